@@ -1,0 +1,396 @@
+"""The 22-DOF actor model read from the URDF: joint order, limits, segment lengths, kinematics.
+
+This is the one place the joint names come from (paper §3.1, Figure 1). Forward kinematics is
+hand-written NumPy, batched over configurations, because it sits on every planner's hot path.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+import os
+import sys
+from typing import Dict, Optional, Tuple
+import xml.etree.ElementTree as ElementTree
+
+import numpy as np
+
+URDF_FILE_NAME = 'digital_actor.urdf'
+PACKAGE_NAME = 'digital_actor_planner'
+
+
+class UrdfError(ValueError):
+    """The URDF cannot describe the paper's actor (missing joint, bad number, wrong count)."""
+
+
+def default_urdf_path() -> str:
+    """Return the path of the package's actor URDF, in a source tree or an install.
+
+    The environment variable ``DIGITAL_ACTOR_URDF`` overrides the search.
+    """
+    override = os.environ.get('DIGITAL_ACTOR_URDF')
+    if override:
+        return override
+    here = os.path.dirname(os.path.abspath(__file__))
+    candidates = [os.path.join(here, '..', '..', 'urdf', URDF_FILE_NAME),
+                  os.path.join(sys.prefix, 'share', PACKAGE_NAME, 'urdf', URDF_FILE_NAME)]
+    # colcon install: <prefix>/lib/pythonX.Y/site-packages/<pkg>/core/skeleton.py
+    prefix = here
+    for _ in range(6):
+        prefix = os.path.dirname(prefix)
+        candidates.append(os.path.join(prefix, 'share', PACKAGE_NAME, 'urdf', URDF_FILE_NAME))
+    for path in candidates:
+        if os.path.isfile(path):
+            return os.path.normpath(path)
+    raise FileNotFoundError(f'{URDF_FILE_NAME} not found; looked in: {", ".join(candidates[:3])}')
+
+
+# The paper's kinematic model (§3.1): the names the URDF must provide, in canonical order.
+ROOT_JOINTS = ('root_x', 'root_y', 'root_z', 'root_yaw')
+WAIST_JOINTS = ('waist_yaw', 'waist_pitch')
+ARM_SUFFIXES = ('shoulder_pitch', 'shoulder_roll', 'shoulder_yaw', 'elbow')
+LEG_SUFFIXES = ('hip_yaw', 'hip_pitch', 'knee', 'ankle')
+SIDES = ('left', 'right')
+
+
+def _expected_joint_names() -> Tuple[str, ...]:
+    names = list(ROOT_JOINTS) + list(WAIST_JOINTS)
+    for side in SIDES:
+        names += [f'{side}_{suffix}' for suffix in ARM_SUFFIXES]
+    for side in SIDES:
+        names += [f'{side}_{suffix}' for suffix in LEG_SUFFIXES]
+    return tuple(names)
+
+
+EXPECTED_JOINT_NAMES = _expected_joint_names()
+
+
+@dataclass(frozen=True)
+class Joint:
+    """One URDF joint. ``origin`` is (4, 4) parent->joint frame; ``axis`` is a unit (3,)."""
+
+    name: str
+    kind: str
+    parent: str
+    child: str
+    origin: np.ndarray
+    axis: np.ndarray
+    lower: float
+    upper: float
+    velocity: float
+
+
+@dataclass(frozen=True)
+class CollisionShape:
+    """A collision primitive of a link.
+
+    ``kind`` is 'box' (size = (3,) edge lengths), 'cylinder' (size = (radius, length), axis z)
+    or 'sphere' (size = (radius,)); ``origin`` is (4, 4) link->shape frame. Metres.
+    """
+
+    link: str
+    kind: str
+    size: Tuple[float, ...]
+    origin: np.ndarray
+
+
+@dataclass(frozen=True)
+class LegGeometry:
+    """Sagittal-plane leg dimensions (paper §4: legs projected to the sagittal plane), metres."""
+
+    hip_half_width: float
+    thigh: float
+    shank: float
+    ankle_height: float
+    heel: float
+    toe: float
+    foot_width: float
+
+    @property
+    def max_reach(self) -> float:
+        """Largest hip-to-ankle distance (straight knee)."""
+        return self.thigh + self.shank
+
+    @property
+    def standing_height(self) -> float:
+        """Hip joint height above the sole with straight legs."""
+        return self.thigh + self.shank + self.ankle_height
+
+
+def _floats(text: Optional[str], count: int, what: str) -> np.ndarray:
+    values = np.array([float(v) for v in (text or ' '.join(['0'] * count)).split()])
+    if values.shape != (count,) or not np.all(np.isfinite(values)):
+        raise UrdfError(f'{what}: expected {count} finite numbers, got {text!r}')
+    return values
+
+
+def _rpy_matrix(rpy: np.ndarray) -> np.ndarray:
+    roll, pitch, yaw = rpy
+    cr, sr, cp, sp, cy, sy = (np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch),
+                              np.cos(yaw), np.sin(yaw))
+    return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                     [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                     [-sp, cp * sr, cp * cr]])
+
+
+def _origin_matrix(element) -> np.ndarray:
+    transform = np.eye(4)
+    if element is not None:
+        transform[:3, :3] = _rpy_matrix(_floats(element.get('rpy'), 3, 'origin rpy'))
+        transform[:3, 3] = _floats(element.get('xyz'), 3, 'origin xyz')
+    return transform
+
+
+def _axis_rotation(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """Rodrigues rotation about a unit axis for a batch of angles: (k,) -> (k, 3, 3)."""
+    x, y, z = axis
+    c, s = np.cos(angle), np.sin(angle)
+    t = 1.0 - c
+    rot = np.empty(angle.shape + (3, 3))
+    rot[..., 0, 0] = t * x * x + c
+    rot[..., 0, 1] = t * x * y - s * z
+    rot[..., 0, 2] = t * x * z + s * y
+    rot[..., 1, 0] = t * x * y + s * z
+    rot[..., 1, 1] = t * y * y + c
+    rot[..., 1, 2] = t * y * z - s * x
+    rot[..., 2, 0] = t * x * z - s * y
+    rot[..., 2, 1] = t * y * z + s * x
+    rot[..., 2, 2] = t * z * z + c
+    return rot
+
+
+class Skeleton:
+    """The actor's kinematic tree, joint order and limits, read from a URDF.
+
+    Parameters
+    ----------
+    urdf_path
+        URDF file; defaults to the package's ``urdf/digital_actor.urdf``.
+
+    """
+
+    def __init__(self, urdf_path: Optional[str] = None):
+        self.urdf_path = urdf_path or default_urdf_path()
+        try:
+            root = ElementTree.parse(self.urdf_path).getroot()
+        except (OSError, ElementTree.ParseError) as error:
+            raise UrdfError(f'{self.urdf_path}: cannot read URDF: {error}') from error
+        self._read(root)
+
+    # -- reading -------------------------------------------------------------------------
+    def _read(self, root) -> None:
+        joints = []
+        for element in root.findall('joint'):
+            kind = element.get('type')
+            limit = element.find('limit')
+            lower, upper, velocity = -np.inf, np.inf, np.inf
+            if limit is not None:
+                lower = float(limit.get('lower', '-inf'))
+                upper = float(limit.get('upper', 'inf'))
+                velocity = float(limit.get('velocity', 'inf'))
+            axis_element = element.find('axis')
+            axis = _floats(axis_element.get('xyz') if axis_element is not None else '1 0 0', 3,
+                           f'joint {element.get("name")} axis')
+            norm = np.linalg.norm(axis)
+            if kind != 'fixed' and norm == 0.0:
+                raise UrdfError(f'joint {element.get("name")}: zero axis')
+            joints.append(Joint(name=element.get('name'), kind=kind,
+                                parent=element.find('parent').get('link'),
+                                child=element.find('child').get('link'),
+                                origin=_origin_matrix(element.find('origin')),
+                                axis=axis / (norm or 1.0), lower=lower, upper=upper,
+                                velocity=velocity))
+        movable = [j for j in joints if j.kind != 'fixed']
+        names = tuple(j.name for j in movable)
+        if len(names) != 22:
+            raise UrdfError(f'{self.urdf_path}: expected 22 non-fixed joints, found {len(names)}')
+        if set(names) != set(EXPECTED_JOINT_NAMES):
+            missing = sorted(set(EXPECTED_JOINT_NAMES) - set(names))
+            extra = sorted(set(names) - set(EXPECTED_JOINT_NAMES))
+            raise UrdfError(f'{self.urdf_path}: joint names differ: missing {missing}, '
+                            f'unexpected {extra}')
+        for j in movable:
+            if j.kind not in ('revolute', 'prismatic', 'continuous'):
+                raise UrdfError(f'joint {j.name}: unsupported type {j.kind!r}')
+            if j.kind != 'continuous' and not (np.isfinite(j.lower) and np.isfinite(j.upper)
+                                               and j.lower < j.upper):
+                raise UrdfError(f'joint {j.name}: bad limits [{j.lower}, {j.upper}]')
+            if not (np.isfinite(j.velocity) and j.velocity > 0):
+                raise UrdfError(f'joint {j.name}: bad velocity limit {j.velocity}')
+
+        #: The 22 joint names in URDF order; the order of every configuration vector.
+        self.joint_names: Tuple[str, ...] = names
+        self.index: Dict[str, int] = {name: i for i, name in enumerate(names)}
+        self.lower = np.array([j.lower for j in movable])
+        self.upper = np.array([j.upper for j in movable])
+        self.velocity_limit = np.array([j.velocity for j in movable])
+        self.joints: Tuple[Joint, ...] = tuple(joints)
+
+        # Topological order from the root link.
+        children: Dict[str, list] = {}
+        child_links = set()
+        for j in joints:
+            children.setdefault(j.parent, []).append(j)
+            child_links.add(j.child)
+        roots = [j.parent for j in joints if j.parent not in child_links]
+        if len(set(roots)) != 1:
+            raise UrdfError(
+                f'{self.urdf_path}: expected one root link, found {sorted(set(roots))}')
+        self.root_link = roots[0]
+        order, stack = [], [self.root_link]
+        while stack:
+            parent = stack.pop()
+            for j in children.get(parent, []):
+                order.append(j)
+                stack.append(j.child)
+        self._chain = tuple(order)
+        self.link_names: Tuple[str, ...] = (self.root_link,) + tuple(j.child for j in order)
+        self.link_index = {name: i for i, name in enumerate(self.link_names)}
+        self._chain_plan = tuple(
+            (self.link_index[j.parent], self.link_index[j.child], j.origin,
+             self.index.get(j.name, -1), j.kind, j.axis) for j in order)
+
+        shapes = []
+        for link in root.findall('link'):
+            for collision in link.findall('collision'):
+                geometry = collision.find('geometry')
+                shape = self._shape(link.get('name'), geometry,
+                                    _origin_matrix(collision.find('origin')))
+                if shape is not None:
+                    shapes.append(shape)
+        self.collision_shapes: Tuple[CollisionShape, ...] = tuple(shapes)
+        self.leg = self._leg_geometry()
+
+    @staticmethod
+    def _shape(link: str, geometry, origin: np.ndarray) -> Optional[CollisionShape]:
+        if geometry is None:
+            return None
+        for element in geometry:
+            if element.tag == 'box':
+                return CollisionShape(link, 'box', tuple(
+                    _floats(element.get('size'), 3, 'box')), origin)
+            if element.tag == 'cylinder':
+                return CollisionShape(link, 'cylinder', (float(element.get('radius')),
+                                                         float(element.get('length'))), origin)
+            if element.tag == 'sphere':
+                return CollisionShape(link, 'sphere', (float(element.get('radius')),), origin)
+        return None
+
+    def _joint(self, name: str) -> Joint:
+        for j in self.joints:
+            if j.name == name:
+                return j
+        raise UrdfError(f'{self.urdf_path}: no joint {name!r}')
+
+    def _leg_geometry(self) -> LegGeometry:
+        hip = self._joint('left_hip_yaw').origin[:3, 3]
+        knee = self._joint('left_knee').origin[:3, 3]
+        ankle = self._joint('left_ankle').origin[:3, 3]
+        feet = [s for s in self.collision_shapes if s.link == 'left_foot' and s.kind == 'box']
+        if not feet:
+            raise UrdfError(f'{self.urdf_path}: left_foot needs a box collision shape (the sole)')
+        foot = feet[0]
+        length, width, height = foot.size
+        centre = foot.origin[:3, 3]
+        return LegGeometry(hip_half_width=float(abs(hip[1])), thigh=float(np.linalg.norm(knee)),
+                           shank=float(np.linalg.norm(ankle)),
+                           ankle_height=float(-(centre[2] - height / 2)),
+                           heel=float(length / 2 - centre[0]), toe=float(length / 2 + centre[0]),
+                           foot_width=float(width))
+
+    # -- configurations ------------------------------------------------------------------
+    def indices(self, *names: str) -> np.ndarray:
+        """Return the configuration-vector indices of the named joints."""
+        try:
+            return np.array([self.index[n] for n in names], dtype=int)
+        except KeyError as error:
+            raise ValueError(f'unknown joint name {error.args[0]!r}') from None
+
+    def branch(self, name: str) -> np.ndarray:
+        """Indices of a branch of Figure 2.
+
+        ``name`` is 'root', 'waist', 'left_arm', 'right_arm', 'left_leg' or 'right_leg'.
+        """
+        if name == 'root':
+            return self.indices(*ROOT_JOINTS)
+        if name == 'waist':
+            return self.indices(*WAIST_JOINTS)
+        side, _, part = name.partition('_')
+        if side in SIDES and part == 'arm':
+            return self.indices(*(f'{side}_{s}' for s in ARM_SUFFIXES))
+        if side in SIDES and part == 'leg':
+            return self.indices(*(f'{side}_{s}' for s in LEG_SUFFIXES))
+        raise ValueError(f'unknown branch {name!r}')
+
+    def neutral(self) -> np.ndarray:
+        """A standing configuration at the origin: (22,) float64, rad or m."""
+        q = np.zeros(len(self.joint_names))
+        q[self.index['root_z']] = self.leg.standing_height
+        for side in SIDES:
+            q[self.index[f'{side}_shoulder_roll']] = 0.06
+        return np.clip(q, self.lower, self.upper)
+
+    def within_limits(self, q: np.ndarray, tolerance: float = 1e-9) -> np.ndarray:
+        """Return whether each configuration respects the position limits: (k,) bool."""
+        q = np.atleast_2d(q)
+        return np.all((q >= self.lower - tolerance) & (q <= self.upper + tolerance), axis=-1)
+
+    # -- kinematics ----------------------------------------------------------------------
+    def forward_kinematics(self, q: np.ndarray) -> np.ndarray:
+        """World transforms of every link.
+
+        Parameters
+        ----------
+        q
+            (22,) or (k, 22) configurations, rad or m.
+
+        Returns
+        -------
+        numpy.ndarray
+            (L, 4, 4) or (k, L, 4, 4) link->world transforms, in ``link_names`` order.
+
+        """
+        q = np.asarray(q, dtype=float)
+        single = q.ndim == 1
+        qs = np.atleast_2d(q)
+        if qs.shape[-1] != len(self.joint_names):
+            raise ValueError(f'configuration has {qs.shape[-1]} values, expected '
+                             f'{len(self.joint_names)}')
+        k = qs.shape[0]
+        out = np.empty((k, len(self.link_names), 4, 4))
+        out[:, 0] = np.eye(4)
+        motion = np.zeros((k, 4, 4))
+        motion[:, 3, 3] = 1.0
+        for parent, child, origin, qi, kind, axis in self._chain_plan:
+            base = out[:, parent] @ origin
+            if qi < 0:
+                out[:, child] = base
+                continue
+            if kind == 'prismatic':
+                motion[:, :3, :3] = np.eye(3)
+                motion[:, :3, 3] = qs[:, qi, None] * axis
+            else:
+                motion[:, :3, :3] = _axis_rotation(axis, qs[:, qi])
+                motion[:, :3, 3] = 0.0
+            out[:, child] = base @ motion
+        return out[0] if single else out
+
+    def link_transform(self, q: np.ndarray, link: str) -> np.ndarray:
+        """World transform(s) of one link: (4, 4) or (k, 4, 4)."""
+        return self.forward_kinematics(q)[..., self.link_index[link], :, :]
+
+    def shape_transforms(self, link_transforms: np.ndarray) -> np.ndarray:
+        """World transforms of every collision shape, in ``collision_shapes`` order.
+
+        Parameters
+        ----------
+        link_transforms
+            (L, 4, 4) or (k, L, 4, 4) from :meth:`forward_kinematics`.
+
+        Returns
+        -------
+        numpy.ndarray
+            (S, 4, 4) or (k, S, 4, 4).
+
+        """
+        idx = [self.link_index[s.link] for s in self.collision_shapes]
+        origins = np.stack([s.origin for s in self.collision_shapes])
+        return link_transforms[..., idx, :, :] @ origins

@@ -1,0 +1,21 @@
+"""Shared pytest configuration."""
+import os
+
+import pytest
+
+ARTIFACTS = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+                         'test-artifacts')
+
+
+def pytest_configure(config):
+    config.addinivalue_line('markers', 'linter: style checks')
+    config.addinivalue_line('markers', 'ros: starts real rclpy node processes')
+    config.addinivalue_line('markers', 'browser: drives headless chromium')
+    config.addinivalue_line('markers', 'slow: takes more than a few seconds')
+
+
+@pytest.fixture
+def artifacts_dir():
+    """A folder for files a person may want to look at after the run (screenshots, logs)."""
+    os.makedirs(ARTIFACTS, exist_ok=True)
+    return ARTIFACTS

@@ -1,0 +1,110 @@
+"""The 22-DOF URDF and the skeleton read from it (paper §3.1, Figure 1)."""
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from digital_actor_planner.core.skeleton import (
+    default_urdf_path, EXPECTED_JOINT_NAMES, Skeleton, UrdfError)
+
+
+@pytest.fixture(scope='module')
+def skeleton():
+    return Skeleton()
+
+
+def test_urdf_has_the_papers_22_joints_in_canonical_order(skeleton):
+    assert skeleton.joint_names == EXPECTED_JOINT_NAMES
+    assert len(skeleton.joint_names) == 22
+    assert skeleton.joint_names[:4] == ('root_x', 'root_y', 'root_z', 'root_yaw')
+
+
+def test_check_urdf_accepts_the_model():
+    tool = shutil.which('check_urdf')
+    assert tool, 'check_urdf (Debian liburdfdom-tools) is not installed; quickstart.sh installs it'
+    result = subprocess.run([tool, default_urdf_path()], capture_output=True, text=True)
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert 'Successfully Parsed XML' in result.stdout
+
+
+def test_adult_proportions(skeleton):
+    q = skeleton.neutral()
+    q[skeleton.index['root_z']] = skeleton.leg.standing_height
+    frames = skeleton.forward_kinematics(q)
+    shapes = skeleton.shape_transforms(frames)
+    tops, bottoms = [], []
+    for shape, transform in zip(skeleton.collision_shapes, shapes):
+        extent = {'sphere': lambda: shape.size[0], 'cylinder': lambda: shape.size[1] / 2,
+                  'box': lambda: shape.size[2] / 2}[shape.kind]()
+        tops.append(transform[2, 3] + extent)
+        bottoms.append(transform[2, 3] - extent)
+    assert min(bottoms) == pytest.approx(0.0, abs=1e-9)  # soles on z = 0
+    assert 1.70 <= max(tops) <= 1.80
+    assert 0.85 <= skeleton.leg.standing_height <= 0.95
+    assert skeleton.leg.heel + skeleton.leg.toe == pytest.approx(0.25)
+
+
+def test_limits_are_finite_and_realistic(skeleton):
+    assert np.all(skeleton.lower < skeleton.upper)
+    assert np.all(skeleton.velocity_limit > 0) and np.all(np.isfinite(skeleton.velocity_limit))
+    body = [i for i, n in enumerate(skeleton.joint_names) if not n.startswith('root')]
+    assert np.all(skeleton.upper[body] - skeleton.lower[body] < 2 * np.pi)
+    assert np.all(skeleton.velocity_limit[body] <= 12.0)
+    assert skeleton.within_limits(skeleton.neutral())[0]
+
+
+def test_every_body_link_has_collision_geometry(skeleton):
+    with_shapes = {s.link for s in skeleton.collision_shapes}
+    body_links = [n for n in skeleton.link_names if n not in
+                  ('world', 'root_x_link', 'root_y_link', 'root_z_link')]
+    assert set(body_links) <= with_shapes
+
+
+def test_forward_kinematics_signs_follow_the_documented_conventions(skeleton):
+    q = skeleton.neutral()
+    base = skeleton.forward_kinematics(q)
+    foot = skeleton.link_index['left_foot']
+    # hip pitch forward moves the ankle forward (+x)
+    q1 = q.copy()
+    q1[skeleton.index['left_hip_pitch']] = 0.5
+    assert skeleton.forward_kinematics(q1)[foot, 0, 3] > base[foot, 0, 3] + 0.3
+    # knee flexion moves the ankle backward and up
+    q2 = q.copy()
+    q2[skeleton.index['left_knee']] = 0.5
+    moved = skeleton.forward_kinematics(q2)[foot, :3, 3]
+    assert moved[0] < base[foot, 0, 3] and moved[2] > base[foot, 2, 3]
+    # root yaw turns the whole body
+    q3 = q.copy()
+    q3[skeleton.index['root_yaw']] = np.pi / 2
+    assert skeleton.forward_kinematics(
+        q3)[foot, 0, 3] == pytest.approx(-skeleton.leg.hip_half_width)
+    # waist pitch forward moves the head forward
+    head = skeleton.link_index['head']
+    q4 = q.copy()
+    q4[skeleton.index['waist_pitch']] = 0.6
+    assert skeleton.forward_kinematics(q4)[head, 0, 3] > 0.3
+
+
+def test_batched_kinematics_matches_single(skeleton):
+    rng = np.random.default_rng(3)
+    qs = rng.uniform(np.maximum(skeleton.lower, -2), np.minimum(skeleton.upper, 2), size=(5, 22))
+    batch = skeleton.forward_kinematics(qs)
+    for q, frames in zip(qs, batch):
+        np.testing.assert_allclose(skeleton.forward_kinematics(q), frames, atol=1e-12)
+
+
+def test_broken_urdf_is_named(tmp_path):
+    bad = tmp_path / 'bad.urdf'
+    bad.write_text('<robot name="x"><link name="a"/></robot>')
+    with pytest.raises(UrdfError, match='22 non-fixed joints'):
+        Skeleton(str(bad))
+    with pytest.raises(UrdfError, match='missing.urdf'):
+        Skeleton(str(tmp_path / 'missing.urdf'))
+
+
+def test_branches(skeleton):
+    assert list(skeleton.branch('waist')) == [4, 5]
+    assert len(skeleton.branch('left_arm')) == 4
+    with pytest.raises(ValueError, match='tail'):
+        skeleton.branch('tail')
