@@ -1,0 +1,560 @@
+"""ROS 2 node ``actor_planner``: cmd_vel and a mesh scene in, a 22-DOF JointState stream out.
+
+A thin adapter over :class:`digital_actor_planner.core.actor.Actor` (STYLE: nodes only adapt).
+Three threads share the work so that planning never stalls the stream:
+
+* a planning worker calls ``actor.plan_next()`` whenever less than ``planning_lead`` seconds of
+  committed frames are buffered ahead of playback (so about one step is buffered);
+* a publishing thread ticks on a monotonic schedule at ``publish_rate`` and publishes the frame
+  for "now", interpolated from the buffer; if planning is late it holds the last frame;
+* the executor thread handles cmd_vel, parameter changes, markers and diagnostics.
+"""
+from __future__ import annotations
+
+import collections
+from dataclasses import dataclass
+import math
+import sys
+import threading
+import time
+from typing import Tuple
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import Point, PoseStamped, Quaternion, Twist, TwistStamped
+from nav_msgs.msg import Path
+import numpy as np
+from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
+import rclpy
+from rclpy.exceptions import ParameterException, ParameterUninitializedException
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import JointState
+from std_msgs.msg import ColorRGBA, String
+from visualization_msgs.msg import Marker, MarkerArray
+
+from digital_actor_planner.core.actor import Actor, ActorConfig, validate
+from digital_actor_planner.core.environment import load_scene
+from digital_actor_planner.core.skeleton import Skeleton
+from digital_actor_planner.nodes.planner_params import ConfigurationError, \
+    parameter_declarations, PlannerNodeConfig, read_node_config, RUNTIME_PARAMETERS, \
+    validate_node_config
+
+# How far ahead of playback the worker keeps committed frames before planning the next block.
+PLANNING_LEAD_DEFAULT = 0.3
+# Committed frames older than this (s of actor time) are dropped from the buffer.
+BUFFER_HISTORY = 1.0
+# Mesh triangles drawn in RViz at most (one TRIANGLE_LIST per mesh).
+MAX_MARKER_TRIANGLES = 200_000
+PAST_FOOTSTEPS = 40
+
+
+class FrameBuffer:
+    """Committed timed frames, sampled at any playback time; safe to share between threads.
+
+    Parameters
+    ----------
+    configuration
+        (22,) float64 first frame, held at time ``start_time`` (s).
+    start_time
+        Actor-clock time of that frame.
+
+    """
+
+    def __init__(self, configuration: np.ndarray, start_time: float = 0.0):
+        self._lock = threading.Lock()
+        q = np.asarray(configuration, dtype=float).reshape(1, -1)
+        self._times = np.array([float(start_time)])
+        self._frames = q
+        self._velocities = np.zeros_like(q)
+
+    @property
+    def end_time(self) -> float:
+        """Time (s) of the last committed frame."""
+        return float(self._times[-1])
+
+    def append(self, times: np.ndarray, frames: np.ndarray, velocities: np.ndarray,
+               now: float) -> None:
+        """Commit frames after the current end; frames before ``now - BUFFER_HISTORY`` go.
+
+        Parameters
+        ----------
+        times
+            (k,) s, increasing and after :attr:`end_time`.
+        frames, velocities
+            (k, 22) rad or m, rad/s or m/s.
+        now
+            Current playback time (s).
+
+        """
+        times = np.asarray(times, dtype=float)
+        if times.size == 0:
+            return
+        if not times[0] > self._times[-1]:
+            raise ValueError(f'block starts at {times[0]:.4f} s, not after the buffer end '
+                             f'{self._times[-1]:.4f} s')
+        with self._lock:
+            keep = max(0, int(np.searchsorted(self._times, now - BUFFER_HISTORY)) - 1)
+            self._times = np.concatenate([self._times[keep:], times])
+            self._frames = np.concatenate([self._frames[keep:], frames])
+            self._velocities = np.concatenate([self._velocities[keep:], velocities])
+
+    def restart(self, configuration: np.ndarray, start_time: float) -> None:
+        """Drop every frame after ``start_time`` and continue from ``configuration`` there."""
+        with self._lock:
+            keep = int(np.searchsorted(self._times, start_time, side='left'))
+            self._times = np.append(self._times[:keep], start_time)
+            self._frames = np.vstack([self._frames[:keep], configuration])
+            self._velocities = np.vstack([self._velocities[:keep],
+                                          np.zeros_like(configuration)])
+
+    def sample(self, t: float) -> Tuple[np.ndarray, np.ndarray]:
+        """Return the configuration (22,) and velocity (22,) at time ``t`` s, interpolated.
+
+        Beyond the last frame the last configuration is held with zero velocity.
+        """
+        with self._lock:
+            times, frames, velocities = self._times, self._frames, self._velocities
+        if t >= times[-1]:
+            return frames[-1].copy(), np.zeros(frames.shape[1])
+        i = int(np.searchsorted(times, t, side='right'))
+        if i == 0:
+            return frames[0].copy(), velocities[0].copy()
+        span = times[i] - times[i - 1]
+        a = (t - times[i - 1]) / span if span > 0.0 else 1.0
+        return ((1.0 - a) * frames[i - 1] + a * frames[i],
+                (1.0 - a) * velocities[i - 1] + a * velocities[i])
+
+
+class CommandState:
+    """The latest finite velocity command and when it arrived (monotonic s)."""
+
+    def __init__(self):
+        self._lock = threading.Lock()
+        self._command = (0.0, 0.0)
+        self._received = None
+        self.changed = 0.0
+
+    def update(self, linear_x: float, angular_z: float, now: float) -> None:
+        """Store a command received at ``now``."""
+        with self._lock:
+            if (linear_x, angular_z) != self._command:
+                self.changed = now
+            self._command = (linear_x, angular_z)
+            self._received = now
+
+    def current(self, now: float, timeout: float) -> Tuple[float, float]:
+        """Return the command to follow at ``now``: zero when none arrived within ``timeout``."""
+        with self._lock:
+            if self._received is None or now - self._received > timeout:
+                return 0.0, 0.0
+            return self._command
+
+
+@dataclass
+class PlanningStats:
+    """Planner state and timing shown on /diagnostics."""
+
+    state: str = 'idle'
+    reason: str = ''
+    steps: int = 0
+    last_planning_time: float = float('nan')
+
+    def __post_init__(self):
+        self.planning_times = collections.deque(maxlen=1000)
+
+    def record(self, status: str, reason: str, planning_time: float) -> None:
+        """Record one planned block."""
+        self.state, self.reason = status, reason
+        self.last_planning_time = planning_time
+        self.planning_times.append(planning_time)
+        if status == 'walking':
+            self.steps += 1
+
+    def percentiles(self) -> Tuple[float, float]:
+        """Return p50 and p99 planning time (s) of the recent blocks (NaN when none)."""
+        if not self.planning_times:
+            return float('nan'), float('nan')
+        p50, p99 = np.percentile(np.fromiter(self.planning_times, float), [50.0, 99.0])
+        return float(p50), float(p99)
+
+
+def _color(r: float, g: float, b: float, a: float = 1.0) -> ColorRGBA:
+    return ColorRGBA(r=float(r), g=float(g), b=float(b), a=float(a))
+
+
+def _yaw_quaternion(yaw: float) -> Quaternion:
+    return Quaternion(x=0.0, y=0.0, z=math.sin(yaw / 2.0), w=math.cos(yaw / 2.0))
+
+
+def _points(xyz: np.ndarray):
+    return [Point(x=float(x), y=float(y), z=float(z)) for x, y, z in xyz]
+
+
+class ActorPlannerNode(Node):
+    """Stream the digital actor's whole-body motion as JointState, directed by cmd_vel."""
+
+    def __init__(self, node_name: str = 'actor_planner', **kwargs):
+        super().__init__(node_name, **kwargs)
+        self.config = self._declare_and_read()
+        self.skeleton = Skeleton()
+        self.actor_config = ActorConfig(**self.config.actor_config_fields())
+        try:
+            validate(self.actor_config)
+        except ValueError as error:
+            raise ConfigurationError(_field_named(error, self.config), str(error)) from error
+        try:
+            self.actor, self.scene = self._build_actor(self.config.scene)
+        except Exception as error:  # noqa: B902 -- any scene failure is a configuration error
+            parameter = 'start_pose' if self.config.start_pose is not None and \
+                'start' in str(error) else 'scene'
+            raise ConfigurationError(parameter, str(error)) from error
+        self.scene_path = self.config.scene
+        self.scene_error = ''
+        self.cmd_timeout = self.config.cmd_timeout
+        self.planning_lead = float(self.get_parameter('planning_lead').value)
+        self.period = 1.0 / self.config.publish_rate
+
+        self.buffer = FrameBuffer(self.actor.configuration)
+        self.actor_offset = 0.0  # buffer time of the current actor's clock zero
+        self.command = CommandState()
+        self.stats = PlanningStats()
+        self.playback_time = 0.0
+        self.underruns = 0
+        self.missed_frames = 0
+        self.tick_times = collections.deque(maxlen=max(4, int(2 * self.config.publish_rate)))
+        self.committed_footsteps = collections.deque(maxlen=PAST_FOOTSTEPS)
+        self._latest_block = None
+        self._markers_block = None
+        self._pending_actor = None
+        self._pending_lock = threading.Lock()
+        self._stop = threading.Event()
+        self._wake = threading.Event()
+
+        self._make_interfaces()
+        self.add_on_set_parameters_callback(self._on_set_parameters)
+        self._planner_thread = threading.Thread(target=self._planning_loop,
+                                                name='actor_planning', daemon=True)
+        self._publisher_thread = threading.Thread(target=self._publishing_loop,
+                                                  name='joint_state_stream', daemon=True)
+        self._planner_thread.start()
+        self._publisher_thread.start()
+        self.get_logger().info(
+            f'streaming {len(self.skeleton.joint_names)} joints at {self.config.publish_rate:g} '
+            f'Hz, scene {self.scene_path}')
+
+    # -- configuration ----------------------------------------------------------------------
+    def _declare_and_read(self) -> PlannerNodeConfig:
+        declarations = parameter_declarations() + [
+            ('planning_lead', PLANNING_LEAD_DEFAULT, ParameterDescriptor(
+                description='Plan the next block when less than this much (s) of committed '
+                            'motion is buffered ahead of playback.',
+                read_only=True, floating_point_range=[_float_range(0.02, 5.0)]))]
+        for name, default, descriptor in declarations:
+            if name not in RUNTIME_PARAMETERS:
+                descriptor.read_only = True
+            try:
+                self.declare_parameter(name, default, descriptor)
+            except ParameterException as error:
+                raise ConfigurationError(name, str(error)) from error
+        config = read_node_config(self._parameter_value)
+        validate_node_config(config)
+        return config
+
+    def _parameter_value(self, name: str):
+        try:
+            return self.get_parameter(name).value
+        except ParameterUninitializedException:
+            return None
+
+    def _build_actor(self, scene_path: str):
+        scene = load_scene(scene_path, self.skeleton)
+        start = self.config.start_pose if self.config.start_pose is not None else scene.start
+        actor = Actor(self.skeleton, scene.environment, self.actor_config, start=tuple(start))
+        return actor, scene
+
+    def _make_interfaces(self) -> None:
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                             reliability=ReliabilityPolicy.RELIABLE)
+        self.joint_state_msg = JointState()
+        self.joint_state_msg.header.frame_id = self.config.frame_id
+        self.joint_state_msg.name = list(self.skeleton.joint_names)
+        self.joint_state_pub = self.create_publisher(JointState, 'joint_states', 10)
+        self.diagnostics_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self.markers_pub = self.create_publisher(MarkerArray, '~/markers', latched)
+        self.environment_pub = self.create_publisher(MarkerArray, '~/environment', latched)
+        self.path_pub = self.create_publisher(Path, '~/path', latched)
+        if self.config.publish_robot_description:
+            self.description_pub = self.create_publisher(String, 'robot_description', latched)
+            with open(self.skeleton.urdf_path) as urdf:
+                self.description_pub.publish(String(data=urdf.read()))
+        if self.config.cmd_vel_stamped:
+            self.create_subscription(TwistStamped, 'cmd_vel',
+                                     lambda msg: self._on_cmd_vel(msg.twist), 10)
+        else:
+            self.create_subscription(Twist, 'cmd_vel', self._on_cmd_vel, 10)
+        self.create_timer(1.0, self._publish_diagnostics)
+        self.create_timer(0.2, self._publish_markers)
+        self._publish_environment()
+
+    def _on_set_parameters(self, parameters) -> SetParametersResult:
+        for parameter in parameters:
+            if parameter.name == 'cmd_timeout':
+                if not (math.isfinite(parameter.value) and parameter.value > 0.0):
+                    return SetParametersResult(successful=False,
+                                               reason=f'cmd_timeout {parameter.value!r}')
+                self.cmd_timeout = float(parameter.value)
+            elif parameter.name == 'scene':
+                try:
+                    actor, scene = self._build_actor(str(parameter.value))
+                except Exception as error:  # noqa: B902 -- report any load failure, keep old
+                    self.scene_error = f'{parameter.value}: {error}'
+                    self.get_logger().error(f'scene not reloaded, keeping {self.scene_path}: '
+                                            f'{error}')
+                    return SetParametersResult(successful=False,
+                                               reason=f'scene not loaded: {error}')
+                with self._pending_lock:
+                    self._pending_actor = actor
+                self.scene, self.scene_path, self.scene_error = scene, str(parameter.value), ''
+                self._wake.set()
+                self._publish_environment()
+                self.get_logger().info(f'scene reloaded: {self.scene_path}')
+        return SetParametersResult(successful=True)
+
+    # -- threads ------------------------------------------------------------------------------
+    def _planning_loop(self) -> None:
+        logger = self.get_logger()
+        while not self._stop.is_set():
+            with self._pending_lock:
+                pending, self._pending_actor = self._pending_actor, None
+            if pending is not None:
+                self.actor = pending
+                self.actor_offset = self.playback_time + self.period
+                self.buffer.restart(pending.configuration, self.actor_offset)
+                self.committed_footsteps.clear()
+            ahead = self.buffer.end_time - self.playback_time
+            if ahead > self.planning_lead:
+                self._wake.wait(min(ahead - self.planning_lead, 0.05))
+                self._wake.clear()
+                continue
+            linear_x, angular_z = self.command.current(time.monotonic(), self.cmd_timeout)
+            warning = self.actor.set_command(linear_x, angular_z)
+            if warning:
+                logger.warning(warning, throttle_duration_sec=2.0)
+            try:
+                block = self.actor.plan_next()
+            except Exception as error:  # noqa: B902 -- keep streaming, report on diagnostics
+                self.stats.record('stuck', f'planner error: {error}', float('nan'))
+                logger.error(f'planning failed: {error}', throttle_duration_sec=2.0)
+                self._stop.wait(0.1)
+                continue
+            self.buffer.append(np.asarray(block.times) + self.actor_offset, block.frames,
+                               block.velocities, self.playback_time)
+            self.stats.record(block.status, block.reason, block.planning_time)
+            if block.status == 'walking' and len(block.footsteps):
+                self.committed_footsteps.append(np.asarray(block.footsteps[0], dtype=float))
+            self._latest_block = block
+
+    def _publishing_loop(self) -> None:
+        # Ticks on a monotonic schedule; a late tick is published late, missed ticks are skipped
+        # (and counted), so the stream never bunches up.
+        start = time.monotonic()
+        clock_zero = start
+        tick = 0
+        msg = self.joint_state_msg
+        while not self._stop.is_set():
+            due = start + tick * self.period
+            delay = due - time.monotonic()
+            if delay > 0.0:
+                time.sleep(delay)
+            now = time.monotonic()
+            late_ticks = int((now - due) / self.period)
+            if late_ticks > 0:
+                self.missed_frames += late_ticks
+                tick += late_ticks
+            tick += 1
+            play = now - clock_zero
+            end = self.buffer.end_time
+            if play > end:
+                if play - end > self.period:
+                    self.underruns += 1
+                clock_zero = now - end
+                play = end
+            self.playback_time = play
+            self._wake.set()
+            q, v = self.buffer.sample(play)
+            msg.header.stamp = self.get_clock().now().to_msg()
+            msg.position = q.tolist()
+            msg.velocity = v.tolist()
+            try:
+                self.joint_state_pub.publish(msg)
+            except Exception:  # noqa: B902 -- the context is shutting down
+                if self._stop.is_set() or not rclpy.ok(context=self.context):
+                    return
+                raise
+            self.tick_times.append(now)
+
+    def stop(self) -> None:
+        """Stop the planning and publishing threads."""
+        self._stop.set()
+        self._wake.set()
+        for thread in (self._publisher_thread, self._planner_thread):
+            thread.join(timeout=5.0)
+
+    # -- executor callbacks -----------------------------------------------------------------
+    def _on_cmd_vel(self, twist: Twist) -> None:
+        linear_x, angular_z = twist.linear.x, twist.angular.z
+        if not (math.isfinite(linear_x) and math.isfinite(angular_z)):
+            self.get_logger().warning(
+                f'ignoring non-finite cmd_vel (linear.x={linear_x}, angular.z={angular_z})',
+                throttle_duration_sec=2.0)
+            return
+        self.command.update(float(linear_x), float(angular_z), time.monotonic())
+
+    def publish_rate_measured(self) -> float:
+        """Return the joint_states rate (Hz) over the last second of ticks (NaN when unknown)."""
+        ticks = list(self.tick_times)
+        if len(ticks) < 2:
+            return float('nan')
+        recent = [t for t in ticks if t >= ticks[-1] - 1.0]
+        if len(recent) < 2 or recent[-1] <= recent[0]:
+            return float('nan')
+        return (len(recent) - 1) / (recent[-1] - recent[0])
+
+    def _publish_diagnostics(self) -> None:
+        stats = self.stats
+        p50, p99 = stats.percentiles()
+        rate = self.publish_rate_measured()
+        rate_ok = math.isfinite(rate) and abs(rate - self.config.publish_rate) <= \
+            0.05 * self.config.publish_rate
+        level = DiagnosticStatus.OK
+        message = stats.state + (f': {stats.reason}' if stats.reason else '')
+        if stats.state == 'stuck' or self.scene_error or not rate_ok:
+            level = DiagnosticStatus.WARN
+        if self.scene_error:
+            message += f'; scene error: {self.scene_error}'
+        if not rate_ok:
+            message += f'; joint_states at {rate:.1f} Hz'
+        values = {
+            'state': stats.state,
+            'reason': stats.reason,
+            'steps': str(stats.steps),
+            'planning_time_last_ms': f'{1e3 * stats.last_planning_time:.3f}',
+            'planning_time_p50_ms': f'{1e3 * p50:.3f}',
+            'planning_time_p99_ms': f'{1e3 * p99:.3f}',
+            'publish_rate_hz': f'{rate:.2f}',
+            'publish_rate_target_hz': f'{self.config.publish_rate:g}',
+            'missed_frames': str(self.missed_frames),
+            'buffer_underruns': str(self.underruns),
+            'buffered_ahead_s': f'{self.buffer.end_time - self.playback_time:.3f}',
+            'scene': self.scene_path,
+            'scene_error': self.scene_error,
+        }
+        status = DiagnosticStatus(
+            level=level, name=f'{self.get_fully_qualified_name()}: actor planner',
+            message=message, hardware_id=self.get_fully_qualified_name(),
+            values=[KeyValue(key=k, value=v) for k, v in values.items()])
+        array = DiagnosticArray(status=[status])
+        array.header.stamp = self.get_clock().now().to_msg()
+        self.diagnostics_pub.publish(array)
+
+    def _header(self, marker: Marker) -> Marker:
+        marker.header.frame_id = self.config.frame_id
+        marker.header.stamp = self.get_clock().now().to_msg()
+        return marker
+
+    def _publish_environment(self) -> None:
+        array = MarkerArray(markers=[self._header(Marker(action=Marker.DELETEALL))])
+        budget = MAX_MARKER_TRIANGLES
+        for index, mesh in enumerate(getattr(self.scene.environment, 'meshes', [])):
+            faces = np.asarray(mesh.faces)[:budget]
+            budget -= len(faces)
+            if len(faces) == 0:
+                continue
+            marker = self._header(Marker(ns='environment', id=index, type=Marker.TRIANGLE_LIST,
+                                         action=Marker.ADD))
+            marker.pose.orientation.w = 1.0
+            marker.scale.x = marker.scale.y = marker.scale.z = 1.0
+            marker.color = _color(0.62, 0.64, 0.66)
+            marker.points = _points(np.asarray(mesh.vertices)[faces].reshape(-1, 3))
+            array.markers.append(marker)
+        self.environment_pub.publish(array)
+
+    def _publish_markers(self) -> None:
+        block = self._latest_block
+        if block is None or block is self._markers_block:
+            return
+        self._markers_block = block
+        markers = [self._header(Marker(action=Marker.DELETEALL))]
+        window = np.asarray(block.footsteps, dtype=float).reshape(-1, 4)
+        past = list(self.committed_footsteps)
+        for ns, steps, color in (('footsteps_past', past, _color(0.5, 0.5, 0.5, 0.6)),
+                                 ('footsteps_window', window, _color(0.1, 0.8, 0.2, 0.9))):
+            for index, (x, y, z, yaw) in enumerate(steps):
+                marker = self._header(Marker(ns=ns, id=index, type=Marker.CUBE,
+                                             action=Marker.ADD))
+                marker.pose.position = Point(x=float(x), y=float(y), z=float(z) + 0.005)
+                marker.pose.orientation = _yaw_quaternion(float(yaw))
+                marker.scale.x, marker.scale.y, marker.scale.z = 0.25, 0.1, 0.01
+                marker.color = color
+                markers.append(marker)
+        path = np.asarray(block.path, dtype=float).reshape(-1, 3)
+        if len(path) >= 2:
+            profile = self._header(Marker(ns='ground_profile', id=0, type=Marker.LINE_STRIP,
+                                          action=Marker.ADD))
+            profile.pose.orientation.w = 1.0
+            profile.scale.x = 0.02
+            profile.color = _color(0.9, 0.5, 0.1)
+            profile.points = _points(path)
+            markers.append(profile)
+        self.markers_pub.publish(MarkerArray(markers=markers))
+        message = Path()
+        message.header.frame_id = self.config.frame_id
+        message.header.stamp = self.get_clock().now().to_msg()
+        for x, y, z in path:
+            pose = PoseStamped()
+            pose.header = message.header
+            pose.pose.position = Point(x=float(x), y=float(y), z=float(z))
+            pose.pose.orientation.w = 1.0
+            message.poses.append(pose)
+        self.path_pub.publish(message)
+
+
+def _float_range(low: float, high: float) -> FloatingPointRange:
+    return FloatingPointRange(from_value=low, to_value=high, step=0.0)
+
+
+def _field_named(error: Exception, config: PlannerNodeConfig) -> str:
+    """Return the parameter a core ``validate`` error names (the fields share the names)."""
+    text = str(error)
+    for name in sorted(config.actor_config_fields(), key=len, reverse=True):
+        if name in text:
+            return name
+    return 'window_steps'
+
+
+def main(args=None) -> int:
+    """Run the node until interrupted; exit status 2 on a bad configuration."""
+    # A pure-Python planning thread holds the GIL; a short switch interval bounds how long the
+    # publishing thread waits for it after waking (the default 5 ms would be the jitter).
+    sys.setswitchinterval(0.0005)
+    rclpy.init(args=args)
+    try:
+        node = ActorPlannerNode()
+    except ConfigurationError as error:
+        rclpy.logging.get_logger('actor_planner').fatal(f'invalid configuration: {error}')
+        rclpy.try_shutdown()
+        return 2
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.stop()
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
