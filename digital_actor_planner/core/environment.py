@@ -1,0 +1,614 @@
+"""The environment: meshes in, an FCL BVH and walkable-ground queries out.
+
+The paper (§3.2, §4.2) asks the lower-body planner for the ground profile under the predicted
+path and for collision tests of the legs against obstacles. The environment is any set of
+triangle meshes in the world frame (z up, metres); the ground is simply one of them. This module
+loads them, keeps an FCL broad-phase manager for exact collision tests (used by
+:mod:`collision`), and answers "where can a foot stand" with a layered height map built once at
+construction, so that planners query it with vectorised NumPy lookups.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+import os
+from typing import Optional, Sequence, Tuple
+
+import fcl
+import numpy as np
+import trimesh
+import yaml
+
+SCENE_KEYS = ('meshes', 'start', 'description', 'expect')
+MESH_KEYS = ('file', 'pose')
+YAML_SUFFIXES = ('.yaml', '.yml')
+
+# Free intervals thinner than this are numerical artefacts of coincident faces (a box resting
+# exactly on the floor), not room to stand in, m.
+_MIN_INTERVAL = 1e-3
+# Surfaces this close in height at one grid node are the same surface hit twice (a node on an
+# edge shared by two triangles), m.
+_SAME_SURFACE = 1e-7
+# Tolerance of "at or below z_ref", m.
+_Z_TOLERANCE = 1e-6
+# Candidate (node, triangle) pairs rasterised at once; bounds the memory of construction.
+_RASTER_CHUNK = 2_000_000
+
+
+def _compact(grounds: np.ndarray, ceilings: np.ndarray):
+    """Sort each row's intervals by ground (empty ones, ground inf, last) and drop empty columns."""
+    order = np.argsort(grounds, axis=1, kind='stable')
+    grounds = np.take_along_axis(grounds, order, axis=1)
+    ceilings = np.take_along_axis(ceilings, order, axis=1)
+    used = max(1, int(np.isfinite(grounds).sum(axis=1).max()) if len(grounds) else 1)
+    return grounds[:, :used], ceilings[:, :used]
+
+
+def _intersect(ground_a, ceiling_a, ground_b, ceiling_b):
+    """Intersect two rows-of-disjoint-intervals sets: (M, Ka), (M, Kb) -> (M, K)."""
+    ground = np.maximum(ground_a[:, :, None], ground_b[:, None, :]).reshape(len(ground_a), -1)
+    ceiling = np.minimum(ceiling_a[:, :, None], ceiling_b[:, None, :]).reshape(len(ground_a), -1)
+    empty = ~((ground < np.inf) & (ceiling >= ground))
+    ground[empty] = np.inf
+    ceiling[empty] = np.inf
+    return _compact(ground, ceiling)
+
+
+class SceneError(ValueError):
+    """A scene file cannot be used: names the file and the field, line or value at fault."""
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A loaded scene: the environment, the actor's start pose and the file's annotations.
+
+    ``start`` is (x m, y m, yaw rad); ``source`` the scene file; ``mesh_files`` the mesh files
+    read; ``expect`` the optional ``expect:`` mapping of the YAML (used by tests).
+    """
+
+    environment: 'Environment'
+    start: Tuple[float, float, float]
+    source: str
+    mesh_files: Tuple[str, ...]
+    description: str = ''
+    expect: dict = field(default_factory=dict)
+
+
+def _pose_matrix(pose: Sequence[float]) -> np.ndarray:
+    """(4, 4) transform of [x, y, z, roll, pitch, yaw] (URDF fixed-axis convention)."""
+    x, y, z, roll, pitch, yaw = pose
+    cr, sr, cp, sp, cy, sy = (math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch),
+                              math.cos(yaw), math.sin(yaw))
+    transform = np.eye(4)
+    transform[:3, :3] = [[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                         [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                         [-sp, cp * sr, cp * cr]]
+    transform[:3, 3] = (x, y, z)
+    return transform
+
+
+def _finite_numbers(value, count: int, what: str, source: str) -> Tuple[float, ...]:
+    """Check that ``value`` is a list of ``count`` finite numbers, else raise SceneError."""
+    ok = isinstance(value, (list, tuple)) and len(value) == count and all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+        for v in value)
+    if not ok:
+        raise SceneError(f'{source}: {what} must be a list of {count} finite numbers, '
+                         f'got {value!r}')
+    return tuple(float(v) for v in value)
+
+
+def load_mesh(path: str) -> trimesh.Trimesh:
+    """Read one mesh file (STL, OBJ, PLY, GLB/GLTF, DAE) as world-frame triangles.
+
+    Multi-geometry files (a GLB scene) are flattened with their node transforms.
+
+    Raises
+    ------
+    SceneError
+        Missing, unreadable, empty or non-mesh file; NaN/inf vertices; no triangles.
+
+    """
+    if not os.path.isfile(path):
+        raise SceneError(f'{path}: no such mesh file')
+    try:
+        size = os.path.getsize(path)
+        with open(path, 'rb'):
+            pass
+    except OSError as error:
+        raise SceneError(f'{path}: cannot read mesh file: {error}') from error
+    if size == 0:
+        raise SceneError(f'{path}: empty file')
+    try:
+        loaded = trimesh.load(path, force='scene', process=False)
+        geometry = [g for g in loaded.dump(concatenate=False)] if loaded.geometry else []
+    except Exception as error:  # trimesh's loaders raise many exception types
+        raise SceneError(f'{path}: not a readable mesh: {error}') from error
+    meshes = [g for g in geometry if isinstance(g, trimesh.Trimesh)]
+    if not meshes:
+        raise SceneError(f'{path}: contains no triangle mesh')
+    mesh = meshes[0] if len(meshes) == 1 else trimesh.util.concatenate(meshes)
+    _check_mesh(mesh, path)
+    return mesh
+
+
+def _check_mesh(mesh, what: str) -> None:
+    if not isinstance(mesh, trimesh.Trimesh):
+        raise ValueError(f'{what}: expected a trimesh.Trimesh, got {type(mesh).__name__}')
+    if len(mesh.faces) == 0:
+        raise SceneError(f'{what}: mesh has zero triangles')
+    vertices = np.asarray(mesh.vertices, dtype=float)
+    if not np.all(np.isfinite(vertices)):
+        bad = int(np.flatnonzero(~np.all(np.isfinite(vertices), axis=1))[0])
+        raise SceneError(f'{what}: vertex {bad} is not finite: {vertices[bad].tolist()}')
+
+
+def _read_yaml(path: str) -> dict:
+    try:
+        with open(path, 'r', encoding='utf-8') as stream:
+            text = stream.read()
+    except (OSError, UnicodeDecodeError) as error:
+        raise SceneError(f'{path}: cannot read scene file: {error}') from error
+    if not text.strip():
+        raise SceneError(f'{path}: empty file')
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as error:
+        mark = getattr(error, 'problem_mark', None)
+        where = f' line {mark.line + 1}, column {mark.column + 1}' if mark else ''
+        problem = getattr(error, 'problem', None) or str(error)
+        raise SceneError(f'{path}:{where} YAML syntax error: {problem}') from error
+    if not isinstance(data, dict):
+        raise SceneError(f'{path}: top level must be a mapping with a meshes: list, '
+                         f'got {type(data).__name__}')
+    unknown = sorted(set(map(str, data)) - set(SCENE_KEYS))
+    if unknown:
+        raise SceneError(f'{path}: unknown key(s) {unknown}; allowed: {list(SCENE_KEYS)}')
+    return data
+
+
+def load_scene(path: str, skeleton=None) -> Scene:
+    """Load a scene: a YAML file listing meshes and the start pose, or one bare mesh file.
+
+    YAML form::
+
+        meshes:
+          - {file: ground.stl}                          # relative to the YAML file
+          - {file: box.obj, pose: [x, y, z, roll, pitch, yaw]}   # m, rad; optional
+        start: [x, y, yaw]                              # optional, default [0, 0, 0]
+        description: free text                          # optional
+        expect: {...}                                   # optional, for tests
+
+    Parameters
+    ----------
+    path
+        Scene YAML (``.yaml``/``.yml``) or a mesh file (start at the origin).
+    skeleton
+        If given, :func:`check_start` verifies the actor can stand at the start.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        Naming the file and the field, line or value at fault.
+
+    """
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        raise SceneError(f'{path}: no such scene file')
+    if os.path.isdir(path):
+        raise SceneError(f'{path}: is a directory, not a scene file')
+    description, expect = '', {}
+    start = (0.0, 0.0, 0.0)
+    if path.lower().endswith(YAML_SUFFIXES):
+        data = _read_yaml(path)
+        entries = data.get('meshes')
+        if not isinstance(entries, list) or not entries:
+            raise SceneError(f'{path}: meshes must be a non-empty list, got {entries!r}')
+        if 'start' in data:
+            start = _finite_numbers(data['start'], 3, 'start', path)
+        if 'description' in data:
+            if not isinstance(data['description'], str):
+                raise SceneError(f'{path}: description must be a string, '
+                                 f'got {data["description"]!r}')
+            description = data['description']
+        if 'expect' in data:
+            if not isinstance(data['expect'], dict):
+                raise SceneError(f'{path}: expect must be a mapping, got {data["expect"]!r}')
+            expect = data['expect']
+        base = os.path.dirname(os.path.abspath(path))
+        meshes, names, files = [], [], []
+        for i, entry in enumerate(entries):
+            where = f'{path}: meshes[{i}]'
+            if not isinstance(entry, dict):
+                raise SceneError(f'{where} must be a mapping with file: (and pose:), '
+                                 f'got {entry!r}')
+            unknown = sorted(set(map(str, entry)) - set(MESH_KEYS))
+            if unknown:
+                raise SceneError(f'{where}: unknown key(s) {unknown}; allowed: {list(MESH_KEYS)}')
+            if not isinstance(entry.get('file'), str) or not entry['file']:
+                raise SceneError(f'{where}.file must be a file name, got {entry.get("file")!r}')
+            mesh_path = os.path.normpath(os.path.join(base, entry['file']))
+            mesh = load_mesh(mesh_path)
+            if 'pose' in entry:
+                pose = _finite_numbers(entry['pose'], 6, f'meshes[{i}].pose', path)
+                mesh = mesh.copy()
+                mesh.apply_transform(_pose_matrix(pose))
+            meshes.append(mesh)
+            names.append(f'{i}:{os.path.basename(mesh_path)}')
+            files.append(mesh_path)
+    else:
+        meshes, names, files = [load_mesh(path)], [os.path.basename(path)], [path]
+    try:
+        environment = Environment(meshes, names)
+    except SceneError:
+        raise
+    except ValueError as error:
+        raise SceneError(f'{path}: {error}') from error
+    scene = Scene(environment=environment, start=start, source=path, mesh_files=tuple(files),
+                  description=description, expect=expect)
+    if skeleton is not None:
+        try:
+            check_start(environment, start, skeleton)
+        except SceneError as error:
+            raise SceneError(f'{path}: {error}') from error
+    return scene
+
+
+def start_configuration(environment: 'Environment', start, skeleton) -> np.ndarray:
+    """Place the actor's neutral standing configuration at a start pose.
+
+    The feet stand on the highest walkable surface below the start that leaves room for the
+    whole actor above it (else the highest one): ``root_z`` = the highest ground under the
+    corners of both soles + ``skeleton.leg.standing_height`` + 2 mm.
+
+    Parameters
+    ----------
+    environment
+        The world.
+    start
+        (x m, y m, yaw rad).
+    skeleton
+        The actor model.
+
+    Returns
+    -------
+    numpy.ndarray
+        (22,) float64 configuration, rad or m.
+
+    Raises
+    ------
+    SceneError
+        ``start`` is not 3 finite numbers, or there is no ground below it.
+
+    """
+    x, y, yaw = _finite_numbers(list(start) if isinstance(start, (list, tuple, np.ndarray))
+                                else start, 3, 'start', 'start pose')
+    q = skeleton.neutral().copy()
+    q[skeleton.index['root_x']], q[skeleton.index['root_y']] = x, y
+    q[skeleton.index['root_yaw']] = yaw
+    leg = skeleton.leg
+    # Sole corners of both feet in the pelvis frame (§4: feet under the hips).
+    corners = np.array([[dx, side * leg.hip_half_width + dy]
+                        for side in (1.0, -1.0)
+                        for dx in (-leg.heel, leg.toe)
+                        for dy in (-leg.foot_width / 2, leg.foot_width / 2)])
+    c, s = math.cos(yaw), math.sin(yaw)
+    xy = corners @ np.array([[c, s], [-s, c]]) + (x, y)
+    q0 = q.copy()
+    q0[skeleton.index['root_z']] = 0.0
+    shapes = skeleton.shape_transforms(skeleton.forward_kinematics(q0))
+    body_height = float(shapes[:, 2, 3].max() - shapes[:, 2, 3].min()) + leg.standing_height
+    z_ref = float(environment.bounds[1, 2]) + 1.0
+    height = None
+    for _ in range(64):
+        ground, clearance = environment.ground_height(xy, z_ref)
+        if np.any(np.isnan(ground)):
+            break
+        level = float(ground.max())
+        if height is None:
+            height = level
+        if float(clearance.min()) >= body_height:
+            height = level
+            break
+        z_ref = float(ground.min()) - 2 * _MIN_INTERVAL
+    if height is None:
+        raise SceneError(f'no ground below the start pose ({x:g}, {y:g}, yaw {yaw:g})')
+    q[skeleton.index['root_z']] = height + leg.standing_height + 0.002
+    return q
+
+
+def check_start(environment: 'Environment', start, skeleton) -> None:
+    """Check the actor can stand at a start pose.
+
+    Places :func:`start_configuration` and tests it against the environment with
+    :class:`collision.BodyCollision`.
+
+    Raises
+    ------
+    SceneError
+        No ground below the start, or the standing actor would be inside an obstacle.
+
+    """
+    from digital_actor_planner.core.collision import BodyCollision
+
+    q = start_configuration(environment, start, skeleton)
+    links = BodyCollision(skeleton, environment).links_in_collision(q)
+    if links:
+        x, y, yaw = (float(v) for v in start)
+        raise SceneError(f'start pose ({x:g}, {y:g}, yaw {yaw:g}) is inside an obstacle: '
+                         f'links {links} collide')
+
+
+class Environment:
+    """Triangle meshes in the world frame with an FCL BVH and a layered walkable-ground map.
+
+    Parameters
+    ----------
+    meshes
+        World-frame triangle meshes (z up, m). Closed meshes are solids; an open upward-facing
+        surface (a height-field terrain) counts as solid below it.
+    names
+        One name per mesh (for messages); default ``mesh0``, ``mesh1``, ...
+    resolution
+        Grid spacing of the ground map, m.
+
+    Attributes
+    ----------
+    meshes, names
+        As given (tuples).
+    bounds
+        (2, 3) world axis-aligned bounds of all meshes, m.
+    manager
+        ``fcl.DynamicAABBTreeCollisionManager`` over one ``fcl.BVHModel`` per mesh.
+    objects
+        The FCL collision objects, in mesh order.
+
+    """
+
+    def __init__(self, meshes: Sequence[trimesh.Trimesh], names: Optional[Sequence[str]] = None,
+                 resolution: float = 0.02):
+        meshes = tuple(meshes)
+        if not meshes:
+            raise ValueError('environment needs at least one mesh, got none')
+        if names is None:
+            names = tuple(f'mesh{i}' for i in range(len(meshes)))
+        names = tuple(str(n) for n in names)
+        if len(names) != len(meshes):
+            raise ValueError(f'{len(names)} names given for {len(meshes)} meshes')
+        for i, (mesh, name) in enumerate(zip(meshes, names)):
+            _check_mesh(mesh, f'mesh {i} ({name})')
+        if not (isinstance(resolution, (int, float)) and math.isfinite(resolution)
+                and resolution > 0):
+            raise ValueError(f'resolution must be a positive number of metres, got {resolution!r}')
+        self.meshes = meshes
+        self.names = names
+        self.resolution = float(resolution)
+        self.bounds = np.array([np.min([m.bounds[0] for m in meshes], axis=0),
+                                np.max([m.bounds[1] for m in meshes], axis=0)])
+        self.objects = []
+        self._models = []
+        for mesh in meshes:
+            model = fcl.BVHModel()
+            vertices = np.asarray(mesh.vertices, dtype=float)
+            faces = np.asarray(mesh.faces, dtype=np.int64)
+            model.beginModel(len(vertices), len(faces))
+            model.addSubModel(vertices, faces)
+            model.endModel()
+            self._models.append(model)
+            self.objects.append(fcl.CollisionObject(model, fcl.Transform()))
+        self.manager = fcl.DynamicAABBTreeCollisionManager()
+        self.manager.registerObjects(self.objects)
+        self.manager.setup()
+        self._object_index = {id(m): i for i, m in enumerate(self._models)}
+        self._vertices = [np.asarray(m.vertices, dtype=float) for m in meshes]
+        self._faces = [np.asarray(m.faces, dtype=np.int64) for m in meshes]
+        self._build_ground_map()
+
+    def mesh_of(self, geometry) -> int:
+        """Index of the mesh whose FCL geometry is ``geometry`` (from a contact), or -1."""
+        return self._object_index.get(id(geometry), -1)
+
+    def triangle(self, mesh_index: int, triangle_index: int) -> np.ndarray:
+        """(3, 3) world vertices of one triangle of one mesh, m."""
+        return self._vertices[mesh_index][self._faces[mesh_index][triangle_index]]
+
+    # -- the layered ground map ----------------------------------------------------------
+    def _build_ground_map(self) -> None:
+        """Rasterise every triangle on the grid nodes: a vertical ray per node, all hits.
+
+        Walking down each ray from the sky with a depth counter (+1 entering a solid at an
+        upward face, -1 leaving at a downward face) gives the free intervals [ground, ceiling)
+        a foot can stand in.
+        """
+        res = self.resolution
+        lo, hi = self.bounds[0, :2], self.bounds[1, :2]
+        counts = np.maximum(np.ceil((hi - lo) / res).astype(int) + 1, 2)
+        self._origin = lo.copy()
+        self._inverse_resolution = 1.0 / res
+        self._shape = (int(counts[1]), int(counts[0]))  # (ny, nx)
+        nx, ny = int(counts[0]), int(counts[1])
+        triangles = np.concatenate([v[f] for v, f in zip(self._vertices, self._faces)])
+        nodes, heights, signs = self._rasterise(triangles, nx, ny)
+
+        order = np.lexsort((-heights, nodes))
+        nodes, heights, signs = nodes[order], heights[order], signs[order]
+        if len(nodes):
+            repeat = np.zeros(len(nodes), dtype=bool)
+            repeat[1:] = ((nodes[1:] == nodes[:-1]) & (signs[1:] == signs[:-1])
+                          & (heights[:-1] - heights[1:] < _SAME_SURFACE))
+            nodes, heights, signs = nodes[~repeat], heights[~repeat], signs[~repeat]
+        unique, first, per_node = np.unique(nodes, return_index=True, return_counts=True)
+        depth_max = int(per_node.max()) if len(per_node) else 1
+        rank = np.arange(len(nodes)) - np.repeat(first, per_node)
+        row = np.repeat(np.arange(len(unique)), per_node)
+        hit_z = np.full((len(unique), depth_max), -np.inf)
+        hit_sign = np.zeros((len(unique), depth_max), dtype=np.int8)
+        hit_z[row, rank] = heights
+        hit_sign[row, rank] = signs
+
+        grounds = np.full((len(unique), depth_max), np.inf)
+        ceilings = np.full((len(unique), depth_max), np.inf)
+        depth = np.zeros(len(unique), dtype=np.int32)
+        ceiling = np.full(len(unique), np.inf)
+        for j in range(depth_max):
+            z, s = hit_z[:, j], hit_sign[:, j]
+            up, down = s > 0, s < 0
+            starts = up & (depth == 0)
+            grounds[starts, j] = z[starts]
+            ceilings[starts, j] = ceiling[starts]
+            depth += up
+            depth = np.where(down, np.maximum(depth - 1, 0), depth)
+            leaves = down & (depth == 0)
+            ceiling[leaves] = z[leaves]
+        with np.errstate(invalid='ignore'):
+            thin = ~(ceilings - grounds >= _MIN_INTERVAL)
+        grounds[thin] = np.inf
+        ceilings[thin] = np.inf
+        grounds, ceilings = _compact(grounds, ceilings)
+        node_ground = np.full((nx * ny, grounds.shape[1]), np.inf)
+        node_ceiling = np.full((nx * ny, grounds.shape[1]), np.inf)
+        node_ground[unique] = grounds
+        node_ceiling[unique] = ceilings
+        node_ground = node_ground.reshape(ny, nx, -1)
+        node_ceiling = node_ceiling.reshape(ny, nx, -1)
+        # Conservative over each cell: a height z is free in the cell when it is free at all four
+        # corners, so the cell's free intervals are the intersection of the corners' intervals.
+        cell_ground, cell_ceiling = node_ground[:-1, :-1], node_ceiling[:-1, :-1]
+        for corner in ((slice(None, -1), slice(1, None)), (slice(1, None), slice(None, -1)),
+                       (slice(1, None), slice(1, None))):
+            cell_ground, cell_ceiling = _intersect(
+                cell_ground.reshape(-1, cell_ground.shape[-1]),
+                cell_ceiling.reshape(-1, cell_ceiling.shape[-1]),
+                node_ground[corner].reshape(-1, node_ground.shape[-1]),
+                node_ceiling[corner].reshape(-1, node_ceiling.shape[-1]))
+        self._layers = cell_ground.shape[-1]
+        self._ground = np.ascontiguousarray(cell_ground.reshape(-1, self._layers))
+        self._ceiling = np.ascontiguousarray(cell_ceiling.reshape(-1, self._layers))
+        self._ground_flat = self._ground.ravel()
+        self._ceiling_flat = self._ceiling.ravel()
+
+    def _rasterise(self, triangles: np.ndarray, nx: int, ny: int):
+        """Heights and facing of every non-vertical triangle at the grid nodes it covers.
+
+        Returns (node index, height m, +1 upward / -1 downward facing) of each hit.
+        """
+        res, (x0, y0) = self.resolution, self._origin
+        edge1 = triangles[:, 1] - triangles[:, 0]
+        edge2 = triangles[:, 2] - triangles[:, 0]
+        normal = np.cross(edge1, edge2)
+        norm = np.linalg.norm(normal, axis=1)
+        steep = np.abs(normal[:, 2]) <= 1e-9 * np.maximum(norm, 1e-300)
+        triangles = triangles[~steep]
+        normal_z = normal[~steep, 2]
+        low = triangles[:, :, :2].min(axis=1)
+        high = triangles[:, :, :2].max(axis=1)
+        ix0 = np.clip(np.ceil((low[:, 0] - x0) / res - 1e-9), 0, nx - 1).astype(np.int64)
+        ix1 = np.clip(np.floor((high[:, 0] - x0) / res + 1e-9), -1, nx - 1).astype(np.int64)
+        iy0 = np.clip(np.ceil((low[:, 1] - y0) / res - 1e-9), 0, ny - 1).astype(np.int64)
+        iy1 = np.clip(np.floor((high[:, 1] - y0) / res + 1e-9), -1, ny - 1).astype(np.int64)
+        width = np.maximum(ix1 - ix0 + 1, 0)
+        count = width * np.maximum(iy1 - iy0 + 1, 0)
+        out_nodes, out_z, out_sign = [], [], []
+        cumulative = np.cumsum(count)
+        start = 0
+        while start < len(triangles):
+            limit = (cumulative[start - 1] if start else 0) + _RASTER_CHUNK
+            stop = max(start + 1, int(np.searchsorted(cumulative, limit, side='right')))
+            sel = slice(start, stop)
+            start = stop
+            n = count[sel]
+            total = int(n.sum())
+            if total == 0:
+                continue
+            tri = np.repeat(np.arange(len(n)), n)
+            local = np.arange(total) - np.repeat(np.cumsum(n) - n, n)
+            w = width[sel][tri]
+            ix = ix0[sel][tri] + local % w
+            iy = iy0[sel][tri] + local // w
+            t = triangles[sel][tri]
+            px = x0 + ix * res - t[:, 0, 0]
+            py = y0 + iy * res - t[:, 0, 1]
+            e1x, e1y = t[:, 1, 0] - t[:, 0, 0], t[:, 1, 1] - t[:, 0, 1]
+            e2x, e2y = t[:, 2, 0] - t[:, 0, 0], t[:, 2, 1] - t[:, 0, 1]
+            det = normal_z[sel][tri]
+            w1 = (px * e2y - e2x * py) / det
+            w2 = (e1x * py - px * e1y) / det
+            eps = 1e-9
+            inside = (w1 >= -eps) & (w2 >= -eps) & (w1 + w2 <= 1 + eps)
+            z = t[:, 0, 2] + w1 * (t[:, 1, 2] - t[:, 0, 2]) + w2 * (t[:, 2, 2] - t[:, 0, 2])
+            out_nodes.append((iy * nx + ix)[inside])
+            out_z.append(z[inside])
+            out_sign.append(np.where(det[inside] > 0, 1, -1).astype(np.int8))
+        if not out_nodes:
+            return np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int8)
+        return np.concatenate(out_nodes), np.concatenate(out_z), np.concatenate(out_sign)
+
+    def ground_height(self, xy, z_ref) -> Tuple[np.ndarray, np.ndarray]:
+        """Height of the highest walkable surface at or below ``z_ref``, and the room above it.
+
+        A walkable surface is an upward-facing surface with free space above it (§4.2: the
+        ground profile under the feet). The answer is conservative over the grid cell that holds
+        each point: the highest of the four corner grounds and the lowest of their ceilings.
+
+        Error bound: on horizontal tops the height is exact (float precision), and within one
+        ``resolution`` outside a top's edge it may report the top (a foot placed there never
+        sinks into the mesh or clips a step edge at a grid node). On sloped faces it
+        overestimates by at most slope x ``resolution`` x sqrt(2); features narrower than
+        ``resolution`` (spikes, thin ridges between nodes) can be missed. Use
+        :class:`collision.BodyCollision` for exact tests.
+
+        Parameters
+        ----------
+        xy
+            (N, 2) horizontal query points, m.
+        z_ref
+            Scalar or (N,) reference heights, m (e.g. a foot's height plus the largest step up).
+
+        Returns
+        -------
+        height : numpy.ndarray
+            (N,) ground height, m; NaN where there is no walkable surface at or below ``z_ref``
+            (off the meshes), or where ``z_ref`` is inside a solid (a wall, a table top), at any
+            corner of the cell.
+        clearance : numpy.ndarray
+            (N,) free height above the ground up to the next surface above it, m; inf if open
+            to the sky; NaN where height is NaN.
+
+        """
+        xy = np.asarray(xy, dtype=float)
+        if xy.ndim != 2 or xy.shape[1] != 2:
+            raise ValueError(f'xy must have shape (N, 2), got {xy.shape}')
+        z = np.asarray(z_ref, dtype=float)
+        if z.ndim == 0:
+            z = np.full(len(xy), float(z))
+        elif z.shape != (len(xy),):
+            raise ValueError(f'z_ref must be a scalar or shape ({len(xy)},), got {z.shape}')
+        ny, nx = self._shape
+        fx = (xy[:, 0] - self._origin[0]) * self._inverse_resolution
+        fy = (xy[:, 1] - self._origin[1]) * self._inverse_resolution
+        valid = (fx >= 0) & (fx <= nx - 1) & (fy >= 0) & (fy <= ny - 1) & (np.abs(z) < np.inf)
+        fx[~valid] = 0.0
+        fy[~valid] = 0.0
+        cell = (np.minimum(fy.astype(np.int64), ny - 2) * (nx - 1)
+                + np.minimum(fx.astype(np.int64), nx - 2))
+        layers = self._layers
+        if layers == 1:
+            height = self._ground_flat[cell]
+            ceiling = self._ceiling_flat[cell]
+            bad = ~(height <= z + _Z_TOLERANCE)
+        else:
+            level = np.count_nonzero(self._ground[cell] <= (z + _Z_TOLERANCE)[:, None],
+                                     axis=1) - 1
+            bad = level < 0
+            flat = cell * layers + level
+            height = self._ground_flat[flat]
+            ceiling = self._ceiling_flat[flat]
+        bad |= z > ceiling
+        bad |= ~valid
+        height[bad] = np.nan
+        clearance = ceiling - height
+        return height, clearance
