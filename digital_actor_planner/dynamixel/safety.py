@@ -1,0 +1,109 @@
+"""The safety envelope between the joint stream and the servos: clamp, rate limit, watchdog."""
+from __future__ import annotations
+
+import math
+from typing import Iterable, List, Sequence
+
+import numpy as np
+
+
+class SafetyEnvelope:
+    """Turn whatever arrives on the input topic into goals that are safe to send.
+
+    Targets are clamped to each joint's safe range; the commanded position moves toward the
+    target no faster than the joint's maximum speed; NaN/inf values and unknown names are
+    ignored; when no valid input has arrived for ``watchdog_timeout`` seconds the commanded
+    position is held.
+
+    Parameters
+    ----------
+    joint_names
+        (n,) names of the driven joints.
+    lower, upper
+        (n,) safe range, rad.
+    max_speed
+        (n,) rad/s.
+    watchdog_timeout
+        Seconds without valid input after which the servos hold.
+    max_step_time
+        Longest time step (s) the rate limiter will integrate, so that a stalled cycle does
+        not turn into one large jump.
+
+    """
+
+    def __init__(self, joint_names: Sequence[str], lower, upper, max_speed,
+                 watchdog_timeout: float, max_step_time: float = 0.05):
+        self.joint_names = tuple(joint_names)
+        self.index = {name: i for i, name in enumerate(self.joint_names)}
+        self.lower = np.asarray(lower, dtype=float)
+        self.upper = np.asarray(upper, dtype=float)
+        self.max_speed = np.asarray(max_speed, dtype=float)
+        n = len(self.joint_names)
+        for name, array in (('lower', self.lower), ('upper', self.upper),
+                            ('max_speed', self.max_speed)):
+            if array.shape != (n,):
+                raise ValueError(f'{name}: shape {array.shape}, expected ({n},)')
+        if not np.all(self.lower < self.upper):
+            raise ValueError(f'lower {self.lower} not below upper {self.upper}')
+        if not np.all(self.max_speed > 0):
+            raise ValueError(f'max_speed {self.max_speed} must be positive')
+        if not (math.isfinite(watchdog_timeout) and watchdog_timeout > 0):
+            raise ValueError(f'watchdog_timeout {watchdog_timeout} must be positive')
+        self.watchdog_timeout = float(watchdog_timeout)
+        self.max_step_time = float(max_step_time)
+        self.commanded = np.clip(np.zeros(n), self.lower, self.upper)
+        self.target = self.commanded.copy()
+        self.last_input_time = -math.inf
+        self.last_step_time = None
+        self.holding = True
+        #: Counts of ignored input values, by reason, for diagnostics.
+        self.ignored = {'not finite': 0, 'unknown name': 0, 'clamped': 0}
+
+    def reset(self, positions, now: float) -> None:
+        """Start from measured positions (rad): commanded = target = clamped positions."""
+        positions = np.asarray(positions, dtype=float)
+        self.commanded = np.clip(np.where(np.isfinite(positions), positions, self.commanded),
+                                 self.lower, self.upper)
+        self.target = self.commanded.copy()
+        self.last_step_time = now
+        self.holding = True
+
+    def command(self, names: Iterable[str], positions: Iterable[float], now: float) -> List[str]:
+        """Take one input message; return the names whose values were ignored."""
+        ignored = []
+        accepted = False
+        for name, value in zip(names, positions):
+            i = self.index.get(name)
+            if i is None:
+                self.ignored['unknown name'] += 1
+                ignored.append(name)
+                continue
+            value = float(value)
+            if not math.isfinite(value):
+                self.ignored['not finite'] += 1
+                ignored.append(name)
+                continue
+            clamped = min(max(value, self.lower[i]), self.upper[i])
+            if clamped != value:
+                self.ignored['clamped'] += 1
+            self.target[i] = clamped
+            accepted = True
+        if accepted:
+            self.last_input_time = now
+            self.holding = False
+        return ignored
+
+    def step(self, now: float) -> np.ndarray:
+        """Advance the commanded positions to time ``now`` (s); return them, (n,) rad."""
+        if now - self.last_input_time > self.watchdog_timeout:
+            # Watchdog: stop where we are instead of chasing a stale target.
+            self.target = self.commanded.copy()
+            self.holding = True
+        dt = 0.0 if self.last_step_time is None else now - self.last_step_time
+        dt = min(max(dt, 0.0), self.max_step_time)
+        self.last_step_time = now
+        limit = self.max_speed * dt
+        self.commanded = np.clip(
+            self.commanded + np.clip(self.target - self.commanded, -limit, limit),
+            self.lower, self.upper)
+        return self.commanded.copy()

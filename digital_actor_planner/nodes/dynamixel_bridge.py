@@ -1,0 +1,188 @@
+"""ROS 2 node ``dynamixel_bridge``: drive Dynamixel X-series servos from a JointState stream.
+
+A thin adapter: parameters -> :class:`BridgeConfig`, messages -> :class:`BridgeController`,
+feedback -> ``~/joint_states``, health -> ``/diagnostics``. Exit codes: 0 after a clean
+shutdown, 2 for invalid configuration, 3 when required servos are missing at start-up.
+"""
+from __future__ import annotations
+
+import sys
+import time
+from typing import Dict, List, Optional
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+import rclpy
+from rclpy.exceptions import (InvalidParameterTypeException, InvalidParameterValueException,
+                              ParameterException)
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
+                                ParameterType)
+from sensor_msgs.msg import JointState
+
+from digital_actor_planner.core.skeleton import Skeleton
+from digital_actor_planner.dynamixel.config import (BridgeConfig, config_from_parameters,
+                                                    ConfigError, servo_joint_names,
+                                                    SUPPORTED_BAUD_RATES)
+from digital_actor_planner.dynamixel.controller import BridgeController, StartupError
+
+EXIT_BAD_CONFIG = 2
+EXIT_MISSING_SERVOS = 3
+
+
+def _float_range(low: float, high: float) -> List[FloatingPointRange]:
+    return [FloatingPointRange(from_value=low, to_value=high, step=0.0)]
+
+
+def _int_range(low: int, high: int) -> List[IntegerRange]:
+    return [IntegerRange(from_value=low, to_value=high, step=1)]
+
+
+# name -> (default, description, extra descriptor fields)
+_PARAMETERS = {
+    'port': ('/dev/ttyUSB0', 'Serial device of the Dynamixel bus (U2D2, USB2Dynamixel).', {}),
+    'baud_rate': (1_000_000, 'Bus bits per second; one of '
+                  + ', '.join(str(b) for b in SUPPORTED_BAUD_RATES) + '.',
+                  {'integer_range': _int_range(9600, 4_000_000)}),
+    'control_rate': (100.0, 'Control cycles per second (one sync write + one sync read each).',
+                     {'floating_point_range': _float_range(1.0, 1000.0)}),
+    'joint_state_topic': ('joint_states', 'sensor_msgs/JointState input topic.', {}),
+    'watchdog_timeout': (0.5, 'Seconds without valid input after which the servos hold.',
+                         {'floating_point_range': _float_range(0.01, 60.0)}),
+    'torque_off_on_shutdown': (True, 'Switch torque off on SIGINT/SIGTERM.', {}),
+    'require_all_servos': (False, 'Exit at start-up if any configured servo does not answer.',
+                           {}),
+    'dry_run': (False, 'Open no port; log the goal ticks that would be sent.', {}),
+    'reconnect_backoff_min': (0.2, 'First delay (s) before reopening a lost serial port.',
+                              {'floating_point_range': _float_range(0.01, 60.0)}),
+    'reconnect_backoff_max': (5.0, 'Longest delay (s) between reconnect attempts.',
+                              {'floating_point_range': _float_range(0.01, 600.0)}),
+    'health_check_period': (0.2, 'Seconds between Hardware Error Status reads.',
+                            {'floating_point_range': _float_range(0.01, 60.0)}),
+}
+
+_SERVO_PARAMETERS = {
+    'id': ('Dynamixel ID of the servo driving this joint.', ParameterType.PARAMETER_INTEGER,
+           {'integer_range': _int_range(0, 252)}),
+    'offset': ('Servo angle (rad from the 2048-tick centre) at joint angle zero.',
+               ParameterType.PARAMETER_DOUBLE, {'floating_point_range': _float_range(-3.2, 3.2)}),
+    'direction': ('+1 if the servo turns with the joint axis, -1 if against it.',
+                  ParameterType.PARAMETER_INTEGER, {'integer_range': _int_range(-1, 1)}),
+    'min_position': ('Lower end of the safe range (rad), within the URDF limit.',
+                     ParameterType.PARAMETER_DOUBLE, {}),
+    'max_position': ('Upper end of the safe range (rad), within the URDF limit.',
+                     ParameterType.PARAMETER_DOUBLE, {}),
+    'max_speed': ('Fastest commanded joint speed (rad/s).', ParameterType.PARAMETER_DOUBLE,
+                  {'floating_point_range': _float_range(0.001, 100.0)}),
+}
+
+
+class DynamixelBridge(Node):
+    """Subscribe joint states, drive the servos, publish feedback and diagnostics."""
+
+    def __init__(self, skeleton: Optional[Skeleton] = None):
+        super().__init__('dynamixel_bridge')
+        self.skeleton = skeleton or Skeleton()
+        self.config = self._read_config()
+        if self.config.dry_run:
+            bus, bus_error = None, RuntimeError
+        else:
+            from digital_actor_planner.dynamixel.bus import BusError, ServoBus
+            bus, bus_error = ServoBus(self.config.port, self.config.baud_rate), BusError
+        self.controller = BridgeController(self.config, bus, log=self._log, bus_error=bus_error)
+        self.controller.start(time.monotonic())
+        self.feedback_publisher = self.create_publisher(JointState, '~/joint_states', 10)
+        self.diagnostics_publisher = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self.create_subscription(JointState, self.config.joint_state_topic, self._on_joint_state,
+                                 10)
+        self.create_timer(1.0 / self.config.control_rate, self._on_cycle)
+        self.create_timer(0.5, self._publish_diagnostics)
+        self._last_levels: Dict[str, int] = {}
+        self._publish_diagnostics()
+
+    def _log(self, level: str, message: str) -> None:
+        logger = self.get_logger()
+        {'info': logger.info, 'warn': logger.warning, 'error': logger.error}[level](message)
+
+    def _declare(self, name, default, descriptor):
+        try:
+            return self.declare_parameter(name, default, descriptor).value
+        except (InvalidParameterTypeException, InvalidParameterValueException,
+                ParameterException) as error:
+            raise ConfigError(f'{name}: {error}') from None
+
+    def _read_config(self) -> BridgeConfig:
+        values = {}
+        for name, (default, description, extra) in _PARAMETERS.items():
+            descriptor = ParameterDescriptor(description=description, read_only=True, **extra)
+            values[name] = self._declare(name, default, descriptor)
+        joints = self._declare(
+            'servo_joints', list(servo_joint_names(self.skeleton)),
+            ParameterDescriptor(description='Joints driven by servos (body joints of the URDF).',
+                                read_only=True))
+        values['servo_joints'] = list(joints)
+        for joint in joints:
+            for field_name, (description, kind, extra) in _SERVO_PARAMETERS.items():
+                descriptor = ParameterDescriptor(description=description, type=kind,
+                                                 read_only=True, **extra)
+                value = self._declare(f'servos.{joint}.{field_name}', kind, descriptor)
+                if value is not None:
+                    values[f'servos.{joint}.{field_name}'] = value
+        return config_from_parameters(values, self.skeleton)
+
+    def _on_joint_state(self, message: JointState) -> None:
+        if len(message.position) != len(message.name):
+            return
+        self.controller.on_joint_state(message.name, message.position, time.monotonic())
+
+    def _on_cycle(self) -> None:
+        feedback = self.controller.cycle(time.monotonic())
+        if feedback is not None and len(feedback.names):
+            message = JointState()
+            message.header.stamp = self.get_clock().now().to_msg()
+            message.name = list(feedback.names)
+            message.position = [float(p) for p in feedback.positions]
+            self.feedback_publisher.publish(message)
+        levels = {s.name: s.level for s in self.controller.health(time.monotonic())}
+        if levels != self._last_levels:
+            self._publish_diagnostics()
+
+    def _publish_diagnostics(self) -> None:
+        statuses = self.controller.health(time.monotonic())
+        self._last_levels = {s.name: s.level for s in statuses}
+        message = DiagnosticArray()
+        message.header.stamp = self.get_clock().now().to_msg()
+        for status in statuses:
+            message.status.append(DiagnosticStatus(
+                level=bytes([status.level]), name=status.name, message=status.message,
+                hardware_id=status.hardware_id,
+                values=[KeyValue(key=k, value=v) for k, v in status.values]))
+        self.diagnostics_publisher.publish(message)
+
+
+def main(args=None) -> int:
+    """Run the bridge until SIGINT/SIGTERM; switch torque off on the way out."""
+    rclpy.init(args=args)
+    node = None
+    code = 0
+    try:
+        node = DynamixelBridge()
+        rclpy.spin(node)
+    except ConfigError as error:
+        print(f'dynamixel_bridge: invalid configuration: {error}', file=sys.stderr)
+        code = EXIT_BAD_CONFIG
+    except StartupError as error:
+        print(f'dynamixel_bridge: {error}', file=sys.stderr)
+        code = EXIT_MISSING_SERVOS
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.controller.shutdown()
+            node.destroy_node()
+        rclpy.try_shutdown()
+    sys.exit(code)
+
+
+if __name__ == '__main__':
+    main()
