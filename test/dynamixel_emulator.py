@@ -163,7 +163,8 @@ class Servo:
 
     def _set(self, address: int, value: int) -> None:
         size = CONTROL_TABLE[address][0]
-        self.table[address:address + size] = int(value).to_bytes(size, 'little', signed=True)
+        self.table[address:address + size] = int(value).to_bytes(size, 'little',
+                                                                  signed=size == 4)
 
     def get(self, address: int) -> int:
         """Register value (signed for 4-byte registers)."""

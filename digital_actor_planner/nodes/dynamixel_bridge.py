@@ -16,8 +16,8 @@ from rclpy.exceptions import (InvalidParameterTypeException, InvalidParameterVal
                               ParameterException)
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rcl_interfaces.msg import (FloatingPointRange, IntegerRange, ParameterDescriptor,
-                                ParameterType)
+from rclpy.parameter import Parameter
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from sensor_msgs.msg import JointState
 
 from digital_actor_planner.core.skeleton import Skeleton
@@ -62,17 +62,17 @@ _PARAMETERS = {
 }
 
 _SERVO_PARAMETERS = {
-    'id': ('Dynamixel ID of the servo driving this joint.', ParameterType.PARAMETER_INTEGER,
+    'id': ('Dynamixel ID of the servo driving this joint.', Parameter.Type.INTEGER,
            {'integer_range': _int_range(0, 252)}),
     'offset': ('Servo angle (rad from the 2048-tick centre) at joint angle zero.',
-               ParameterType.PARAMETER_DOUBLE, {'floating_point_range': _float_range(-3.2, 3.2)}),
+               Parameter.Type.DOUBLE, {'floating_point_range': _float_range(-3.2, 3.2)}),
     'direction': ('+1 if the servo turns with the joint axis, -1 if against it.',
-                  ParameterType.PARAMETER_INTEGER, {'integer_range': _int_range(-1, 1)}),
+                  Parameter.Type.INTEGER, {'integer_range': _int_range(-1, 1)}),
     'min_position': ('Lower end of the safe range (rad), within the URDF limit.',
-                     ParameterType.PARAMETER_DOUBLE, {}),
+                     Parameter.Type.DOUBLE, {}),
     'max_position': ('Upper end of the safe range (rad), within the URDF limit.',
-                     ParameterType.PARAMETER_DOUBLE, {}),
-    'max_speed': ('Fastest commanded joint speed (rad/s).', ParameterType.PARAMETER_DOUBLE,
+                     Parameter.Type.DOUBLE, {}),
+    'max_speed': ('Fastest commanded joint speed (rad/s).', Parameter.Type.DOUBLE,
                   {'floating_point_range': _float_range(0.001, 100.0)}),
 }
 
@@ -101,6 +101,10 @@ class DynamixelBridge(Node):
         self._publish_diagnostics()
 
     def _log(self, level: str, message: str) -> None:
+        if not self.context.ok():
+            # After SIGINT/SIGTERM the ROS logger can no longer reach /rosout.
+            print(f'[{level.upper()}] [dynamixel_bridge]: {message}', file=sys.stderr)
+            return
         logger = self.get_logger()
         {'info': logger.info, 'warn': logger.warning, 'error': logger.error}[level](message)
 
@@ -123,8 +127,8 @@ class DynamixelBridge(Node):
         values['servo_joints'] = list(joints)
         for joint in joints:
             for field_name, (description, kind, extra) in _SERVO_PARAMETERS.items():
-                descriptor = ParameterDescriptor(description=description, type=kind,
-                                                 read_only=True, **extra)
+                descriptor = ParameterDescriptor(description=description, read_only=True,
+                                                 **extra)
                 value = self._declare(f'servos.{joint}.{field_name}', kind, descriptor)
                 if value is not None:
                     values[f'servos.{joint}.{field_name}'] = value
