@@ -13,13 +13,14 @@ The emulator keeps a stable symlink (``port_path``) to the current pty slave, li
 """
 from __future__ import annotations
 
+from collections import deque
 import os
 import select
 import struct
 import threading
 import time
 import tty
-from typing import Dict, Iterable, List, Optional, Tuple
+from typing import Deque, Dict, Iterable, List, Optional, Tuple
 
 HEADER = b'\xff\xff\xfd\x00'
 BROADCAST_ID = 0xFE
@@ -163,8 +164,8 @@ class Servo:
 
     def _set(self, address: int, value: int) -> None:
         size = CONTROL_TABLE[address][0]
-        self.table[address:address + size] = int(value).to_bytes(size, 'little',
-                                                                  signed=size == 4)
+        self.table[address:address + size] = int(value).to_bytes(
+            size, 'little', signed=size == 4)
 
     def get(self, address: int) -> int:
         """Register value (signed for 4-byte registers)."""
@@ -269,6 +270,8 @@ class DynamixelEmulator:
         self.bytes_out = 0
         self.crc_errors = 0
         self.wire_busy_s = 0.0
+        #: The last raw instruction packets received (as sent on the wire, stuffing included).
+        self.received: Deque[bytes] = deque(maxlen=64)
         self._master = self._slave = -1
         self._stop = threading.Event()
         self._thread: Optional[threading.Thread] = None
@@ -368,6 +371,8 @@ class DynamixelEmulator:
                     buffer = buffer[consumed:]
                     break
                 raw_length = consumed
+                raw = bytes(buffer[:consumed])
+                self.received.append(raw[raw.find(HEADER):])
                 buffer = buffer[consumed:]
                 with self.lock:
                     self.bytes_in += raw_length

@@ -1,0 +1,164 @@
+"""The emulator and dynamixel-sdk against the e-Manual's Protocol 2.0 example packets.
+
+The golden packets are the examples of the ROBOTIS e-Manual "DYNAMIXEL Protocol 2.0" page
+(instruction and status packets, CRC bytes included).
+"""
+import os
+import select
+import time
+
+import dynamixel_sdk as sdk
+import pytest
+
+import dynamixel_emulator as emu
+
+GOLDEN = {
+    'ping': bytes.fromhex('FF FF FD 00 01 03 00 01 19 4E'),
+    'ping status': bytes.fromhex('FF FF FD 00 01 07 00 55 00 06 04 26 65 5D'),
+    'read': bytes.fromhex('FF FF FD 00 01 07 00 02 84 00 04 00 1D 15'),
+    'read status': bytes.fromhex('FF FF FD 00 01 08 00 55 00 A6 00 00 00 8C C0'),
+    'write': bytes.fromhex('FF FF FD 00 01 09 00 03 74 00 00 02 00 00 CA 89'),
+    'write status': bytes.fromhex('FF FF FD 00 01 04 00 55 00 A1 0C'),
+    'sync read': bytes.fromhex('FF FF FD 00 FE 09 00 82 84 00 04 00 01 02 CE FA'),
+    'sync read status 2': bytes.fromhex('FF FF FD 00 02 08 00 55 00 1F 08 00 00 BA BE'),
+    'sync write': bytes.fromhex(
+        'FF FF FD 00 FE 11 00 83 74 00 04 00 01 96 00 00 00 02 AA 00 00 00 82 87'),
+}
+
+
+def test_emulator_encodes_the_golden_packets():
+    assert emu.build_packet(1, emu.PING) == GOLDEN['ping']
+    assert emu.build_status(1, 0, bytes([0x06, 0x04, 0x26])) == GOLDEN['ping status']
+    assert emu.build_packet(1, emu.READ, bytes([0x84, 0, 4, 0])) == GOLDEN['read']
+    assert emu.build_status(1, 0, (166).to_bytes(4, 'little')) == GOLDEN['read status']
+    assert emu.build_packet(1, emu.WRITE, bytes([0x74, 0]) + (512).to_bytes(4, 'little')) \
+        == GOLDEN['write']
+    assert emu.build_status(1, 0) == GOLDEN['write status']
+    assert emu.build_packet(0xFE, emu.SYNC_READ, bytes([0x84, 0, 4, 0, 1, 2])) \
+        == GOLDEN['sync read']
+    assert emu.build_status(2, 0, (2079).to_bytes(4, 'little')) == GOLDEN['sync read status 2']
+    params = bytes([0x74, 0, 4, 0, 1]) + (150).to_bytes(4, 'little') + bytes([2]) + (
+        170).to_bytes(4, 'little')
+    assert emu.build_packet(0xFE, emu.SYNC_WRITE, params) == GOLDEN['sync write']
+
+
+def test_emulator_decodes_the_golden_packets():
+    for key in ('ping', 'read', 'write', 'sync read', 'sync write'):
+        packet, consumed, crc_ok = emu.parse_packet(b'\x00\x13' + GOLDEN[key] + b'\xff')
+        assert crc_ok and consumed == len(GOLDEN[key]) + 2, key
+    packet, _, _ = emu.parse_packet(GOLDEN['sync write'])
+    assert packet == (0xFE, emu.SYNC_WRITE, GOLDEN['sync write'][8:-2])
+
+
+def test_byte_stuffing_round_trip():
+    payload = bytes([0x03, 0xFF, 0xFF, 0xFD, 0x01, 0xFF, 0xFF, 0xFD])
+    stuffed = emu.stuff(payload)
+    assert stuffed == bytes([0x03, 0xFF, 0xFF, 0xFD, 0xFD, 0x01, 0xFF, 0xFF, 0xFD, 0xFD])
+    assert emu.unstuff(stuffed) == payload
+
+
+@pytest.fixture
+def bus(tmp_path):
+    with emu.DynamixelEmulator([1, 2], str(tmp_path / 'ttyDXL')) as emulator:
+        emulator.set_register(1, emu.MODEL_NUMBER, 1030)
+        emulator.set_register(1, emu.FIRMWARE_VERSION, 0x26)
+        emulator.set_register(1, emu.PRESENT_POSITION, 166)
+        emulator.servos[1]._position = 166
+        emulator.set_register(2, emu.PRESENT_POSITION, 2079)
+        emulator.servos[2]._position = 2079
+        fd = os.open(emulator.port_path, os.O_RDWR | os.O_NOCTTY)
+        try:
+            yield emulator, fd
+        finally:
+            os.close(fd)
+
+
+def _exchange(fd, request: bytes, expect: int, timeout: float = 2.0) -> bytes:
+    os.write(fd, request)
+    reply = b''
+    deadline = time.monotonic() + timeout
+    while len(reply) < expect and time.monotonic() < deadline:
+        ready, _, _ = select.select([fd], [], [], 0.05)
+        if ready:
+            reply += os.read(fd, 256)
+    return reply
+
+
+def test_emulated_servo_answers_golden_instructions_with_golden_status(bus):
+    emulator, fd = bus
+    assert _exchange(fd, GOLDEN['ping'], 14) == GOLDEN['ping status']
+    assert _exchange(fd, GOLDEN['read'], 15) == GOLDEN['read status']
+    assert _exchange(fd, GOLDEN['sync read'], 30) == GOLDEN['read status'] + GOLDEN[
+        'sync read status 2']
+    assert _exchange(fd, GOLDEN['write'], 11) == GOLDEN['write status']
+    assert emulator.register(1, emu.GOAL_POSITION) == 512
+    assert _exchange(fd, GOLDEN['sync write'], 1, timeout=0.3) == b''  # no status for sync write
+    assert (emulator.register(1, emu.GOAL_POSITION), emulator.register(2, emu.GOAL_POSITION)) \
+        == (150, 170)
+
+
+def test_corrupt_crc_gets_a_crc_error_status(bus):
+    emulator, fd = bus
+    corrupt = GOLDEN['write'][:-1] + bytes([GOLDEN['write'][-1] ^ 0x01])
+    reply = _exchange(fd, corrupt, 11)
+    assert reply == emu.build_status(1, emu.ERR_CRC)
+    assert emulator.register(1, emu.GOAL_POSITION) != 512
+
+
+def test_sdk_sends_the_golden_instruction_bytes(bus):
+    emulator, _ = bus
+    port = sdk.PortHandler(emulator.port_path)
+    assert port.openPort()
+    try:
+        packet = sdk.PacketHandler(2.0)
+        model, result, error = packet.ping(port, 1)
+        assert (model, result, error) == (1030, sdk.COMM_SUCCESS, 0)
+        assert emulator.received[-1] == GOLDEN['ping']
+        value, result, _ = packet.read4ByteTxRx(port, 1, 132)
+        assert (value, result) == (166, sdk.COMM_SUCCESS)
+        assert emulator.received[-1] == GOLDEN['read']
+        packet.write4ByteTxRx(port, 1, 116, 512)
+        assert emulator.received[-1] == GOLDEN['write']
+        group = sdk.GroupSyncWrite(port, packet, 116, 4)
+        group.addParam(1, (150).to_bytes(4, 'little'))
+        group.addParam(2, (170).to_bytes(4, 'little'))
+        assert group.txPacket() == sdk.COMM_SUCCESS
+        reader = sdk.GroupSyncRead(port, packet, 132, 4)
+        reader.addParam(1)
+        reader.addParam(2)
+        assert reader.txRxPacket() == sdk.COMM_SUCCESS
+        assert list(emulator.received)[-2:] == [GOLDEN['sync write'], GOLDEN['sync read']]
+    finally:
+        port.closePort()
+
+
+def test_stuffed_parameters_cross_the_wire_intact(bus):
+    # dynamixel-sdk 4.1.0 (Python) does not stuff what it transmits (addStuffing rebinds its
+    # list), so this sends a correctly stuffed packet by hand. The bridge's own packets never
+    # contain FF FF FD: goal ticks <= 4095 and IDs <= 252.
+    emulator, fd = bus
+    value = bytes([0xFF, 0xFF, 0xFD, 0x00])  # Homing Offset (EEPROM, torque is off)
+    request = emu.build_packet(1, emu.WRITE, bytes([20, 0]) + value)
+    assert b'\xff\xff\xfd\xfd' in request
+    assert _exchange(fd, request, 11) == emu.build_status(1, 0)
+    assert emulator.servos[1].table[20:24] == value
+    reply = _exchange(fd, emu.build_packet(1, emu.READ, bytes([20, 0, 4, 0])), 16)
+    assert reply == emu.build_status(1, 0, value)
+    assert b'\xff\xff\xfd\xfd' in reply
+
+
+def test_status_reports_access_errors_and_hardware_alert(bus):
+    emulator, _ = bus
+    port = sdk.PortHandler(emulator.port_path)
+    assert port.openPort()
+    try:
+        packet = sdk.PacketHandler(2.0)
+        assert packet.write4ByteTxRx(port, 1, 132, 5)[1] == emu.ERR_ACCESS  # read-only
+        packet.write1ByteTxRx(port, 1, 64, 1)
+        assert packet.write1ByteTxRx(port, 1, 7, 9)[1] == emu.ERR_ACCESS  # EEPROM locked
+        emulator.inject_hardware_error(1, 0x20)
+        assert packet.ping(port, 1)[2] & emu.ALERT
+        assert packet.read1ByteTxRx(port, 1, 70)[0] == 0x20
+        assert packet.ping(port, 3)[1] == sdk.COMM_RX_TIMEOUT  # nobody has ID 3
+    finally:
+        port.closePort()
