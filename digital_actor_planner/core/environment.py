@@ -36,7 +36,7 @@ _RASTER_CHUNK = 2_000_000
 
 
 def _compact(grounds: np.ndarray, ceilings: np.ndarray):
-    """Sort each row's intervals by ground (empty ones, ground inf, last) and drop empty columns."""
+    """Sort each row's intervals by ground (empty ones last) and drop all-empty columns."""
     order = np.argsort(grounds, axis=1, kind='stable')
     grounds = np.take_along_axis(grounds, order, axis=1)
     ceilings = np.take_along_axis(ceilings, order, axis=1)

@@ -1,0 +1,395 @@
+"""Exact collision tests of the actor's URDF collision shapes against the environment.
+
+The paper checks the legs' swing (§4.1), the footsteps (§4.2) and the upper body's branches
+(§5) for collisions in 3D. Every check here uses the URDF's own primitives (boxes, cylinders,
+spheres) as python-fcl objects against the environment's BVH meshes.
+"""
+from __future__ import annotations
+
+import math
+from typing import Dict, Iterable, List, Optional, Sequence, Tuple
+
+import fcl
+import numpy as np
+
+# Contacts asked of FCL per shape when measuring penetration.
+_MAX_CONTACTS = 64
+
+
+_IDENTITY = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+
+
+def _matmul(a: Sequence[float], b: Sequence[float]) -> Tuple[float, ...]:
+    """Product of two row-major 3x3 matrices held as 9 floats."""
+    return (a[0] * b[0] + a[1] * b[3] + a[2] * b[6], a[0] * b[1] + a[1] * b[4] + a[2] * b[7],
+            a[0] * b[2] + a[1] * b[5] + a[2] * b[8], a[3] * b[0] + a[4] * b[3] + a[5] * b[6],
+            a[3] * b[1] + a[4] * b[4] + a[5] * b[7], a[3] * b[2] + a[4] * b[5] + a[5] * b[8],
+            a[6] * b[0] + a[7] * b[3] + a[8] * b[6], a[6] * b[1] + a[7] * b[4] + a[8] * b[7],
+            a[6] * b[2] + a[7] * b[5] + a[8] * b[8])
+
+
+def _apply(r: Sequence[float], v: Sequence[float]) -> Tuple[float, float, float]:
+    """Row-major 3x3 matrix (9 floats) times a 3-vector."""
+    return (r[0] * v[0] + r[1] * v[1] + r[2] * v[2], r[3] * v[0] + r[4] * v[1] + r[5] * v[2],
+            r[6] * v[0] + r[7] * v[1] + r[8] * v[2])
+
+
+def _rotate_columns(r: Sequence[float], axis: int, angle: float) -> Tuple[float, ...]:
+    """``r`` times the rotation by ``angle`` about local principal axis 0, 1 or 2."""
+    c, s = math.cos(angle), math.sin(angle)
+    i, j = ((1, 2), (2, 0), (0, 1))[axis]
+    out = list(r)
+    for row in (0, 3, 6):
+        a, b = r[row + i], r[row + j]
+        out[row + i] = c * a + s * b
+        out[row + j] = c * b - s * a
+    return tuple(out)
+
+
+def _quaternion(r: Sequence[float]) -> Tuple[float, float, float, float]:
+    """Unit quaternion (w, x, y, z) of a rotation matrix given as 9 floats, row-major."""
+    trace = r[0] + r[4] + r[8]
+    if trace > 0.0:
+        s = 2.0 * math.sqrt(trace + 1.0)
+        return (0.25 * s, (r[7] - r[5]) / s, (r[2] - r[6]) / s, (r[3] - r[1]) / s)
+    if r[0] > r[4] and r[0] > r[8]:
+        s = 2.0 * math.sqrt(1.0 + r[0] - r[4] - r[8])
+        return ((r[7] - r[5]) / s, 0.25 * s, (r[1] + r[3]) / s, (r[2] + r[6]) / s)
+    if r[4] > r[8]:
+        s = 2.0 * math.sqrt(1.0 + r[4] - r[0] - r[8])
+        return ((r[2] - r[6]) / s, (r[1] + r[3]) / s, 0.25 * s, (r[5] + r[7]) / s)
+    s = 2.0 * math.sqrt(1.0 + r[8] - r[0] - r[4])
+    return ((r[3] - r[1]) / s, (r[2] + r[6]) / s, (r[5] + r[7]) / s, 0.25 * s)
+
+
+def _rodrigues(axis: Sequence[float], angle: float) -> Tuple[float, ...]:
+    """Rotation matrix (9 floats, row-major) about a unit axis."""
+    x, y, z = axis
+    c, s = math.cos(angle), math.sin(angle)
+    t = 1.0 - c
+    return (t * x * x + c, t * x * y - s * z, t * x * z + s * y,
+            t * x * y + s * z, t * y * y + c, t * y * z - s * x,
+            t * x * z - s * y, t * y * z + s * x, t * z * z + c)
+
+
+class BodyCollision:
+    """The actor's collision shapes as FCL objects, tested against an environment.
+
+    Parameters
+    ----------
+    skeleton
+        :class:`skeleton.Skeleton`; its ``collision_shapes`` are the body.
+    environment
+        :class:`environment.Environment`.
+    padding
+        Safety margin added to every shape (radius, half extents), m; >= 0.
+
+    Notes
+    -----
+    ``q`` arguments are (22,) configurations in ``skeleton.joint_names`` order, rad or m.
+    ``links`` arguments are iterables of link names (links without shapes are ignored);
+    ``None`` means every link with a shape.
+
+    """
+
+    def __init__(self, skeleton, environment, padding: float = 0.0):
+        if not (isinstance(padding, (int, float)) and math.isfinite(padding) and padding >= 0):
+            raise ValueError(f'padding must be a finite number of metres >= 0, got {padding!r}')
+        self.skeleton = skeleton
+        self.environment = environment
+        self.padding = float(padding)
+        self.shapes = tuple(skeleton.collision_shapes)
+        self._geometries, self._objects, self._half_extent = [], [], []
+        for shape in self.shapes:
+            geometry, half = self._geometry(shape, self.padding)
+            self._geometries.append(geometry)
+            self._objects.append(fcl.CollisionObject(geometry, fcl.Transform()))
+            self._half_extent.append(half)
+        self._reach = [float(np.linalg.norm(h[1])) if h[0] == 'box' else
+                       float(math.hypot(*h[1])) if h[0] == 'cylinder' else float(h[1][0])
+                       for h in self._half_extent]
+        self._mesh_low = [tuple(float(v) for v in m.bounds[0]) for m in environment.meshes]
+        self._mesh_high = [tuple(float(v) for v in m.bounds[1]) for m in environment.meshes]
+        self.link_shapes: Dict[str, Tuple[int, ...]] = {}
+        for i, shape in enumerate(self.shapes):
+            self.link_shapes[shape.link] = self.link_shapes.get(shape.link, ()) + (i,)
+        self.links: Tuple[str, ...] = tuple(self.link_shapes)
+        self._prepare_kinematics()
+        self._cache_values: Optional[list] = None
+        self._cache_links: Dict[str, tuple] = {}
+        self._placed: Dict[int, tuple] = {}
+        self._request = fcl.CollisionRequest()
+        self._contact_request = fcl.CollisionRequest(num_max_contacts=_MAX_CONTACTS,
+                                                     enable_contact=True)
+
+    # -- construction --------------------------------------------------------------------
+    @staticmethod
+    def _geometry(shape, padding: float):
+        """FCL geometry of one URDF shape, inflated by ``padding``, and its (3,) half extents."""
+        if shape.kind == 'box':
+            size = np.asarray(shape.size, dtype=float) + 2 * padding
+            return fcl.Box(*size), ('box', size / 2)
+        if shape.kind == 'cylinder':
+            radius, length = shape.size[0] + padding, shape.size[1] + 2 * padding
+            return fcl.Cylinder(radius, length), ('cylinder', np.array([radius, length / 2]))
+        if shape.kind == 'sphere':
+            radius = shape.size[0] + padding
+            return fcl.Sphere(radius), ('sphere', np.array([radius]))
+        raise ValueError(f'link {shape.link}: unsupported collision shape {shape.kind!r}')
+
+    def _prepare_kinematics(self) -> None:
+        """Joint data as plain floats for a fast single-configuration forward kinematics."""
+        skeleton = self.skeleton
+        self._joint_of = {}
+        for j in skeleton.joints:
+            rotation = tuple(float(v) for v in j.origin[:3, :3].ravel())
+            if np.allclose(j.origin[:3, :3], np.eye(3), atol=1e-15):
+                rotation = None
+            principal = int(np.argmax(np.abs(j.axis)))
+            if abs(abs(j.axis[principal]) - 1.0) < 1e-12:
+                axis_sign = (principal, float(np.sign(j.axis[principal])))
+            else:
+                axis_sign = None
+            self._joint_of[j.child] = (j.parent, rotation,
+                                       tuple(float(v) for v in j.origin[:3, 3]),
+                                       skeleton.index.get(j.name, -1), j.kind,
+                                       tuple(float(v) for v in j.axis), axis_sign)
+        self._shape_origin = []
+        for shape in self.shapes:
+            rotation = tuple(float(v) for v in shape.origin[:3, :3].ravel())
+            if np.allclose(shape.origin[:3, :3], np.eye(3), atol=1e-15):
+                rotation = None
+            self._shape_origin.append((rotation, tuple(float(v) for v in shape.origin[:3, 3])))
+
+    # -- kinematics ----------------------------------------------------------------------
+    def _check_q(self, q) -> np.ndarray:
+        q = np.asarray(q, dtype=float)
+        if q.shape != (len(self.skeleton.joint_names),):
+            raise ValueError(f'configuration must have shape ({len(self.skeleton.joint_names)},),'
+                             f' got {q.shape}')
+        return q
+
+    def _link_pose(self, link: str):
+        """World (rotation 9 floats row-major, position 3 floats) of one link, cached per q."""
+        pose = self._cache_links.get(link)
+        if pose is not None:
+            return pose
+        joint = self._joint_of.get(link)
+        if joint is None:
+            pose = (_IDENTITY, (0.0, 0.0, 0.0))
+            self._cache_links[link] = pose
+            return pose
+        parent, rotation0, offset0, qi, kind, axis, axis_sign = joint
+        base_rotation, base_position = self._link_pose(parent)
+        moved = _apply(base_rotation, offset0)
+        position = (base_position[0] + moved[0], base_position[1] + moved[1],
+                    base_position[2] + moved[2])
+        rotation = base_rotation if rotation0 is None else _matmul(base_rotation, rotation0)
+        if qi >= 0:
+            value = self._cache_values[qi]
+            if kind == 'prismatic':
+                step = _apply(rotation, axis)
+                position = (position[0] + value * step[0], position[1] + value * step[1],
+                            position[2] + value * step[2])
+            elif axis_sign is not None:
+                rotation = _rotate_columns(rotation, axis_sign[0], axis_sign[1] * value)
+            else:
+                rotation = _matmul(rotation, _rodrigues(axis, value))
+        pose = (rotation, position)
+        self._cache_links[link] = pose
+        return pose
+
+    def _set_configuration(self, q: np.ndarray) -> None:
+        values = q.tolist()
+        if values != self._cache_values:
+            self._cache_values = values
+            self._cache_links = {}
+            self._placed = {}
+
+    def _place(self, shape: int):
+        """Move one shape's FCL object to its pose at the current configuration."""
+        obj = self._objects[shape]
+        if shape not in self._placed:
+            link_rotation, link_position = self._link_pose(self.shapes[shape].link)
+            rotation0, offset0 = self._shape_origin[shape]
+            moved = _apply(link_rotation, offset0)
+            rotation = (link_rotation if rotation0 is None
+                        else _matmul(link_rotation, rotation0))
+            position = (link_position[0] + moved[0], link_position[1] + moved[1],
+                        link_position[2] + moved[2])
+            # Quaternion and translation setters are several times cheaper than fcl.Transform.
+            obj.setQuatRotation(np.array(_quaternion(rotation)))
+            obj.setTranslation(np.array(position))
+            self._placed[shape] = (rotation, position)
+        return obj
+
+    def _candidates(self, shape: int) -> List[int]:
+        """Indices of environment meshes whose bounds overlap the placed shape's bounding box."""
+        x, y, z = self._placed[shape][1]
+        reach = self._reach[shape]
+        low, high = self._mesh_low, self._mesh_high
+        return [i for i in range(len(low))
+                if low[i][0] <= x + reach and x - reach <= high[i][0]
+                and low[i][1] <= y + reach and y - reach <= high[i][1]
+                and low[i][2] <= z + reach and z - reach <= high[i][2]]
+
+    def _shapes_of(self, links: Optional[Iterable[str]]) -> List[Tuple[str, Tuple[int, ...]]]:
+        if links is None:
+            return list(self.link_shapes.items())
+        if isinstance(links, str):
+            raise ValueError(f'links must be an iterable of link names, got the string {links!r}')
+        out = []
+        for link in links:
+            if link not in self.skeleton.link_index:
+                raise ValueError(f'unknown link {link!r}')
+            if link in self.link_shapes:
+                out.append((link, self.link_shapes[link]))
+        return out
+
+    def shape_poses(self, q) -> List[Tuple[np.ndarray, np.ndarray]]:
+        """World (rotation (3, 3), position (3,)) of every collision shape at ``q``, m."""
+        q = self._check_q(q)
+        self._set_configuration(q)
+        out = []
+        for i in range(len(self.shapes)):
+            self._place(i)
+            rotation, position = self._placed[i]
+            out.append((np.array(rotation).reshape(3, 3), np.array(position)))
+        return out
+
+    # -- queries against the environment -------------------------------------------------
+    def _shape_collides(self, shape: int) -> bool:
+        obj = self._place(shape)
+        targets = self.environment.objects
+        for mesh in self._candidates(shape):
+            if fcl.collide(obj, targets[mesh], self._request, fcl.CollisionResult()):
+                return True
+        return False
+
+    def collides(self, q, links: Optional[Iterable[str]] = None) -> bool:
+        """Whether any shape of the given links touches the environment (early exit)."""
+        q = self._check_q(q)
+        self._set_configuration(q)
+        for _, shapes in self._shapes_of(links):
+            for shape in shapes:
+                if self._shape_collides(shape):
+                    return True
+        return False
+
+    def links_in_collision(self, q, links: Optional[Iterable[str]] = None) -> List[str]:
+        """Names of the given links that touch the environment, in ``links`` order."""
+        q = self._check_q(q)
+        self._set_configuration(q)
+        return [link for link, shapes in self._shapes_of(links)
+                if any(self._shape_collides(s) for s in shapes)]
+
+    def _support(self, shape: int, direction: np.ndarray) -> float:
+        """How far the shape reaches from its centre along a unit ``direction``, m."""
+        kind, half = self._half_extent[shape]
+        rotation = np.array(self._placed[shape][0]).reshape(3, 3)
+        if kind == 'sphere':
+            return float(half[0])
+        local = rotation.T @ direction
+        if kind == 'box':
+            return float(np.abs(local) @ half)
+        along = min(1.0, abs(float(local[2])))
+        return float(half[0] * math.sqrt(max(0.0, 1.0 - along * along)) + half[1] * along)
+
+    def _shape_penetration(self, shape: int) -> float:
+        """Depth of one placed shape behind the surfaces it touches, m (0.0 if free).
+
+        FCL's own contact depth for a primitive against a single triangle measures how far
+        the shape must move to clear that triangle (often sideways off its edge), not how deep
+        it is in the solid. So each touched triangle's depth is taken along its outward normal:
+        how far the shape reaches behind the triangle's plane. Within one mesh the smallest of
+        these is reported (touching a convex edge, the shape reaches far behind the plane of the
+        face it only grazes); across meshes the largest. The result is exact for a shape in a
+        flat face or a convex solid and a lower bound in a concave corner of one mesh.
+        """
+        obj = self._place(shape)
+        centre = np.array(self._placed[shape][1])
+        geometry = self._geometries[shape]
+        per_mesh: Dict[int, float] = {}
+        for mesh in self._candidates(shape):
+            result = fcl.CollisionResult()
+            fcl.collide(obj, self.environment.objects[mesh], self._contact_request, result)
+            for contact in result.contacts:
+                triangle = contact.b2 if contact.o1 is geometry else contact.b1
+                if triangle < 0:
+                    continue
+                depth = self._depth_behind(shape, centre, mesh, triangle)
+                per_mesh[mesh] = min(per_mesh.get(mesh, math.inf), depth)
+        return max(per_mesh.values()) if per_mesh else 0.0
+
+    def _depth_behind(self, shape: int, centre: np.ndarray, mesh: int, triangle: int) -> float:
+        """How far a placed shape reaches behind one triangle's plane (along -normal), m."""
+        vertices = self.environment.triangle(mesh, triangle)
+        normal = np.cross(vertices[1] - vertices[0], vertices[2] - vertices[0])
+        length = float(np.linalg.norm(normal))
+        if length == 0.0:
+            return 0.0
+        normal /= length
+        return max(0.0, float((vertices[0] - centre) @ normal) + self._support(shape, normal))
+
+    def penetration(self, q, links: Optional[Iterable[str]] = None) -> Dict[str, float]:
+        """Largest penetration depth of each link's shapes into the environment.
+
+        Returns
+        -------
+        dict
+            {link: depth m}, 0.0 for a link that does not touch the environment. See
+            :meth:`_shape_penetration` for how depth is measured.
+
+        """
+        q = self._check_q(q)
+        self._set_configuration(q)
+        out = {}
+        for link, shapes in self._shapes_of(links):
+            depth = 0.0
+            for shape in shapes:
+                self._place(shape)
+                depth = max(depth, self._shape_penetration(shape))
+            out[link] = depth
+        return out
+
+    def distance(self, q, links: Optional[Iterable[str]] = None) -> Dict[str, float]:
+        """Smallest distance from each link's shapes to the environment, m (0.0 in contact)."""
+        q = self._check_q(q)
+        self._set_configuration(q)
+        request = fcl.DistanceRequest()
+        out = {}
+        for link, shapes in self._shapes_of(links):
+            best = math.inf
+            for shape in shapes:
+                obj = self._place(shape)
+                if self._shape_collides(shape):
+                    best = 0.0
+                    break
+                for target in self.environment.objects:
+                    best = min(best, fcl.distance(obj, target, request, fcl.DistanceResult()))
+            out[link] = max(0.0, float(best))
+        return out
+
+    # -- self collision ------------------------------------------------------------------
+    def self_collides(self, q, links_a: Sequence[str], links_b: Sequence[str]) -> bool:
+        """Whether any shape of a link in ``links_a`` touches any shape of a link in ``links_b``.
+
+        The caller chooses the pairs: links joined by a joint (the upper arm and the forearm,
+        the torso and the shoulders) overlap by construction and must not be passed against
+        each other.
+        """
+        q = self._check_q(q)
+        self._set_configuration(q)
+        shapes_b = [s for _, shapes in self._shapes_of(links_b) for s in shapes]
+        if not shapes_b:
+            return False
+        for _, shapes in self._shapes_of(links_a):
+            for a in shapes:
+                obj_a = self._place(a)
+                for b in shapes_b:
+                    if a == b:
+                        continue
+                    if fcl.collide(obj_a, self._place(b), self._request,
+                                   fcl.CollisionResult()):
+                        return True
+        return False
