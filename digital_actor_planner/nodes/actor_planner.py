@@ -14,6 +14,7 @@ from __future__ import annotations
 import collections
 from dataclasses import dataclass
 import math
+import os
 import sys
 import threading
 import time
@@ -34,7 +35,7 @@ from std_msgs.msg import ColorRGBA, String
 from visualization_msgs.msg import Marker, MarkerArray
 
 from digital_actor_planner.core.actor import Actor, ActorConfig, validate
-from digital_actor_planner.core.environment import load_scene
+from digital_actor_planner.core.environment import check_start, load_scene
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.nodes.planner_params import ConfigurationError, \
     parameter_declarations, PlannerNodeConfig, read_node_config, RUNTIME_PARAMETERS, \
@@ -47,6 +48,8 @@ BUFFER_HISTORY = 1.0
 # Mesh triangles drawn in RViz at most (one TRIANGLE_LIST per mesh).
 MAX_MARKER_TRIANGLES = 200_000
 PAST_FOOTSTEPS = 40
+# Nice value added to the planning thread (lowering priority needs no privileges).
+PLANNER_NICENESS = 5
 
 
 class FrameBuffer:
@@ -203,12 +206,7 @@ class ActorPlannerNode(Node):
             validate(self.actor_config)
         except ValueError as error:
             raise ConfigurationError(_field_named(error, self.config), str(error)) from error
-        try:
-            self.actor, self.scene = self._build_actor(self.config.scene)
-        except Exception as error:  # noqa: B902 -- any scene failure is a configuration error
-            parameter = 'start_pose' if self.config.start_pose is not None and \
-                'start' in str(error) else 'scene'
-            raise ConfigurationError(parameter, str(error)) from error
+        self.actor, self.scene = self._build_actor(self.config.scene)
         self.scene_path = self.config.scene
         self.scene_error = ''
         self.cmd_timeout = self.config.cmd_timeout
@@ -268,9 +266,28 @@ class ActorPlannerNode(Node):
             return None
 
     def _build_actor(self, scene_path: str):
-        scene = load_scene(scene_path, self.skeleton)
-        start = self.config.start_pose if self.config.start_pose is not None else scene.start
-        actor = Actor(self.skeleton, scene.environment, self.actor_config, start=tuple(start))
+        """Load a scene and place a new actor at its start (or at ``start_pose``).
+
+        Raises
+        ------
+        ConfigurationError
+            Naming ``scene`` (unreadable, bad mesh, no standing room at the scene's start) or
+            ``start_pose`` (no ground or an obstacle there).
+
+        """
+        start = self.config.start_pose
+        try:
+            scene = load_scene(scene_path, self.skeleton if start is None else None)
+        except (OSError, ValueError) as error:
+            raise ConfigurationError('scene', str(error)) from error
+        try:
+            if start is not None:
+                check_start(scene.environment, start, self.skeleton)
+            actor = Actor(self.skeleton, scene.environment, self.actor_config,
+                          start=tuple(scene.start if start is None else start))
+        except ValueError as error:
+            raise ConfigurationError('scene' if start is None else 'start_pose',
+                                     str(error)) from error
         return actor, scene
 
     def _make_interfaces(self) -> None:
@@ -307,7 +324,7 @@ class ActorPlannerNode(Node):
             elif parameter.name == 'scene':
                 try:
                     actor, scene = self._build_actor(str(parameter.value))
-                except Exception as error:  # noqa: B902 -- report any load failure, keep old
+                except ConfigurationError as error:
                     self.scene_error = f'{parameter.value}: {error}'
                     self.get_logger().error(f'scene not reloaded, keeping {self.scene_path}: '
                                             f'{error}')
@@ -324,6 +341,11 @@ class ActorPlannerNode(Node):
     # -- threads ------------------------------------------------------------------------------
     def _planning_loop(self) -> None:
         logger = self.get_logger()
+        try:
+            # Within the process the publishing thread should win the CPU when both are ready.
+            os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), PLANNER_NICENESS)
+        except (AttributeError, OSError):
+            pass
         while not self._stop.is_set():
             with self._pending_lock:
                 pending, self._pending_actor = self._pending_actor, None

@@ -48,7 +48,7 @@ def default_scene_path() -> str:
         try:
             candidates.append(os.path.join(get_package_share_directory(PACKAGE_NAME),
                                            'config', 'scenes', DEFAULT_SCENE))
-        except PackageNotFoundError:
+        except (PackageNotFoundError, OSError):  # OSError: AMENT_PREFIX_PATH unset
             pass
     except ImportError:
         pass

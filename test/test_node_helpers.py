@@ -1,0 +1,241 @@
+"""Probe for the actor_planner process tests, and tests of the node's ROS-free pieces.
+
+The probe is an rclpy node in the test process, in its own context and ROS_DOMAIN_ID, that
+sends cmd_vel like a mouse teleop (a steady 20 Hz stream) and records joint_states,
+/diagnostics and robot_description.
+"""
+import collections
+import math
+import os
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+
+from digital_actor_planner.core.skeleton import Skeleton
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SCENES = os.path.join(REPO, 'config', 'scenes')
+JOINT_NAMES = tuple(Skeleton().joint_names)
+ROOT_X, ROOT_Y, ROOT_YAW = (JOINT_NAMES.index(n) for n in ('root_x', 'root_y', 'root_yaw'))
+
+
+def scene(name: str) -> str:
+    """Path of a shipped course, ``name`` without .yaml."""
+    return os.path.join(SCENES, name + '.yaml')
+
+
+def node_command(*ros_args: str, executable: str = None) -> list:
+    """Command line that starts actor_planner, with ros args.
+
+    The venv's console script by default; ``executable`` or the environment variable
+    ``ACTOR_PLANNER_EXECUTABLE`` (e.g. a colcon install's ``lib/digital_actor_planner/
+    actor_planner``) override it.
+    """
+    script = executable or os.environ.get('ACTOR_PLANNER_EXECUTABLE') or \
+        os.path.join(sys.prefix, 'bin', 'actor_planner')
+    base = [script] if os.path.exists(script) else \
+        [sys.executable, '-m', 'digital_actor_planner.nodes.actor_planner']
+    return base + ['--ros-args', *ros_args]
+
+
+class Probe:
+    """A test-side rclpy node that talks to one actor_planner (optionally namespaced)."""
+
+    def __init__(self, domain_id: int, namespace: str = '', stamped: bool = True):
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.qos import DurabilityPolicy, QoSProfile
+        from diagnostic_msgs.msg import DiagnosticArray
+        from geometry_msgs.msg import Twist, TwistStamped
+        from sensor_msgs.msg import JointState
+        from std_msgs.msg import String
+
+        os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+        self.rclpy = rclpy
+        self.context = rclpy.Context()
+        self.context.init(domain_id=domain_id)
+        self.node = rclpy.create_node(f'probe_{os.getpid()}', namespace=namespace or '/',
+                                      context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.joint_states = collections.deque(maxlen=20000)
+        self.diagnostics = collections.deque(maxlen=100)
+        self.descriptions = []
+        self.stamped = stamped
+        self._types = (TwistStamped, Twist)
+        self.node.create_subscription(JointState, 'joint_states', self._on_joint_state, 100)
+        self.node.create_subscription(DiagnosticArray, '/diagnostics',
+                                      lambda msg: self.diagnostics.append(msg),
+                                      10)
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self.node.create_subscription(String, 'robot_description',
+                                      lambda msg: self.descriptions.append(msg),
+                                      latched)
+        self.cmd_pub = self.node.create_publisher(TwistStamped if stamped else Twist,
+                                                  'cmd_vel', 10)
+        self.command = None
+        self.node.create_timer(0.05, self._send_command)
+        self._lock = threading.Lock()
+
+    def _on_joint_state(self, msg) -> None:
+        self.joint_states.append((time.monotonic(), msg))
+
+    def _send_command(self) -> None:
+        if self.command is None:
+            return
+        linear_x, angular_z = self.command
+        TwistStamped, Twist = self._types
+        if self.stamped:
+            msg = TwistStamped()
+            msg.header.stamp = self.node.get_clock().now().to_msg()
+            twist = msg.twist
+        else:
+            msg = twist = Twist()
+        twist.linear.x, twist.angular.z = float(linear_x), float(angular_z)
+        self.cmd_pub.publish(msg)
+
+    def spin(self, seconds: float) -> None:
+        """Process callbacks for ``seconds``."""
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=min(0.02, max(0.0, deadline - time.monotonic())))
+
+    def spin_until(self, predicate, timeout: float) -> bool:
+        """Process callbacks until ``predicate()`` holds or ``timeout`` s pass."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.02)
+            if predicate():
+                return True
+        return bool(predicate())
+
+    def wait_for_stream(self, process=None, timeout: float = 30.0) -> bool:
+        """Wait until the actor's joint_states arrive and it sees our cmd_vel publisher.
+
+        Gives up early when ``process`` (a NodeProcess) exits.
+        """
+        self.spin_until(lambda: (len(self.joint_states) > 5 and
+                                 self.cmd_pub.get_subscription_count() > 0) or
+                        (process is not None and not process.alive()), timeout)
+        return len(self.joint_states) > 5 and self.cmd_pub.get_subscription_count() > 0
+
+    def latest(self) -> np.ndarray:
+        """The latest received configuration (22,)."""
+        return np.array(self.joint_states[-1][1].position)
+
+    def positions_since(self, since: float) -> tuple:
+        """Receipt times (k,) and configurations (k, 22) received after monotonic ``since``."""
+        rows = [(t, m.position) for t, m in list(self.joint_states) if t >= since]
+        return np.array([r[0] for r in rows]), np.array([r[1] for r in rows])
+
+    def drive(self, linear_x: float, angular_z: float, seconds: float) -> float:
+        """Send a command stream for ``seconds``; return the monotonic time it started."""
+        started = time.monotonic()
+        self.command = (linear_x, angular_z)
+        self._send_command()
+        self.spin(seconds)
+        return started
+
+    def wait_until_still(self, timeout: float, still_for: float = 1.0,
+                         tolerance: float = 2e-3) -> float:
+        """Spin until the root stays within ``tolerance`` m/rad for ``still_for`` s.
+
+        Returns
+        -------
+        float
+            Monotonic receipt time of the first frame of the still period (inf on timeout).
+
+        """
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            self.spin(0.1)
+            times, frames = self.positions_since(time.monotonic() - still_for - 0.2)
+            if len(times) < 2 or times[-1] - times[0] < still_for:
+                continue
+            root = frames[:, [ROOT_X, ROOT_Y, ROOT_YAW]]
+            moving = np.nonzero(np.any(np.abs(root - root[-1]) > tolerance, axis=1))[0]
+            first_still = 0 if len(moving) == 0 else moving[-1] + 1
+            if times[-1] - times[first_still] >= still_for:
+                return float(times[first_still])
+        return math.inf
+
+    def diagnostic_values(self) -> dict:
+        """Key/values of the latest actor planner diagnostic status (empty when none)."""
+        for array in reversed(self.diagnostics):
+            for status in array.status:
+                if 'actor planner' in status.name:
+                    values = {kv.key: kv.value for kv in status.values}
+                    values['_level'] = int.from_bytes(status.level, 'little') \
+                        if isinstance(status.level, bytes) else int(status.level)
+                    values['_message'] = status.message
+                    values['_name'] = status.name
+                    return values
+        return {}
+
+    def close(self) -> None:
+        """Destroy the probe node and its context."""
+        self.executor.shutdown()
+        self.node.destroy_node()
+        self.context.try_shutdown()
+
+
+# -- tests of the node's ROS-free pieces -------------------------------------------------------
+def test_frame_buffer_interpolates_and_holds_the_last_frame():
+    from digital_actor_planner.nodes.actor_planner import FrameBuffer
+    q0 = np.zeros(22)
+    buffer = FrameBuffer(q0)
+    times = np.array([0.01, 0.02])
+    frames = np.zeros((2, 22))
+    frames[:, ROOT_X] = [0.1, 0.2]
+    velocities = np.full((2, 22), 10.0)
+    buffer.append(times, frames, velocities, now=0.0)
+    q, v = buffer.sample(0.015)
+    assert q[ROOT_X] == pytest.approx(0.15)
+    assert v[ROOT_X] == pytest.approx(10.0)
+    q, v = buffer.sample(5.0)
+    assert q[ROOT_X] == pytest.approx(0.2)
+    assert np.all(v == 0.0)
+    with pytest.raises(ValueError, match='0.0100'):
+        buffer.append(times, frames, velocities, now=0.0)
+
+
+def test_frame_buffer_restart_jumps_to_the_new_configuration():
+    from digital_actor_planner.nodes.actor_planner import FrameBuffer
+    buffer = FrameBuffer(np.zeros(22))
+    frames = np.zeros((10, 22))
+    frames[:, ROOT_X] = np.arange(10)
+    buffer.append(0.1 * np.arange(1, 11), frames, np.zeros((10, 22)), now=0.0)
+    fresh = np.full(22, 7.0)
+    buffer.restart(fresh, 0.35)
+    assert buffer.end_time == pytest.approx(0.35)
+    assert buffer.sample(0.35)[0][ROOT_X] == 7.0
+    assert buffer.sample(0.2)[0][ROOT_X] == pytest.approx(1.0)
+
+
+def test_command_times_out_to_zero():
+    from digital_actor_planner.nodes.actor_planner import CommandState
+    command = CommandState()
+    assert command.current(0.0, 0.5) == (0.0, 0.0)
+    command.update(0.4, -0.2, now=10.0)
+    assert command.current(10.3, 0.5) == (0.4, -0.2)
+    assert command.current(10.6, 0.5) == (0.0, 0.0)
+
+
+def test_validation_names_the_bad_parameter():
+    from digital_actor_planner.nodes.planner_params import ConfigurationError, \
+        default_scene_path, read_node_config, validate_node_config
+    values = {'scene': default_scene_path(), 'start_pose': None, 'publish_rate': 100.0,
+              'window_steps': 3, 'step_intervals': 13, 'step_length_min': 0.15,
+              'step_length_max': 0.8, 'max_linear_speed': 1.2, 'max_angular_speed': 1.0,
+              'cmd_timeout': 0.5, 'frame_id': 'world', 'cmd_vel_stamped': True,
+              'publish_robot_description': True}
+    validate_node_config(read_node_config(values.get))
+    for name, bad in (('step_length_min', 0.9), ('scene', '/no/such/scene.yaml'),
+                      ('frame_id', ' '), ('start_pose', [0.0, float('nan'), 0.0]),
+                      ('start_pose', [1.0, 2.0])):
+        with pytest.raises(ConfigurationError, match=name) as caught:
+            validate_node_config(read_node_config(dict(values, **{name: bad}).get))
+        assert caught.value.parameter == name

@@ -1,0 +1,183 @@
+"""actor_planner as a real process: the joint stream, commands, diagnostics, scene reload.
+
+One node process walks the stairs course for the whole module; each test sets up the motion it
+needs (CI-proof: rclpy only, localhost discovery, own ROS_DOMAIN_ID).
+"""
+import math
+import os
+import time
+
+import numpy as np
+import pytest
+from ros_harness import NodeProcess, ros_env
+from test_node_helpers import JOINT_NAMES, node_command, Probe, ROOT_X, ROOT_Y, ROOT_YAW, scene
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+DOMAIN_ID = int(os.environ.get('ACTOR_NODE_TEST_DOMAIN', '31'))
+COURSE = scene('stairs_up') if os.path.exists(scene('stairs_up')) else scene('flat')
+CMD_TIMEOUT = 0.5
+# Generous bound on "stops within one step": the step being played, plus the planning lead,
+# plus the step that brings the feet together, on a loaded 2-core machine.
+STOP_BOUND_S = 3.0
+
+
+@pytest.fixture(scope='module')
+def actor(tmp_path_factory):
+    log = tmp_path_factory.mktemp('actor_planner') / 'node.log'
+    process = NodeProcess(node_command('-p', f'scene:={COURSE}',
+                                       '-p', f'cmd_timeout:={CMD_TIMEOUT}'),
+                          ros_env(DOMAIN_ID), log_path=str(log))
+    probe = Probe(DOMAIN_ID)
+    try:
+        assert probe.wait_for_stream(process, 60.0), \
+            f'no joint_states from the node:\n{process.output()}'
+        yield process, probe
+    finally:
+        probe.close()
+        code = process.stop()
+        assert code == 0, f'node exit status {code} after SIGINT:\n{process.output()}'
+
+
+def _stop(probe):
+    probe.drive(0.0, 0.0, 0.2)
+    assert probe.wait_until_still(timeout=10.0) < math.inf
+
+
+def test_joint_states_carry_the_22_urdf_joints_with_position_and_velocity(actor):
+    _, probe = actor
+    _, msg = probe.joint_states[-1]
+    assert tuple(msg.name) == JOINT_NAMES
+    assert len(msg.name) == 22
+    assert len(msg.position) == 22 and len(msg.velocity) == 22
+    assert msg.header.frame_id == 'world'
+    assert msg.header.stamp.sec > 0
+    assert np.all(np.isfinite(msg.position)) and np.all(np.isfinite(msg.velocity))
+
+
+def test_robot_description_is_latched_for_late_subscribers(actor):
+    _, probe = actor
+    assert probe.spin_until(lambda: probe.descriptions, 10.0)
+    assert '<robot' in probe.descriptions[0].data and 'root_yaw' in probe.descriptions[0].data
+
+
+def test_forward_command_walks_the_stairs_at_a_steady_100_hz(actor):
+    _, probe = actor
+    _stop(probe)
+    start = probe.latest()
+    began = probe.drive(0.5, 0.0, 10.5)
+    stamps = [m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec
+              for t, m in list(probe.joint_states) if t >= began + 0.25]
+    stamps = np.array(stamps)
+    window = stamps[(stamps >= stamps[0]) & (stamps < stamps[0] + 10.0)]
+    rate = len(window) / 10.0
+    assert 95.0 <= rate <= 105.0, f'joint_states at {rate:.1f} Hz over 10 s'
+    gaps = np.diff(stamps)
+    assert gaps.max() < 0.1, f'stream stalled for {gaps.max():.3f} s'
+    end = probe.latest()
+    heading = start[ROOT_YAW]
+    advance = (end[ROOT_X] - start[ROOT_X]) * math.cos(heading) + \
+        (end[ROOT_Y] - start[ROOT_Y]) * math.sin(heading)
+    assert advance > 1.5, f'walked only {advance:.2f} m forward in 10 s at 0.5 m/s'
+    values = probe.diagnostic_values()
+    assert values['state'] in ('walking', 'stuck'), values
+
+
+def test_zero_command_stops_the_actor_within_one_step(actor):
+    _, probe = actor
+    probe.drive(0.4, 0.0, 2.0)
+    zero = probe.drive(0.0, 0.0, 0.0)
+    still = probe.wait_until_still(timeout=10.0)
+    assert still - zero < STOP_BOUND_S, f'still only {still - zero:.2f} s after the zero command'
+    assert probe.diagnostic_values().get('state') == 'idle' or probe.spin_until(
+        lambda: probe.diagnostic_values().get('state') == 'idle', 3.0)
+
+
+def test_turning_command_turns_the_actor_the_commanded_way(actor):
+    _, probe = actor
+    _stop(probe)
+    before = probe.latest()[ROOT_YAW]
+    probe.drive(0.2, 0.6, 4.0)
+    after = probe.latest()[ROOT_YAW]
+    assert after - before > 0.5, f'root_yaw went {before:.2f} -> {after:.2f} rad'
+    probe.drive(0.2, -0.6, 4.0)
+    assert probe.latest()[ROOT_YAW] < after - 0.5
+
+
+def test_silence_stops_the_actor_after_cmd_timeout(actor):
+    _, probe = actor
+    probe.drive(0.4, 0.0, 2.0)
+    moving = probe.latest()
+    probe.command = None  # the teleop goes quiet
+    silent = time.monotonic()
+    still = probe.wait_until_still(timeout=10.0)
+    assert still - silent < CMD_TIMEOUT + STOP_BOUND_S
+    assert np.any(np.abs(probe.latest()[:2] - moving[:2]) < 1.0)
+
+
+def test_nan_and_inf_commands_are_ignored_and_the_stream_goes_on(actor):
+    process, probe = actor
+    _stop(probe)
+    before = probe.latest()
+    count = len(probe.joint_states)
+    probe.drive(float('nan'), 0.0, 1.0)
+    probe.drive(0.3, float('inf'), 1.0)
+    probe.command = None
+    assert process.alive()
+    assert len(probe.joint_states) > count + 100
+    assert np.allclose(probe.latest()[[ROOT_X, ROOT_Y, ROOT_YAW]],
+                       before[[ROOT_X, ROOT_Y, ROOT_YAW]], atol=2e-3)
+    assert 'non-finite cmd_vel' in process.output()
+
+
+def test_diagnostics_report_state_planning_time_and_stream_health(actor):
+    _, probe = actor
+    assert probe.spin_until(lambda: probe.diagnostic_values(), 5.0)
+    values = probe.diagnostic_values()
+    for key in ('state', 'reason', 'planning_time_last_ms', 'planning_time_p50_ms',
+                'planning_time_p99_ms', 'publish_rate_hz', 'missed_frames', 'scene'):
+        assert key in values, key
+    assert float(values['planning_time_p99_ms']) > 0.0
+    # One second of a loaded machine; the +-5 % check over 10 s is in the walking test.
+    assert abs(float(values['publish_rate_hz']) - 100.0) < 20.0
+    assert values['scene'] == COURSE
+
+
+def _set_scene(probe, path):
+    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+    client = probe.node.create_client(SetParameters, '/actor_planner/set_parameters')
+    try:
+        assert client.wait_for_service(timeout_sec=10.0)
+        request = SetParameters.Request(parameters=[Parameter(
+            name='scene', value=ParameterValue(type=ParameterType.PARAMETER_STRING,
+                                               string_value=path))])
+        future = client.call_async(request)
+        assert probe.spin_until(future.done, 30.0)
+        return future.result().results[0]
+    finally:
+        probe.node.destroy_client(client)
+
+
+def test_scene_reload_at_run_time_keeps_the_old_scene_when_broken(actor, tmp_path):
+    _, probe = actor
+    flat = scene('flat')
+    result = _set_scene(probe, flat)
+    assert result.successful, result.reason
+    assert probe.spin_until(lambda: probe.diagnostic_values().get('scene') == flat, 5.0)
+    # The actor stands at the new course's start and still walks.
+    probe.drive(0.5, 0.0, 3.0)
+    assert probe.latest()[ROOT_X] > 0.5
+
+    broken = tmp_path / 'broken.yaml'
+    broken.write_text('meshes: [{file: missing_mesh.stl}]\nstart: [0, 0, 0]\n')
+    count = len(probe.joint_states)
+    result = _set_scene(probe, str(broken))
+    assert not result.successful
+    assert 'missing_mesh.stl' in result.reason or 'broken.yaml' in result.reason, result.reason
+    assert probe.spin_until(lambda: probe.diagnostic_values().get('scene_error'), 5.0)
+    values = probe.diagnostic_values()
+    assert values['scene'] == flat
+    assert 'broken.yaml' in values['scene_error']
+    probe.drive(0.5, 0.0, 2.0)
+    assert len(probe.joint_states) > count + 150
