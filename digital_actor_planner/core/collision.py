@@ -306,7 +306,9 @@ class BodyCollision:
         face it only grazes); across meshes the largest. The result is exact for a shape in a
         flat face or a convex solid and a lower bound in a concave corner of one mesh.
         """
-        obj = self._place(shape)
+        if not self._shape_collides(shape):
+            return 0.0
+        obj = self._objects[shape]
         centre = np.array(self._placed[shape][1])
         geometry = self._geometries[shape]
         per_mesh: Dict[int, float] = {}
