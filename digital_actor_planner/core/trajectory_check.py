@@ -23,8 +23,6 @@ FEET = ('left_foot', 'right_foot')
 STANCE_GAP = 0.010
 # Thickness of the slab standing for the sole when measuring its gap to the ground, m.
 _SOLE_THICKNESS = 0.002
-# Radius of the probe spheres at the sole corners, m.
-_CORNER_RADIUS = 0.001
 
 
 @dataclass(frozen=True)
@@ -33,8 +31,9 @@ class CheckReport:
 
     Times are trajectory times (s). ``penetration`` maps each checked link to its largest
     penetration depth (m) and ``penetration_time`` to when it happened. ``foot_down_gap`` is the
-    worst over frames of the smaller sole-to-surface gap of the two feet (m), at
-    ``foot_down_time``. ``position_violations``, ``velocity_violations`` and ``jumps`` hold
+    worst sole-to-surface gap of the nearer foot (m), at ``foot_down_time``, measured exactly on
+    frames where no sole is within the foot-down tolerance (0.0 when every frame has a foot
+    down). ``position_violations``, ``velocity_violations`` and ``jumps`` hold
     (joint, time, value, allowed) tuples, the worst per joint. ``non_finite_times`` lists frames
     with NaN/inf. ``slip`` maps each foot to its largest horizontal stance slip (m), at
     ``slip_time``. ``max_jump_ratio`` is the largest per-frame change over velocity limit x dt.
@@ -120,9 +119,9 @@ def _worst_per_joint(names, excess: np.ndarray, times: np.ndarray, values: np.nd
 
 
 class _Soles:
-    """FCL probes under the feet: a thin slab for the sole and small spheres at its corners."""
+    """FCL probes at the soles: slabs around the sole plane and spheres at its corners."""
 
-    def __init__(self, skeleton, environment):
+    def __init__(self, skeleton, environment, foot_down_tol: float):
         self.environment = environment
         self.shape_index = {}
         self.size = {}
@@ -133,10 +132,16 @@ class _Soles:
         missing = [f for f in FEET if f not in self.shape_index]
         if missing:
             raise ValueError(f'the skeleton has no box collision shape for {missing}')
-        self.slab = {foot: fcl.CollisionObject(
-            fcl.Box(self.size[foot][0], self.size[foot][1], _SOLE_THICKNESS), fcl.Transform())
-            for foot in FEET}
-        self.corner = fcl.CollisionObject(fcl.Sphere(_CORNER_RADIUS), fcl.Transform())
+
+        def slab(foot, thickness):
+            box = fcl.Box(self.size[foot][0], self.size[foot][1], thickness)
+            return fcl.CollisionObject(box, fcl.Transform())
+
+        # The exact sole, and slabs reaching STANCE_GAP / foot_down_tol either side of it.
+        self.sole = {foot: slab(foot, _SOLE_THICKNESS) for foot in FEET}
+        self.stance_probe = {foot: slab(foot, 2 * STANCE_GAP) for foot in FEET}
+        self.down_probe = {foot: slab(foot, 2 * max(foot_down_tol, 1e-6)) for foot in FEET}
+        self.corner = fcl.CollisionObject(fcl.Sphere(STANCE_GAP), fcl.Transform())
         self.request = fcl.DistanceRequest()
         self.collision_request = fcl.CollisionRequest()
 
@@ -147,28 +152,40 @@ class _Soles:
                           for sx in (-1, 1) for sy in (-1, 1)])
         return (local @ transform.T)[:, :3]
 
-    def _distance(self, obj) -> float:
+    def _touches(self, obj) -> bool:
+        return any(fcl.collide(obj, target, self.collision_request, fcl.CollisionResult())
+                   for target in self.environment.objects)
+
+    def _place(self, obj, foot: str, transform: np.ndarray):
+        """Centre a sole probe on the bottom face of a foot box at ``transform``."""
+        offset = transform[:3, :3] @ np.array([0.0, 0.0, -self.size[foot][2] / 2])
+        obj.setTransform(fcl.Transform(transform[:3, :3], transform[:3, 3] + offset))
+        return obj
+
+    def in_stance(self, foot: str, transform: np.ndarray) -> bool:
+        """Whether the sole is within STANCE_GAP of a surface (or in it)."""
+        return self._touches(self._place(self.stance_probe[foot], foot, transform))
+
+    def down(self, foot: str, transform: np.ndarray) -> bool:
+        """Whether the sole is within foot_down_tol of a surface (or in it)."""
+        return self._touches(self._place(self.down_probe[foot], foot, transform))
+
+    def sole_gap(self, foot: str, transform: np.ndarray) -> float:
+        """Distance from a foot's sole (bottom face) to the environment, m (0 in contact)."""
+        obj = self._place(self.sole[foot], foot, transform)
         best = math.inf
         for target in self.environment.objects:
             if fcl.collide(obj, target, self.collision_request, fcl.CollisionResult()):
                 return 0.0
             best = min(best, fcl.distance(obj, target, self.request, fcl.DistanceResult()))
-        return best
+        return max(0.0, best + _SOLE_THICKNESS / 2)
 
-    def sole_gap(self, foot: str, transform: np.ndarray) -> float:
-        """Distance from a foot's sole (bottom face) to the environment, m (0 in contact)."""
-        offset = transform[:3, :3] @ np.array([0.0, 0.0, -self.size[foot][2] / 2
-                                               + _SOLE_THICKNESS / 2])
-        obj = self.slab[foot]
-        obj.setTransform(fcl.Transform(transform[:3, :3], transform[:3, 3] + offset))
-        return max(0.0, self._distance(obj))
-
-    def corner_gaps(self, corners: np.ndarray) -> np.ndarray:
-        """(4,) distance from each sole corner to the environment, m."""
-        out = np.empty(len(corners))
-        for i, point in enumerate(corners):
+    def corners_in_contact(self, corners: np.ndarray) -> List[bool]:
+        """Whether each sole corner is within STANCE_GAP of a surface."""
+        out = []
+        for point in corners:
             self.corner.setTranslation(np.asarray(point, dtype=float))
-            out[i] = max(0.0, self._distance(self.corner) + _CORNER_RADIUS)
+            out.append(self._touches(self.corner))
         return out
 
 
@@ -269,7 +286,7 @@ def check_trajectory(skeleton, environment, times, frames, *, penetration_tol: f
     link_list = list(body.links if links is None else links)
     penetration = {link: 0.0 for link in link_list if link in body.link_shapes}
     penetration_time = {link: float(times[0]) for link in penetration}
-    soles = _Soles(skeleton, environment)
+    soles = _Soles(skeleton, environment, tolerances['foot_down_tol'])
     shape_transforms = (skeleton.shape_transforms(skeleton.forward_kinematics(clean[checked]))
                         if len(checked) else np.zeros((0, len(skeleton.collision_shapes), 4, 4)))
     foot_down_gap, foot_down_time = 0.0, float(times[0])
@@ -283,17 +300,20 @@ def check_trajectory(skeleton, environment, times, frames, *, penetration_tol: f
         for link, depth in body.penetration(q, penetration).items():
             if depth > penetration[link]:
                 penetration[link], penetration_time[link] = depth, t
-        gaps = []
+        down = False
         for foot in FEET:
             transform = shape_transforms[row, soles.shape_index[foot]]
-            # A foot in a surface is down (its depth is judged above); the sole slab, deep
-            # inside a solid, would measure its distance to the surface instead.
+            # A foot in a surface is down (its depth is judged above); a probe deep inside a
+            # solid would not touch its surface.
             sunk = body.collides(q, (foot,))
-            gap = 0.0 if sunk else soles.sole_gap(foot, transform)
-            gaps.append(gap)
-            _track_slip(foot, soles, transform, gap, t, corner_runs, slip, slip_time)
-        if min(gaps) > foot_down_gap:
-            foot_down_gap, foot_down_time = min(gaps), t
+            stance = sunk or soles.in_stance(foot, transform)
+            down = down or stance or soles.down(foot, transform)
+            _track_slip(foot, soles, transform, stance, t, corner_runs, slip, slip_time)
+        if not down:
+            gap = min(soles.sole_gap(foot, shape_transforms[row, soles.shape_index[foot]])
+                      for foot in FEET)
+            if gap > foot_down_gap:
+                foot_down_gap, foot_down_time = gap, t
 
     return CheckReport(frames=len(times), frames_checked=len(checked), penetration=penetration,
                        penetration_time=penetration_time, foot_down_gap=float(foot_down_gap),
@@ -303,7 +323,7 @@ def check_trajectory(skeleton, environment, times, frames, *, penetration_tol: f
                        slip=slip, slip_time=slip_time, tolerances=tolerances)
 
 
-def _track_slip(foot: str, soles: _Soles, transform: np.ndarray, gap: float, time: float,
+def _track_slip(foot: str, soles: _Soles, transform: np.ndarray, stance: bool, time: float,
                 corner_runs: Dict[str, list], slip: Dict[str, float],
                 slip_time: Dict[str, float]) -> None:
     """Follow each sole corner through its runs of contact; record its horizontal drift.
@@ -311,14 +331,14 @@ def _track_slip(foot: str, soles: _Soles, transform: np.ndarray, gap: float, tim
     A foot rolling over its heel or toe keeps those corners fixed while the others lift, so
     tracking corners (not the sole's centre) tells rolling from sliding.
     """
-    corners = soles.corners(foot, transform)
-    if gap > STANCE_GAP:
+    if not stance:
         corner_runs[foot] = [None] * 4
         return
-    gaps = soles.corner_gaps(corners)
+    corners = soles.corners(foot, transform)
+    contact = soles.corners_in_contact(corners)
     runs = corner_runs[foot]
     for c in range(4):
-        if gaps[c] > STANCE_GAP:
+        if not contact[c]:
             runs[c] = None
             continue
         if runs[c] is None:
