@@ -1,0 +1,270 @@
+"""`digital-actor` command line: offline simulation, the interactive demo and the viewer.
+
+Argument parsing, files and pictures live here, not in the core. Exit codes: 0 success, 1 a run
+failed, 2 bad input (a message names the file, line or value).
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+from dataclasses import dataclass
+import json
+import math
+import os
+import sys
+import tempfile
+import time
+from typing import List, Optional, Sequence
+
+import numpy as np
+
+EXIT_BAD_INPUT = 2
+
+
+class InputError(ValueError):
+    """Bad user input; the message names the file, line or value."""
+
+
+@dataclass(frozen=True)
+class CommandRow:
+    """One row of a command file: from ``time`` on (s), walk at ``linear_x`` m/s and turn at
+    ``angular_z`` rad/s; ``line`` is the row's line number in the file."""
+
+    time: float
+    linear_x: float
+    angular_z: float
+    line: int
+
+
+def read_commands(path: str) -> List[CommandRow]:
+    """Read a command CSV (header ``time,linear_x,angular_z``); each row holds until the next.
+
+    Raises
+    ------
+    InputError
+        Missing file, wrong header, malformed or non-finite numbers, times not increasing.
+
+    """
+    try:
+        with open(path, newline='') as f:
+            rows = list(csv.reader(f))
+    except OSError as error:
+        raise InputError(f'{path}: cannot read command file: {error.strerror or error}') from None
+    except UnicodeDecodeError:
+        raise InputError(f'{path}: not a text CSV file') from None
+    rows = [(i + 1, r) for i, r in enumerate(rows) if r and any(c.strip() for c in r)]
+    if not rows:
+        raise InputError(f'{path}: empty command file')
+    header = [c.strip() for c in rows[0][1]]
+    if header != ['time', 'linear_x', 'angular_z']:
+        raise InputError(f'{path}:{rows[0][0]}: header must be time,linear_x,angular_z, '
+                         f'got {",".join(header)}')
+    commands: List[CommandRow] = []
+    for line, row in rows[1:]:
+        if len(row) != 3:
+            raise InputError(f'{path}:{line}: expected 3 values, got {len(row)}: {row}')
+        try:
+            values = [float(c) for c in row]
+        except ValueError:
+            raise InputError(f'{path}:{line}: not a number in {row}') from None
+        if not all(math.isfinite(v) for v in values):
+            raise InputError(f'{path}:{line}: non-finite value in {row}')
+        if values[0] < 0 or (commands and values[0] <= commands[-1].time):
+            raise InputError(f'{path}:{line}: time {values[0]:g} must be >= 0 and increase')
+        commands.append(CommandRow(values[0], values[1], values[2], line))
+    if not commands:
+        raise InputError(f'{path}: no command rows after the header')
+    return commands
+
+
+def _atomic_writer(path: str, mode: str = 'w'):
+    """A temporary file next to ``path``; :func:`_publish` renames it into place when complete."""
+    folder = os.path.dirname(os.path.abspath(path)) or '.'
+    os.makedirs(folder, exist_ok=True)
+    handle, temporary = tempfile.mkstemp(prefix='.' + os.path.basename(path) + '.', dir=folder)
+    os.close(handle)
+    return temporary
+
+
+def _publish(temporary: str, path: str) -> None:
+    os.replace(temporary, path)
+
+
+def simulate(args) -> int:
+    """Run ``digital-actor simulate``."""
+    from digital_actor_planner.core.actor import Actor, ActorConfig, validate
+    from digital_actor_planner.core.environment import load_scene, SceneError
+    from digital_actor_planner.core.skeleton import Skeleton
+
+    skeleton = Skeleton()
+    try:
+        commands = read_commands(args.commands)
+        scene = load_scene(args.scene, skeleton)
+        config = ActorConfig(window_steps=args.window_steps, step_intervals=args.step_intervals,
+                             step_length_min=args.step_length_min,
+                             step_length_max=args.step_length_max, frame_rate=args.rate,
+                             plan_upper_body=not args.no_upper_body)
+        validate(config)
+    except (InputError, SceneError, ValueError) as error:
+        print(f'digital-actor simulate: error: {error}', file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+    actor = Actor(skeleton, scene.environment, config, start=scene.start)
+    end_time = commands[-1].time
+    blocks = []
+    events = []
+    warned = set()
+    wall_start = time.perf_counter()
+    row = 0
+    while actor.time < end_time - 1e-9:
+        while row + 1 < len(commands) and commands[row + 1].time <= actor.time + 1e-9:
+            row += 1
+        command = commands[row] if commands[row].time <= actor.time + 1e-9 else None
+        linear, angular = (command.linear_x, command.angular_z) if command else (0.0, 0.0)
+        warning = actor.set_command(linear, angular)
+        if warning and command is not None and command.line not in warned:
+            warned.add(command.line)
+            print(f'digital-actor simulate: warning: {args.commands}:{command.line}: {warning}',
+                  file=sys.stderr)
+        block = actor.plan_next()
+        blocks.append(block)
+        if block.status == 'stuck' and (not events or events[-1]['reason'] != block.reason
+                                        or events[-1]['end'] < block.times[0] - 0.011):
+            events.append({'time': round(float(block.times[0]), 3), 'reason': block.reason,
+                           'end': float(block.times[-1])})
+        elif block.status == 'stuck':
+            events[-1]['end'] = float(block.times[-1])
+    wall = time.perf_counter() - wall_start
+    times = np.concatenate([b.times for b in blocks]) if blocks else np.zeros(0)
+    frames = np.vstack([b.frames for b in blocks]) if blocks else np.zeros((0, 22))
+    _write_trajectory(args.out, skeleton.joint_names, times, frames)
+    steps = [b for b in blocks if b.status == 'walking']
+    planning = [b.planning_time for b in steps]
+    summary = {
+        'scene': os.path.abspath(args.scene), 'commands': os.path.abspath(args.commands),
+        'frames': int(times.size), 'simulated_time': float(times[-1]) if times.size else 0.0,
+        'wall_time': wall,
+        'real_time_factor': (float(times[-1]) / wall) if times.size and wall > 0 else None,
+        'steps_taken': len(steps),
+        'step_categories': {c: sum(1 for b in steps if b.category == c)
+                            for c in ('level', 'uphill', 'downhill')},
+        'planning_time_per_step': planning,
+        'planning_time_p50': float(np.percentile(planning, 50)) if planning else None,
+        'planning_time_p99': float(np.percentile(planning, 99)) if planning else None,
+        'stuck_events': [{'time': e['time'], 'until': round(e['end'], 3), 'reason': e['reason']}
+                         for e in events],
+        'final_status': actor.status, 'final_reason': actor.reason,
+        'final_pose': {n: float(v) for n, v in zip(skeleton.joint_names[:4],
+                                                   actor.configuration[:4])},
+        'window_steps': config.window_steps, 'step_intervals': config.step_intervals,
+    }
+    if args.summary:
+        temporary = _atomic_writer(args.summary)
+        with open(temporary, 'w') as f:
+            json.dump(summary, f, indent=2)
+        _publish(temporary, args.summary)
+    if args.render:
+        from digital_actor_planner.core import render
+        footsteps = _landed_feet(skeleton, frames)
+        temporary = _atomic_writer(args.render)
+        render_path = temporary + os.path.splitext(args.render)[1]
+        if args.render.lower().endswith('.gif'):
+            render.render_gif(render_path, skeleton, scene.environment.meshes, times, frames,
+                              footsteps=footsteps)
+        else:
+            render.render_png(render_path, skeleton, scene.environment.meshes, times, frames,
+                              footsteps=footsteps, title=os.path.basename(args.scene))
+        os.remove(temporary)
+        _publish(render_path, args.render)
+    simulated = float(times[-1]) if times.size else 0.0
+    print(f'{os.path.basename(args.scene)}: {len(steps)} steps, {simulated:.2f}'
+          f' s simulated in {wall:.2f} s, final status {actor.status}'
+          + (f' ({actor.reason})' if actor.reason else ''))
+    return 0
+
+
+def _landed_feet(skeleton, frames: np.ndarray) -> np.ndarray:
+    """(f, 4) x, y, z, yaw of the distinct places the feet rested on, for pictures."""
+    if frames.shape[0] == 0:
+        return np.zeros((0, 4))
+    transforms = skeleton.forward_kinematics(frames[::5])
+    feet = []
+    for link in ('left_foot', 'right_foot'):
+        t = transforms[:, skeleton.link_index[link]]
+        positions = t[:, :3, 3]
+        yaws = np.arctan2(t[:, 1, 0], t[:, 0, 0])
+        last = None
+        for p, yaw in zip(positions, yaws):
+            if last is None or np.linalg.norm(p[:2] - last[:2]) > 0.1:
+                feet.append([p[0], p[1], p[2], yaw])
+                last = p
+    return np.array(feet)
+
+
+def _write_trajectory(path: str, names: Sequence[str], times: np.ndarray,
+                      frames: np.ndarray) -> None:
+    temporary = _atomic_writer(path)
+    with open(temporary, 'w', newline='') as f:
+        writer = csv.writer(f)
+        writer.writerow(['time'] + list(names))
+        for t, q in zip(times, frames):
+            writer.writerow([f'{t:.4f}'] + [f'{v:.6f}' for v in q])
+    _publish(temporary, path)
+
+
+def read_trajectory(path: str):
+    """Read a trajectory CSV written by ``simulate``: (names, times (k,), frames (k, 22))."""
+    with open(path, newline='') as f:
+        reader = csv.reader(f)
+        header = next(reader)
+        data = np.array([[float(v) for v in row] for row in reader])
+    return tuple(header[1:]), data[:, 0], data[:, 1:]
+
+
+def _share_dir() -> str:
+    here = os.path.dirname(os.path.abspath(__file__))
+    source = os.path.normpath(os.path.join(here, '..'))
+    if os.path.isdir(os.path.join(source, 'config', 'scenes')):
+        return source
+    return os.path.join(sys.prefix, 'share', 'digital_actor_planner')
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog='digital-actor', description=__doc__.splitlines()[0])
+    sub = parser.add_subparsers(dest='command', required=True)
+    sim = sub.add_parser('simulate', help='plan a whole course offline and write the trajectory')
+    sim.add_argument('--scene', required=True, help='scene YAML or a bare mesh file')
+    sim.add_argument('--commands', required=True, help='CSV time,linear_x,angular_z')
+    sim.add_argument('--out', required=True, help='trajectory CSV to write')
+    sim.add_argument('--summary', help='JSON summary to write')
+    sim.add_argument('--render', help='PNG (key poses) or GIF (animation) to write')
+    sim.add_argument('--window-steps', type=int, default=3, help='n, footsteps per window')
+    sim.add_argument('--step-intervals', type=int, default=13, help='m, step length intervals')
+    sim.add_argument('--step-length-min', type=float, default=0.15, help='m')
+    sim.add_argument('--step-length-max', type=float, default=0.80, help='m')
+    sim.add_argument('--rate', type=float, default=100.0, help='frames per second')
+    sim.add_argument('--no-upper-body', action='store_true',
+                     help='keep the motion patterns, skip upper-body planning')
+    sub.add_parser('demo', help='the interactive demo (browser viewer + planner node)',
+                   add_help=False)
+    sub.add_parser('view', help='attach a browser viewer to a running planner', add_help=False)
+    return parser
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv and argv[0] in ('demo', 'view'):
+        if argv[0] == 'demo':
+            from digital_actor_planner import demo
+            return demo.main(argv[1:])
+        from digital_actor_planner.nodes import viewer
+        return viewer.main(argv[1:])
+    args = build_parser().parse_args(argv)
+    try:
+        return simulate(args)
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == '__main__':
+    sys.exit(main())

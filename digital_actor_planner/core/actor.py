@@ -1,0 +1,434 @@
+"""The actor pipeline: commands in, timed 22-DOF frames out, one step at a time (§3.2, Figure 2).
+
+Data flows one way: command -> predicted path -> ground profile -> footstep window -> leg motion
+and pelvis trajectory -> upper body -> frames. If a planner fails the step is not taken: the
+actor holds a stable stance and reports ``stuck`` with the reason until a new command (the user
+steering away) makes a step feasible again.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields, replace
+import time as _time
+from typing import Optional, Tuple
+
+import numpy as np
+
+from .footsteps import (FootstepConfig, FootstepPlanner, FootstepWindow, LEFT, RIGHT,
+                        sample_ground_profile, validate_footstep_config)
+from .gait import (GaitConfig, GaitError, hold_frames, Stance, standing_stance,
+                   validate_gait_config, WalkGenerator, with_at_rest)
+from .path import predict_path
+from .skeleton import Skeleton
+
+LEG_LINKS = ('pelvis', 'left_hip', 'left_thigh', 'left_shank', 'left_foot', 'right_hip',
+             'right_thigh', 'right_shank', 'right_foot')
+
+
+@dataclass(frozen=True)
+class ActorConfig:
+    """Settings of the whole pipeline. Speeds in m/s and rad/s, lengths in m, times in s."""
+
+    window_steps: int = 3
+    step_intervals: int = 13
+    step_length_min: float = 0.15
+    step_length_max: float = 0.80
+    max_linear_speed: float = 1.2
+    max_angular_speed: float = 1.0
+    frame_rate: float = 100.0
+    hold_time: float = 0.1
+    nominal_step_time: float = 0.65
+    max_attempts: int = 6
+    verify_collisions: bool = True
+    plan_upper_body: bool = True
+    footsteps: FootstepConfig = field(default_factory=FootstepConfig)
+    gait: GaitConfig = field(default_factory=GaitConfig)
+
+    def footstep_config(self) -> FootstepConfig:
+        """The footstep settings with the window and length fields of this config."""
+        return replace(self.footsteps, window_steps=self.window_steps,
+                       step_intervals=self.step_intervals, step_length_min=self.step_length_min,
+                       step_length_max=self.step_length_max)
+
+    def gait_config(self) -> GaitConfig:
+        """The gait settings with this config's frame rate."""
+        return replace(self.gait, frame_rate=self.frame_rate)
+
+
+def validate(config: ActorConfig) -> None:
+    """Raise ValueError naming the first bad field of ``config`` (cross-field rules included)."""
+    for f in fields(config):
+        value = getattr(config, f.name)
+        if isinstance(value, (bool, FootstepConfig, GaitConfig)):
+            continue
+        if not isinstance(value, (int, float, np.integer, np.floating)) or not np.isfinite(value):
+            raise ValueError(f'{f.name} must be a finite number, got {value!r}')
+    if config.max_linear_speed <= 0 or config.max_linear_speed > 3.0:
+        raise ValueError(f'max_linear_speed must be in (0, 3] m/s, got {config.max_linear_speed}')
+    if config.max_angular_speed <= 0 or config.max_angular_speed > 3.0:
+        raise ValueError(f'max_angular_speed must be in (0, 3] rad/s, got '
+                         f'{config.max_angular_speed}')
+    if not 0 < config.hold_time <= 1.0:
+        raise ValueError(f'hold_time must be in (0, 1] s, got {config.hold_time}')
+    if config.max_attempts < 1:
+        raise ValueError(f'max_attempts must be >= 1, got {config.max_attempts}')
+    validate_footstep_config(config.footstep_config())
+    validate_gait_config(config.gait_config())
+
+
+@dataclass(frozen=True)
+class StepBlock:
+    """A block of committed frames.
+
+    Attributes
+    ----------
+    status
+        'walking', 'idle' or 'stuck'.
+    reason
+        Why the actor is stuck (or what it did), '' when walking normally.
+    times
+        (k,) s on the actor's clock (it starts at 0 at construction).
+    frames, velocities
+        (k, 22) joint positions (rad or m) and velocities (rad/s or m/s).
+    footsteps
+        (n, 4) x, y, z, yaw of the planned footstep window (empty when none).
+    path
+        (p, 3) x, y, z of the predicted path (empty when idle).
+    planning_time
+        Wall time spent planning this block, s.
+    category
+        'level', 'uphill', 'downhill', 'closing' or '' for hold blocks.
+
+    """
+
+    status: str
+    reason: str
+    times: np.ndarray
+    frames: np.ndarray
+    velocities: np.ndarray
+    footsteps: np.ndarray
+    path: np.ndarray
+    planning_time: float
+    category: str = ''
+
+
+class Actor:
+    """A digital actor walking where it is told (the whole planning system of the paper).
+
+    Parameters
+    ----------
+    skeleton
+        The 22-DOF model.
+    environment
+        The world (:class:`environment.Environment`).
+    config
+        Pipeline settings.
+    start
+        (x, y, yaw) start pose, m and rad.
+    upper_body_planner
+        Optional planner for §5 with ``plan(times, frames)``; by default one is built when
+        ``config.plan_upper_body`` is set.
+    body_collision
+        Optional :class:`collision.BodyCollision` used to verify each step in 3D.
+
+    """
+
+    def __init__(self, skeleton: Skeleton, environment, config: ActorConfig = ActorConfig(),
+                 start: Tuple[float, float, float] = (0.0, 0.0, 0.0),
+                 upper_body_planner=None, body_collision=None):
+        validate(config)
+        from .collision import BodyCollision
+        from .environment import start_configuration
+        self.skeleton = skeleton
+        self.environment = environment
+        self.config = config
+        self._footstep_config = config.footstep_config()
+        self._planner = FootstepPlanner(self._footstep_config, skeleton.leg)
+        self._walk = WalkGenerator(skeleton, config.gait_config(), self._footstep_config)
+        self._collision = body_collision or BodyCollision(skeleton, environment)
+        self._leg_links = LEG_LINKS
+        if upper_body_planner is None and config.plan_upper_body:
+            from .upper_body import UpperBodyPlanner
+            upper_body_planner = UpperBodyPlanner(skeleton, self._collision)
+        self._upper = upper_body_planner
+        q = start_configuration(environment, start, skeleton)
+        sole = q[skeleton.index['root_z']] - skeleton.leg.standing_height - 0.002
+        self._stance = standing_stance(skeleton, float(start[0]), float(start[1]),
+                                       float(start[2]), float(sole))
+        self._configuration = self._standing_configuration()
+        self._time = 0.0
+        self._command = (0.0, 0.0)
+        self._previous_length = 0.0
+        self._window: Optional[FootstepWindow] = None
+        self._window_command = None
+        self.status = 'idle'
+        self.reason = ''
+
+    # -- state ---------------------------------------------------------------------------
+    @property
+    def time(self) -> float:
+        """End time of everything committed so far, s."""
+        return self._time
+
+    @property
+    def configuration(self) -> np.ndarray:
+        """The last committed frame, (22,) rad or m."""
+        return self._configuration.copy()
+
+    @property
+    def command(self) -> Tuple[float, float]:
+        """The (clamped) command in force: linear m/s, angular rad/s."""
+        return self._command
+
+    @property
+    def stance(self) -> Stance:
+        """The double-support state after the last committed step."""
+        return self._stance
+
+    def set_command(self, linear: float, angular: float) -> Optional[str]:
+        """Set the velocity command (the mouse drag of §3.1).
+
+        Backward speeds are not walked (the paper's actor walks forward): they become 0.
+
+        Returns
+        -------
+        str or None
+            A warning when the command was clamped.
+
+        Raises
+        ------
+        ValueError
+            When a value is NaN or infinite (the command is not applied).
+
+        """
+        if not (np.isfinite(linear) and np.isfinite(angular)):
+            raise ValueError(f'command must be finite, got linear={linear}, angular={angular}')
+        cfg = self.config
+        v = float(np.clip(linear, 0.0, cfg.max_linear_speed))
+        w = float(np.clip(angular, -cfg.max_angular_speed, cfg.max_angular_speed))
+        self._command = (v, w)
+        if v != linear or w != angular:
+            return (f'command ({linear:g}, {angular:g}) clamped to ({v:g}, {w:g}): limits are '
+                    f'linear [0, {cfg.max_linear_speed:g}] m/s, angular '
+                    f'+-{cfg.max_angular_speed:g} rad/s')
+        return None
+
+    # -- planning ----------------------------------------------------------------------
+    def plan_next(self) -> StepBlock:
+        """Plan and commit the next block of frames (one step, or a short hold)."""
+        started = _time.perf_counter()
+        v, w = self._command
+        if v < 1e-3 and abs(w) < 1e-3:
+            if not self._stance.at_rest:
+                block = self._closing_step(started)
+                if block is not None:
+                    return block
+            return self._hold('idle', '', started)
+        return self._walk_step(v, w, started)
+
+    def _standing_configuration(self) -> np.ndarray:
+        """Configuration of the initial stance (neutral legs, arms in their pattern)."""
+        q = self.skeleton.neutral()
+        q[self.skeleton.branch('root')] = self._stance.pelvis
+        from .gait import leg_inverse_kinematics
+        leg = self.skeleton.leg
+        for side, name in ((LEFT, 'left_leg'), (RIGHT, 'right_leg')):
+            foot = self._stance.feet[side]
+            offset = leg.hip_half_width if side == LEFT else -leg.hip_half_width
+            yaw = self._stance.pelvis[3]
+            hip = np.array([[self._stance.pelvis[0] - np.sin(yaw) * offset,
+                             self._stance.pelvis[1] + np.cos(yaw) * offset,
+                             self._stance.pelvis[2]]])
+            ankle = np.array([[foot.xy[0], foot.xy[1], foot.z]])
+            joints, _, _ = leg_inverse_kinematics(leg, hip, ankle, np.array([foot.yaw]),
+                                                  np.array([yaw]), np.array([foot.pitch]))
+            q[self.skeleton.branch(name)] = joints[0]
+        return self._with_patterns(q[None, :])[0]
+
+    def _with_patterns(self, frames: np.ndarray) -> np.ndarray:
+        from .upper_body import motion_patterns
+        return motion_patterns(self.skeleton, frames)
+
+    def _hold(self, status: str, reason: str, started: float, footsteps=None,
+              path=None) -> StepBlock:
+        cfg = self.config
+        times, frames = hold_frames(self._configuration, self._time, cfg.hold_time,
+                                    cfg.frame_rate)
+        self._stance = with_at_rest(self._stance, True)
+        self._time = float(times[-1])
+        self.status, self.reason = status, reason
+        empty = np.zeros((0, 4)), np.zeros((0, 3))
+        return StepBlock(status, reason, times, frames, np.zeros_like(frames),
+                         empty[0] if footsteps is None else footsteps,
+                         empty[1] if path is None else path,
+                         _time.perf_counter() - started)
+
+    def _commit(self, status: str, reason: str, times: np.ndarray, frames: np.ndarray,
+                stance: Stance, footsteps: np.ndarray, path: np.ndarray, started: float,
+                category: str) -> StepBlock:
+        previous = np.vstack([self._configuration[None, :], frames])
+        velocities = np.diff(previous, axis=0) * self.config.frame_rate
+        absolute = self._time + times
+        self._configuration = frames[-1].copy()
+        self._stance = stance
+        self._time = float(absolute[-1])
+        self.status, self.reason = status, reason
+        return StepBlock(status, reason, absolute, frames, velocities, footsteps, path,
+                         _time.perf_counter() - started, category)
+
+    def _upper_body(self, times: np.ndarray, frames: np.ndarray):
+        """Fill the motion patterns, then let the §5 planner make the upper body compliant."""
+        frames = self._with_patterns(frames)
+        if self._upper is None:
+            return frames, True, ''
+        upper = self.skeleton.branch('waist').tolist() + self.skeleton.branch(
+            'left_arm').tolist() + self.skeleton.branch('right_arm').tolist()
+        full = np.vstack([self._configuration[None, :], frames])
+        full_times = np.concatenate([[0.0], times])
+        # Continuity: frame 0 is the previous step's planned upper body.
+        full[0, upper] = self._configuration[upper]
+        plan = self._upper.plan(full_times, full)
+        if not plan.ok:
+            return frames, False, plan.reason
+        return plan.frames[1:], True, ''
+
+    def _verify(self, frames: np.ndarray) -> Optional[str]:
+        """3D check of the legs against the environment at a subset of frames."""
+        if not self.config.verify_collisions:
+            return None
+        step = max(1, frames.shape[0] // 16)
+        for j in list(range(0, frames.shape[0], step)) + [frames.shape[0] - 1]:
+            if self._collision.collides(frames[j], self._leg_links):
+                links = self._collision.links_in_collision(frames[j], self._leg_links)
+                return f'leg collides with the environment ({", ".join(links)})'
+        return None
+
+    def _walk_step(self, v: float, w: float, started: float) -> StepBlock:
+        cfg, fcfg, leg = self.config, self._footstep_config, self.skeleton.leg
+        stance = self._stance
+        x, y, _, yaw = stance.pelvis
+        horizon = fcfg.window_steps * fcfg.step_length_max + 1.0
+        path = predict_path(x, y, yaw, v, w, horizon, cfg.gait.min_turn_speed)
+        stance_foot = stance.feet[stance.stance_side]
+        swing_foot = stance.feet[1 - stance.stance_side]
+        stance_s = path.project(stance_foot.xy)
+        swing_s = path.project(swing_foot.xy)
+        s_start = min(stance_s, swing_s) - leg.heel - 0.06
+        s_end = stance_s + fcfg.window_steps * fcfg.step_length_max + leg.toe + 0.06
+        profile = sample_ground_profile(self.environment, path, s_start, s_end, 0.02,
+                                        leg.hip_half_width, leg.foot_width, stance_foot.sole,
+                                        fcfg.max_step_up, fcfg.window_steps)
+        path_points = self._path_points(path, s_end)
+        s_init = float(np.clip(v * cfg.nominal_step_time, fcfg.step_length_min,
+                               fcfg.step_length_max))
+        init_index = int(np.clip(round((s_init - fcfg.step_length_min) / fcfg.step_increment),
+                                 0, fcfg.step_intervals))
+        start = None
+        if self._window is not None and self._window_command == (v, w):
+            # §4.2: slide the window by one step; the new last step starts at s_init.
+            start = tuple(self._window.indices[1:]) + (init_index,)
+        banned, reason = [], 'no collision-free footstep window'
+        for _ in range(cfg.max_attempts):
+            window = self._planner.plan(profile, stance.stance_side, stance_s, stance_foot.sole,
+                                        swing_s, swing_foot.sole, s_init, self._previous_length,
+                                        start=start, banned_first=tuple(banned))
+            if window is None:
+                break
+            footsteps = self._footstep_poses(path, window)
+            try:
+                motion = self._generate(stance, path, window, v)
+            except GaitError as error:
+                banned.append(window.indices[0])
+                reason = f'walk generation failed: {error}'
+                start = None
+                continue
+            collision = self._verify(motion.frames)
+            if collision is not None:
+                banned.append(window.indices[0])
+                reason = collision
+                start = None
+                continue
+            frames, ok, upper_reason = self._upper_body(motion.times, motion.frames)
+            if not ok:
+                return self._stuck(f'upper body blocked: {upper_reason}', started, footsteps,
+                                   path_points)
+            self._window, self._window_command = window, (v, w)
+            self._previous_length = float(window.lengths[0])
+            return self._commit('walking', '', motion.times, frames, motion.stance, footsteps,
+                                path_points, started, motion.category)
+        return self._stuck(reason, started, np.zeros((0, 4)), path_points)
+
+    def _stuck(self, reason: str, started: float, footsteps, path_points) -> StepBlock:
+        self._window = None
+        return self._hold('stuck', reason, started, footsteps, path_points)
+
+    def _generate(self, stance: Stance, path, window: FootstepWindow, v: float):
+        leg = self.skeleton.leg
+        s1 = float(window.arc_lengths[0])
+        side = int(window.sides[0])
+        offset = leg.hip_half_width if side == LEFT else -leg.hip_half_width
+        landing_xy = path.offset_points(np.array([s1]), offset)[0]
+        landing_yaw = float(path.poses(np.array([s1]))[0, 2])
+        stance_s = s1 - float(window.lengths[0])
+        middle = path.poses(np.array([0.5 * (stance_s + s1)]))[0]
+        rise = float(window.heights[0]) - stance.feet[stance.stance_side].sole
+        duration = self._walk.step_duration(float(window.lengths[0]), v, rise)
+        return self._walk.step(stance, landing_xy, landing_yaw, float(window.heights[0]),
+                               float(window.pitches[0]), middle, duration, self._obstacles)
+
+    def _closing_step(self, started: float) -> Optional[StepBlock]:
+        """Bring the feet side by side when the command stops (the actor stops within a step)."""
+        leg = self.skeleton.leg
+        stance = self._stance
+        foot = stance.feet[stance.stance_side]
+        swing_side = 1 - stance.stance_side
+        offset = 2 * (leg.hip_half_width if swing_side == LEFT else -leg.hip_half_width)
+        landing_xy = foot.xy + offset * np.array([-np.sin(foot.yaw), np.cos(foot.yaw)])
+        sole = foot.sole + np.tan(foot.pitch) * 0.0
+        middle_xy = foot.xy + 0.5 * (landing_xy - foot.xy)
+        target = np.array([middle_xy[0], middle_xy[1], foot.yaw])
+        ground, room = self.environment.ground_height(landing_xy[None, :], sole + 0.05)
+        if np.isnan(ground[0]) or abs(ground[0] - sole) > 0.01 or abs(foot.pitch) > 0.05:
+            return None
+        swing = stance.feet[swing_side]
+        distance = float(np.linalg.norm(swing.xy - landing_xy))
+        if distance < 0.02:
+            self._stance = with_at_rest(stance, True)
+            return None
+        duration = self._walk.step_duration(max(distance, 0.3), 0.6, abs(swing.sole - sole))
+        try:
+            motion = self._walk.step(stance, landing_xy, foot.yaw, sole, 0.0, target, duration,
+                                     self._obstacles, to_rest=True)
+        except GaitError:
+            return None
+        if self._verify(motion.frames) is not None:
+            return None
+        frames, ok, _ = self._upper_body(motion.times, motion.frames)
+        if not ok:
+            return None
+        self._window = None
+        self._previous_length = 0.0
+        return self._commit('idle', 'stopping', motion.times, frames,
+                            with_at_rest(motion.stance, True), np.zeros((0, 4)),
+                            np.zeros((0, 3)), started, 'closing')
+
+    def _obstacles(self, xy: np.ndarray, z_ref: float) -> np.ndarray:
+        """Heights a swinging sole must clear at ``xy`` (NaN over empty space)."""
+        height, _ = self.environment.ground_height(xy, z_ref)
+        missing = np.isnan(height)
+        if np.any(missing):
+            top, _ = self.environment.ground_height(xy[missing], z_ref + 3.0)
+            height[missing] = top
+        return height
+
+    def _footstep_poses(self, path, window: FootstepWindow) -> np.ndarray:
+        leg = self.skeleton.leg
+        offsets = np.where(window.sides == LEFT, leg.hip_half_width, -leg.hip_half_width)
+        poses = path.poses(window.arc_lengths)
+        xy = np.stack([path.offset_points(np.array([s]), o)[0]
+                       for s, o in zip(window.arc_lengths, offsets)])
+        return np.column_stack([xy, window.heights, poses[:, 2]])
+
+    def _path_points(self, path, s_end: float) -> np.ndarray:
+        s = np.linspace(0.0, max(s_end, 0.1), 24)
+        poses = path.poses(s)
+        return np.column_stack([poses[:, :2], np.full(s.size, self._stance.feet[0].sole)])

@@ -1,0 +1,456 @@
+"""The sliding-window footstep planner (§4.2).
+
+A footstep configuration q_f = (s_1, ..., s_n) holds the lengths of the next n steps, each in
+[s_min, s_max] divided into m intervals. From q_init = (s_init, ..., s_init) a breadth-first search
+finds a collision-free configuration, then hill-climbing on an effort criterion moves to the best
+neighbour until every neighbour is worse. Only s_1 is executed; the next call starts from
+(s_2, ..., s_n, s_init).
+"""
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Dict, Optional, Tuple
+
+import numpy as np
+
+from .skeleton import LegGeometry
+
+LEFT, RIGHT = 0, 1
+
+
+@dataclass(frozen=True)
+class FootstepConfig:
+    """Footstep planner settings (paper defaults n = 3, m = 13). Lengths in m, angles in rad."""
+
+    window_steps: int = 3
+    step_intervals: int = 13
+    step_length_min: float = 0.15
+    step_length_max: float = 0.80
+    max_step_up: float = 0.30
+    max_step_down: float = 0.35
+    max_swing_height: float = 0.40
+    flatness_tolerance: float = 0.015
+    min_support_fraction: float = 0.6
+    max_foot_pitch: float = 0.30
+    min_headroom: float = 1.0
+    weight_length: float = 1.0
+    weight_height: float = 0.5
+    weight_pitch: float = 0.2
+    weight_smooth: float = 0.3
+
+    @property
+    def step_increment(self) -> float:
+        """Length of one of the m intervals, m."""
+        return (self.step_length_max - self.step_length_min) / self.step_intervals
+
+    def lengths(self) -> np.ndarray:
+        """The m + 1 allowed footstep lengths, (m + 1,) m."""
+        return self.step_length_min + self.step_increment * np.arange(self.step_intervals + 1)
+
+
+def validate_footstep_config(config: FootstepConfig) -> None:
+    """Raise ValueError naming the first bad field of ``config``."""
+    if not isinstance(config.window_steps, (int, np.integer)) or not 1 <= config.window_steps <= 8:
+        raise ValueError(f'window_steps must be an integer in [1, 8], got {config.window_steps!r}')
+    if (not isinstance(config.step_intervals, (int, np.integer))
+            or not 1 <= config.step_intervals <= 60):
+        raise ValueError(f'step_intervals must be an integer in [1, 60], got '
+                         f'{config.step_intervals!r}')
+    for name in ('step_length_min', 'step_length_max', 'max_step_up', 'max_step_down',
+                 'max_swing_height', 'flatness_tolerance', 'max_foot_pitch', 'min_headroom',
+                 'weight_length', 'weight_height', 'weight_pitch', 'weight_smooth'):
+        value = getattr(config, name)
+        if not np.isfinite(value) or value < 0:
+            raise ValueError(f'{name} must be finite and >= 0, got {value!r}')
+    if not 0.05 <= config.step_length_min < config.step_length_max <= 1.0:
+        raise ValueError('need 0.05 <= step_length_min < step_length_max <= 1.0, got '
+                         f'step_length_min={config.step_length_min}, '
+                         f'step_length_max={config.step_length_max}')
+
+
+@dataclass(frozen=True)
+class GroundProfile:
+    """The ground under each foot's track, sampled along the predicted path (§3.2).
+
+    Attributes
+    ----------
+    s0, ds
+        Arc length of the first sample and the sample spacing, m.
+    height
+        (2, K) highest ground across the foot's width per side (0 left, 1 right), m; NaN where a
+        foot cannot stand (no surface within step reach, or inside a solid).
+    low
+        (2, K) lowest ground across the foot's width, m (for the flatness test).
+    headroom
+        (2, K) free height above ``height``, m.
+    obstacle
+        (2, K) height a swinging foot must clear, m: ``height`` where it exists, the top of the
+        solid where the sample lies inside one, NaN over empty space (a gap).
+
+    """
+
+    s0: float
+    ds: float
+    height: np.ndarray
+    low: np.ndarray
+    headroom: np.ndarray
+    obstacle: np.ndarray
+
+    @property
+    def samples(self) -> int:
+        """Number of samples K per side."""
+        return self.height.shape[1]
+
+    def arc_lengths(self) -> np.ndarray:
+        """(K,) arc length of each sample, m."""
+        return self.s0 + self.ds * np.arange(self.samples)
+
+
+@dataclass(frozen=True)
+class Foothold:
+    """Where a sole can rest at arc length ``s`` on one side: height of the sole under the ankle
+    (m), sole pitch (rad, toes up positive) and whether it is usable at all."""
+
+    ok: bool
+    height: float
+    pitch: float
+
+
+@dataclass(frozen=True)
+class FootstepWindow:
+    """Result of one footstep-window search.
+
+    Attributes
+    ----------
+    lengths
+        (n,) footstep lengths s_1..s_n, m.
+    indices
+        (n,) interval index of each length (0..m).
+    arc_lengths
+        (n,) arc length of each foothold along the path, m.
+    heights, pitches
+        (n,) foothold sole heights (m) and pitches (rad).
+    sides
+        (n,) 0 = left, 1 = right.
+    effort
+        Effort criterion of the configuration (dimensionless).
+    evaluated
+        Configurations whose feasibility was tested (BFS + hill-climbing).
+
+    """
+
+    lengths: np.ndarray
+    indices: Tuple[int, ...]
+    arc_lengths: np.ndarray
+    heights: np.ndarray
+    pitches: np.ndarray
+    sides: np.ndarray
+    effort: float
+    evaluated: int
+
+
+@dataclass
+class _Search:
+    """Per-call memo of foothold and swing tests (cleared every plan)."""
+
+    footholds: Dict[Tuple[int, int], Foothold] = field(default_factory=dict)
+    swings: Dict[Tuple[int, int, int], bool] = field(default_factory=dict)
+    feasible: Dict[Tuple[int, ...], Optional[float]] = field(default_factory=dict)
+
+
+class FootstepPlanner:
+    """Sliding-window footstep planner (§4.2) over a ground profile.
+
+    Parameters
+    ----------
+    config
+        Planner settings.
+    leg
+        Leg dimensions (sole length around the ankle).
+
+    """
+
+    def __init__(self, config: FootstepConfig, leg: LegGeometry):
+        validate_footstep_config(config)
+        self.config = config
+        self.leg = leg
+
+    # -- the ground under a sole -----------------------------------------------------------
+    def foothold(self, profile: GroundProfile, side: int, s: float) -> Foothold:
+        """Evaluate a sole with its ankle at arc length ``s`` on ``side``.
+
+        The sole needs support under its whole length that is flat within the tolerance after
+        fitting a plane (so slopes are fine), not steeper than the pitch limit, and with headroom.
+        """
+        cfg, leg = self.config, self.leg
+        i0 = int(np.floor((s - leg.heel - profile.s0) / profile.ds))
+        i1 = int(np.ceil((s + leg.toe - profile.s0) / profile.ds))
+        if i0 < 0 or i1 >= profile.samples:
+            return Foothold(False, np.nan, 0.0)
+        high = profile.height[side, i0:i1 + 1]
+        if np.any(np.isnan(high)):
+            return Foothold(False, np.nan, 0.0)
+        if np.min(profile.headroom[side, i0:i1 + 1]) < cfg.min_headroom:
+            return Foothold(False, np.nan, 0.0)
+        low = profile.low[side, i0:i1 + 1]
+        x = profile.s0 + profile.ds * np.arange(i0, i1 + 1) - s
+        xc = x - x.mean()
+        slope = float(np.dot(xc, high) / np.dot(xc, xc)) if x.size > 2 else 0.0
+        pitch = float(np.arctan(slope))
+        if abs(pitch) > cfg.max_foot_pitch:
+            return Foothold(False, np.nan, pitch)
+        plane = slope * x
+        # The sole rests on the highest point above the fitted plane; it must not bridge a dip
+        # deeper than the tolerance anywhere under it (neither across nor along the foot).
+        lift = float(np.max(high - plane))
+        if lift - float(np.min(low - plane)) <= cfg.flatness_tolerance:
+            return Foothold(True, lift, pitch)
+        # At an edge (a stair nosing, a block, a ditch) a flat sole may overhang lower ground,
+        # as long as the ankle is over the support and most of the sole is supported.
+        top = float(np.max(high))
+        supported = (high >= top - cfg.flatness_tolerance) & (low >= top - cfg.flatness_tolerance)
+        ankle = int(np.argmin(np.abs(x)))
+        if (supported[max(ankle - 1, 0):ankle + 2].all()
+                and supported.mean() >= cfg.min_support_fraction):
+            return Foothold(True, top, 0.0)
+        return Foothold(False, np.nan, pitch)
+
+    def swing_clear(self, profile: GroundProfile, side: int, s_from: float, h_from: float,
+                    s_to: float, h_to: float) -> bool:
+        """Whether a foot can swing from one foothold to the next over the ground profile."""
+        i0 = int(np.floor((s_from + self.leg.toe - profile.s0) / profile.ds))
+        i1 = int(np.ceil((s_to - self.leg.heel - profile.s0) / profile.ds))
+        i0, i1 = max(i0, 0), min(i1, profile.samples - 1)
+        if i1 < i0:
+            return True
+        tops = profile.obstacle[side, i0:i1 + 1]
+        tops = tops[~np.isnan(tops)]
+        if tops.size == 0:
+            return True
+        return float(np.max(tops)) <= max(h_from, h_to) + self.config.max_swing_height
+
+    # -- §4.2 search -------------------------------------------------------------------
+    def plan(self, profile: GroundProfile, stance_side: int, stance_s: float,
+             stance_height: float, swing_s: float, swing_height: float, s_init: float,
+             previous_length: float, start: Optional[Tuple[int, ...]] = None,
+             banned_first: Tuple[int, ...] = ()) -> Optional[FootstepWindow]:
+        """Plan the next n footsteps.
+
+        Parameters
+        ----------
+        profile
+            Ground under both foot tracks.
+        stance_side, stance_s, stance_height
+            The foot that stays down: side, arc length, sole height (m).
+        swing_s, swing_height
+            Where the swinging foot lifts from: arc length and sole height, m.
+        s_init
+            Neutral footstep length, m (from the commanded speed).
+        previous_length
+            Length of the step just taken, m (for the smoothness term).
+        start
+            Initial configuration as interval indices; defaults to (s_init, ..., s_init). The
+            actor passes the slid previous window (s_2, ..., s_n, s_init).
+        banned_first
+            Interval indices that s_1 must not take (the walk generator could not realise them).
+
+        Returns
+        -------
+        FootstepWindow or None
+            None when no collision-free configuration exists in the window.
+
+        """
+        cfg = self.config
+        n, m = cfg.window_steps, cfg.step_intervals
+        lengths = cfg.lengths()
+        init_index = int(np.clip(round((s_init - cfg.step_length_min) / cfg.step_increment), 0, m))
+        q = tuple(start) if start is not None else (init_index,) * n
+        if len(q) != n or any(not 0 <= j <= m for j in q):
+            raise ValueError(f'start configuration {q} is not {n} indices in [0, {m}]')
+        memo = _Search()
+        sides = np.array([(1 - stance_side) if i % 2 == 0 else stance_side for i in range(n)])
+        banned = set(int(b) for b in banned_first)
+
+        def evaluate(config: Tuple[int, ...]) -> Optional[float]:
+            """Effort of a configuration, or None if it is not collision-free."""
+            if config in memo.feasible:
+                return memo.feasible[config]
+            result = self._effort(profile, config, lengths, sides, stance_s, stance_height,
+                                  swing_s, swing_height, s_init, previous_length, memo, banned)
+            memo.feasible[config] = result
+            return result
+
+        # Breadth-first search from q_init to the nearest collision-free configuration.
+        queue, seen, found = deque([q]), {q}, None
+        while queue:
+            current = queue.popleft()
+            if evaluate(current) is not None:
+                found = current
+                break
+            for neighbour in self._neighbours(current, m):
+                if neighbour not in seen:
+                    seen.add(neighbour)
+                    queue.append(neighbour)
+        if found is None:
+            return None
+        # Hill-climbing: move to the best neighbour while it improves the effort.
+        current, effort = found, evaluate(found)
+        while True:
+            best, best_effort = None, effort
+            for neighbour in self._neighbours(current, m):
+                value = evaluate(neighbour)
+                if value is not None and value < best_effort - 1e-12:
+                    best, best_effort = neighbour, value
+            if best is None:
+                break
+            current, effort = best, best_effort
+        return self._window(profile, current, lengths, sides, stance_s, effort,
+                            len(memo.feasible), memo)
+
+    def plan_exhaustive(self, profile: GroundProfile, stance_side: int, stance_s: float,
+                        stance_height: float, swing_s: float, swing_height: float,
+                        s_init: float, previous_length: float) -> Optional[FootstepWindow]:
+        """The optimum over every configuration of the window (for benchmarks only)."""
+        cfg = self.config
+        n, m = cfg.window_steps, cfg.step_intervals
+        lengths = cfg.lengths()
+        memo = _Search()
+        sides = np.array([(1 - stance_side) if i % 2 == 0 else stance_side for i in range(n)])
+        best, best_effort = None, np.inf
+        for config in np.ndindex(*([m + 1] * n)):
+            value = self._effort(profile, tuple(config), lengths, sides, stance_s, stance_height,
+                                 swing_s, swing_height, s_init, previous_length, memo, set())
+            if value is not None and value < best_effort:
+                best, best_effort = tuple(config), value
+        if best is None:
+            return None
+        return self._window(profile, best, lengths, sides, stance_s, best_effort,
+                            (m + 1) ** n, memo)
+
+    @staticmethod
+    def _neighbours(config: Tuple[int, ...], m: int):
+        for i in range(len(config)):
+            for delta in (-1, 1):
+                j = config[i] + delta
+                if 0 <= j <= m:
+                    yield config[:i] + (j,) + config[i + 1:]
+
+    def _effort(self, profile, config, lengths, sides, stance_s, stance_height, swing_s,
+                swing_height, s_init, previous_length, memo, banned) -> Optional[float]:
+        cfg = self.config
+        if config[0] in banned:
+            return None
+        span = cfg.step_length_max - cfg.step_length_min
+        # Position of each foot before the step: (arc length, height) by side.
+        last = {int(1 - sides[0]): (stance_s, stance_height),
+                int(sides[0]): (swing_s, swing_height)}
+        s, height_before, effort, length_before = stance_s, stance_height, 0.0, previous_length
+        cumulative = 0
+        for i, j in enumerate(config):
+            length = lengths[j]
+            s += length
+            cumulative += j
+            side = int(sides[i])
+            key = (i, cumulative)
+            hold = memo.footholds.get(key)
+            if hold is None:
+                hold = self.foothold(profile, side, s)
+                memo.footholds[key] = hold
+            if not hold.ok:
+                return None
+            rise = hold.height - height_before
+            if rise > cfg.max_step_up or -rise > cfg.max_step_down:
+                return None
+            s_from, h_from = last[side]
+            swing_key = (side, int(round(s_from / 1e-4)), int(round(s / 1e-4)))
+            clear = memo.swings.get(swing_key)
+            if clear is None:
+                clear = self.swing_clear(profile, side, s_from, h_from, s, hold.height)
+                memo.swings[swing_key] = clear
+            if not clear:
+                return None
+            effort += (cfg.weight_length * ((length - s_init) / span) ** 2
+                       + cfg.weight_height * (rise / max(cfg.max_step_up, 1e-6)) ** 2
+                       + cfg.weight_pitch * (hold.pitch / max(cfg.max_foot_pitch, 1e-6)) ** 2
+                       + cfg.weight_smooth * ((length - length_before) / span) ** 2)
+            last[side] = (s, hold.height)
+            height_before, length_before = hold.height, length
+        return effort
+
+    def _window(self, profile, config, lengths, sides, stance_s, effort, evaluated, memo):
+        ls = lengths[list(config)]
+        arcs = stance_s + np.cumsum(ls)
+        holds = [memo.footholds.get((i, int(np.sum(config[:i + 1]))))
+                 or self.foothold(profile, int(sides[i]), float(arcs[i]))
+                 for i in range(len(config))]
+        return FootstepWindow(lengths=ls, indices=tuple(int(j) for j in config), arc_lengths=arcs,
+                              heights=np.array([h.height for h in holds]),
+                              pitches=np.array([h.pitch for h in holds]), sides=sides.copy(),
+                              effort=float(effort), evaluated=int(evaluated))
+
+
+def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: float,
+                          hip_half_width: float, foot_width: float, base_height: float,
+                          max_step_up: float, levels: int) -> GroundProfile:
+    """Sample the ground under both foot tracks along a predicted path (§3.2).
+
+    "By taking the intersection of the ground and the sagittal plane of the actor, one can
+    compute the ground profile along the global path." Here each foot has its own track, offset
+    from the path by the hip half-width, sampled at three points across the sole's width.
+
+    Parameters
+    ----------
+    environment
+        An :class:`environment.Environment`.
+    path
+        The :class:`path.PredictedPath`.
+    s_start, s_end, ds
+        Arc-length range and spacing of the samples, m.
+    hip_half_width, foot_width
+        Lateral track offset and sole width, m.
+    base_height
+        Sole height of the stance foot, m: ground within reach is looked for at or below
+        ``base_height + max_step_up`` first, then one step-up higher per level (stairs).
+    max_step_up
+        Largest step-up, m.
+    levels
+        How many step-ups ahead to look (the window length).
+
+    Returns
+    -------
+    GroundProfile
+
+    """
+    count = int(np.ceil((s_end - s_start) / ds)) + 1
+    s = s_start + ds * np.arange(count)
+    across = np.array([-0.4, 0.0, 0.4]) * foot_width
+    points = np.stack([path.offset_points(s, side_offset + a)
+                       for side_offset in (hip_half_width, -hip_half_width) for a in across])
+    xy = points.reshape(-1, 2)
+    height, clearance = environment.ground_height(xy, base_height + max_step_up + 0.02)
+    for level in range(1, max(levels, 1)):
+        missing = np.isnan(height)
+        if not np.any(missing):
+            break
+        z_ref = base_height + (level + 1) * max_step_up + 0.02
+        h, c = environment.ground_height(xy[missing], z_ref)
+        height[missing], clearance[missing] = h, c
+    obstacle = height.copy()
+    missing = np.isnan(obstacle)
+    if np.any(missing):
+        # Inside a solid the swing must clear its top; over empty space there is nothing to hit.
+        top, _ = environment.ground_height(xy[missing], base_height + 3.0)
+        obstacle[missing] = top
+    shape = (2, across.size, count)
+    height = height.reshape(shape)
+    clearance = clearance.reshape(shape)
+    obstacle = obstacle.reshape(shape)
+    with np.errstate(invalid='ignore'):
+        high = np.max(height, axis=1)
+        low = np.min(height, axis=1)
+        room = np.min(np.where(np.isnan(clearance), 0.0, clearance), axis=1)
+        tops = np.where(np.all(np.isnan(obstacle), axis=1), np.nan,
+                        np.nanmax(np.where(np.isnan(obstacle), -np.inf, obstacle), axis=1))
+    return GroundProfile(s0=float(s_start), ds=float(ds), height=high, low=low, headroom=room,
+                         obstacle=tops)

@@ -1,0 +1,452 @@
+"""Walk generation for one step (§4.1): key frames, sagittal leg IK, Bezier swing, pelvis motion.
+
+The legs are planned in their sagittal planes (§4): each leg has hip yaw, hip pitch, knee and
+ankle, so a foot on the ground must stay in the vertical plane of its hip. The pelvis trajectory
+is therefore built from the stance foot: the stance hip slides along the stance foot's plane while
+the pelvis yaw turns towards the new heading, and the hip yaw takes up the difference (§4, last
+paragraph). The landing foot is placed in the swing hip's plane at touchdown, so the next step
+starts consistent again.
+
+Key frames differ by the level of the next step (Figure 4): on level ground the pelvis moves
+evenly; uphill the front leg is bent first (the pelvis rises late, after the foot is up);
+downhill the rear leg is bent first (the pelvis lowers early, before the foot lands).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from typing import Tuple
+
+import numpy as np
+
+from .footsteps import FootstepConfig, LEFT, RIGHT
+from .skeleton import LegGeometry, Skeleton
+
+SOLE_CLEARANCE = 0.002  # a resting sole floats this far above the surface, m
+
+
+class GaitError(Exception):
+    """A step cannot be realised (out of reach, joint limit, swing cannot clear the ground)."""
+
+
+@dataclass(frozen=True)
+class GaitConfig:
+    """Walk generation settings. Lengths in m, times in s, angles in rad."""
+
+    frame_rate: float = 100.0
+    reach_fraction: float = 0.975
+    pelvis_height_drop: float = 0.035
+    swing_lift: float = 0.07
+    swing_clearance: float = 0.035
+    max_swing_lift: float = 0.55
+    min_step_time: float = 0.5
+    max_step_time: float = 0.9
+    time_per_rise: float = 1.5
+    min_turn_speed: float = 0.25
+    max_heading_change: float = 0.5
+
+
+def validate_gait_config(config: GaitConfig) -> None:
+    """Raise ValueError naming the first bad field of ``config``."""
+    for name, value in vars(config).items():
+        if not np.isfinite(value) or value < 0:
+            raise ValueError(f'{name} must be finite and >= 0, got {value!r}')
+    if not 10.0 <= config.frame_rate <= 1000.0:
+        raise ValueError(f'frame_rate must be in [10, 1000] Hz, got {config.frame_rate}')
+    if not 0.5 < config.reach_fraction < 1.0:
+        raise ValueError(f'reach_fraction must be in (0.5, 1), got {config.reach_fraction}')
+    if not 0 < config.min_step_time <= config.max_step_time:
+        raise ValueError(f'need 0 < min_step_time <= max_step_time, got '
+                         f'{config.min_step_time}, {config.max_step_time}')
+
+
+@dataclass(frozen=True)
+class FootPose:
+    """A foot resting on the ground: ankle joint xy (m), ankle height (m), yaw and sole pitch
+    (rad, toes up positive), and the sole height under the ankle (m)."""
+
+    xy: np.ndarray
+    z: float
+    yaw: float
+    pitch: float
+    sole: float
+
+
+@dataclass(frozen=True)
+class Stance:
+    """Double-support state between two steps.
+
+    ``pelvis`` is (x, y, z, yaw) with yaw unwrapped (continuous); ``feet`` is (left, right);
+    ``stance_side`` is the foot that stays down during the next step (the one that landed last).
+    """
+
+    pelvis: np.ndarray
+    feet: Tuple[FootPose, FootPose]
+    stance_side: int
+    at_rest: bool = True
+
+
+@dataclass(frozen=True)
+class StepMotion:
+    """One generated step: frames (k, 22) at times (k,) s relative to the step start (the last
+    frame is at the step's duration), the stance after it, and its category."""
+
+    times: np.ndarray
+    frames: np.ndarray
+    stance: Stance
+    category: str
+    swing_lift: float
+    lateral_error: float
+
+
+def smoothstep(t: np.ndarray) -> np.ndarray:
+    """Cubic ease 3t^2 - 2t^3 on [0, 1] (also the horizontal part of the swing Bezier)."""
+    t = np.clip(t, 0.0, 1.0)
+    return t * t * (3.0 - 2.0 * t)
+
+
+def _wrap(angle):
+    return (angle + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def _lateral(yaw, offset):
+    """World xy of a point ``offset`` m to the left of a heading ``yaw``: (..., 2)."""
+    return np.stack([-np.sin(yaw) * offset, np.cos(yaw) * offset], axis=-1)
+
+
+def foot_pose_on(xy, yaw, sole, pitch, leg: LegGeometry) -> FootPose:
+    """The resting foot pose whose sole lies on a plane of ``pitch`` at height ``sole`` under the
+    ankle."""
+    z = sole + leg.ankle_height / np.cos(pitch) + SOLE_CLEARANCE
+    return FootPose(np.asarray(xy, dtype=float).copy(), float(z), float(yaw), float(pitch),
+                    float(sole))
+
+
+def standing_stance(skeleton: Skeleton, x: float, y: float, yaw: float, sole: float,
+                    stance_side: int = RIGHT) -> Stance:
+    """Both feet side by side under the hips on level ground at sole height ``sole``."""
+    leg = skeleton.leg
+    feet = []
+    for side in (LEFT, RIGHT):
+        offset = leg.hip_half_width if side == LEFT else -leg.hip_half_width
+        xy = np.array([x, y]) + _lateral(yaw, offset)
+        feet.append(foot_pose_on(xy, yaw, sole, 0.0, leg))
+    z = feet[0].z + leg.thigh + leg.shank - 0.03
+    return Stance(np.array([x, y, z, yaw], dtype=float), (feet[0], feet[1]), stance_side, True)
+
+
+def leg_inverse_kinematics(leg: LegGeometry, hip: np.ndarray, ankle: np.ndarray,
+                           plane_yaw: np.ndarray, pelvis_yaw: np.ndarray,
+                           foot_pitch: np.ndarray):
+    """Sagittal-plane IK of one leg for k frames (§4: legs move in their sagittal planes).
+
+    Parameters
+    ----------
+    hip, ankle
+        (k, 3) world positions of the hip and ankle joints, m.
+    plane_yaw
+        (k,) heading of the leg's plane (= the foot's yaw), rad.
+    pelvis_yaw
+        (k,) pelvis yaw, rad.
+    foot_pitch
+        (k,) sole pitch, rad, toes up positive.
+
+    Returns
+    -------
+    tuple
+        (joints (k, 4) hip_yaw, hip_pitch, knee, ankle in rad; lateral (k,) out-of-plane
+        distance of the ankle, m; reach (k,) hip-ankle distance over the maximum).
+
+    """
+    v = ankle - hip
+    direction = np.stack([np.cos(plane_yaw), np.sin(plane_yaw)], axis=-1)
+    forward = np.sum(v[:, :2] * direction, axis=-1)
+    lateral = v[:, 0] * -direction[:, 1] + v[:, 1] * direction[:, 0]
+    down = -v[:, 2]
+    distance = np.hypot(forward, down)
+    l1, l2 = leg.thigh, leg.shank
+    reach = distance / (l1 + l2)
+    d = np.clip(distance, 1e-6, l1 + l2)
+    cos_knee = np.clip((l1 * l1 + l2 * l2 - d * d) / (2 * l1 * l2), -1.0, 1.0)
+    knee = np.pi - np.arccos(cos_knee)
+    cos_beta = np.clip((l1 * l1 + d * d - l2 * l2) / (2 * l1 * d), -1.0, 1.0)
+    hip_pitch = np.arctan2(forward, down) + np.arccos(cos_beta)
+    ankle_angle = foot_pitch - (hip_pitch - knee)
+    hip_yaw = _wrap(plane_yaw - pelvis_yaw)
+    return np.stack([hip_yaw, hip_pitch, knee, ankle_angle], axis=-1), lateral, reach
+
+
+def _ease(tau: np.ndarray, from_rest: bool, to_rest: bool) -> np.ndarray:
+    """Progress of the pelvis over a step: constant speed, easing in or out at rest."""
+    if from_rest and to_rest:
+        return smoothstep(tau)
+    if from_rest:
+        return tau * tau * (2.0 - tau)
+    if to_rest:
+        return tau * (1.0 + tau - tau * tau)
+    return tau
+
+
+class WalkGenerator:
+    """Generates the lower-body motion of single steps (§4.1, Figure 3).
+
+    Parameters
+    ----------
+    skeleton
+        The actor model.
+    config
+        Gait settings.
+    footstep_config
+        Footstep limits (the same step-height limits bound the swing).
+
+    """
+
+    def __init__(self, skeleton: Skeleton, config: GaitConfig = GaitConfig(),
+                 footstep_config: FootstepConfig = FootstepConfig()):
+        validate_gait_config(config)
+        self.skeleton = skeleton
+        self.leg = skeleton.leg
+        self.config = config
+        self.footstep_config = footstep_config
+        self._leg_index = {side: skeleton.branch('left_leg' if side == LEFT else 'right_leg')
+                           for side in (LEFT, RIGHT)}
+        self._leg_lower = {s: skeleton.lower[i] for s, i in self._leg_index.items()}
+        self._leg_upper = {s: skeleton.upper[i] for s, i in self._leg_index.items()}
+        self._root = skeleton.branch('root')
+
+    def step_duration(self, length: float, speed: float, rise: float) -> float:
+        """Duration of a step of ``length`` m at ``speed`` m/s changing height by ``rise`` m."""
+        cfg = self.config
+        base = length / max(speed, cfg.min_turn_speed, 1e-3)
+        duration = float(np.clip(base, cfg.min_step_time, cfg.max_step_time))
+        duration += cfg.time_per_rise * abs(rise)
+        return np.ceil(duration * cfg.frame_rate - 1e-9) / cfg.frame_rate
+
+    def step(self, stance: Stance, landing_xy: np.ndarray, landing_yaw: float,
+             landing_sole: float, landing_pitch: float, pelvis_target: np.ndarray,
+             duration: float, swing_profile, to_rest: bool = False) -> StepMotion:
+        """Generate one step: the swing foot moves to the landing foothold.
+
+        Parameters
+        ----------
+        stance
+            State at the start of the step (double support).
+        landing_xy, landing_yaw, landing_sole, landing_pitch
+            Planned foothold of the swing foot: ankle xy (m), yaw (rad), sole height (m), sole
+            pitch (rad). The xy is adjusted along the landing heading so the foot lies in the
+            swing hip's plane.
+        pelvis_target
+            (3,) desired pelvis x, y (m) and yaw (rad) at touchdown.
+        duration
+            Step time, s (a multiple of the frame period).
+        swing_profile
+            Callable (xy (N, 2), z_ref float) -> (N,) obstacle heights the swinging sole must
+            clear (NaN over empty space).
+        to_rest
+            Ease the pelvis to a stop at the end.
+
+        Raises
+        ------
+        GaitError
+            When the step is out of reach, breaks a joint limit, or the swing cannot clear.
+
+        """
+        cfg, leg = self.config, self.leg
+        rate = cfg.frame_rate
+        k = int(round(duration * rate))
+        if k < 2:
+            raise GaitError(f'step duration {duration} s is too short')
+        tau = np.arange(1, k + 1) / k
+        stance_side = stance.stance_side
+        swing_side = 1 - stance_side
+        foot_s, foot_w = stance.feet[stance_side], stance.feet[swing_side]
+        w_s = leg.hip_half_width if stance_side == LEFT else -leg.hip_half_width
+        w_w = -w_s
+        x0, y0, z0, yaw0 = stance.pelvis
+        yaw1 = yaw0 + _wrap(pelvis_target[2] - yaw0)
+        if abs(yaw1 - yaw0) > 2 * cfg.max_heading_change + 1e-9:
+            raise GaitError(f'heading change {yaw1 - yaw0:.2f} rad in one step is too large')
+
+        # The stance hip slides along the stance foot's sagittal line.
+        d_s = np.array([np.cos(foot_s.yaw), np.sin(foot_s.yaw)])
+        hip0 = np.array([x0, y0]) + _lateral(yaw0, w_s)
+        lam0 = float(np.dot(hip0 - foot_s.xy, d_s))
+        hip1 = pelvis_target[:2] + _lateral(yaw1, w_s)
+        lam1 = float(np.dot(hip1 - foot_s.xy, d_s))
+        progress = _ease(tau, stance.at_rest, to_rest)
+        yaw = yaw0 + (yaw1 - yaw0) * smoothstep(tau)
+        lam = lam0 + (lam1 - lam0) * progress
+        stance_hip_xy = foot_s.xy + lam[:, None] * d_s
+        pelvis_xy = stance_hip_xy - _lateral(yaw, w_s)
+        swing_hip_xy = pelvis_xy + _lateral(yaw, w_w)
+
+        # Touchdown: the landing ankle lies in the swing hip's plane at the end of the step.
+        d_l = np.array([np.cos(landing_yaw), np.sin(landing_yaw)])
+        forward_end = float(np.dot(np.asarray(landing_xy) - swing_hip_xy[-1], d_l))
+        land_xy = swing_hip_xy[-1] + forward_end * d_l
+        landing = foot_pose_on(land_xy, landing_yaw, landing_sole, landing_pitch, leg)
+        lateral_error = float(np.linalg.norm(land_xy - np.asarray(landing_xy)))
+
+        # Swing foot: straight horizontal line with Bezier timing, lifted to clear the ground.
+        p = smoothstep(tau)
+        plane_yaw = foot_w.yaw + _wrap(landing.yaw - foot_w.yaw) * p
+        wanted_xy = foot_w.xy + p[:, None] * (landing.xy - foot_w.xy)
+        direction = np.stack([np.cos(plane_yaw), np.sin(plane_yaw)], axis=-1)
+        forward = np.sum((wanted_xy - swing_hip_xy) * direction, axis=-1)
+        swing_xy = swing_hip_xy + forward[:, None] * direction
+        swing_pitch = foot_w.pitch + (landing.pitch - foot_w.pitch) * p
+        swing_z, lift = self._swing_heights(tau, foot_w, landing, swing_xy, plane_yaw,
+                                            swing_profile)
+
+        # Pelvis height: key-frame shape by category, bounded by what both legs can reach.
+        rise = landing.sole - foot_s.sole
+        if rise > 0.03:
+            category, weight = 'uphill', smoothstep((tau - 0.35) / 0.65)
+        elif rise < -0.03:
+            category, weight = 'downhill', smoothstep((tau - 0.1) / 0.75)
+        else:
+            category, weight = 'level', smoothstep(tau)
+        nominal = 0.5 * (foot_s.z + landing.z) + leg.thigh + leg.shank - cfg.pelvis_height_drop
+        wanted_z = z0 + (nominal - z0) * weight
+        r = cfg.reach_fraction * (leg.thigh + leg.shank)
+        stance_bound = foot_s.z + np.sqrt(np.maximum(r * r - lam * lam, 0.0))
+        swing_bound = swing_z + np.sqrt(np.maximum(r * r - forward * forward, 0.0))
+        if np.any(np.abs(lam) > r) or np.any(np.abs(forward) > r):
+            raise GaitError('footstep out of leg reach')
+        z = np.minimum(wanted_z, np.minimum(stance_bound, swing_bound))
+
+        foot_end = [None, None]
+        foot_end[stance_side] = foot_s
+        frames = np.zeros((k, len(self.skeleton.joint_names)))
+        frames[:, self._root] = np.stack([pelvis_xy[:, 0], pelvis_xy[:, 1], z, yaw], axis=-1)
+        for side, hip_xy, ankle_xy, ankle_z, plane, pitch in (
+                (stance_side, stance_hip_xy, np.broadcast_to(foot_s.xy, (k, 2)),
+                 np.full(k, foot_s.z), np.full(k, foot_s.yaw), np.full(k, foot_s.pitch)),
+                (swing_side, swing_hip_xy, swing_xy, swing_z, plane_yaw, swing_pitch)):
+            hip = np.column_stack([hip_xy, z])
+            ankle = np.column_stack([ankle_xy, ankle_z])
+            joints, lateral, reach = leg_inverse_kinematics(leg, hip, ankle, plane, yaw, pitch)
+            if side == stance_side and np.any(joints[:, 3] > self._leg_upper[side][3] - 0.03):
+                # Heel-off: the stance foot rolls about its toe instead of over-flexing the ankle.
+                joints, foot_s_end = self._heel_off(leg, hip, foot_s, yaw, joints,
+                                                    self._leg_upper[side][3] - 0.03)
+                foot_end[stance_side] = foot_s_end
+            if side == swing_side:
+                # A foot in the air may point its toes (push-off) or lift them: its pitch is
+                # free, so the ankle stays inside its range; contact frames are unchanged.
+                joints[:, 3] = np.clip(joints[:, 3], self._leg_lower[side][3] + 0.02,
+                                       self._leg_upper[side][3] - 0.02)
+            if np.max(reach) > 1.0 + 1e-9:
+                raise GaitError(f'{"left" if side == LEFT else "right"} leg out of reach')
+            low, high = self._leg_lower[side], self._leg_upper[side]
+            bad = (joints < low - 1e-9) | (joints > high + 1e-9)
+            if np.any(bad):
+                column = int(np.argmax(np.any(bad, axis=0)))
+                name = self.skeleton.joint_names[self._leg_index[side][column]]
+                value = joints[np.any(bad, axis=1)][0, column]
+                raise GaitError(f'{name} would reach {value:.2f} rad, outside its limits')
+            frames[:, self._leg_index[side]] = joints
+            lateral_error = max(lateral_error, float(np.max(np.abs(lateral[-1:]))))
+        feet = foot_end
+        feet[swing_side] = landing
+        end = Stance(np.array([pelvis_xy[-1, 0], pelvis_xy[-1, 1], z[-1], yaw1]),
+                     (feet[0], feet[1]), swing_side, to_rest)
+        return StepMotion(times=tau * duration, frames=frames, stance=end, category=category,
+                          swing_lift=lift, lateral_error=lateral_error)
+
+    @staticmethod
+    def _heel_off(leg: LegGeometry, hip: np.ndarray, foot: FootPose, pelvis_yaw: np.ndarray,
+                  joints: np.ndarray, limit: float):
+        """Roll a stance foot about its toe tip where the ankle would pass ``limit``.
+
+        Returns the corrected (k, 4) leg joints and the foot pose at the last frame.
+        """
+        direction = np.array([np.cos(foot.yaw), np.sin(foot.yaw)])
+        p0 = foot.pitch
+        toe_xy = foot.xy + (leg.toe * np.cos(p0) + leg.ankle_height * np.sin(p0)) * direction
+        toe_z = foot.z + leg.toe * np.sin(p0) - leg.ankle_height * np.cos(p0)
+        over = joints[:, 3] > limit
+        pitch = np.full(joints.shape[0], p0)
+        shank = joints[over, 1] - joints[over, 2]
+        k = int(np.count_nonzero(over))
+        plane = np.full(k, foot.yaw)
+        for _ in range(5):
+            p = np.minimum(limit + shank, p0)
+            ankle = np.column_stack([
+                toe_xy - (leg.toe * np.cos(p) + leg.ankle_height * np.sin(p))[:, None] * direction,
+                toe_z - (leg.toe * np.sin(p) - leg.ankle_height * np.cos(p))])
+            solved, _, _ = leg_inverse_kinematics(leg, hip[over], ankle, plane,
+                                                  pelvis_yaw[over], p)
+            shank = solved[:, 1] - solved[:, 2]
+        joints = joints.copy()
+        joints[over] = solved
+        pitch[over] = p
+        if over[-1]:
+            end = FootPose(ankle[-1, :2].copy(), float(ankle[-1, 2]), foot.yaw, float(p[-1]),
+                           foot.sole)
+        else:
+            end = foot
+        return joints, end
+
+    def _swing_heights(self, tau, lift_foot: FootPose, landing: FootPose, swing_xy, plane_yaw,
+                       swing_profile):
+        """Ankle heights of the swinging foot: a cubic Bezier raised until it clears (§4.1).
+
+        The control points sit above the lift-off and touchdown points; when the sole would
+        touch the ground profile, both are raised ("the Bezier curve adjustment module") until
+        it is collision-free or the lift limit is reached.
+        """
+        cfg, leg = self.config, self.leg
+        z0, z1 = lift_foot.z, landing.z
+        # Sole footprint (heel..toe, across the width) at each sampled swing position.
+        along = np.linspace(-leg.heel, leg.toe, 6)
+        across = np.array([-0.5, 0.0, 0.5]) * leg.foot_width
+        samples = np.arange(0, tau.size, max(1, tau.size // 24))
+        d = np.stack([np.cos(plane_yaw[samples]), np.sin(plane_yaw[samples])], axis=-1)
+        n = np.stack([-d[:, 1], d[:, 0]], axis=-1)
+        points = (swing_xy[samples, None, None, :] + along[None, :, None, None] * d[:, None, None]
+                  + across[None, None, :, None] * n[:, None, None])
+        z_ref = max(z0, z1) + cfg.max_swing_lift
+        tops = swing_profile(points.reshape(-1, 2), z_ref).reshape(len(samples), -1)
+        with np.errstate(invalid='ignore'):
+            ground = np.nanmax(np.where(np.isnan(tops), -np.inf, tops), axis=1)
+        b = tau[samples]
+        ramp = np.minimum(1.0, 5.0 * np.minimum(b, 1.0 - b))
+        need = ground + leg.ankle_height + cfg.swing_clearance * ramp
+        basis_1 = 3 * b * (1 - b) ** 2
+        basis_2 = 3 * b * b * (1 - b)
+        h1 = cfg.swing_lift + max(0.0, z1 - z0)
+        h2 = cfg.swing_lift + 0.5 * max(0.0, z0 - z1)
+        for _ in range(12):
+            curve = (1 - b) ** 3 * z0 + basis_1 * (z0 + h1) + basis_2 * (z1 + h2) + b ** 3 * z1
+            short = need - curve
+            if np.all(short <= 1e-4):
+                break
+            worst = int(np.argmax(short))
+            weight = basis_1[worst] + basis_2[worst]
+            raise_by = min(short[worst] / max(weight, 0.05), 0.15) + 0.005
+            if b[worst] < 0.5:
+                h1 += raise_by
+                h2 += 0.5 * raise_by
+            else:
+                h2 += raise_by
+                h1 += 0.5 * raise_by
+            if max(h1, h2) > cfg.max_swing_lift + max(abs(z1 - z0), 0.0):
+                raise GaitError('swing foot cannot clear the terrain')
+        else:
+            raise GaitError('swing foot cannot clear the terrain')
+        z = ((1 - tau) ** 3 * z0 + 3 * tau * (1 - tau) ** 2 * (z0 + h1)
+             + 3 * tau * tau * (1 - tau) * (z1 + h2) + tau ** 3 * z1)
+        return z, float(max(h1, h2))
+
+
+def hold_frames(configuration: np.ndarray, start_time: float, duration: float,
+                frame_rate: float) -> Tuple[np.ndarray, np.ndarray]:
+    """A still block: (times (k,), frames (k, 22)) holding ``configuration``."""
+    k = max(1, int(round(duration * frame_rate)))
+    times = start_time + np.arange(1, k + 1) / frame_rate
+    return times, np.repeat(configuration[None, :], k, axis=0)
+
+
+def with_at_rest(stance: Stance, at_rest: bool) -> Stance:
+    """The same stance with the at-rest flag changed."""
+    return replace(stance, at_rest=at_rest)

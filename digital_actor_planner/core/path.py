@@ -1,0 +1,110 @@
+"""Path prediction: a velocity command becomes the horizontal path of the next steps (§3.2).
+
+"Given a user mouse input command, the horizontal location and facing direction of the actor for
+the next step can be computed. If the input is not changed often, the path for the actor in the
+next n steps can be further derived." A constant command (v, w) traces a circular arc.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class PredictedPath:
+    """A circular arc (or a straight line) in the ground plane.
+
+    Attributes
+    ----------
+    x, y, heading
+        Start of the path: m, m, rad (world frame).
+    curvature
+        1/m, positive turns left (counter-clockwise seen from above).
+    length
+        Arc length covered, m.
+
+    """
+
+    x: float
+    y: float
+    heading: float
+    curvature: float
+    length: float
+
+    def poses(self, s: np.ndarray) -> np.ndarray:
+        """Poses on the path at arc lengths ``s``.
+
+        Parameters
+        ----------
+        s
+            (N,) arc lengths, m (may exceed ``length`` or be negative: the arc is extended).
+
+        Returns
+        -------
+        numpy.ndarray
+            (N, 3) x (m), y (m), heading (rad).
+
+        """
+        s = np.asarray(s, dtype=float)
+        heading = self.heading + self.curvature * s
+        if abs(self.curvature) < 1e-9:
+            x = self.x + s * np.cos(self.heading)
+            y = self.y + s * np.sin(self.heading)
+        else:
+            x = self.x + (np.sin(heading) - np.sin(self.heading)) / self.curvature
+            y = self.y - (np.cos(heading) - np.cos(self.heading)) / self.curvature
+        return np.stack([x, y, heading], axis=-1)
+
+    def offset_points(self, s: np.ndarray, lateral: float) -> np.ndarray:
+        """Points on the parallel track ``lateral`` m to the left of the path: (N, 2), m."""
+        poses = self.poses(s)
+        normal = np.stack([-np.sin(poses[:, 2]), np.cos(poses[:, 2])], axis=-1)
+        return poses[:, :2] + lateral * normal
+
+    def project(self, xy: np.ndarray) -> float:
+        """Arc length of the path point closest to ``xy`` ((2,) m), near the start."""
+        dx, dy = xy[0] - self.x, xy[1] - self.y
+        along = dx * np.cos(self.heading) + dy * np.sin(self.heading)
+        if abs(self.curvature) < 1e-9:
+            return float(along)
+        # Angle swept from the start around the turning centre.
+        radius = 1.0 / self.curvature
+        cx = self.x - radius * np.sin(self.heading)
+        cy = self.y + radius * np.cos(self.heading)
+        a0 = np.arctan2(self.y - cy, self.x - cx)
+        a1 = np.arctan2(xy[1] - cy, xy[0] - cx)
+        swept = (a1 - a0 + np.pi) % (2 * np.pi) - np.pi
+        return float(swept * radius)
+
+
+def predict_path(x: float, y: float, heading: float, linear: float, angular: float,
+                 length: float, min_turn_speed: float = 0.25) -> PredictedPath:
+    """Predict the path of a constant velocity command from a pose (§3.2).
+
+    Parameters
+    ----------
+    x, y, heading
+        Current pelvis pose, m and rad.
+    linear, angular
+        Commanded forward speed (m/s, >= 0) and turn rate (rad/s, positive = left).
+    length
+        Arc length to predict, m.
+    min_turn_speed
+        A pure turn command (linear near 0) is walked as an arc at this forward speed, m/s,
+        so the curvature stays finite: the actor turns by walking a tight circle.
+
+    Returns
+    -------
+    PredictedPath
+
+    """
+    values = (x, y, heading, linear, angular, length, min_turn_speed)
+    if not all(np.isfinite(v) for v in values):
+        raise ValueError(f'predict_path: non-finite input {values}')
+    if linear < 0:
+        raise ValueError(f'predict_path: linear speed must be >= 0, got {linear}')
+    if length <= 0:
+        raise ValueError(f'predict_path: length must be > 0, got {length}')
+    speed = max(linear, min_turn_speed)
+    return PredictedPath(float(x), float(y), float(heading), float(angular / speed), float(length))
