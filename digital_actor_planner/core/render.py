@@ -29,9 +29,9 @@ _LINK_COLOURS = (('head', (0.87, 0.72, 0.60)), ('forearm', (0.87, 0.72, 0.60)),
 _DEFAULT_LINK_COLOUR = (0.28, 0.28, 0.34)       # trousers
 _FOOTSTEP_COLOUR = (0.95, 0.55, 0.10)
 _TILE = 0.25                 # m, largest tile edge the course faces are split into
-_FACE_BUDGET = 12000
+_FACE_BUDGET = 12000         # faces per course mesh before it is resampled as a heightfield
 _ACTOR_BIAS = 0.3            # m of depth-sort bias: the actor stands on the tiles around it
-_FOOTSTEP_BIAS = 0.25        # m: footstep marks lie on the tiles around them         # faces per course mesh before it is resampled as a heightfield
+_FOOTSTEP_BIAS = 0.25        # m: footstep marks lie on the tiles around them
 
 
 @dataclass(frozen=True)
@@ -46,7 +46,7 @@ class _Camera:
     @classmethod
     def looking_at(cls, target: np.ndarray, azimuth: float, elevation: float,
                    distance: float) -> '_Camera':
-        """Place the camera ``distance`` m from ``target`` in the direction (azimuth, elevation)."""
+        """Place the camera ``distance`` m from ``target`` towards (azimuth, elevation), rad."""
         offset = np.array([math.cos(elevation) * math.cos(azimuth),
                            math.cos(elevation) * math.sin(azimuth), math.sin(elevation)])
         eye = np.asarray(target, dtype=float) + distance * offset
