@@ -261,9 +261,9 @@ def load_scene(path: str, skeleton=None) -> Scene:
 def start_configuration(environment: 'Environment', start, skeleton) -> np.ndarray:
     """Place the actor's neutral standing configuration at a start pose.
 
-    The feet stand on the highest walkable surface below the start that leaves room for the
-    whole actor above it (else the highest one): ``root_z`` = the highest ground under the
-    corners of both soles + ``skeleton.leg.standing_height`` + 2 mm.
+    The actor stands on the lowest walkable surface under its soles and pelvis, so a start in
+    a wall, under a table or under a beam puts it at floor level (where it collides) rather
+    than on top: ``root_z`` = that ground + ``skeleton.leg.standing_height`` + 2 mm.
 
     Parameters
     ----------
@@ -291,33 +291,17 @@ def start_configuration(environment: 'Environment', start, skeleton) -> np.ndarr
     q[skeleton.index['root_x']], q[skeleton.index['root_y']] = x, y
     q[skeleton.index['root_yaw']] = yaw
     leg = skeleton.leg
-    # Sole corners of both feet in the pelvis frame (§4: feet under the hips).
-    corners = np.array([[dx, side * leg.hip_half_width + dy]
-                        for side in (1.0, -1.0)
-                        for dx in (-leg.heel, leg.toe)
-                        for dy in (-leg.foot_width / 2, leg.foot_width / 2)])
+    # Sole corners of both feet and the pelvis, in the pelvis frame (§4: feet under the hips).
+    points = np.array([[0.0, 0.0]] + [[dx, side * leg.hip_half_width + dy]
+                                      for side in (1.0, -1.0)
+                                      for dx in (-leg.heel, leg.toe)
+                                      for dy in (-leg.foot_width / 2, leg.foot_width / 2)])
     c, s = math.cos(yaw), math.sin(yaw)
-    xy = corners @ np.array([[c, s], [-s, c]]) + (x, y)
-    q0 = q.copy()
-    q0[skeleton.index['root_z']] = 0.0
-    shapes = skeleton.shape_transforms(skeleton.forward_kinematics(q0))
-    body_height = float(shapes[:, 2, 3].max() - shapes[:, 2, 3].min()) + leg.standing_height
-    z_ref = float(environment.bounds[1, 2]) + 1.0
-    height = None
-    for _ in range(64):
-        ground, clearance = environment.ground_height(xy, z_ref)
-        if np.any(np.isnan(ground)):
-            break
-        level = float(ground.max())
-        if height is None:
-            height = level
-        if float(clearance.min()) >= body_height:
-            height = level
-            break
-        z_ref = float(ground.min()) - 2 * _MIN_INTERVAL
-    if height is None:
+    xy = points @ np.array([[c, s], [-s, c]]) + (x, y)
+    ground = environment.lowest_ground(xy)
+    if np.all(np.isnan(ground)):
         raise SceneError(f'no ground below the start pose ({x:g}, {y:g}, yaw {yaw:g})')
-    q[skeleton.index['root_z']] = height + leg.standing_height + 0.002
+    q[skeleton.index['root_z']] = float(np.nanmin(ground)) + leg.standing_height + 0.002
     return q
 
 
@@ -546,6 +530,40 @@ class Environment:
         if not out_nodes:
             return np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int8)
         return np.concatenate(out_nodes), np.concatenate(out_z), np.concatenate(out_sign)
+
+    def _cells(self, xy):
+        """Grid cell index of each (N, 2) point, and whether it lies on the grid."""
+        xy = np.asarray(xy, dtype=float)
+        if xy.ndim != 2 or xy.shape[1] != 2:
+            raise ValueError(f'xy must have shape (N, 2), got {xy.shape}')
+        ny, nx = self._shape
+        fx = (xy[:, 0] - self._origin[0]) * self._inverse_resolution
+        fy = (xy[:, 1] - self._origin[1]) * self._inverse_resolution
+        valid = (fx >= 0) & (fx <= nx - 1) & (fy >= 0) & (fy <= ny - 1)
+        fx[~valid] = 0.0
+        fy[~valid] = 0.0
+        cell = (np.minimum(fy.astype(np.int64), ny - 2) * (nx - 1)
+                + np.minimum(fx.astype(np.int64), nx - 2))
+        return cell, valid
+
+    def lowest_ground(self, xy) -> np.ndarray:
+        """Height of the lowest walkable surface at each point (conservative over its cell).
+
+        Parameters
+        ----------
+        xy
+            (N, 2) horizontal points, m.
+
+        Returns
+        -------
+        numpy.ndarray
+            (N,) m; NaN where there is none.
+
+        """
+        cell, valid = self._cells(xy)
+        ground = self._ground[cell, 0].copy()
+        ground[~valid | ~np.isfinite(ground)] = np.nan
+        return ground
 
     def ground_height(self, xy, z_ref) -> Tuple[np.ndarray, np.ndarray]:
         """Height of the highest walkable surface at or below ``z_ref``, and the room above it.
