@@ -3,6 +3,8 @@ from __future__ import annotations
 
 from typing import Dict, Iterable, Mapping, Tuple
 
+import termios
+
 import dynamixel_sdk as sdk
 import serial
 
@@ -44,8 +46,8 @@ class ServoBus:
     def _guard(self, call, *args):
         try:
             return call(*args)
-        except (serial.SerialException, OSError, TypeError) as error:
-            # TypeError: pyserial on a closed descriptor
+        except (serial.SerialException, OSError, termios.error, TypeError) as error:
+            # termios.error: flushing a hung-up tty; TypeError: pyserial on a closed descriptor
             raise BusError(f'{self.port_name}: {error}') from None
 
     def open(self) -> None:
@@ -65,7 +67,7 @@ class ServoBus:
         if self.port is not None and self.port.ser is not None:
             try:
                 self.port.closePort()
-            except (serial.SerialException, OSError):
+            except (serial.SerialException, OSError, termios.error):
                 pass
         self.port = None
 

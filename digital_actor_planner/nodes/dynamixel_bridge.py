@@ -105,8 +105,14 @@ class DynamixelBridge(Node):
             # After SIGINT/SIGTERM the ROS logger can no longer reach /rosout.
             print(f'[{level.upper()}] [dynamixel_bridge]: {message}', file=sys.stderr)
             return
+        # rclpy ties one severity to each call site, hence three calls.
         logger = self.get_logger()
-        {'info': logger.info, 'warn': logger.warning, 'error': logger.error}[level](message)
+        if level == 'error':
+            logger.error(message)
+        elif level == 'warn':
+            logger.warning(message)
+        else:
+            logger.info(message)
 
     def _declare(self, name, default, descriptor):
         try:

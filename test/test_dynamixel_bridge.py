@@ -1,0 +1,363 @@
+"""The real ``dynamixel_bridge`` process against the Protocol 2.0 emulator, checked in registers.
+
+The emulator runs in a thread of the test process and serves a pseudo-terminal; the bridge
+opens it as its serial port. JointState messages are published from here with rclpy.
+"""
+import itertools
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+import pytest
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from sensor_msgs.msg import JointState
+import yaml
+
+import dynamixel_emulator as emu
+from ros_harness import NodeProcess, ros_env, wait_for
+
+pytestmark = pytest.mark.ros
+
+os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+os.environ.setdefault('RMW_IMPLEMENTATION', 'rmw_fastrtps_cpp')
+_DOMAINS = itertools.cycle(range(60 + os.getpid() % 5, 80))
+BRIDGE = [sys.executable, '-m', 'digital_actor_planner.nodes.dynamixel_bridge']
+TICK = 2 * math.pi / 4096
+JOINTS = ('waist_yaw', 'waist_pitch', 'left_shoulder_pitch', 'left_shoulder_roll',
+          'left_shoulder_yaw', 'left_elbow', 'right_shoulder_pitch', 'right_shoulder_roll',
+          'right_shoulder_yaw', 'right_elbow', 'left_hip_yaw', 'left_hip_pitch', 'left_knee',
+          'left_ankle', 'right_hip_yaw', 'right_hip_pitch', 'right_knee', 'right_ankle')
+ID = {joint: i + 1 for i, joint in enumerate(JOINTS)}
+# Mounting as a builder might have it: mirrored right side, a few horns off-centre.
+OFFSET = {'left_knee': 0.25, 'right_knee': -0.25, 'waist_pitch': -0.1, 'left_elbow': 0.4}
+DIRECTION = {joint: (-1 if joint.startswith('right_') else 1) for joint in JOINTS}
+SAFE = {'left_knee': (0.1, 1.5), 'left_hip_pitch': (-0.5, 1.0)}
+SPEED = {'left_knee': 1.0, 'left_hip_pitch': 2.0}
+
+
+def expected_ticks(joint: str, angle: float) -> int:
+    """The e-Manual's resolution: 4096 ticks per turn, 2048 at the centre."""
+    return round(2048 + (DIRECTION[joint] * angle + OFFSET.get(joint, 0.0)) / TICK)
+
+
+def write_params(path, **scalars) -> str:
+    servos = {}
+    for joint in JOINTS:
+        entry = {'id': ID[joint], 'offset': OFFSET.get(joint, 0.0),
+                 'direction': DIRECTION[joint], 'max_speed': SPEED.get(joint, 20.0)}
+        if joint in SAFE:
+            entry['min_position'], entry['max_position'] = SAFE[joint]
+        servos[joint] = entry
+    parameters = {'baud_rate': 1000000, 'control_rate': 100.0, 'watchdog_timeout': 0.5,
+                  'reconnect_backoff_min': 0.1, 'reconnect_backoff_max': 0.4,
+                  'servo_joints': list(JOINTS), 'servos': servos}
+    parameters.update(scalars)
+    with open(path, 'w') as stream:
+        yaml.safe_dump({'dynamixel_bridge': {'ros__parameters': parameters}}, stream)
+    return str(path)
+
+
+class Rig:
+    """One emulated bus, one bridge process, and a test node on a private domain."""
+
+    def __init__(self, tmp_path, ids=tuple(range(1, 19))):
+        self.tmp_path = tmp_path
+        self.domain = next(_DOMAINS)
+        self.port = str(tmp_path / 'ttyDXL')
+        self.emulator = emu.DynamixelEmulator(ids, self.port)
+        self.bridge = None
+        self.context = rclpy.Context()
+        self.context.init(domain_id=self.domain)
+        self.node = rclpy.create_node('bridge_test', context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.publisher = self.node.create_publisher(JointState, 'joint_states', 10)
+        self.feedback = []
+        self.diagnostics = None
+        self.node.create_subscription(JointState, '/dynamixel_bridge/joint_states',
+                                      self.feedback.append, 10)
+        self.node.create_subscription(DiagnosticArray, '/diagnostics',
+                                      lambda m: setattr(self, 'diagnostics', m), 10)
+
+    def start_bridge(self, extra=(), **scalars):
+        params = write_params(self.tmp_path / 'bridge.yaml', **scalars)
+        self.bridge = NodeProcess(
+            BRIDGE + ['--ros-args', '--params-file', params, '-p', f'port:={self.port}',
+                      *extra],
+            ros_env(self.domain), log_path=str(self.tmp_path / 'bridge.log'))
+        return self.bridge
+
+    def spin(self):
+        self.executor.spin_once(timeout_sec=0.01)
+
+    def wait(self, predicate, timeout=10.0) -> bool:
+        return wait_for(predicate, timeout, spin=self.spin)
+
+    def wait_connected(self):
+        assert self.wait(lambda: self.publisher.get_subscription_count() >= 1
+                         and self.status('dynamixel_bridge: bus') is not None
+                         and self.emulator.register(1, emu.TORQUE_ENABLE) == 1), (
+            self.bridge.output())
+
+    def publish(self, positions: dict):
+        message = JointState()
+        message.name = list(positions)
+        message.position = [float(v) for v in positions.values()]
+        self.publisher.publish(message)
+
+    def stream(self, positions: dict, seconds: float, rate: float = 50.0):
+        """Publish the same command at ``rate`` Hz for ``seconds``, spinning in between."""
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            self.publish(positions)
+            until = time.monotonic() + 1.0 / rate
+            while time.monotonic() < until:
+                self.executor.spin_once(timeout_sec=max(until - time.monotonic(), 0.0))
+
+    def status(self, name: str):
+        if self.diagnostics is None:
+            return None
+        for status in self.diagnostics.status:
+            if status.name == name:
+                return status
+        return None
+
+    def goal(self, joint: str) -> int:
+        return self.emulator.register(ID[joint], emu.GOAL_POSITION)
+
+    def close(self):
+        if self.bridge is not None:
+            self.bridge.stop()
+        self.executor.shutdown()
+        self.node.destroy_node()
+        self.context.try_shutdown()
+        self.emulator.stop()
+
+
+@pytest.fixture
+def rig(tmp_path):
+    made = []
+
+    def make(**kwargs):
+        made.append(Rig(tmp_path, **kwargs))
+        return made[-1]
+    yield make
+    for each in made:
+        each.close()
+
+
+def _level(status) -> int:
+    return status.level[0] if isinstance(status.level, (bytes, bytearray)) else status.level
+
+
+def test_goal_ticks_match_the_joint_angles(rig):
+    r = rig()
+    r.emulator.start()
+    r.start_bridge()
+    r.wait_connected()
+    command = {'left_knee': 0.7, 'right_knee': 0.7, 'waist_pitch': 0.3 + 3 * TICK,
+               'left_elbow': 1.0, 'right_shoulder_pitch': -0.4, 'left_ankle': -0.3 + TICK}
+    expected = {joint: expected_ticks(joint, angle) for joint, angle in command.items()}
+    r.stream(command, 0.2)
+    assert r.wait(lambda: (r.stream(command, 0.05) or True)
+                  and all(r.goal(j) == t for j, t in expected.items()), timeout=8.0), (
+        {j: (r.goal(j), t) for j, t in expected.items()})
+    # one tick apart in the command is one tick apart on the servo
+    assert r.goal('waist_pitch') == expected_ticks('waist_pitch', 0.3) + 3
+    # mirrored servos turn the other way for the same joint angle
+    assert r.goal('left_knee') - 2048 > 0 > r.goal('right_knee') - 2048
+    # every servo is written each cycle, in one sync write, and all 18 are read back
+    assert r.emulator.instruction_counts.get(emu.WRITE, 0) <= 18  # only torque enables
+    assert r.wait(lambda: r.feedback and len(r.feedback[-1].name) == 18)
+    back = dict(zip(r.feedback[-1].name, r.feedback[-1].position))
+    assert r.wait(lambda: abs(dict(zip(r.feedback[-1].name, r.feedback[-1].position))[
+        'left_knee'] - 0.7) < 2 * TICK)
+    assert set(back) == set(JOINTS)
+
+
+def test_hostile_stream_is_clamped_and_rate_limited(rig):
+    r = rig()
+    r.emulator.start()
+    r.start_bridge()
+    r.wait_connected()
+    hostile = [{'left_knee': 9.0, 'left_hip_pitch': -9.0},
+               {'left_knee': float('nan'), 'left_hip_pitch': float('inf')},
+               {'left_knee': -5.0, 'left_hip_pitch': 5.0, 'root_x': 3.0, 'no_such': 1.0},
+               {'left_knee': 1.4, 'left_hip_pitch': float('-inf')},
+               {'left_knee': 0.0, 'left_hip_pitch': 0.9}]
+    end = time.monotonic() + 2.5
+    k = 0
+    while time.monotonic() < end:
+        r.stream(hostile[k % len(hostile)], 0.04, rate=100.0)
+        k += 1
+    for joint in ('left_knee', 'left_hip_pitch'):
+        history = r.emulator.goal_history(ID[joint])
+        assert len(history) > 100
+        ticks = [t for _, t in history]
+        low, high = sorted(expected_ticks(joint, a) for a in SAFE[joint])
+        assert low <= min(ticks) and max(ticks) <= high, (joint, min(ticks), max(ticks))
+        # the bridge integrates at most 2 control periods per cycle: bounded single steps
+        max_step = SPEED[joint] * 0.02 / TICK + 1
+        steps = [abs(b - a) for a, b in zip(ticks, ticks[1:])]
+        assert max(steps) <= max_step, (joint, max(steps), max_step)
+        # and over any 0.2 s window it never beats the configured speed (timing slack added)
+        for i, (t0, a) in enumerate(history):
+            for t1, b in history[i + 1:]:
+                if t1 - t0 >= 0.2:
+                    assert abs(b - a) <= SPEED[joint] * (t1 - t0 + 0.04) / TICK + 2
+                    break
+    # a sane command after the storm is followed exactly
+    r.stream({'left_knee': 1.2}, 0.3)
+    assert r.wait(lambda: (r.stream({'left_knee': 1.2}, 0.05) or True)
+                  and r.goal('left_knee') == expected_ticks('left_knee', 1.2), timeout=5.0)
+    status = r.status('dynamixel_bridge: bus')
+    ignored = dict((v.key, v.value) for v in status.values)['ignored inputs']
+    assert 'not finite' in ignored and 'unknown name: 0' not in ignored
+
+
+def test_watchdog_holds_the_last_position(rig):
+    r = rig()
+    r.emulator.start()
+    r.start_bridge(watchdog_timeout=0.3)
+    r.wait_connected()
+    start = r.goal('left_knee')
+    # 1 rad/s toward a target 1.4 rad away: it takes 1.4 s; stop talking after 0.4 s
+    r.stream({'left_knee': 1.5}, 0.4)
+    r.diagnostics = None
+    assert r.wait(lambda: r.status('dynamixel_bridge: bus') is not None
+                  and 'holding' in r.status('dynamixel_bridge: bus').message, timeout=3.0), (
+        r.status('dynamixel_bridge: bus'))
+    held = r.goal('left_knee')
+    time.sleep(0.5)
+    assert r.goal('left_knee') == held
+    moved = (held - start) * TICK
+    assert 0.3 < moved < 0.9, moved  # moved for ~0.4 s + 0.3 s watchdog, then held
+    assert held < expected_ticks('left_knee', 1.5)
+    # input resumes -> it moves on toward the target
+    r.stream({'left_knee': 1.5}, 0.5)
+    assert r.goal('left_knee') > held + 0.2 / TICK
+
+
+def test_torque_goes_off_on_sigterm(rig):
+    r = rig()
+    r.emulator.start()
+    bridge = r.start_bridge()
+    r.wait_connected()
+    assert all(r.emulator.register(i, emu.TORQUE_ENABLE) == 1 for i in range(1, 19))
+    os.kill(bridge.pid, signal.SIGTERM)
+    assert bridge.proc.wait(timeout=10) == 0
+    assert all(r.emulator.register(i, emu.TORQUE_ENABLE) == 0 for i in range(1, 19))
+
+
+def test_torque_stays_on_when_configured(rig):
+    r = rig()
+    r.emulator.start()
+    bridge = r.start_bridge(torque_off_on_shutdown=False)
+    r.wait_connected()
+    assert bridge.stop() == 0  # SIGINT
+    assert all(r.emulator.register(i, emu.TORQUE_ENABLE) == 1 for i in range(1, 19))
+
+
+def test_missing_servo_is_named_in_diagnostics(rig):
+    r = rig(ids=[i for i in range(1, 19) if i != ID['left_shoulder_yaw']])
+    r.emulator.start()
+    r.start_bridge()
+    r.wait_connected()
+    assert r.wait(lambda: r.status('dynamixel_bridge: left_shoulder_yaw') is not None)
+    servo = r.status('dynamixel_bridge: left_shoulder_yaw')
+    assert _level(servo) == DiagnosticStatus.ERROR[0] and 'missing' in servo.message
+    bus = r.status('dynamixel_bridge: bus')
+    assert _level(bus) == DiagnosticStatus.ERROR[0] and 'left_shoulder_yaw' in bus.message
+    # the others are driven normally
+    r.stream({'left_elbow': 1.0}, 0.3)
+    assert r.wait(lambda: (r.stream({'left_elbow': 1.0}, 0.05) or True)
+                  and r.goal('left_elbow') == expected_ticks('left_elbow', 1.0))
+
+
+def test_missing_servo_is_fatal_when_all_are_required(rig):
+    r = rig(ids=[i for i in range(1, 19) if i != ID['right_ankle']])
+    r.emulator.start()
+    bridge = r.start_bridge(require_all_servos=True)
+    assert bridge.proc.wait(timeout=20) == 3
+    assert 'right_ankle (ID 18)' in bridge.output()
+
+
+def test_hardware_error_switches_that_servo_off_and_is_named(rig):
+    r = rig()
+    r.emulator.start()
+    r.start_bridge()
+    r.wait_connected()
+    r.emulator.inject_hardware_error(ID['left_knee'], 0x20)  # overload
+    assert r.wait(lambda: r.emulator.register(ID['left_knee'], emu.TORQUE_ENABLE) == 0,
+                  timeout=5.0)
+    assert r.wait(lambda: r.status('dynamixel_bridge: left_knee') is not None
+                  and _level(r.status('dynamixel_bridge: left_knee')) == 2)
+    assert 'overload' in r.status('dynamixel_bridge: left_knee').message
+    frozen = r.goal('left_knee')
+    r.stream({'left_knee': 1.2, 'left_elbow': 1.0}, 0.6)
+    assert r.goal('left_knee') == frozen  # no more goals for the faulted servo
+    assert r.emulator.register(ID['left_knee'], emu.TORQUE_ENABLE) == 0
+    assert r.goal('left_elbow') != 2048 + OFFSET['left_elbow'] / TICK  # others still follow
+    assert r.emulator.register(ID['left_elbow'], emu.TORQUE_ENABLE) == 1
+
+
+def test_port_vanishing_and_coming_back_is_survived(rig):
+    r = rig()
+    r.emulator.start()
+    bridge = r.start_bridge()
+    r.wait_connected()
+    r.emulator.stop()  # unplugged: the pty closes and the device link disappears
+    assert r.wait(lambda: r.status('dynamixel_bridge: bus') is not None
+                  and _level(r.status('dynamixel_bridge: bus')) == 2
+                  and 'unavailable' in r.status('dynamixel_bridge: bus').message, timeout=5.0)
+    time.sleep(0.5)  # several reconnect attempts fail meanwhile
+    assert bridge.alive()
+    r.emulator.start()  # plugged back in: a new pty behind the same link
+    assert r.wait(lambda: _level(r.status('dynamixel_bridge: bus')) == 0, timeout=10.0), (
+        r.status('dynamixel_bridge: bus'))
+    r.stream({'left_elbow': 0.8}, 0.3)
+    assert r.wait(lambda: (r.stream({'left_elbow': 0.8}, 0.05) or True)
+                  and r.goal('left_elbow') == expected_ticks('left_elbow', 0.8))
+    reconnects = dict((v.key, v.value) for v in r.status('dynamixel_bridge: bus').values)
+    assert int(reconnects['reconnects']) >= 1
+
+
+def test_missing_port_at_start_up_is_retried(rig):
+    r = rig()
+    bridge = r.start_bridge()
+    assert r.wait(lambda: r.status('dynamixel_bridge: bus') is not None
+                  and _level(r.status('dynamixel_bridge: bus')) == 2, timeout=10.0)
+    assert bridge.alive()
+    r.emulator.start()
+    r.wait_connected()
+
+
+def test_dry_run_logs_ticks_and_opens_no_port(rig, tmp_path):
+    r = rig()
+    bridge = r.start_bridge(dry_run=True)
+    assert r.wait(lambda: r.publisher.get_subscription_count() >= 1, timeout=10.0)
+    r.stream({'left_knee': 0.7}, 0.4)
+    assert r.wait(lambda: (r.stream({'left_knee': 0.7}, 0.05) or True)
+                  and f'left_knee[13]={expected_ticks("left_knee", 0.7)}' in bridge.output(),
+                  timeout=5.0), bridge.output()
+    assert not os.path.exists(r.port)
+
+
+@pytest.mark.parametrize('override, named', [
+    (['-p', 'servos.left_knee.id:=1'], 'duplicate servo ID 1'),
+    (['-p', 'servo_joints:=[waist_yaw,left_toe]'], "'left_toe'"),
+    (['-p', 'servos.left_knee.max_position:=2.9'], 'outside the URDF limits'),
+    (['-p', 'baud_rate:=250000'], 'baud_rate: 250000'),
+])
+def test_invalid_configuration_exits_naming_the_item(tmp_path, override, named):
+    params = write_params(tmp_path / 'bridge.yaml')
+    result = subprocess.run(
+        BRIDGE + ['--ros-args', '--params-file', params, '-p', 'port:=/nonexistent', *override],
+        env=ros_env(next(_DOMAINS)), capture_output=True, text=True, timeout=60)
+    assert result.returncode == 2, result.stderr
+    assert named in result.stderr
