@@ -605,14 +605,8 @@ class Environment:
             z = np.full(len(xy), float(z))
         elif z.shape != (len(xy),):
             raise ValueError(f'z_ref must be a scalar or shape ({len(xy)},), got {z.shape}')
-        ny, nx = self._shape
-        fx = (xy[:, 0] - self._origin[0]) * self._inverse_resolution
-        fy = (xy[:, 1] - self._origin[1]) * self._inverse_resolution
-        valid = (fx >= 0) & (fx <= nx - 1) & (fy >= 0) & (fy <= ny - 1) & (np.abs(z) < np.inf)
-        fx[~valid] = 0.0
-        fy[~valid] = 0.0
-        cell = (np.minimum(fy.astype(np.int64), ny - 2) * (nx - 1)
-                + np.minimum(fx.astype(np.int64), nx - 2))
+        cell, valid = self._cells(xy)
+        valid &= np.abs(z) < np.inf
         layers = self._layers
         if layers == 1:
             height = self._ground_flat[cell]

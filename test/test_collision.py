@@ -1,0 +1,137 @@
+"""BodyCollision: the URDF's collision shapes against meshes and against each other."""
+import time
+
+import numpy as np
+import pytest
+import trimesh
+
+from digital_actor_planner.core.collision import BodyCollision
+from digital_actor_planner.core.environment import Environment, start_configuration
+from digital_actor_planner.core.skeleton import Skeleton
+
+
+def _box(low, high):
+    low, high = np.asarray(low, float), np.asarray(high, float)
+    mesh = trimesh.creation.box(high - low)
+    mesh.apply_translation((low + high) / 2)
+    return mesh
+
+
+@pytest.fixture(scope='module')
+def skeleton():
+    return Skeleton()
+
+
+@pytest.fixture(scope='module')
+def floor_world():
+    return Environment([_box((-3, -3, -0.2), (3, 3, 0.0))])
+
+
+@pytest.fixture(scope='module')
+def body(skeleton, floor_world):
+    return BodyCollision(skeleton, floor_world)
+
+
+@pytest.fixture(scope='module')
+def standing(skeleton, floor_world):
+    """Neutral stance with the soles 2 mm above the floor."""
+    return start_configuration(floor_world, (0.0, 0.0, 0.3), skeleton)
+
+
+def test_shapes_are_placed_by_the_skeletons_kinematics(skeleton, body):
+    rng = np.random.default_rng(7)
+    for _ in range(20):
+        q = rng.uniform(np.maximum(skeleton.lower, -4), np.minimum(skeleton.upper, 4))
+        expected = skeleton.shape_transforms(skeleton.forward_kinematics(q))
+        poses = body.shape_poses(q)
+        for (rotation, position), transform in zip(poses, expected):
+            np.testing.assert_allclose(rotation, transform[:3, :3], atol=1e-12)
+            np.testing.assert_allclose(position, transform[:3, 3], atol=1e-12)
+
+
+def test_standing_actor_is_free_and_sunk_feet_report_their_depth(skeleton, body, standing):
+    assert not body.collides(standing)
+    assert body.links_in_collision(standing) == []
+    assert all(depth == 0.0 for depth in body.penetration(standing).values())
+    for sink in (0.005, 0.05):
+        q = standing.copy()
+        q[skeleton.index['root_z']] -= 0.002 + sink
+        assert body.collides(q)
+        assert sorted(body.links_in_collision(q)) == ['left_foot', 'right_foot']
+        depth = body.penetration(q)
+        assert depth['left_foot'] == pytest.approx(sink, abs=0.001)
+        assert depth['right_foot'] == pytest.approx(sink, abs=0.001)
+        assert depth['head'] == 0.0 and depth['left_shank'] == 0.0
+
+
+def test_penetration_at_a_step_edge_is_the_small_overlap(skeleton):
+    """A foot overlapping a step's top edge by 1 mm is 1 mm deep, not a foot length."""
+    step = _box((0.0, -1, 0.0), (1.0, 1, 0.15))
+    env = Environment([_box((-2, -1, -0.1), (2, 1, 0.0)), step])
+    body = BodyCollision(skeleton, env)
+    q = start_configuration(env, (0.3, 0.0, 0.0), skeleton)      # standing on the step
+    assert q[skeleton.index['root_z']] == pytest.approx(0.15 + skeleton.leg.standing_height
+                                                        + 0.002)
+    q[skeleton.index['root_x']] = -0.1                           # toes over the edge
+    q[skeleton.index['root_z']] -= 0.003                         # soles 1 mm too low
+    depth = body.penetration(q, ['left_foot', 'right_foot'])
+    assert depth['left_foot'] == pytest.approx(0.001, abs=0.0005)
+    # Walking into the riser at floor level: the toes are 30 mm into it.
+    q = start_configuration(env, (-0.5, 0.0, 0.0), skeleton)
+    q[skeleton.index['root_x']] = -0.15
+    depth = body.penetration(q, ['right_foot'])
+    assert depth['right_foot'] == pytest.approx(0.03, abs=0.001)
+
+
+def test_distance_and_link_subsets(skeleton):
+    beam = _box((0.3, -1, 1.6), (0.5, 1, 1.8))                 # at head height
+    env = Environment([_box((-2, -1, -0.1), (2, 1, 0.0)), beam])
+    body = BodyCollision(skeleton, env)
+    q = start_configuration(env, (-0.5, 0.0, 0.0), skeleton)
+    q[skeleton.index['root_z']] += 0.1
+    distance = body.distance(q, ['left_foot', 'head'])
+    assert distance['left_foot'] == pytest.approx(0.102, abs=1e-4)
+    assert distance['head'] > 0.5
+    q[skeleton.index['root_x']] = 0.4
+    assert body.collides(q, ['head'])
+    assert not body.collides(q, ['left_foot', 'right_foot', 'left_shank'])
+    assert body.links_in_collision(q, ['pelvis', 'head']) == ['head']
+    assert body.distance(q, ['head'])['head'] == 0.0
+
+
+def test_padding_inflates_every_shape(skeleton, floor_world, standing):
+    padded = BodyCollision(skeleton, floor_world, padding=0.01)
+    assert padded.collides(standing, ['left_foot'])
+    assert not BodyCollision(skeleton, floor_world, padding=0.001).collides(standing)
+
+
+def test_self_collision_between_chosen_links(skeleton, body, standing):
+    assert not body.self_collides(standing, ['left_foot'], ['right_foot'])
+    assert not body.self_collides(standing, ['left_forearm', 'left_upper_arm'],
+                                  ['torso', 'pelvis', 'left_thigh'])
+    q = standing.copy()
+    q[skeleton.index['left_hip_yaw']] = -0.25                  # toes turned in: feet overlap
+    q[skeleton.index['right_hip_yaw']] = 0.25
+    assert body.self_collides(q, ['left_foot'], ['right_foot'])
+    assert not body.self_collides(q, ['left_foot'], ['head'])
+
+
+def test_bad_input_is_rejected(skeleton, floor_world, body, standing):
+    with pytest.raises(ValueError, match='padding'):
+        BodyCollision(skeleton, floor_world, padding=-0.1)
+    with pytest.raises(ValueError, match=r'shape \(22,\)'):
+        body.collides(np.zeros(21))
+    with pytest.raises(ValueError, match="unknown link 'elbow'"):
+        body.collides(standing, ['elbow'])
+    with pytest.raises(ValueError, match='string'):
+        body.collides(standing, 'left_foot')
+
+
+def test_collision_queries_are_fast_enough_for_planning_loops(skeleton, body, standing):
+    rng = np.random.default_rng(1)
+    configurations = standing + rng.normal(0.0, 0.01, (300, len(standing)))
+    start = time.perf_counter()
+    for q in configurations:
+        body.collides(q, ['left_foot', 'left_shank', 'left_thigh'])
+    per_call = (time.perf_counter() - start) / len(configurations)
+    assert per_call < 0.005  # generous; bench/bench_environment.py measures it
