@@ -24,7 +24,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Point, PoseStamped, Quaternion, Twist, TwistStamped
 from nav_msgs.msg import Path
 import numpy as np
-from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
+from rcl_interfaces.msg import SetParametersResult
 import rclpy
 from rclpy.exceptions import ParameterException, ParameterUninitializedException
 from rclpy.executors import ExternalShutdownException
@@ -41,15 +41,11 @@ from digital_actor_planner.nodes.planner_params import ConfigurationError, \
     parameter_declarations, PlannerNodeConfig, read_node_config, RUNTIME_PARAMETERS, \
     validate_node_config
 
-# How far ahead of playback the worker keeps committed frames before planning the next block.
-PLANNING_LEAD_DEFAULT = 0.3
 # Committed frames older than this (s of actor time) are dropped from the buffer.
 BUFFER_HISTORY = 1.0
 # Mesh triangles drawn in RViz at most (one TRIANGLE_LIST per mesh).
 MAX_MARKER_TRIANGLES = 200_000
 PAST_FOOTSTEPS = 40
-# Nice value added to the planning thread (lowering priority needs no privileges).
-PLANNER_NICENESS = 5
 
 
 class FrameBuffer:
@@ -210,7 +206,7 @@ class ActorPlannerNode(Node):
         self.scene_path = self.config.scene
         self.scene_error = ''
         self.cmd_timeout = self.config.cmd_timeout
-        self.planning_lead = float(self.get_parameter('planning_lead').value)
+        self.planning_lead = self.config.planning_lead
         self.period = 1.0 / self.config.publish_rate
 
         self.buffer = FrameBuffer(self.actor.configuration)
@@ -243,12 +239,7 @@ class ActorPlannerNode(Node):
 
     # -- configuration ----------------------------------------------------------------------
     def _declare_and_read(self) -> PlannerNodeConfig:
-        declarations = parameter_declarations() + [
-            ('planning_lead', PLANNING_LEAD_DEFAULT, ParameterDescriptor(
-                description='Plan the next block when less than this much (s) of committed '
-                            'motion is buffered ahead of playback.',
-                read_only=True, floating_point_range=[_float_range(0.02, 5.0)]))]
-        for name, default, descriptor in declarations:
+        for name, default, descriptor in parameter_declarations():
             if name not in RUNTIME_PARAMETERS:
                 descriptor.read_only = True
             try:
@@ -341,11 +332,6 @@ class ActorPlannerNode(Node):
     # -- threads ------------------------------------------------------------------------------
     def _planning_loop(self) -> None:
         logger = self.get_logger()
-        try:
-            # Within the process the publishing thread should win the CPU when both are ready.
-            os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), PLANNER_NICENESS)
-        except (AttributeError, OSError):
-            pass
         while not self._stop.is_set():
             with self._pending_lock:
                 pending, self._pending_actor = self._pending_actor, None
@@ -380,6 +366,13 @@ class ActorPlannerNode(Node):
     def _publishing_loop(self) -> None:
         # Ticks on a monotonic schedule; a late tick is published late, missed ticks are skipped
         # (and counted), so the stream never bunches up.
+        if self.config.stream_priority > 0:
+            try:
+                os.sched_setscheduler(threading.get_native_id(), os.SCHED_FIFO,
+                                      os.sched_param(self.config.stream_priority))
+            except (AttributeError, OSError) as error:
+                self.get_logger().info(f'joint_states thread keeps normal scheduling '
+                                       f'(SCHED_FIFO not permitted: {error})')
         start = time.monotonic()
         clock_zero = start
         tick = 0
@@ -540,10 +533,6 @@ class ActorPlannerNode(Node):
             pose.pose.orientation.w = 1.0
             message.poses.append(pose)
         self.path_pub.publish(message)
-
-
-def _float_range(low: float, high: float) -> FloatingPointRange:
-    return FloatingPointRange(from_value=low, to_value=high, step=0.0)
 
 
 def _field_named(error: Exception, config: PlannerNodeConfig) -> str:

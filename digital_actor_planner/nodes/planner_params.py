@@ -133,6 +133,13 @@ def parameter_declarations() -> List[Tuple[str, Any, ParameterDescriptor]]:
             'false.')),
         ('publish_robot_description', True, _descriptor(
             'Publish the URDF on robot_description (std_msgs/String, transient local).')),
+        ('planning_lead', 0.3, _descriptor(
+            'Plan the next block when less than this much committed motion (s) is buffered '
+            'ahead of playback; larger rides out planning hiccups, smaller reacts sooner.',
+            floats=(0.02, 5.0))),
+        ('stream_priority', 10, _descriptor(
+            'SCHED_FIFO priority of the joint_states thread (1-99) for low jitter on a busy '
+            'machine; 0 or no permission: normal scheduling.', integers=(0, 99))),
     ]
 
 
@@ -141,7 +148,7 @@ class PlannerNodeConfig:
     """Everything the node runs with, read once from its parameters.
 
     ``start_pose`` is ``(x, y, yaw)`` in m, m, rad or None for the scene's own start;
-    ``publish_rate`` in Hz; ``cmd_timeout`` in s.
+    ``publish_rate`` in Hz; ``cmd_timeout`` and ``planning_lead`` in s.
     """
 
     scene: str
@@ -157,6 +164,8 @@ class PlannerNodeConfig:
     frame_id: str
     cmd_vel_stamped: bool
     publish_robot_description: bool
+    planning_lead: float = 0.3
+    stream_priority: int = 0
 
     def actor_config_fields(self) -> Dict[str, Any]:
         """Return the keyword arguments of the core ``ActorConfig`` these parameters set."""
@@ -210,6 +219,8 @@ def read_node_config(get_value: Callable[[str], Any]) -> PlannerNodeConfig:
         frame_id=str(get_value('frame_id')),
         cmd_vel_stamped=bool(get_value('cmd_vel_stamped')),
         publish_robot_description=bool(get_value('publish_robot_description')),
+        planning_lead=float(get_value('planning_lead')),
+        stream_priority=int(get_value('stream_priority')),
     )
 
 
@@ -230,7 +241,7 @@ def validate_node_config(config: PlannerNodeConfig) -> None:
     if config.start_pose is not None and not all(math.isfinite(v) for v in config.start_pose):
         raise ConfigurationError('start_pose', f'not finite: {list(config.start_pose)!r}')
     for name in ('publish_rate', 'cmd_timeout', 'step_length_min', 'step_length_max',
-                 'max_linear_speed', 'max_angular_speed'):
+                 'max_linear_speed', 'max_angular_speed', 'planning_lead'):
         value = getattr(config, name)
         if not math.isfinite(value) or value < 0.0:
             raise ConfigurationError(name, f'must be a finite non-negative number, got {value!r}')

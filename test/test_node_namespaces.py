@@ -1,0 +1,73 @@
+"""Two actor_planner processes side by side under different namespaces, Twist and TwistStamped.
+
+Each actor follows only its own cmd_vel: one takes geometry_msgs/Twist (cmd_vel_stamped false),
+the other geometry_msgs/TwistStamped (the default).
+"""
+import math
+import os
+
+import pytest
+from ros_harness import NodeProcess, ros_env
+from test_node_helpers import node_command, Probe, ROOT_X, ROOT_Y, ROOT_YAW, scene
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+DOMAIN_ID = int(os.environ.get('ACTOR_NODE_TEST_DOMAIN', '31')) + 1
+
+
+@pytest.fixture(scope='module')
+def two_actors(tmp_path_factory):
+    folder = tmp_path_factory.mktemp('two_actors')
+    flat = scene('flat')
+    processes = {
+        'twist': NodeProcess(node_command('-r', '__ns:=/twist_actor', '-p', f'scene:={flat}',
+                                          '-p', 'cmd_vel_stamped:=false'),
+                             ros_env(DOMAIN_ID), log_path=str(folder / 'twist.log')),
+        'stamped': NodeProcess(node_command('-r', '__ns:=/stamped_actor', '-p', f'scene:={flat}'),
+                               ros_env(DOMAIN_ID), log_path=str(folder / 'stamped.log')),
+    }
+    probes = {'twist': Probe(DOMAIN_ID, namespace='/twist_actor', stamped=False),
+              'stamped': Probe(DOMAIN_ID, namespace='/stamped_actor', stamped=True)}
+    try:
+        for name, probe in probes.items():
+            assert probe.wait_for_stream(processes[name], 60.0), processes[name].output()
+        yield processes, probes
+    finally:
+        for probe in probes.values():
+            probe.close()
+        codes = {name: process.stop() for name, process in processes.items()}
+        assert codes == {'twist': 0, 'stamped': 0}, codes
+
+
+def _root(probe):
+    q = probe.latest()
+    return q[ROOT_X], q[ROOT_Y], q[ROOT_YAW]
+
+
+def test_each_actor_follows_only_its_own_command(two_actors):
+    _, probes = two_actors
+    twist, stamped = probes['twist'], probes['stamped']
+    twist_start, stamped_start = _root(twist), _root(stamped)
+    twist.command = (0.5, 0.0)
+    stamped.command = (0.0, 0.6)
+    # Both probes' callbacks must run: spin them in turn.
+    for _ in range(40):
+        twist.spin(0.05)
+        stamped.spin(0.05)
+    twist.command = stamped.command = None
+    x0, y0, yaw0 = twist_start
+    x1, y1, yaw1 = _root(twist)
+    assert (x1 - x0) * math.cos(yaw0) + (y1 - y0) * math.sin(yaw0) > 0.5
+    assert abs(yaw1 - yaw0) < 0.2
+    x0, y0, yaw0 = stamped_start
+    x1, y1, yaw1 = _root(stamped)
+    assert yaw1 - yaw0 > 0.4, f'stamped actor yaw {yaw0:.2f} -> {yaw1:.2f}'
+    assert math.hypot(x1 - x0, y1 - y0) < 0.5
+
+
+def test_each_actor_streams_its_own_joint_states(two_actors):
+    _, probes = two_actors
+    for name, probe in probes.items():
+        count = len(probe.joint_states)
+        probe.spin(1.0)
+        assert len(probe.joint_states) - count > 70, name
