@@ -7,8 +7,15 @@ configuration-time space with the earlier branches fixed.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+import time
+from typing import Dict, Optional, Tuple
+
 import numpy as np
 
+from digital_actor_planner.core.ct_roadmap import CTRoadmap
+from digital_actor_planner.core.ct_space import (
+    BodyKinematics, BodyShapes, CTSpace, EnvironmentIndex, TimedBody)
 from digital_actor_planner.core.skeleton import Skeleton
 
 #: Shoulder roll that keeps a hanging arm clear of the torso and the thigh, rad.
@@ -72,3 +79,278 @@ def motion_patterns(skeleton: Skeleton, frames: np.ndarray,
                             for name in ('waist', 'left_arm', 'right_arm')])
     out[:, upper] = np.clip(out[:, upper], skeleton.lower[upper], skeleton.upper[upper])
     return out
+
+
+# -- prioritized planning (§5) ------------------------------------------------------------
+#: Planning order of the branches (§5: the waist first, then the arms).
+BRANCH_ORDER = ('waist', 'left_arm', 'right_arm')
+_LEG_LINKS = ('pelvis', 'left_hip', 'right_hip', 'left_thigh', 'right_thigh', 'left_shank',
+              'right_shank', 'left_foot', 'right_foot')
+_TRUNK_LINKS = ('waist', 'torso', 'head', 'left_shoulder', 'right_shoulder')
+_ARM_LINKS = {side: (f'{side}_shoulder_roll_link', f'{side}_upper_arm', f'{side}_forearm')
+              for side in ('left', 'right')}
+
+
+@dataclass(frozen=True)
+class UpperBodyConfig:
+    """Settings of the upper-body compliant motion planner (§5.2).
+
+    Attributes
+    ----------
+    roadmap_radius
+        Distance r of a node grown when the search is stuck, rad (weighted norm).
+    node_budget
+        States a branch search may expand per plan.
+    max_backtracks
+        Backtracking steps a branch search may take per plan.
+    max_roadmap_nodes
+        Largest CT-roadmap per branch (initial patterns plus grown nodes).
+    hold_frames
+        Frames a posture is held for when the search keeps it (>= 1).
+    speed_fraction
+        Fraction of the joint speed limits used to time motions between nodes, (0, 1].
+    growth_attempts
+        Random directions tried when growing a node.
+    waist_weights, arm_weights
+        Joint weights of the closeness to the objective: (yaw, pitch) and
+        (shoulder pitch, shoulder roll, shoulder yaw, elbow), > 0.
+    time_weight
+        Weight of time in the CT-space distance, rad/s (>= 0).
+
+    """
+
+    roadmap_radius: float = 0.3
+    node_budget: int = 300
+    max_backtracks: int = 40
+    max_roadmap_nodes: int = 64
+    hold_frames: int = 5
+    speed_fraction: float = 0.8
+    growth_attempts: int = 4
+    waist_weights: Tuple[float, float] = (1.0, 1.0)
+    arm_weights: Tuple[float, float, float, float] = (1.0, 1.0, 1.0, 0.5)
+    time_weight: float = 1.0
+
+
+def validate_upper_body_config(config: UpperBodyConfig) -> UpperBodyConfig:
+    """Check an :class:`UpperBodyConfig`; raise ValueError naming the first bad field."""
+    def positive(name, value, integer=False):
+        ok = (isinstance(value, (int, np.integer)) and not isinstance(value, bool) if integer
+              else isinstance(value, (int, float)) and np.isfinite(value))
+        if not ok or value <= 0:
+            kind = 'an integer' if integer else 'a finite number'
+            raise ValueError(f'{name} must be {kind} > 0, got {value!r}')
+
+    positive('roadmap_radius', config.roadmap_radius)
+    for name in ('node_budget', 'max_roadmap_nodes', 'hold_frames', 'growth_attempts'):
+        positive(name, getattr(config, name), integer=True)
+    if not (isinstance(config.max_backtracks, (int, np.integer))
+            and not isinstance(config.max_backtracks, bool) and config.max_backtracks >= 0):
+        raise ValueError(f'max_backtracks must be an integer >= 0, got {config.max_backtracks!r}')
+    positive('speed_fraction', config.speed_fraction)
+    if config.speed_fraction > 1.0:
+        raise ValueError(f'speed_fraction must be <= 1, got {config.speed_fraction!r}')
+    for name, size in (('waist_weights', 2), ('arm_weights', 4)):
+        weights = getattr(config, name)
+        if len(weights) != size:
+            raise ValueError(f'{name} must have {size} values, got {weights!r}')
+        for value in weights:
+            positive(name, value)
+    if not (isinstance(config.time_weight, (int, float)) and np.isfinite(config.time_weight)
+            and config.time_weight >= 0):
+        raise ValueError(f'time_weight must be a finite number >= 0, got {config.time_weight!r}')
+    if config.max_roadmap_nodes < len(_waist_patterns()) + 1:
+        raise ValueError(f'max_roadmap_nodes must hold the {len(_waist_patterns()) + 1} initial '
+                         f'patterns, got {config.max_roadmap_nodes}')
+    return config
+
+
+@dataclass(frozen=True)
+class UpperBodyPlan:
+    """The upper-body motion of one step.
+
+    Attributes
+    ----------
+    frames
+        (k, 22) float64: the input frames with the upper-body columns planned, rad or m.
+    ok
+        Whether every branch reaches the final frame collision-free.
+    reason
+        Empty when ok; otherwise which branch is blocked and when.
+    deviation
+        Largest absolute deviation of the upper-body columns from the objective, rad.
+    planning_time
+        Wall time of the plan, s.
+    per_branch
+        Branch name -> dict(time s, ok, fast bool, nodes, backtracks, grown, deviation rad).
+
+    """
+
+    frames: np.ndarray
+    ok: bool
+    reason: str
+    deviation: float
+    planning_time: float
+    per_branch: Dict[str, dict]
+
+
+def _waist_patterns() -> np.ndarray:
+    """Common waist postures as deviations (yaw, pitch) from erect, rad: bends and turns."""
+    bends = [(0.0, p) for p in (0.15, 0.3, 0.45, 0.6, 0.75, 0.9, 1.05, 1.2)]
+    turns = [(y, 0.0) for y in (0.25, -0.25, 0.5, -0.5, 0.75, -0.75)]
+    both = [(y, p) for y in (0.4, -0.4) for p in (0.4, 0.8)]
+    return np.array(bends + turns + both + [(0.0, -0.2)])
+
+
+def _arm_patterns() -> np.ndarray:
+    """Common arm postures as deviations (pitch, roll, yaw, elbow) from the swing, rad."""
+    return np.array([(0.0, 0.0, 0.0, e) for e in (0.3, 0.6, 0.9, 1.2, 1.6)]
+                    + [(0.3, 0.0, 0.0, 0.8), (0.6, 0.0, 0.0, 1.4), (-0.3, 0.0, 0.0, 0.6),
+                       (0.0, 0.25, 0.0, 0.0), (0.0, 0.5, 0.0, 0.4), (0.0, 0.0, -0.5, 0.9),
+                       (0.0, 0.2, 0.0, 1.0)])
+
+
+class UpperBodyPlanner:
+    """Prioritized CT-roadmap planning of the waist, then the left arm, then the right arm.
+
+    Parameters
+    ----------
+    skeleton
+        The actor model.
+    body_collision
+        ``BodyCollision`` of the actor in the environment: its environment (FCL objects,
+        meshes) and padding are the ones checked here.
+    config
+        Planner settings (validated here).
+    rng
+        Random generator for roadmap growth; seeded default when omitted.
+
+    """
+
+    def __init__(self, skeleton: Skeleton, body_collision, config: UpperBodyConfig = None,
+                 rng: Optional[np.random.Generator] = None):
+        self.skeleton = skeleton
+        self.body_collision = body_collision
+        self.config = validate_upper_body_config(config or UpperBodyConfig())
+        self.rng = rng if rng is not None else np.random.default_rng(0)
+        self.kinematics = BodyKinematics(skeleton)
+        self.shapes = BodyShapes(skeleton, getattr(body_collision, 'padding', 0.0))
+        environment = body_collision.environment
+        self.environment = EnvironmentIndex(environment.meshes,
+                                            getattr(environment, 'objects', None))
+        config = self.config
+        self.roadmaps = {
+            'waist': CTRoadmap(_waist_patterns(), np.array(config.waist_weights),
+                               config.roadmap_radius, config.max_roadmap_nodes, self.rng)}
+        for side in ('left', 'right'):
+            self.roadmaps[f'{side}_arm'] = CTRoadmap(
+                _arm_patterns(), np.array(config.arm_weights), config.roadmap_radius,
+                config.max_roadmap_nodes, self.rng)
+        self.indices = {name: skeleton.branch(name) for name in BRANCH_ORDER}
+        self.upper_indices = np.concatenate([self.indices[name] for name in BRANCH_ORDER])
+        self._checked = {'waist': _TRUNK_LINKS, 'left_arm': _ARM_LINKS['left'],
+                         'right_arm': _ARM_LINKS['right']}
+        self._obstacles = {'waist': _LEG_LINKS,
+                           'left_arm': _LEG_LINKS + _TRUNK_LINKS,
+                           'right_arm': _LEG_LINKS + _TRUNK_LINKS + _ARM_LINKS['left']}
+
+    def _check_input(self, times: np.ndarray, frames: np.ndarray) -> None:
+        skeleton = self.skeleton
+        if times.ndim != 1 or len(times) < 2:
+            raise ValueError(f'times must have shape (k,) with k >= 2, got {times.shape}')
+        if frames.shape != (len(times), len(skeleton.joint_names)):
+            raise ValueError(f'frames must have shape ({len(times)}, '
+                             f'{len(skeleton.joint_names)}), got {frames.shape}')
+        if not (np.all(np.isfinite(times)) and np.all(np.isfinite(frames))):
+            raise ValueError('times or frames contain NaN or infinite values')
+        if not np.all(np.diff(times) > 0):
+            bad = int(np.flatnonzero(np.diff(times) <= 0)[0])
+            raise ValueError(f'times must increase strictly, got {times[bad]} then '
+                             f'{times[bad + 1]} at index {bad}')
+        upper = self.upper_indices
+        values = frames[:, upper]
+        outside = (values < skeleton.lower[upper] - 1e-9) | (values > skeleton.upper[upper] + 1e-9)
+        if outside.any():
+            row, column = np.argwhere(outside)[0]
+            name = skeleton.joint_names[upper[column]]
+            raise ValueError(f'objective {name} = {values[row, column]:.4f} rad at frame {row} '
+                             f'is outside the joint limits [{skeleton.lower[upper[column]]}, '
+                             f'{skeleton.upper[upper[column]]}]')
+
+    def plan(self, times: np.ndarray, frames: np.ndarray) -> UpperBodyPlan:
+        """Plan the upper body over one step (§5).
+
+        Parameters
+        ----------
+        times
+            (k,) frame times, s, strictly increasing.
+        frames
+            (k, 22) configurations, rad or m: root and legs fixed; upper-body columns hold the
+            objective O(t) except frame 0, which holds the start (the previous plan's end).
+
+        Returns
+        -------
+        UpperBodyPlan
+            Frames whose upper-body columns follow the objective wherever it is legal.
+
+        """
+        began = time.perf_counter()
+        times = np.asarray(times, dtype=float)
+        frames = np.asarray(frames, dtype=float)
+        self._check_input(times, frames)
+        config = self.config
+        body = TimedBody(self.kinematics, self.shapes, self.environment, frames)
+        out = frames.copy()
+        per_branch: Dict[str, dict] = {}
+        ok, reason = True, ''
+        for name in BRANCH_ORDER:
+            tic = time.perf_counter()
+            indices = self.indices[name]
+            objective = frames[:, indices].copy()
+            start = frames[0, indices].copy()
+            space = CTSpace(name, body, times, objective, self._checked[name],
+                            self._obstacles[name], config.time_weight)
+            record = dict(ok=True, fast=False, nodes=0, backtracks=0, grown=0)
+            path = None
+            if not space.is_valid(start, 0):
+                ok, record['ok'] = False, False
+                links = self._links_in_collision(frames[0], name)
+                reason = (f'{name} start in collision at t={times[0]:.2f} s'
+                          + (f' ({", ".join(links)})' if links else ''))
+            else:
+                # Fast path: the objective (joined from the start) is legal at every frame.
+                if space.first_invalid_motion((start, 0), (objective[-1], len(times) - 1)) < 0:
+                    path = space.motion_frames((start, 0), (objective[-1], len(times) - 1))
+                    record['fast'] = True
+                else:
+                    result = self.roadmaps[name].solve(
+                        space, start, hold_frames=config.hold_frames,
+                        speed_fraction=config.speed_fraction,
+                        growth_attempts=config.growth_attempts,
+                        node_budget=config.node_budget, max_backtracks=config.max_backtracks)
+                    record.update(nodes=result.nodes, backtracks=result.backtracks,
+                                  grown=result.grown, ok=result.ok)
+                    path = result.path
+                    if not result.ok:
+                        ok = False
+                        reason = f'{name} blocked at t={times[result.blocked_frame]:.2f} s'
+            if path is not None and record['ok']:
+                path[0] = start
+                out[:, indices] = path
+                body.set_branch(indices, path, space.steps)
+            record['deviation'] = float(np.max(np.abs(out[1:, indices] - objective[1:])))
+            record['checks'] = space.checks
+            record['time'] = time.perf_counter() - tic
+            per_branch[name] = record
+            if not ok:
+                break
+        upper = self.upper_indices
+        deviation = float(np.max(np.abs(out[1:, upper] - frames[1:, upper])))
+        return UpperBodyPlan(frames=out, ok=ok, reason=reason, deviation=deviation,
+                             planning_time=time.perf_counter() - began, per_branch=per_branch)
+
+    def _links_in_collision(self, q: np.ndarray, branch: str) -> list:
+        """Names of the branch's links touching the environment at ``q`` (for the reason)."""
+        try:
+            return list(self.body_collision.links_in_collision(q, self._checked[branch]))
+        except (AttributeError, ValueError):
+            return []

@@ -1,0 +1,404 @@
+"""The CT-roadmap: best-first planning forward in configuration-time space (paper §5.2).
+
+The roadmap's nodes are branch configurations stored as deviations from the objective O(t)
+(§5.1), so a node means the same posture relative to the motion pattern at any time and the
+roadmap stays useful from one step to the next. It starts with the branch's common motion
+patterns (the objective itself, bent and turned waists, flexed arms) and grows a node at
+distance r whenever the search is stuck.
+
+The search (Figure 5) only moves forward in time. From the current state it tries the
+neighbouring nodes in order of closeness to the objective at their arrival time; when every
+advance fails it grows a new node at distance r; when that does not bring the search forward
+in time either it backtracks to an earlier state: the latest one from which a node that is
+legal at the blocking frame can be reached in time, else the previous one. The goal is any
+legal configuration at the final frame k.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import List, Optional, Tuple
+
+import numpy as np
+
+from digital_actor_planner.core.ct_space import CTSpace
+
+
+@dataclass(frozen=True)
+class SearchResult:
+    """Outcome of one CT-roadmap search.
+
+    Attributes
+    ----------
+    ok
+        Whether a legal motion reaches the final frame.
+    path
+        (k, d) branch configurations at every frame, rad; on failure the best partial motion
+        followed by the objective (do not execute it).
+    blocked_frame
+        On failure, the frame index the search could not get past; -1 on success.
+    nodes
+        States expanded.
+    backtracks
+        Backtracking steps taken.
+    grown
+        Nodes added to the roadmap by this search.
+
+    """
+
+    ok: bool
+    path: np.ndarray
+    blocked_frame: int
+    nodes: int
+    backtracks: int
+    grown: int
+
+
+@dataclass
+class _State:
+    deviation: np.ndarray
+    frame: int
+    candidates: Optional[List[Tuple[float, int, np.ndarray]]] = None
+    grew: bool = False
+    failures: List[int] = field(default_factory=list)
+    # A sub-goal set by backtracking: until frame ``until`` only nodes legal there are used.
+    until: int = -1
+    allowed: Optional[np.ndarray] = None
+    relay: bool = False
+
+
+class CTRoadmap:
+    """A CT-roadmap for one branch, kept between successive plans.
+
+    Parameters
+    ----------
+    patterns
+        (n, d) initial nodes as deviations from the objective, rad (the common motion
+        patterns; the zero deviation is always included).
+    weights
+        (d,) weights of the joints in the closeness measure, > 0.
+    radius
+        Distance r of a grown node from the current one (weighted norm), rad.
+    max_nodes
+        Largest roadmap size; the oldest grown nodes are forgotten first.
+    rng
+        Random generator for growth directions.
+
+    """
+
+    def __init__(self, patterns: np.ndarray, weights: np.ndarray, radius: float,
+                 max_nodes: int, rng: np.random.Generator):
+        patterns = np.atleast_2d(np.asarray(patterns, dtype=float))
+        weights = np.asarray(weights, dtype=float)
+        if patterns.shape[1] != weights.shape[0]:
+            raise ValueError(f'patterns have {patterns.shape[1]} joints, weights '
+                             f'{weights.shape[0]}')
+        if not np.all(weights > 0):
+            raise ValueError(f'weights must be > 0, got {weights}')
+        if not radius > 0:
+            raise ValueError(f'radius must be > 0 rad, got {radius}')
+        zero = np.zeros((1, patterns.shape[1]))
+        if not np.any(np.all(patterns == 0.0, axis=1)):
+            patterns = np.vstack([zero, patterns])
+        self.patterns = patterns
+        self.weights = weights
+        self.radius = float(radius)
+        self.max_nodes = int(max_nodes)
+        self.rng = rng
+        self.grown_nodes = np.zeros((0, patterns.shape[1]))
+
+    @property
+    def nodes(self) -> np.ndarray:
+        """All roadmap nodes as deviations from the objective: (n, d), rad."""
+        return np.vstack([self.patterns, self.grown_nodes])
+
+    def closeness(self, deviation: np.ndarray) -> np.ndarray:
+        """Weighted distance of deviation(s) (..., d) from the objective, rad."""
+        return np.sqrt(np.sum(self.weights * np.square(deviation), axis=-1))
+
+    def _add(self, deviation: np.ndarray) -> None:
+        self.grown_nodes = np.vstack([self.grown_nodes, deviation[None]])
+        spare = self.max_nodes - len(self.patterns)
+        if len(self.grown_nodes) > max(spare, 0):
+            self.grown_nodes = self.grown_nodes[len(self.grown_nodes) - max(spare, 0):]
+
+    # -- timing helpers ------------------------------------------------------------------
+    @staticmethod
+    def _travel_frames(space: CTSpace, frame: int, change: np.ndarray,
+                       speed_fraction: float) -> int:
+        """Frames needed to change the deviation by ``change`` (d,) at a fraction of the limit."""
+        step = float(np.mean(np.diff(space.times))) if space.frame_count > 1 else 1.0
+        seconds = float(np.max(np.abs(change) / (speed_fraction * space.speed_limit)))
+        return max(1, int(np.ceil(seconds / step - 1e-9)))
+
+    # -- search --------------------------------------------------------------------------
+    def solve(self, space: CTSpace, start: np.ndarray, hold_frames: int = 5,
+              speed_fraction: float = 0.8, growth_attempts: int = 4,
+              node_budget: int = 400, max_backtracks: int = 60) -> SearchResult:
+        """Search forward in time from ``start`` at frame 0 to any legal state at frame k-1.
+
+        Parameters
+        ----------
+        space
+            The branch's CT-space for this step.
+        start
+            (d,) branch configuration at frame 0, rad (must be legal).
+        hold_frames
+            Frames a node is held for when the search keeps the current posture.
+        speed_fraction
+            Fraction of the joint speed limits used when timing motions between nodes.
+        growth_attempts
+            Random directions tried when growing a node at distance r.
+        node_budget, max_backtracks
+            Search limits; exceeding either fails the search.
+
+        Returns
+        -------
+        SearchResult
+            The motion over all k frames, or the frame the search could not get past.
+
+        """
+        last = space.frame_count - 1
+        start_state = _State(np.asarray(start, dtype=float) - space.objective[0], 0)
+        stack = [start_state]
+        visited = set()
+        jumps = set()
+        nodes = backtracks = grown = 0
+        deepest_blocked = 0
+        while stack:
+            state = stack[-1]
+            if state.relay:
+                # Relay states only mark departure points inside a checked motion.
+                stack.pop()
+                continue
+            if state.frame >= last:
+                return SearchResult(True, self._path(space, stack), -1, nodes, backtracks,
+                                    grown)
+            nodes += 1
+            if nodes > node_budget or backtracks > max_backtracks:
+                break
+            child = self._advance(space, state, visited, hold_frames, speed_fraction)
+            if child is None and not state.grew:
+                # §5.2: every advance failed; grow a node at distance r.
+                state.grew = True
+                child = self._grow(space, state, speed_fraction, growth_attempts)
+                grown += child is not None
+            if child is not None:
+                self._push(space, stack, child, hold_frames)
+                continue
+            # The farthest any advance got: the frame a new sub-goal must be legal at.
+            blocked = max(state.failures) if state.failures else state.frame + 1
+            deepest_blocked = max(deepest_blocked, blocked)
+            # §5.2: the new node did not bring the search forward in time: backtrack.
+            backtracks += 1
+            if not self._passable(space, blocked):
+                break
+            jump = self._jump_back(space, stack, blocked, speed_fraction, jumps)
+            if jump is not None:
+                depth, child = jump
+                del stack[depth + 1:]
+                self._push(space, stack, child, hold_frames)
+                continue
+            stack.pop()
+        path = self._path(space, stack) if stack else np.array(space.objective)
+        return SearchResult(False, path, min(deepest_blocked, last), nodes, backtracks, grown)
+
+    def _candidates(self, space: CTSpace, state: _State, hold_frames: int,
+                    speed_fraction: float) -> List[Tuple[float, int, np.ndarray]]:
+        """Neighbouring states forward in time, ranked by closeness to the objective."""
+        last = space.frame_count - 1
+        here = state.frame
+        on_objective = not np.any(state.deviation)
+        targets, frames = [], []
+        if on_objective:
+            # Following the objective to the goal is the best advance there is.
+            targets.append(np.zeros_like(state.deviation))
+            frames.append(last)
+        nodes = self.nodes
+        if state.allowed is not None and here < state.until:
+            # Backtracking set a sub-goal: stay among the nodes legal at the blocking frame.
+            nodes = state.allowed
+            targets, frames = [], []
+        for node in nodes:
+            travel = self._travel_frames(space, here, node - state.deviation, speed_fraction)
+            if node is not None and not np.any(node - state.deviation):
+                travel = hold_frames
+            arrival = here + travel
+            if arrival > last:
+                # Steer: go as far towards the node as the remaining time allows.
+                share = (last - here) / travel
+                node = state.deviation + share * (node - state.deviation)
+                arrival = last
+            targets.append(node)
+            frames.append(arrival)
+        targets.append(state.deviation.copy())
+        frames.append(min(here + hold_frames, last))
+        targets = np.array(targets)
+        frames = np.array(frames)
+        # Endpoints in collision cannot start a legal motion: filter them in one batch.
+        legal = space.valid_rows(space.objective[frames] + targets, frames)
+        closeness = self.closeness(targets)
+        order = np.lexsort((frames if not on_objective else -frames, np.round(closeness, 6)))
+        return [(float(closeness[i]), int(frames[i]), targets[i]) for i in order if legal[i]]
+
+    def _advance(self, space: CTSpace, state: _State, visited: set, hold_frames: int,
+                 speed_fraction: float) -> Optional[_State]:
+        """Try the ranked neighbours forward in time; return the first legal one."""
+        if state.candidates is None:
+            state.candidates = self._candidates(space, state, hold_frames, speed_fraction)
+            if state.candidates and not np.any(state.deviation):
+                # On the objective: follow it as far as it is legal (one motion check).
+                _, arrival, target = state.candidates.pop(0)
+                child = self._try(space, state, target, arrival)
+                if child is not None:
+                    return child
+        fresh = []
+        while state.candidates:
+            _, arrival, target = state.candidates.pop(0)
+            key = (arrival, tuple(np.round(target, 3)))
+            if key not in visited:
+                visited.add(key)
+                fresh.append((target, arrival))
+        if not fresh:
+            return None
+        here = state.frame
+        start = (space.objective[here] + state.deviation, here)
+        goals = [(space.objective[arrival] + target, arrival) for target, arrival in fresh]
+        chosen, failures = space.first_legal_motion(start, goals)
+        state.failures.extend(f for f in failures if f >= 0)
+        # Keep the untried neighbours for when the search comes back here.
+        state.candidates = [(0.0, arrival, target) for target, arrival in fresh[chosen + 1:]
+                            ] if chosen >= 0 else []
+        if chosen < 0:
+            return None
+        target, arrival = fresh[chosen]
+        child = _State(np.array(target), arrival)
+        if arrival < state.until:
+            child.until, child.allowed = state.until, state.allowed
+        return child
+
+    def _try(self, space: CTSpace, state: _State, deviation: np.ndarray,
+             arrival: int) -> Optional[_State]:
+        """Check the motion to (deviation, arrival); on a collision remember where."""
+        here = state.frame
+        start = (space.objective[here] + state.deviation, here)
+        goal = (space.objective[arrival] + deviation, arrival)
+        bad = space.first_invalid_motion(start, goal)
+        if bad < 0:
+            child = _State(np.array(deviation), arrival)
+            if arrival < state.until:
+                child.until, child.allowed = state.until, state.allowed
+            return child
+        state.failures.append(bad)
+        if not np.any(state.deviation) and not np.any(deviation) and bad - 1 > here:
+            # Following the objective is legal up to the frame before the obstacle.
+            return _State(np.zeros_like(deviation), bad - 1)
+        return None
+
+    def _grow(self, space: CTSpace, state: _State, speed_fraction: float,
+              attempts: int) -> Optional[_State]:
+        """Grow a roadmap node at distance r from the current state (§5.2)."""
+        last = space.frame_count - 1
+        for _ in range(attempts):
+            direction = self.rng.normal(size=state.deviation.shape)
+            direction /= np.sqrt(np.sum(self.weights * direction * direction))
+            deviation = state.deviation + self.radius * direction
+            arrival = state.frame + self._travel_frames(space, state.frame,
+                                                        deviation - state.deviation,
+                                                        speed_fraction)
+            arrival = min(arrival, last)
+            q = np.clip(space.objective[arrival] + deviation, space.lower, space.upper)
+            deviation = q - space.objective[arrival]
+            child = self._try(space, state, deviation, arrival)
+            if child is not None:
+                self._add(deviation)
+                return child
+        return None
+
+    def _jump_back(self, space: CTSpace, stack: List[_State], blocked: int,
+                   speed_fraction: float, jumps: set,
+                   targets: int = 4) -> Optional[Tuple[int, _State]]:
+        """Backtrack to the latest earlier state that can reach a node legal at ``blocked``.
+
+        For the few nodes closest to the objective that are legal at the blocking frame, the
+        latest departure that still gets there in time is found by bisection over the states
+        on the stack. Returns (stack depth to keep, new state), or None.
+        """
+        nodes = self.nodes
+        legal = space.valid_rows(space.objective[blocked] + nodes,
+                                 np.full(len(nodes), blocked))
+        if not legal.any():
+            return None
+        nodes = nodes[legal]
+        nodes = nodes[np.argsort(self.closeness(nodes), kind='stable')]
+        # A sub-goal already tried for this blocking frame led to a dead end: skip it.
+        fresh = [(blocked, tuple(np.round(node, 3))) not in jumps for node in nodes]
+        nodes = nodes[np.array(fresh, dtype=bool)]
+        earlier = [depth for depth in range(len(stack) - 1) if stack[depth].frame < blocked]
+        for node in nodes[:targets]:
+            jumps.add((blocked, tuple(np.round(node, 3))))
+            low, high, best = 0, len(earlier) - 1, None
+            while low <= high:
+                middle = (low + high) // 2
+                state = stack[earlier[middle]]
+                change = node - state.deviation
+                arrival = state.frame + self._travel_frames(space, state.frame, change,
+                                                            speed_fraction)
+                if arrival > blocked:
+                    arrival = state.frame + self._travel_frames(space, state.frame, change, 1.0)
+                child = None
+                if arrival <= blocked:
+                    failures = len(state.failures)
+                    child = self._try(space, state, node, arrival)
+                    del state.failures[failures:]
+                if child is not None and child.frame == arrival:
+                    best = (earlier[middle], child)
+                    low = middle + 1
+                else:
+                    high = middle - 1
+            if best is not None:
+                depth, child = best
+                if child.frame < blocked:
+                    child.until, child.allowed = blocked, nodes
+                return depth, child
+        return None
+
+    @staticmethod
+    def _push(space: CTSpace, stack: List[_State], child: _State, spacing: int) -> None:
+        """Push a state, with relay states every ``spacing`` frames along the motion to it.
+
+        Deviations are interpolated linearly in time, so every piece of a checked motion is
+        itself a legal motion: the relays are legal departure points for later backtracking.
+        """
+        parent = stack[-1]
+        span = child.frame - parent.frame
+        for frame in range(parent.frame + spacing, child.frame - spacing // 2, spacing):
+            share = (space.times[frame] - space.times[parent.frame]) / (
+                space.times[child.frame] - space.times[parent.frame])
+            relay = _State(parent.deviation + share * (child.deviation - parent.deviation),
+                           frame, relay=True)
+            relay.failures = []
+            stack.append(relay)
+        del span
+        stack.append(child)
+
+    def _passable(self, space: CTSpace, frame: int, samples: int = 16) -> bool:
+        """Whether any roadmap node or random configuration is legal at ``frame``."""
+        nodes = self.nodes
+        q = space.objective[frame] + nodes
+        lower, upper = space.bounds
+        random = lower + self.rng.random((samples, len(lower))) * (upper - lower)
+        q = np.vstack([q, random])
+        return bool(space.valid_rows(q, np.full(len(q), frame)).any())
+
+    @staticmethod
+    def _path(space: CTSpace, stack: List[_State]) -> np.ndarray:
+        """Configurations at every frame along the states of the stack: (k, d), rad."""
+        out = np.array(space.objective, dtype=float)
+        out[0] = space.objective[0] + stack[0].deviation
+        for a, b in zip(stack[:-1], stack[1:]):
+            out[a.frame:b.frame + 1] = space.motion_frames(
+                (space.objective[a.frame] + a.deviation, a.frame),
+                (space.objective[b.frame] + b.deviation, b.frame))
+        end = stack[-1]
+        out[end.frame:] = space.objective[end.frame:] + end.deviation
+        return np.clip(out, space.lower, space.upper)

@@ -1,0 +1,694 @@
+"""Configuration-time space of one upper-body branch (paper §5.2).
+
+The pelvis trajectory q_R(t) and the legs are fixed by the locomotion planner (§4), and the
+branches planned before this one are fixed by the priority order of §5 (waist, then left arm,
+then right arm). What remains is the branch's own joints plus time: the CT-space. A state is a
+pair ``(q, i)``: the branch configuration ``q`` (d,) rad at frame index ``i`` of the time grid.
+
+The interface is shaped like OMPL's space-time planning (``SpaceTimeStateSpace``): ``bounds``,
+``distance``, ``interpolate``, ``is_valid(q, i)`` and ``check_motion(a, b)``, where a motion is
+legal only forward in time, within the joint speed limits and collision-free at every frame.
+
+Motions are interpolated in deviation from the objective O(t) (§5.1) rather than in absolute
+joint values, so a motion between two states on the objective follows the objective exactly and
+a constant deviation rides on top of the swinging arm pattern.
+
+Collision checking is broad phase in NumPy (per-frame axis-aligned boxes of the branch's shapes
+against the environment's triangles and the rest of the body) and narrow phase in FCL, using the
+shapes and environment models of :class:`~digital_actor_planner.core.collision.BodyCollision`
+when it provides them.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import fcl
+import numpy as np
+
+from digital_actor_planner.core.skeleton import Skeleton
+
+#: Relative slack on the joint speed limits, for rounding in interpolation.
+SPEED_TOLERANCE = 1e-6
+#: Links this many joints apart or closer are adjacent and never checked against each other.
+ADJACENT_JOINTS = 2
+UPPER_BODY_BRANCHES = ('waist', 'left_arm', 'right_arm')
+
+
+def _axis_code(axis: np.ndarray) -> Tuple[int, float]:
+    """Return (coordinate, sign) for a coordinate axis, or (-1, 0) for a general one."""
+    nonzero = np.flatnonzero(np.abs(axis) > 1e-12)
+    if len(nonzero) == 1:
+        return int(nonzero[0]), float(np.sign(axis[nonzero[0]]))
+    return -1, 0.0
+
+
+@dataclass(frozen=True)
+class _Step:
+    parent: int
+    child: int
+    origin_rotation: Optional[np.ndarray]
+    origin_translation: np.ndarray
+    joint: int
+    kind: str
+    axis: np.ndarray
+    axis_coordinate: int
+    axis_sign: float
+    has_offset: bool
+
+
+class BodyKinematics:
+    """Batched forward kinematics as link rotations and positions, fast for small batches.
+
+    Equivalent to :meth:`Skeleton.forward_kinematics`, but it keeps rotations (3, 3) and
+    positions (3,) apart, rotates about coordinate axes by mixing two columns, and can re-evaluate
+    only a subtree, which is what a branch planner needs on its hot path.
+
+    Parameters
+    ----------
+    skeleton
+        The actor model.
+
+    """
+
+    def __init__(self, skeleton: Skeleton):
+        self.skeleton = skeleton
+        order = {name: i for i, name in enumerate(skeleton.link_names)}
+        joints = sorted(skeleton.joints, key=lambda j: order[j.child])
+        steps = []
+        for joint in joints:
+            rotation = joint.origin[:3, :3]
+            coordinate, sign = _axis_code(joint.axis)
+            steps.append(_Step(
+                parent=order[joint.parent], child=order[joint.child],
+                origin_rotation=None if np.allclose(rotation, np.eye(3)) else rotation.copy(),
+                origin_translation=joint.origin[:3, 3].copy(),
+                joint=skeleton.index.get(joint.name, -1), kind=joint.kind, axis=joint.axis,
+                axis_coordinate=coordinate, axis_sign=sign,
+                has_offset=bool(np.any(joint.origin[:3, 3] != 0.0))))
+        self.steps: Tuple[_Step, ...] = tuple(steps)
+        self.link_count = len(skeleton.link_names)
+
+    def subtree_steps(self, joint_names: Sequence[str]) -> Tuple[_Step, ...]:
+        """Return the steps that move when any of the named joints moves, in evaluation order."""
+        moving = set()
+        for name in joint_names:
+            moving.add(self.skeleton.link_index[
+                next(j.child for j in self.skeleton.joints if j.name == name)])
+        out = []
+        for step in self.steps:
+            if step.child in moving or step.parent in moving:
+                moving.add(step.child)
+                out.append(step)
+        return tuple(out)
+
+    def poses(self, q: np.ndarray, rotations: Optional[np.ndarray] = None,
+              positions: Optional[np.ndarray] = None,
+              steps: Optional[Sequence[_Step]] = None) -> Tuple[np.ndarray, np.ndarray]:
+        """Link poses for a batch of configurations.
+
+        Parameters
+        ----------
+        q
+            (k, 22) configurations, rad or m.
+        rotations, positions
+            (k, L, 3, 3) and (k, L, 3) poses to update in place (only ``steps`` are evaluated);
+            allocated and fully evaluated when omitted.
+        steps
+            The joint steps to evaluate, in order (default: all).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            Rotations (k, L, 3, 3) (columns are the link axes in the world frame) and positions
+            (k, L, 3), m, in ``skeleton.link_names`` order.
+
+        """
+        k = q.shape[0]
+        if rotations is None:
+            rotations = np.empty((k, self.link_count, 3, 3))
+            positions = np.empty((k, self.link_count, 3))
+            rotations[:, 0] = np.eye(3)
+            positions[:, 0] = 0.0
+        for step in (self.steps if steps is None else steps):
+            parent_rotation = rotations[:, step.parent]
+            base_position = positions[:, step.parent]
+            if step.has_offset:
+                base_position = base_position + parent_rotation @ step.origin_translation
+            base = (parent_rotation if step.origin_rotation is None
+                    else parent_rotation @ step.origin_rotation)
+            if step.joint < 0:
+                rotations[:, step.child] = base
+                positions[:, step.child] = base_position
+                continue
+            value = q[:, step.joint]
+            if step.kind == 'prismatic':
+                rotations[:, step.child] = base
+                positions[:, step.child] = base_position + (base @ step.axis) * value[:, None]
+                continue
+            positions[:, step.child] = base_position
+            coordinate = step.axis_coordinate
+            if coordinate < 0:
+                rotations[:, step.child] = base @ _rodrigues(step.axis, value)
+                continue
+            angle = step.axis_sign * value
+            cos, sin = np.cos(angle)[:, None], np.sin(angle)[:, None]
+            # Right-multiplying by a rotation about axis e_c mixes the other two columns.
+            a, b = (coordinate + 1) % 3, (coordinate + 2) % 3
+            out = rotations[:, step.child]
+            out[:, :, coordinate] = base[:, :, coordinate]
+            column_a, column_b = base[:, :, a], base[:, :, b]
+            out[:, :, a] = column_a * cos + column_b * sin
+            out[:, :, b] = column_b * cos - column_a * sin
+        return rotations, positions
+
+
+def _rodrigues(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    x, y, z = axis
+    c, s = np.cos(angle), np.sin(angle)
+    t = 1.0 - c
+    out = np.empty(angle.shape + (3, 3))
+    out[..., 0, 0] = t * x * x + c
+    out[..., 0, 1] = t * x * y - s * z
+    out[..., 0, 2] = t * x * z + s * y
+    out[..., 1, 0] = t * x * y + s * z
+    out[..., 1, 1] = t * y * y + c
+    out[..., 1, 2] = t * y * z - s * x
+    out[..., 2, 0] = t * x * z - s * y
+    out[..., 2, 1] = t * y * z + s * x
+    out[..., 2, 2] = t * z * z + c
+    return out
+
+
+class BodyShapes:
+    """The actor's collision shapes: FCL objects, box bounds and the pairs worth checking.
+
+    Parameters
+    ----------
+    skeleton
+        The actor model.
+    padding
+        Safety margin added to every shape, m (>= 0).
+
+    """
+
+    def __init__(self, skeleton: Skeleton, padding: float = 0.0):
+        if not (np.isfinite(padding) and padding >= 0.0):
+            raise ValueError(f'padding must be a finite distance >= 0 m, got {padding}')
+        self.skeleton = skeleton
+        self.padding = float(padding)
+        shapes = skeleton.collision_shapes
+        self.link = np.array([skeleton.link_index[s.link] for s in shapes])
+        self.origin_rotation = np.stack([s.origin[:3, :3] for s in shapes])
+        self.origin_translation = np.stack([s.origin[:3, 3] for s in shapes])
+        self.kind = tuple(s.kind for s in shapes)
+        self.objects = []
+        # Per-shape parameters of the box bound: half extents (box), (radius, half length)
+        # (cylinder) or radius (sphere), all padded.
+        self.half = np.zeros((len(shapes), 3))
+        for i, shape in enumerate(shapes):
+            if shape.kind == 'box':
+                half = np.asarray(shape.size) / 2 + padding
+                geometry = fcl.Box(*(2 * half))
+            elif shape.kind == 'cylinder':
+                half = np.array([shape.size[0] + padding, shape.size[1] / 2 + padding, 0.0])
+                geometry = fcl.Cylinder(half[0], 2 * half[1])
+            else:
+                half = np.array([shape.size[0] + padding, 0.0, 0.0])
+                geometry = fcl.Sphere(half[0])
+            self.half[i] = half
+            self.objects.append(fcl.CollisionObject(geometry, fcl.Transform()))
+        self.is_box = np.array([k == 'box' for k in self.kind])
+        self.is_cylinder = np.array([k == 'cylinder' for k in self.kind])
+        self.is_sphere = np.array([k == 'sphere' for k in self.kind])
+        self._tree_distance = self._link_tree_distances()
+
+    def _link_tree_distances(self) -> np.ndarray:
+        names = self.skeleton.link_names
+        neighbours: Dict[int, List[int]] = {i: [] for i in range(len(names))}
+        index = self.skeleton.link_index
+        for joint in self.skeleton.joints:
+            a, b = index[joint.parent], index[joint.child]
+            neighbours[a].append(b)
+            neighbours[b].append(a)
+        distance = np.full((len(names), len(names)), np.iinfo(np.int32).max // 2)
+        for start in range(len(names)):
+            distance[start, start] = 0
+            frontier = [start]
+            while frontier:
+                nxt = []
+                for a in frontier:
+                    for b in neighbours[a]:
+                        if distance[start, b] > distance[start, a] + 1:
+                            distance[start, b] = distance[start, a] + 1
+                            nxt.append(b)
+                frontier = nxt
+        return distance
+
+    def shapes_of(self, link_names: Sequence[str]) -> np.ndarray:
+        """Indices of the shapes attached to the named links: (n,) int."""
+        links = [self.skeleton.link_index[name] for name in link_names]
+        return np.flatnonzero(np.isin(self.link, links))
+
+    def pairs(self, shapes_a: np.ndarray, shapes_b: np.ndarray) -> np.ndarray:
+        """Shape pairs (a, b) on links more than ``ADJACENT_JOINTS`` joints apart: (P, 2) int."""
+        a, b = np.meshgrid(shapes_a, shapes_b, indexing='ij')
+        a, b = a.ravel(), b.ravel()
+        keep = self._tree_distance[self.link[a], self.link[b]] > ADJACENT_JOINTS
+        return np.stack([a[keep], b[keep]], axis=1)
+
+    def poses(self, rotations: np.ndarray, positions: np.ndarray,
+              shapes: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+        """World poses of some shapes: rotations (k, n, 3, 3) and centres (k, n, 3), m."""
+        link_rotation = rotations[:, self.link[shapes]]
+        centre = positions[:, self.link[shapes]] + (
+            link_rotation @ self.origin_translation[shapes][:, :, None])[..., 0]
+        rotation = link_rotation @ self.origin_rotation[shapes]
+        return rotation, centre
+
+    def bounds(self, rotation: np.ndarray, centre: np.ndarray,
+               shapes: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+        """Axis-aligned boxes around shapes posed at (k, n): lower and upper corners (k, n, 3)."""
+        half = self.half[shapes]
+        extent = np.empty(centre.shape)
+        box = self.is_box[shapes]
+        if box.any():
+            extent[:, box] = (np.abs(rotation[:, box]) @ half[box][:, :, None])[..., 0]
+        cylinder = self.is_cylinder[shapes]
+        if cylinder.any():
+            axis = np.abs(rotation[:, cylinder][..., 2])
+            radius, half_length = half[cylinder, 0, None], half[cylinder, 1, None]
+            extent[:, cylinder] = (radius * np.sqrt(np.clip(1.0 - axis * axis, 0.0, 1.0))
+                                   + half_length * axis)
+        sphere = self.is_sphere[shapes]
+        if sphere.any():
+            extent[:, sphere] = half[sphere, 0, None]
+        return centre - extent, centre + extent
+
+    def collides(self, shape: int, rotation: np.ndarray, centre: np.ndarray,
+                 other) -> bool:
+        """Narrow phase: does shape ``shape`` posed at (rotation, centre) touch ``other``?"""
+        obj = self.objects[shape]
+        obj.setTransform(fcl.Transform(rotation, centre))
+        result = fcl.CollisionResult()
+        fcl.collide(obj, other, fcl.CollisionRequest(), result)
+        return bool(result.is_collision)
+
+
+class EnvironmentIndex:
+    """The environment's triangles as boxes for the broad phase, and FCL models per mesh.
+
+    Parameters
+    ----------
+    meshes
+        trimesh.Trimesh objects (world frame, m).
+    objects
+        Optional FCL collision objects, one per mesh (e.g. from ``BodyCollision``); built from
+        the meshes when omitted.
+
+    """
+
+    def __init__(self, meshes: Sequence, objects: Optional[Sequence] = None):
+        lower, upper, owner = [], [], []
+        built = []
+        for i, mesh in enumerate(meshes):
+            vertices = np.asarray(mesh.vertices, dtype=float)
+            faces = np.asarray(mesh.faces, dtype=int)
+            if len(faces) == 0:
+                continue
+            if not np.all(np.isfinite(vertices)):
+                raise ValueError(f'environment mesh {i} has non-finite vertices')
+            triangles = vertices[faces]
+            lower.append(triangles.min(axis=1))
+            upper.append(triangles.max(axis=1))
+            owner.append(np.full(len(faces), i))
+            if objects is None:
+                model = fcl.BVHModel()
+                model.beginModel(len(vertices), len(faces))
+                model.addSubModel(vertices, faces)
+                model.endModel()
+                built.append(fcl.CollisionObject(model, fcl.Transform()))
+        self.objects = list(objects) if objects is not None else built
+        if objects is not None and len(self.objects) != len(meshes):
+            raise ValueError(f'{len(self.objects)} FCL objects for {len(meshes)} meshes')
+        if lower:
+            self.lower = np.concatenate(lower)
+            self.upper = np.concatenate(upper)
+            self.owner = np.concatenate(owner)
+        else:
+            self.lower = np.zeros((0, 3))
+            self.upper = np.zeros((0, 3))
+            self.owner = np.zeros(0, dtype=int)
+        if objects is None:
+            # Map mesh index -> object index (empty meshes were skipped).
+            kept = [i for i, mesh in enumerate(meshes) if len(mesh.faces)]
+            self._object_of = {mesh: j for j, mesh in enumerate(kept)}
+        else:
+            self._object_of = {i: i for i in range(len(meshes))}
+
+    def object_of(self, mesh: int):
+        """The FCL object of mesh ``mesh``."""
+        return self.objects[self._object_of[mesh]]
+
+    def triangles_near(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+        """Indices of triangles whose boxes overlap the box [lower, upper] (3,) m."""
+        hit = np.all((self.upper >= lower) & (self.lower <= upper), axis=1)
+        return np.flatnonzero(hit)
+
+
+class TimedBody:
+    """The actor over the frames of one step, as far as it is fixed, with fast branch checks.
+
+    Holds the link poses at every frame for the current frames (lower body, root and the
+    branches planned so far) and answers, for one branch, which frames of a candidate motion are
+    in collision.
+
+    Parameters
+    ----------
+    kinematics, shapes, environment
+        Shared model objects.
+    frames
+        (k, 22) configurations, rad or m.
+
+    """
+
+    def __init__(self, kinematics: BodyKinematics, shapes: BodyShapes,
+                 environment: EnvironmentIndex, frames: np.ndarray):
+        self.kinematics = kinematics
+        self.shapes = shapes
+        self.environment = environment
+        self.frames = np.array(frames, dtype=float)
+        self.rotations, self.positions = kinematics.poses(self.frames)
+
+    def set_branch(self, indices: np.ndarray, values: np.ndarray,
+                   steps: Sequence[_Step]) -> None:
+        """Fix a planned branch: write its (k, d) values and update the poses of its subtree."""
+        self.frames[:, indices] = values
+        self.kinematics.poses(self.frames, self.rotations, self.positions, steps)
+
+
+class CTSpace:
+    """Configuration-time space of one branch, with OMPL-shaped queries (paper §5.2).
+
+    Parameters
+    ----------
+    branch
+        'waist', 'left_arm' or 'right_arm'.
+    body
+        The actor over the step, with the earlier branches already fixed.
+    times
+        (k,) frame times, s, strictly increasing.
+    objective
+        (k, d) the branch's objective configurations O(t_i), rad.
+    checked_links
+        Links whose shapes are this branch's responsibility.
+    obstacle_links
+        Links of the actor's own body this branch must not touch (adjacent ones are skipped).
+    time_weight
+        Weight of time in :meth:`distance`, rad/s.
+
+    """
+
+    def __init__(self, branch: str, body: TimedBody, times: np.ndarray, objective: np.ndarray,
+                 checked_links: Sequence[str], obstacle_links: Sequence[str],
+                 time_weight: float = 1.0):
+        skeleton = body.kinematics.skeleton
+        self.branch = branch
+        self.body = body
+        self.indices = skeleton.branch(branch)
+        self.joint_names = tuple(skeleton.joint_names[i] for i in self.indices)
+        self.times = np.asarray(times, dtype=float)
+        self.objective = np.asarray(objective, dtype=float)
+        k, d = self.objective.shape
+        if self.times.shape != (k,) or d != len(self.indices):
+            raise ValueError(f'objective shape {self.objective.shape} does not match times '
+                             f'{self.times.shape} and branch {branch!r} ({len(self.indices)})')
+        self.lower = skeleton.lower[self.indices]
+        self.upper = skeleton.upper[self.indices]
+        self.speed_limit = skeleton.velocity_limit[self.indices]
+        self.time_weight = float(time_weight)
+        self.steps = body.kinematics.subtree_steps(self.joint_names)
+        moving = {step.child for step in self.steps}
+        shapes = body.shapes
+        self.checked = shapes.shapes_of(checked_links)
+        self.checked = self.checked[np.isin(shapes.link[self.checked], list(moving))]
+        obstacle = shapes.shapes_of(obstacle_links)
+        self.pairs = shapes.pairs(self.checked, obstacle)
+        # The obstacle shapes do not move while this branch is planned: bound them once.
+        rotation, centre = shapes.poses(body.rotations, body.positions, self.pairs[:, 1])
+        self._pair_rotation, self._pair_centre = rotation, centre
+        self._pair_lower, self._pair_upper = shapes.bounds(rotation, centre, self.pairs[:, 1])
+        self._pair_column = np.searchsorted(self.checked, self.pairs[:, 0])
+        self._prepare_environment()
+        self.checks = 0
+
+    def _prepare_environment(self) -> None:
+        """Keep only triangles the branch could reach during the step (§5: broad phase)."""
+        shapes = self.body.shapes
+        env = self.body.environment
+        root = self.steps[0].parent if self.steps else 0
+        centre = self.body.positions[:, root]
+        # Reach: the farthest any checked shape point can get from the branch's root link
+        # origin in any configuration, summed along the chain.
+        link_reach = {root: 0.0}
+        for step in self.steps:
+            link_reach[step.child] = (link_reach.get(step.parent, 0.0)
+                                      + float(np.linalg.norm(step.origin_translation)))
+        reach = 0.0
+        for shape in self.checked:
+            radius = float(np.linalg.norm(shapes.half[shape]))
+            offset = float(np.linalg.norm(shapes.origin_translation[shape]))
+            reach = max(reach, link_reach.get(int(shapes.link[shape]), 0.0) + offset + radius)
+        lower = centre.min(axis=0) - reach
+        upper = centre.max(axis=0) + reach
+        near = env.triangles_near(lower, upper)
+        self._triangle_lower = env.lower[near]
+        self._triangle_upper = env.upper[near]
+        self._triangle_owner = env.owner[near]
+
+    # -- OMPL-shaped space ---------------------------------------------------------------
+    @property
+    def dimension(self) -> int:
+        """Number of branch joints d."""
+        return len(self.indices)
+
+    @property
+    def bounds(self) -> Tuple[np.ndarray, np.ndarray]:
+        """Joint bounds (lower (d,), upper (d,)), rad."""
+        return self.lower, self.upper
+
+    @property
+    def frame_count(self) -> int:
+        """Number of frames k of the time grid."""
+        return len(self.times)
+
+    def distance(self, a: Tuple[np.ndarray, int], b: Tuple[np.ndarray, int]) -> float:
+        """Distance between CT states: joint distance (rad) plus weighted time gap."""
+        (qa, ia), (qb, ib) = a, b
+        return float(np.linalg.norm(np.asarray(qa) - np.asarray(qb))
+                     + self.time_weight * abs(self.times[ib] - self.times[ia]))
+
+    def deviation(self, q: np.ndarray, i: int) -> np.ndarray:
+        """Deviation of configuration(s) q from the objective at frame(s) i: same shape, rad."""
+        return np.asarray(q) - self.objective[i]
+
+    def motion_frames(self, a: Tuple[np.ndarray, int], b: Tuple[np.ndarray, int]) -> np.ndarray:
+        """Configurations at frames ia..ib of the motion a -> b: (ib - ia + 1, d), rad.
+
+        Interpolates the deviation from the objective linearly in time, so a motion between
+        states on the objective follows it exactly.
+        """
+        (qa, ia), (qb, ib) = a, b
+        frames = np.arange(ia, ib + 1)
+        da = np.asarray(qa) - self.objective[ia]
+        db = np.asarray(qb) - self.objective[ib]
+        span = self.times[ib] - self.times[ia]
+        s = (self.times[frames] - self.times[ia]) / span if span > 0 else np.zeros(len(frames))
+        return self.objective[frames] + da + s[:, None] * (db - da)
+
+    def interpolate(self, a: Tuple[np.ndarray, int], b: Tuple[np.ndarray, int],
+                    s: float) -> Tuple[np.ndarray, float]:
+        """State a fraction s in [0, 1] of the way from a to b: (q (d,), t s)."""
+        (qa, ia), (qb, ib) = a, b
+        t = (1 - s) * self.times[ia] + s * self.times[ib]
+        objective = np.array([np.interp(t, self.times, column) for column in self.objective.T])
+        da = np.asarray(qa) - self.objective[ia]
+        db = np.asarray(qb) - self.objective[ib]
+        return objective + da + s * (db - da), t
+
+    def within_bounds(self, q: np.ndarray) -> np.ndarray:
+        """Whether each configuration is within the joint limits: (...,) bool."""
+        return np.all((q >= self.lower - 1e-9) & (q <= self.upper + 1e-9), axis=-1)
+
+    def is_valid(self, q: np.ndarray, i: int) -> bool:
+        """Whether branch configuration q (d,) is legal at frame i (limits, no collision)."""
+        return self.first_invalid(np.asarray(q, dtype=float)[None], np.array([i])) < 0
+
+    def check_motion(self, a: Tuple[np.ndarray, int], b: Tuple[np.ndarray, int]) -> bool:
+        """Whether the motion a -> b is legal (forward in time, speeds, collision-free)."""
+        return self.first_invalid_motion(a, b) < 0
+
+    def first_invalid_motion(self, a: Tuple[np.ndarray, int],
+                             b: Tuple[np.ndarray, int]) -> int:
+        """First illegal frame of the motion a -> b, or -1 when it is legal.
+
+        A motion backwards or standing still in time is illegal at ``a``'s frame; a speed
+        violation is reported at the frame it ends on.
+        """
+        _, failures = self.first_legal_motion(a, [b])
+        return failures[0]
+
+    def first_legal_motion(self, a: Tuple[np.ndarray, int],
+                           goals: Sequence[Tuple[np.ndarray, int]]) -> Tuple[int, List[int]]:
+        """Check motions from ``a`` to each goal in order; stop at the first legal one.
+
+        The broad phase of all motions runs in one batch; the narrow phase runs goal by goal.
+
+        Returns
+        -------
+        tuple
+            (index of the first legal goal or -1, first illegal frame of each goal checked,
+            -1 for the legal one).
+
+        """
+        qa, ia = a
+        rows, frames, segments, early = [], [], [], []
+        for qb, ib in goals:
+            if ib <= ia:
+                segments.append((0, 0))
+                early.append(ia)
+                continue
+            path = self.motion_frames((qa, ia), (qb, ib))
+            speed = np.abs(np.diff(path, axis=0)) / np.diff(self.times[ia:ib + 1])[:, None]
+            too_fast = np.flatnonzero(np.any(speed > self.speed_limit * (1 + SPEED_TOLERANCE),
+                                             axis=1))
+            end = ib if not len(too_fast) else ia + 1 + int(too_fast[0])
+            begin = sum(len(r) for r in rows)
+            rows.append(path[1:end - ia + 1] if not len(too_fast) else path[1:end - ia])
+            frames.append(np.arange(ia + 1, ia + 1 + len(rows[-1])))
+            segments.append((begin, begin + len(rows[-1])))
+            early.append(-1 if not len(too_fast) else end)
+        if rows:
+            q = np.concatenate(rows)
+            frame_index = np.concatenate(frames)
+        else:
+            q, frame_index = np.zeros((0, self.dimension)), np.zeros(0, dtype=int)
+        failures = []
+        for i, bad in enumerate(self._check_segments(q, frame_index, segments, early,
+                                                     stop_at_legal=True)):
+            failures.append(bad)
+            if bad < 0:
+                return i, failures
+        return -1, failures
+
+    def first_invalid(self, q: np.ndarray, frames: np.ndarray) -> int:
+        """Row of the first illegal configuration in a batch, or -1 when all are legal.
+
+        Parameters
+        ----------
+        q
+            (m, d) branch configurations, rad.
+        frames
+            (m,) frame index of each row, in increasing order.
+
+        Returns
+        -------
+        int
+            The first row outside the joint limits or in collision with the environment or the
+            rest of the actor, or -1.
+
+        """
+        frames = np.asarray(frames)
+        bad = next(self._check_segments(np.asarray(q, dtype=float), frames,
+                                        [(0, len(frames))], [-1], False))
+        return -1 if bad < 0 else int(np.searchsorted(frames, bad))
+
+    def valid_rows(self, q: np.ndarray, frames: np.ndarray) -> np.ndarray:
+        """Legality of each configuration of a batch: (m,) bool.
+
+        Parameters
+        ----------
+        q
+            (m, d) branch configurations, rad.
+        frames
+            (m,) frame index of each row, any order.
+
+        """
+        frames = np.asarray(frames)
+        segments = [(i, i + 1) for i in range(len(frames))]
+        return np.array([bad < 0 for bad in self._check_segments(
+            np.asarray(q, dtype=float), frames, segments, [-1] * len(frames), False)],
+            dtype=bool)
+
+    def _check_segments(self, q: np.ndarray, frames: np.ndarray,
+                        segments: Sequence[Tuple[int, int]], early: Sequence[int],
+                        stop_at_legal: bool):
+        """Yield, per segment of rows, the frame of its first illegal row or -1.
+
+        The broad phase (limits, boxes) runs over all rows at once; the narrow phase in FCL runs
+        segment by segment, in row order, stopping a segment at its first collision. A segment
+        with ``early[i] >= 0`` is illegal at that frame if its rows are all legal. With
+        ``stop_at_legal`` nothing after the first legal segment is checked.
+        """
+        m = len(frames)
+        self.checks += m
+        if m:
+            inside = self.within_bounds(q)
+            suspects = self._broad_phase(q, frames)
+        for (begin, end), late in zip(segments, early):
+            bad = -1
+            for row in range(begin, end):
+                if not inside[row] or self._narrow_phase(row, frames[row], suspects):
+                    bad = int(frames[row])
+                    break
+            if bad < 0 and late >= 0:
+                bad = int(late)
+            yield bad
+            if stop_at_legal and bad < 0:
+                return
+
+    def _broad_phase(self, q: np.ndarray, frames: np.ndarray) -> tuple:
+        """Boxes of the branch's shapes against triangles and body shapes, all rows at once."""
+        body = self.body
+        full = body.frames[frames]
+        full[:, self.indices] = q
+        rotations = body.rotations[frames]
+        positions = body.positions[frames]
+        body.kinematics.poses(full, rotations, positions, self.steps)
+        shapes = body.shapes
+        rotation, centre = shapes.poses(rotations, positions, self.checked)
+        low, high = shapes.bounds(rotation, centre, self.checked)
+        suspects: Dict[int, list] = {}
+        if len(self._triangle_lower):
+            # (m, n, T) overlap of shape boxes with triangle boxes.
+            overlap = np.all((high[:, :, None] >= self._triangle_lower[None, None])
+                             & (low[:, :, None] <= self._triangle_upper[None, None]), axis=-1)
+            rows, columns, triangles = np.nonzero(overlap)
+            owners = self._triangle_owner[triangles]
+            for row, column, owner in sorted(set(zip(rows.tolist(), columns.tolist(),
+                                                     owners.tolist()))):
+                suspects.setdefault(row, []).append((column, -1 - owner))
+        if len(self.pairs):
+            pair_overlap = np.all((high[:, self._pair_column] >= self._pair_lower[frames])
+                                  & (low[:, self._pair_column] <= self._pair_upper[frames]),
+                                  axis=-1)
+            for row, pair in zip(*np.nonzero(pair_overlap)):
+                suspects.setdefault(int(row), []).append((int(self._pair_column[pair]),
+                                                          int(pair)))
+        return suspects, rotation, centre
+
+    def _narrow_phase(self, row: int, frame: int, broad: tuple) -> bool:
+        """Whether any suspect pair of one row really collides (FCL)."""
+        suspects, rotation, centre = broad
+        shapes = self.body.shapes
+        for column, other in suspects.get(row, ()):
+            shape = int(self.checked[column])
+            if other < 0:
+                target = self.body.environment.object_of(-1 - other)
+            else:
+                target = shapes.objects[int(self.pairs[other, 1])]
+                target.setTransform(fcl.Transform(self._pair_rotation[frame, other],
+                                                  self._pair_centre[frame, other]))
+            if shapes.collides(shape, rotation[row, column], centre[row, column], target):
+                return True
+        return False
