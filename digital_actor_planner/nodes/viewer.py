@@ -1,0 +1,853 @@
+"""Browser viewer node: the actor, its course and a drag pad in a web page served by viser.
+
+Like RViz, it is only a ROS 2 client: it subscribes to ``robot_description``, ``joint_states``,
+the planner's markers and path and ``/diagnostics``, and publishes ``cmd_vel`` from the drag pad
+(paper §3: the vertical part of a dragged vector is the forward speed, the horizontal part the turn
+rate). The pure helpers at the top (drag mapping, status text, marker conversion, scene list, port
+choice) hold the logic; the node only wires them to topics and to the page.
+"""
+from __future__ import annotations
+
+import argparse
+from collections import deque
+from dataclasses import dataclass
+import glob
+import io
+import math
+import os
+import socket
+import sys
+import threading
+import time
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+PACKAGE_NAME = 'digital_actor_planner'
+ROOT_JOINTS = ('root_x', 'root_y', 'root_z', 'root_yaw')
+PLANNER_NODE = 'actor_planner'
+
+
+# ----------------------------------------------------------------------------------------------
+# Pure helpers (no ROS, no browser)
+# ----------------------------------------------------------------------------------------------
+
+def drag_to_command(start: Sequence[float], end: Sequence[float], span: float,
+                    max_linear_speed: float, max_angular_speed: float) -> Tuple[float, float]:
+    """Map a drag on the pad to a velocity command (paper §3, teleop_tools mouse_teleop signs).
+
+    Parameters
+    ----------
+    start, end : (2,) screen positions of the press and of the pointer now, in pixels, x to the
+        right and y down.
+    span : drag length in pixels that gives full speed; longer drags are clamped.
+    max_linear_speed, max_angular_speed : m/s and rad/s at full deflection.
+
+    Returns
+    -------
+    (linear_x m/s, angular_z rad/s): dragging up walks forward, dragging left turns left.
+    """
+    if not (span > 0.0 and math.isfinite(span)):
+        raise ValueError(f'drag span must be a positive number of pixels, got {span!r}')
+    for name, value in (('max_linear_speed', max_linear_speed),
+                        ('max_angular_speed', max_angular_speed)):
+        if not (value >= 0.0 and math.isfinite(value)):
+            raise ValueError(f'{name} must be a finite speed >= 0, got {value!r}')
+    dx = float(end[0]) - float(start[0])
+    dy = float(end[1]) - float(start[1])
+    if not (math.isfinite(dx) and math.isfinite(dy)):
+        raise ValueError(f'drag positions must be finite, got {start!r} -> {end!r}')
+    forward = min(1.0, max(-1.0, -dy / span))
+    turn_left = min(1.0, max(-1.0, -dx / span))
+    return forward * max_linear_speed, turn_left * max_angular_speed
+
+
+class StreamMonitor:
+    """Arrival times of ``joint_states``: the stream rate and whether the planner went silent."""
+
+    def __init__(self, window: float = 2.0):
+        if not window > 0.0:
+            raise ValueError(f'rate window must be > 0 s, got {window!r}')
+        self.window = window
+        self._arrivals: deque = deque()
+        self.last_arrival: Optional[float] = None
+
+    def add(self, now: float) -> None:
+        """Record one message received at ``now`` (s, monotonic)."""
+        self._arrivals.append(now)
+        self.last_arrival = now
+        while self._arrivals and self._arrivals[0] < now - self.window:
+            self._arrivals.popleft()
+
+    def rate(self, now: float) -> float:
+        """Messages per second over the last ``window`` s (0 when silent)."""
+        while self._arrivals and self._arrivals[0] < now - self.window:
+            self._arrivals.popleft()
+        if len(self._arrivals) < 2:
+            return 0.0
+        span = self._arrivals[-1] - self._arrivals[0]
+        return (len(self._arrivals) - 1) / span if span > 0 else 0.0
+
+    def silent_for(self, now: float) -> Optional[float]:
+        """Seconds since the last message, or None if none ever arrived."""
+        return None if self.last_arrival is None else now - self.last_arrival
+
+
+@dataclass(frozen=True)
+class PlannerDiagnostics:
+    """What the planner reported last on /diagnostics."""
+
+    state: str = ''
+    reason: str = ''
+    planning_time_ms: Optional[float] = None
+
+
+def parse_planner_diagnostics(statuses, node_name: str) -> Optional[PlannerDiagnostics]:
+    """Pick the planner's status out of a DiagnosticArray's ``status`` list.
+
+    A status belongs to the planner when its name or hardware id contains ``node_name``. The state
+    comes from a ``state`` key (else the message's first word), the reason from ``reason``
+    (else the rest of the message) and the planning time from the first key naming the last
+    (or else the median) planning time, in ms or s as the key says.
+    """
+    for status in statuses:
+        if node_name not in status.name and node_name not in status.hardware_id:
+            continue
+        values = {kv.key.strip().lower(): kv.value.strip() for kv in status.values}
+        message = status.message.strip()
+        state = values.get('state', '')
+        reason = values.get('reason', '')
+        if not state and message:
+            state = message.split()[0].rstrip(':,').lower()
+            reason = reason or message[len(state):].strip(' :,')
+        planning = None
+        for key in sorted(values, key=lambda k: ('last' not in k, 'p50' not in k, k)):
+            if 'planning' in key and 'time' in key:
+                planning = _to_ms(key, values[key])
+                if planning is not None:
+                    break
+        return PlannerDiagnostics(state=state.lower(), reason=reason, planning_time_ms=planning)
+    return None
+
+
+def _to_ms(key: str, text: str) -> Optional[float]:
+    try:
+        value = float(text.split()[0])
+    except (ValueError, IndexError):
+        return None
+    in_ms = 'ms' in key or text.endswith('ms')
+    return value if in_ms else value * 1000.0
+
+
+def status_text(now: float, stream: StreamMonitor, diagnostics: Optional[PlannerDiagnostics],
+                planner_present: bool, silence_limit: float = 1.0) -> str:
+    """The status line shown in the page (plain text; the page renders it as markdown)."""
+    silent = stream.silent_for(now)
+    if silent is None:
+        note = '' if planner_present else ' (no planner found)'
+        return f'waiting for joint_states{note}'
+    if silent > silence_limit:
+        why = 'planner stopped' if not planner_present else 'planner not publishing'
+        return f'{why}: no joint_states for {silent:.1f} s'
+    parts = []
+    if diagnostics is not None and diagnostics.state:
+        state = diagnostics.state
+        if diagnostics.reason and state != 'walking':
+            state += f' ({diagnostics.reason})'
+        parts.append(state)
+        if diagnostics.planning_time_ms is not None:
+            parts.append(f'planning {diagnostics.planning_time_ms:.1f} ms')
+    else:
+        parts.append('no diagnostics yet')
+    parts.append(f'stream {stream.rate(now):.0f} Hz')
+    return ' · '.join(parts)
+
+
+def shipped_scenes(directory: Optional[str] = None) -> Dict[str, str]:
+    """Every shipped course: {name: absolute path of config/scenes/<name>.yaml}, sorted by name."""
+    if directory is None:
+        directory = scenes_directory()
+    paths = sorted(glob.glob(os.path.join(directory, '*.yaml')))
+    return {os.path.splitext(os.path.basename(p))[0]: os.path.abspath(p) for p in paths}
+
+
+def scenes_directory() -> str:
+    """The package's config/scenes folder, in a source tree or an install."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    candidates = [os.path.join(here, '..', '..', 'config', 'scenes'),
+                  os.path.join(sys.prefix, 'share', PACKAGE_NAME, 'config', 'scenes')]
+    prefix = here
+    for _ in range(6):
+        prefix = os.path.dirname(prefix)
+        candidates.append(os.path.join(prefix, 'share', PACKAGE_NAME, 'config', 'scenes'))
+    for path in candidates:
+        if os.path.isdir(path):
+            return os.path.normpath(path)
+    return os.path.normpath(candidates[0])
+
+
+def pick_port(host: str, port: int, attempts: int = 100) -> int:
+    """Return ``port`` if it is free on ``host``, else the next free one (raises if none)."""
+    if not 0 < port < 65536:
+        raise ValueError(f'port must be in 1..65535, got {port!r}')
+    for candidate in range(port, min(port + attempts, 65536)):
+        with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+            try:
+                probe.bind((host, candidate))
+            except OSError:
+                continue
+            return candidate
+    raise OSError(f'no free port on {host} in {port}..{port + attempts - 1}')
+
+
+def triangle_list_mesh(points: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+    """A TRIANGLE_LIST marker's points (3k, 3) as (vertices (3k, 3) float32, faces (k, 3))."""
+    points = np.asarray(points, dtype=np.float64)
+    if points.ndim != 2 or points.shape[1] != 3 or points.shape[0] % 3:
+        raise ValueError(f'TRIANGLE_LIST needs 3k points of (x, y, z), got shape {points.shape}')
+    count = points.shape[0] // 3
+    return points.astype(np.float32), np.arange(3 * count, dtype=np.uint32).reshape(count, 3)
+
+
+def polyline_segments(points: np.ndarray) -> np.ndarray:
+    """A polyline (p, 3) as line segments (p - 1, 2, 3) for the page."""
+    points = np.asarray(points, dtype=np.float32)
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise ValueError(f'polyline needs (p, 3) points, got shape {points.shape}')
+    if len(points) < 2:
+        return np.zeros((0, 2, 3), dtype=np.float32)
+    return np.stack([points[:-1], points[1:]], axis=1)
+
+
+def quaternion_xyzw_to_wxyz(q) -> Tuple[float, float, float, float]:
+    """Convert a geometry_msgs quaternion to viser's (w, x, y, z); zero means identity."""
+    w, x, y, z = float(q.w), float(q.x), float(q.y), float(q.z)
+    norm = math.sqrt(w * w + x * x + y * y + z * z)
+    if norm < 1e-9 or not math.isfinite(norm):
+        return (1.0, 0.0, 0.0, 0.0)
+    return (w / norm, x / norm, y / norm, z / norm)
+
+
+def pad_pose(camera_position: np.ndarray, camera_wxyz: np.ndarray, fov: float, aspect: float,
+             screen_uv: Tuple[float, float], depth: float) -> np.ndarray:
+    """World position of a point drawn at normalized screen position ``screen_uv`` (x right, y
+    down, 0..1) at ``depth`` m in front of a camera (OpenCV axes: z forward, y down)."""
+    w, x, y, z = np.asarray(camera_wxyz, dtype=np.float64)
+    rotation = np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    half_height = math.tan(fov / 2.0)
+    ray = np.array([(2.0 * screen_uv[0] - 1.0) * half_height * aspect,
+                    (2.0 * screen_uv[1] - 1.0) * half_height, 1.0])
+    return np.asarray(camera_position, dtype=np.float64) + rotation @ (depth * ray)
+
+
+def disc_mesh(radius: float, segments: int = 40) -> Tuple[np.ndarray, np.ndarray]:
+    """A flat disc in the xy plane: vertices (segments + 1, 3) float32, faces (segments, 3)."""
+    angles = np.linspace(0.0, 2.0 * math.pi, segments, endpoint=False)
+    rim = np.stack([radius * np.cos(angles), radius * np.sin(angles), np.zeros(segments)], 1)
+    vertices = np.vstack([np.zeros((1, 3)), rim]).astype(np.float32)
+    faces = np.array([[0, 1 + i, 1 + (i + 1) % segments] for i in range(segments)],
+                     dtype=np.uint32)
+    return vertices, faces
+
+
+def marker_color(marker) -> Tuple[Tuple[int, int, int], Optional[float]]:
+    """A marker's colour as 0-255 RGB and an opacity (None when opaque)."""
+    c = marker.color
+    if c.a == 0.0 and c.r == 0.0 and c.g == 0.0 and c.b == 0.0 and marker.colors:
+        c = marker.colors[0]
+    rgb = tuple(int(round(255 * min(1.0, max(0.0, v)))) for v in (c.r, c.g, c.b))
+    alpha = float(c.a) if c.a > 0.0 else 1.0
+    return rgb, (None if alpha >= 0.999 else alpha)
+
+
+# ----------------------------------------------------------------------------------------------
+# The node
+# ----------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class ViewerConfig:
+    """Everything the viewer node is configured with."""
+
+    host: str = '127.0.0.1'
+    port: int = 8080
+    max_linear_speed: float = 0.8
+    max_angular_speed: float = 1.0
+    cmd_vel_stamped: bool = True
+    cmd_rate: float = 20.0
+    render_rate: float = 30.0
+    drag_span: float = 0.25
+    urdf_wait: float = 2.0
+    follow: bool = True
+
+
+def validate(config: ViewerConfig) -> None:
+    """Raise ValueError naming the first bad field of ``config``."""
+    if not 0 < config.port < 65536:
+        raise ValueError(f'port must be in 1..65535, got {config.port!r}')
+    for name in ('max_linear_speed', 'max_angular_speed'):
+        value = getattr(config, name)
+        if not (value > 0.0 and math.isfinite(value)):
+            raise ValueError(f'{name} must be > 0, got {value!r}')
+    for name in ('cmd_rate', 'render_rate'):
+        value = getattr(config, name)
+        if not (0.0 < value <= 200.0):
+            raise ValueError(f'{name} must be in (0, 200] Hz, got {value!r}')
+    if not 0.0 < config.drag_span <= 1.0:
+        raise ValueError(f'drag_span must be in (0, 1] of the view height, got '
+                         f'{config.drag_span!r}')
+    if not config.urdf_wait >= 0.0:
+        raise ValueError(f'urdf_wait must be >= 0 s, got {config.urdf_wait!r}')
+
+
+def _build_node_class():
+    """Define the rclpy node class (rclpy imported only when a node is made)."""
+    from diagnostic_msgs.msg import DiagnosticArray
+    from geometry_msgs.msg import Twist, TwistStamped
+    from nav_msgs.msg import Path
+    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+    from rcl_interfaces.srv import GetParameters, SetParameters
+    from rclpy.node import Node
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import String
+    import viser
+    from visualization_msgs.msg import Marker, MarkerArray
+
+    class ActorViewer(Node):
+        """Serve the actor, its course and a drag pad in a web page; publish cmd_vel."""
+
+        PAD_UV = (0.14, 0.78)
+        PAD_RADIUS = 0.09      # fraction of the view height
+        PAD_DEPTH = 0.5        # m in front of the camera
+
+        def __init__(self, config: ViewerConfig, namespace: str = '', announce=print):
+            # The namespace is the node's, so every relative topic resolves under it.
+            super().__init__('actor_viewer', namespace=namespace)
+            self.config = config
+            self._lock = threading.Lock()
+            self._stream = StreamMonitor()
+            self._diagnostics: Optional[PlannerDiagnostics] = None
+            self._latest_joints: Optional[Tuple[Tuple[str, ...], np.ndarray]] = None
+            self._rendered_stamp = None
+            self._last_pose = None
+            self._urdf_source: Optional[str] = None
+            self._urdf = None
+            self._actor_position = np.zeros(3)
+            self._command = (0.0, 0.0)
+            self._dragging = False
+            self._drag_start: Dict[int, Tuple[float, float]] = {}
+            self._markers: Dict[Tuple[str, int], Tuple[object, object]] = {}
+            self._pads: Dict[int, object] = {}
+            self._planner_present = False
+            self._course_note = ''
+            self._max_speeds = (config.max_linear_speed, config.max_angular_speed)
+            self._speeds_known = False
+            self._scenes = shipped_scenes()
+
+            self.port = pick_port(config.host, config.port)
+            self.server = viser.ViserServer(host=config.host, port=self.port, verbose=False)
+            self.port = self.server.get_port()
+            self.url = f'http://{config.host}:{self.port}'
+            if self.port != config.port:
+                announce(f'actor_viewer: port {config.port} is busy, using {self.port} instead',
+                         flush=True)
+            announce(f'actor_viewer: open {self.url} in a browser', flush=True)
+            self._build_page()
+
+            latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
+                                 reliability=ReliabilityPolicy.RELIABLE)
+            self.create_subscription(String, 'robot_description', self._on_description, latched)
+            self.create_subscription(JointState, 'joint_states', self._on_joint_states, 10)
+            self.create_subscription(MarkerArray, f'{PLANNER_NODE}/markers', self._on_markers,
+                                     QoSProfile(depth=10,
+                                                durability=DurabilityPolicy.VOLATILE))
+            self.create_subscription(Path, f'{PLANNER_NODE}/path', self._on_path, 10)
+            self.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics, 10)
+            if config.cmd_vel_stamped:
+                self._cmd_type = TwistStamped
+            else:
+                self._cmd_type = Twist
+            self._cmd_pub = self.create_publisher(self._cmd_type, 'cmd_vel', 10)
+            self._set_params = self.create_client(SetParameters,
+                                                  f'{PLANNER_NODE}/set_parameters')
+            self._get_params = self.create_client(GetParameters,
+                                                  f'{PLANNER_NODE}/get_parameters')
+            self._msg = {'Parameter': Parameter, 'ParameterValue': ParameterValue,
+                         'ParameterType': ParameterType, 'Marker': Marker,
+                         'SetParameters': SetParameters, 'GetParameters': GetParameters}
+            self._started = time.monotonic()
+            self.create_timer(1.0 / config.cmd_rate, self._publish_command)
+            self.create_timer(1.0 / config.render_rate, self._render)
+            self.create_timer(0.25, self._refresh_status)
+
+        # -- page -------------------------------------------------------------------------------
+        def _build_page(self) -> None:
+            server = self.server
+            server.scene.set_up_direction('+z')
+            server.initial_camera.position = (-3.0, -3.5, 2.6)
+            server.initial_camera.look_at = (0.0, 0.0, 0.8)
+            server.scene.add_grid('/ground_grid', width=40.0, height=40.0, cell_size=0.5,
+                                  plane='xy', position=(0.0, 0.0, -0.002))
+            self._actor_root = server.scene.add_frame('/actor', show_axes=False)
+            gui = server.gui
+            gui.configure_theme(show_logo=False)
+            self._status = gui.add_markdown('**status:** waiting for joint_states')
+            names = list(self._scenes) or ['(no shipped courses)']
+            self._course = gui.add_dropdown('course', options=names, initial_value=names[0])
+            self._course_shown = None
+            self._course.on_update(self._on_course_picked)
+            self._follow = gui.add_checkbox('follow actor', initial_value=self.config.follow)
+            self._speed_note = gui.add_markdown(self._speed_text())
+            gui.add_markdown('Drag the grey disc at the lower left: up walks forward, '
+                             'down walks back, left/right turns. Release to stop.')
+            server.on_client_connect(self._on_client_connect)
+            server.on_client_disconnect(self._on_client_disconnect)
+
+        def _speed_text(self) -> str:
+            lin, ang = self._max_speeds
+            return f'full drag: {lin:.2f} m/s forward, {ang:.2f} rad/s turn'
+
+        def _on_client_connect(self, client) -> None:
+            vertices, faces = disc_mesh(1.0)
+            pad = client.scene.add_mesh_simple('/drag_pad', vertices, faces,
+                                               color=(120, 120, 130), opacity=0.55,
+                                               side='double', cast_shadow=False,
+                                               receive_shadow=False)
+            self._pads[client.client_id] = pad
+
+            @pad.on_drag
+            def _(event) -> None:
+                self._on_pad_drag(client, event)
+
+            @client.camera.on_update
+            def _(camera) -> None:
+                self._place_pad(client)
+
+            self._place_pad(client)
+
+        def _on_client_disconnect(self, client) -> None:
+            self._pads.pop(client.client_id, None)
+            if self._drag_start.pop(client.client_id, None) is not None:
+                self._release()
+
+        def _place_pad(self, client) -> None:
+            pad = self._pads.get(client.client_id)
+            camera = client.camera
+            try:
+                fov, aspect = camera.fov, camera.aspect
+                position, wxyz = camera.position, camera.wxyz
+            except AssertionError:
+                return   # no camera message from this client yet
+            if pad is None or not all(np.isfinite([fov, aspect])):
+                return
+            world = pad_pose(position, wxyz, fov, aspect, self.PAD_UV, self.PAD_DEPTH)
+            radius = self.PAD_RADIUS * 2.0 * self.PAD_DEPTH * math.tan(fov / 2.0)
+            with client.atomic():
+                pad.position = tuple(world)
+                pad.wxyz = tuple(wxyz)
+                pad.scale = radius
+
+        def _on_pad_drag(self, client, event) -> None:
+            height = max(1, int(client.camera.image_height))
+            width = max(1, int(client.camera.image_width))
+            if event.phase == 'start':
+                self._drag_start[client.client_id] = tuple(event.start_screen_pos)
+            start = self._drag_start.get(client.client_id, tuple(event.start_screen_pos))
+            if event.phase == 'end':
+                self._drag_start.pop(client.client_id, None)
+                self._release()
+                return
+            # Both axes in pixels so a diagonal drag means the same on any window shape.
+            start_px = (start[0] * width, start[1] * height)
+            end_px = (event.end_screen_pos[0] * width, event.end_screen_pos[1] * height)
+            lin, ang = self._max_speeds
+            command = drag_to_command(start_px, end_px, self.config.drag_span * height, lin, ang)
+            with self._lock:
+                self._command = command
+                self._dragging = True
+
+        def _release(self) -> None:
+            with self._lock:
+                self._command = (0.0, 0.0)
+                was_dragging, self._dragging = self._dragging, False
+            if was_dragging:
+                self._send(0.0, 0.0)
+
+        # -- cmd_vel ----------------------------------------------------------------------------
+        def _publish_command(self) -> None:
+            with self._lock:
+                dragging, (lin, ang) = self._dragging, self._command
+            if dragging:
+                self._send(lin, ang)
+
+        def _send(self, linear_x: float, angular_z: float) -> None:
+            msg = self._cmd_type()
+            twist = msg.twist if self.config.cmd_vel_stamped else msg
+            if self.config.cmd_vel_stamped:
+                msg.header.stamp = self.get_clock().now().to_msg()
+            twist.linear.x = float(linear_x)
+            twist.angular.z = float(angular_z)
+            self._cmd_pub.publish(msg)
+
+        # -- course picker ----------------------------------------------------------------------
+        def _on_course_picked(self, _event) -> None:
+            name = self._course.value
+            if name == self._course_shown:
+                return   # the page only caught up with the planner's current course
+            path = self._scenes.get(name)
+            if path is None:
+                return
+            if not self._set_params.service_is_ready():
+                self._course_note = f'cannot load {name}: planner parameter service not found'
+                return
+            param = self._msg['Parameter'](name='scene', value=self._msg['ParameterValue'](
+                type=self._msg['ParameterType'].PARAMETER_STRING, string_value=path))
+            request = self._msg['SetParameters'].Request(parameters=[param])
+            self._course_note = f'loading {name}...'
+            future = self._set_params.call_async(request)
+            future.add_done_callback(lambda f: self._on_course_result(name, f))
+
+        def _on_course_result(self, name: str, future) -> None:
+            try:
+                result = future.result().results[0]
+            except Exception as error:  # noqa: B902 - report any service failure in the page
+                self._course_note = f'loading {name} failed: {error}'
+                return
+            if result.successful:
+                self._course_shown = name
+                self._course_note = f'course: {name}'
+            else:
+                self._course_note = f'course {name} rejected: {result.reason}'
+
+        def _query_planner(self) -> None:
+            """Read the planner's scene and speed limits once its parameter service appears."""
+            if self._speeds_known or not self._get_params.service_is_ready():
+                return
+            self._speeds_known = True
+            request = self._msg['GetParameters'].Request(
+                names=['scene', 'max_linear_speed', 'max_angular_speed'])
+            self._get_params.call_async(request).add_done_callback(self._on_planner_params)
+
+        def _on_planner_params(self, future) -> None:
+            try:
+                values = future.result().values
+            except Exception:  # noqa: B902 - keep the viewer's own defaults
+                return
+            if len(values) != 3:
+                return
+            scene, lin, ang = values
+            ptype = self._msg['ParameterType']
+            if lin.type == ptype.PARAMETER_DOUBLE and ang.type == ptype.PARAMETER_DOUBLE:
+                if lin.double_value > 0 and ang.double_value > 0:
+                    self._max_speeds = (lin.double_value, ang.double_value)
+                    self._speed_note.content = self._speed_text()
+            if scene.type == ptype.PARAMETER_STRING and scene.string_value:
+                current = os.path.splitext(os.path.basename(scene.string_value))[0]
+                self._course_note = f'course: {current}'
+                if current in self._scenes:
+                    self._course_shown = current
+                    self._course.value = current
+
+        # -- subscriptions ----------------------------------------------------------------------
+        def _on_description(self, msg) -> None:
+            if msg.data and msg.data != self._urdf_source:
+                self._load_urdf(msg.data)
+
+        def _on_joint_states(self, msg) -> None:
+            self._stream.add(time.monotonic())
+            positions = np.asarray(msg.position, dtype=np.float64)
+            if len(positions) == len(msg.name):
+                self._latest_joints = (tuple(msg.name), positions)
+
+        def _on_diagnostics(self, msg) -> None:
+            parsed = parse_planner_diagnostics(msg.status, PLANNER_NODE)
+            if parsed is not None:
+                self._diagnostics = parsed
+
+        def _on_path(self, msg) -> None:
+            points = np.array([[p.pose.position.x, p.pose.position.y, p.pose.position.z]
+                               for p in msg.poses], dtype=np.float64).reshape(-1, 3)
+            segments = polyline_segments(points + np.array([0.0, 0.0, 0.02]))
+            if len(segments):
+                self.server.scene.add_line_segments('/planner/path', segments,
+                                                    colors=(30, 120, 255), line_width=3.0)
+
+        def _on_markers(self, msg) -> None:
+            Marker = self._msg['Marker']
+            with self.server.atomic():
+                for marker in msg.markers:
+                    key = (marker.ns, marker.id)
+                    if marker.action == Marker.DELETEALL:
+                        for old in list(self._markers):
+                            if not marker.ns or old[0] == marker.ns:
+                                self._markers.pop(old)[1].remove()
+                        continue
+                    if marker.action == Marker.DELETE:
+                        if key in self._markers:
+                            self._markers.pop(key)[1].remove()
+                        continue
+                    self._show_marker(key, marker)
+
+        def _show_marker(self, key, marker) -> None:
+            Marker = self._msg['Marker']
+            points = np.array([[p.x, p.y, p.z] for p in marker.points],
+                              dtype=np.float64).reshape(-1, 3)
+            signature = (marker.type, points.tobytes(), marker.scale.x, marker.scale.y,
+                         marker.scale.z, marker.color.r, marker.color.g, marker.color.b,
+                         marker.color.a)
+            old = self._markers.get(key)
+            name = f'/planner/{marker.ns or "markers"}/{marker.id}'
+            rgb, opacity = marker_color(marker)
+            position = (marker.pose.position.x, marker.pose.position.y,
+                        marker.pose.position.z)
+            wxyz = quaternion_xyzw_to_wxyz(marker.pose.orientation)
+            if old is not None and old[0] == signature:
+                handle = old[1]
+                handle.position, handle.wxyz = position, wxyz
+                return
+            scene = self.server.scene
+            scale = (max(marker.scale.x, 1e-3), max(marker.scale.y, 1e-3),
+                     max(marker.scale.z, 1e-3))
+            handle = None
+            if marker.type == Marker.TRIANGLE_LIST and len(points) >= 3:
+                vertices, faces = triangle_list_mesh(points[:len(points) // 3 * 3])
+                handle = scene.add_mesh_simple(name, vertices, faces, color=rgb,
+                                               opacity=opacity, side='double',
+                                               flat_shading=True)
+            elif marker.type == Marker.LINE_STRIP and len(points) >= 2:
+                handle = scene.add_line_segments(name, polyline_segments(points), colors=rgb,
+                                                 line_width=2.0)
+            elif marker.type == Marker.LINE_LIST and len(points) >= 2:
+                pairs = points[:len(points) // 2 * 2].reshape(-1, 2, 3).astype(np.float32)
+                handle = scene.add_line_segments(name, pairs, colors=rgb, line_width=2.0)
+            elif marker.type in (Marker.POINTS, Marker.SPHERE_LIST) and len(points):
+                handle = scene.add_point_cloud(name, points.astype(np.float32), colors=rgb,
+                                               point_size=float(scale[0]),
+                                               point_shape='circle')
+            elif marker.type == Marker.CUBE_LIST and len(points):
+                handle = scene.add_batched_meshes_simple(
+                    name, *_unit_box(), batched_positions=points.astype(np.float32),
+                    batched_wxyzs=np.tile([1.0, 0.0, 0.0, 0.0], (len(points), 1)),
+                    batched_scales=np.tile(scale, (len(points), 1)), color=rgb,
+                    opacity=opacity)
+            elif marker.type == Marker.CUBE:
+                handle = scene.add_box(name, color=rgb, dimensions=scale, opacity=opacity)
+            elif marker.type == Marker.SPHERE:
+                handle = scene.add_icosphere(name, radius=0.5, color=rgb, scale=scale,
+                                             opacity=opacity)
+            elif marker.type == Marker.CYLINDER:
+                handle = scene.add_cylinder(name, radius=0.5, height=1.0, color=rgb,
+                                            scale=scale, opacity=opacity)
+            elif marker.type == Marker.ARROW:
+                handle = scene.add_box(name, color=rgb, dimensions=scale, opacity=opacity)
+            if handle is None:
+                if old is not None:
+                    self._markers.pop(key)[1].remove()
+                return
+            handle.position, handle.wxyz = position, wxyz
+            self._markers[key] = (signature, handle)
+
+        # -- actor ------------------------------------------------------------------------------
+        def load_fallback_urdf_if_needed(self) -> None:
+            """Use the package URDF when no robot_description arrived within ``urdf_wait``."""
+            if self._urdf is None and time.monotonic() - self._started >= self.config.urdf_wait:
+                from digital_actor_planner.core.skeleton import default_urdf_path
+                with open(default_urdf_path()) as f:
+                    self._load_urdf(f.read())
+
+        def _load_urdf(self, text: str) -> None:
+            import yourdfpy
+            from viser.extras import ViserUrdf
+            try:
+                model = yourdfpy.URDF.load(io.StringIO(text), build_scene_graph=True,
+                                           load_meshes=True)
+            except Exception as error:  # noqa: B902 - a bad description must not kill the viewer
+                self.get_logger().error(f'robot_description could not be read: {error}')
+                return
+            with self._lock:
+                if self._urdf is not None:
+                    self._urdf[0].remove()
+                self._urdf = (ViserUrdf(self.server, model, root_node_name='/actor'),
+                              tuple(model.actuated_joint_names))
+                self._urdf_source = text
+                self._rendered_stamp = None
+                self._last_pose = None
+
+        def _render(self) -> None:
+            self.load_fallback_urdf_if_needed()
+            self._query_planner()
+            joints = self._latest_joints
+            if joints is None or self._urdf is None or joints is self._rendered_stamp:
+                return
+            self._rendered_stamp = joints
+            urdf, urdf_names = self._urdf
+            names, positions = joints
+            if self._last_pose is not None and self._last_pose[0] == names and \
+                    np.allclose(self._last_pose[1], positions, atol=1e-6):
+                return   # a standing actor: nothing to send
+            self._last_pose = joints
+            by_name = dict(zip(names, positions))
+            configuration = np.array([by_name.get(n, 0.0) for n in urdf_names])
+            with self.server.atomic():
+                _update_urdf_pose(urdf, dict(zip(urdf_names, configuration)))
+            self._actor_position = np.array([by_name.get(n, 0.0) for n in ROOT_JOINTS[:3]])
+            if self._follow.value:
+                self._follow_actor()
+
+        def _follow_actor(self) -> None:
+            target = self._actor_position
+            for client in list(self.server.get_clients().values()):
+                camera = client.camera
+                try:
+                    look_at, position = camera.look_at, camera.position
+                except AssertionError:
+                    continue
+                if np.linalg.norm(look_at - target) < 0.005:
+                    continue
+                # Setting the position translates the camera and its look-at point together,
+                # so the user's orbit angle and distance are kept.
+                with client.atomic():
+                    camera.position = position + (target - look_at)
+                    self._place_pad(client)
+
+        def _refresh_status(self) -> None:
+            now = time.monotonic()
+            publishers = self.count_publishers(self.resolve_topic_name('joint_states'))
+            self._planner_present = publishers > 0
+            text = status_text(now, self._stream, self._diagnostics, self._planner_present)
+            if self._course_note:
+                text += f' · {self._course_note}'
+            content = f'**status:** {text}'
+            if content != self._status.content:
+                self._status.content = content
+
+        def destroy_node(self):
+            self.server.stop()
+            return super().destroy_node()
+
+    return ActorViewer
+
+
+def _update_urdf_pose(urdf, positions: Dict[str, float]) -> None:
+    """Move a ViserUrdf's joint frames to ``positions`` (rad or m by joint name).
+
+    yourdfpy's ``update_cfg`` rebuilds its whole scene graph (about 5 ms a frame); the joint
+    frames only need each joint's own parent->child transform, computed here directly.
+    """
+    from viser import transforms
+    joints = getattr(urdf, '_joint_map_values', None)
+    frames = getattr(urdf, '_joint_frames', None)
+    if joints is None or frames is None or len(joints) != len(frames):
+        urdf.update_cfg(np.array([positions.get(n, 0.0)
+                                  for n in urdf.get_actuated_joint_names()]))
+        return
+    for joint, frame in zip(joints, frames):
+        origin = np.eye(4) if joint.origin is None else np.asarray(joint.origin)
+        rotation = transforms.SO3.from_matrix(origin[:3, :3])
+        translation = origin[:3, 3].copy()
+        value = positions.get(joint.name, 0.0)
+        axis = np.asarray(joint.axis if joint.axis is not None else (1.0, 0.0, 0.0), float)
+        if joint.type in ('revolute', 'continuous'):
+            rotation = rotation @ transforms.SO3.exp(axis * value)
+        elif joint.type == 'prismatic':
+            translation = translation + origin[:3, :3] @ (axis * value)
+        frame.wxyz = rotation.wxyz
+        frame.position = translation * urdf._scale
+
+
+def _unit_box() -> Tuple[np.ndarray, np.ndarray]:
+    corners = np.array([[x, y, z] for x in (-0.5, 0.5) for y in (-0.5, 0.5)
+                        for z in (-0.5, 0.5)], dtype=np.float32)
+    faces = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                      [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]],
+                     dtype=np.uint32)
+    return corners, faces
+
+
+def build_parser(prog: str = 'digital-actor view') -> argparse.ArgumentParser:
+    """Command-line options of the viewer (also used by ``digital-actor view``)."""
+    parser = argparse.ArgumentParser(
+        prog=prog, description='Show a running actor_planner in a web page and steer it.')
+    parser.add_argument('--host', default='127.0.0.1',
+                        help='address to serve the page on (default 127.0.0.1: this machine '
+                             'only; 0.0.0.0 to allow other machines)')
+    parser.add_argument('--port', type=int, default=8080,
+                        help='port of the page; the next free one is used if it is busy')
+    parser.add_argument('--namespace', default='',
+                        help='namespace of the actor_planner to attach to, e.g. /actor1')
+    parser.add_argument('--twist', action='store_true',
+                        help='publish geometry_msgs/Twist on cmd_vel (default TwistStamped)')
+    parser.add_argument('--max-linear-speed', type=float, default=0.8,
+                        help='m/s at a full drag (the planner\'s own limit is used when found)')
+    parser.add_argument('--max-angular-speed', type=float, default=1.0,
+                        help='rad/s at a full drag (the planner\'s own limit is used when found)')
+    parser.add_argument('--render-rate', type=float, default=30.0,
+                        help='how often the page is updated with the latest pose (Hz)')
+    parser.add_argument('--no-follow', action='store_true',
+                        help='start with the follow camera off')
+    return parser
+
+
+def config_from_args(args: argparse.Namespace) -> ViewerConfig:
+    """The validated ViewerConfig for parsed command-line options."""
+    config = ViewerConfig(host=args.host, port=args.port, cmd_vel_stamped=not args.twist,
+                          max_linear_speed=args.max_linear_speed,
+                          max_angular_speed=args.max_angular_speed,
+                          render_rate=args.render_rate, follow=not args.no_follow)
+    validate(config)
+    return config
+
+
+def normalize_namespace(namespace: str) -> str:
+    """'' or 'a/b' or '/a/b/' as a ROS namespace ('/' or '/a/b'); raises on bad characters."""
+    namespace = '/' + namespace.strip().strip('/')
+    for part in namespace.strip('/').split('/'):
+        if part and not (part[0].isalpha() or part[0] == '_') or \
+                any(not (ch.isalnum() or ch == '_') for ch in part):
+            raise ValueError(f'bad namespace {namespace!r}: use letters, digits and _')
+    return namespace
+
+
+def main(argv: Optional[List[str]] = None) -> int:
+    """Run the viewer node until Ctrl-C; returns the exit code."""
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+
+    if argv is None:
+        argv = sys.argv[1:]
+    parser = build_parser()
+    # ROS arguments (--ros-args ...) pass through to rclpy.
+    ros_args: List[str] = []
+    if '--ros-args' in argv:
+        cut = argv.index('--ros-args')
+        argv, ros_args = argv[:cut], argv[cut:]
+    args = parser.parse_args(argv)
+    try:
+        config = config_from_args(args)
+        namespace = normalize_namespace(args.namespace)
+    except ValueError as error:
+        print(f'actor_viewer: {error}', file=sys.stderr)
+        return 2
+    rclpy.init(args=['actor_viewer'] + ros_args)
+    node = None
+    try:
+        node = _build_node_class()(config, namespace)
+        rclpy.spin(node)
+    except OSError as error:
+        print(f'actor_viewer: {error}', file=sys.stderr)
+        return 1
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None and getattr(node, 'server', None) is not None:
+            node.destroy_node()
+        if rclpy.ok():
+            rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

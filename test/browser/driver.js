@@ -1,0 +1,108 @@
+// Drive Debian chromium (headless) for the viewer tests, one JSON command per stdin line.
+//
+// Every command gets one JSON reply line on stdout: {"ok": true, ...} or {"ok": false, "error"}.
+// Commands: open {url}, canvas, mouse {action: down|up|move, x, y, steps}, text,
+// screenshot {path}, select {label, option}, check {label}, close.
+'use strict';
+
+const readline = require('readline');
+const { chromium } = require('playwright-core');
+
+const CHROMIUM_FLAGS = [
+  '--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking',
+  '--disable-component-update', '--disable-sync', '--no-first-run',
+  '--enable-unsafe-swiftshader',
+];
+
+async function main() {
+  const userDataDir = process.argv[2];
+  const executablePath = process.env.CHROMIUM || '/usr/bin/chromium';
+  const context = await chromium.launchPersistentContext(userDataDir, {
+    executablePath,
+    headless: true,
+    args: CHROMIUM_FLAGS,
+    viewport: { width: 1280, height: 800 },
+  });
+  const page = context.pages()[0] || await context.newPage();
+  const reply = (obj) => process.stdout.write(JSON.stringify(obj) + '\n');
+
+  const handlers = {
+    async open(cmd) {
+      await page.goto(cmd.url, { waitUntil: 'load', timeout: 30000 });
+      await page.waitForSelector('canvas', { timeout: 30000 });
+      return {};
+    },
+    async canvas() {
+      // The 3D view is the largest canvas on the page.
+      const boxes = [];
+      for (const handle of await page.$$('canvas')) {
+        const box = await handle.boundingBox();
+        if (box) boxes.push(box);
+      }
+      boxes.sort((a, b) => b.width * b.height - a.width * a.height);
+      if (!boxes.length) throw new Error('no canvas on the page');
+      return { box: boxes[0] };
+    },
+    async mouse(cmd) {
+      if (cmd.action === 'move') {
+        await page.mouse.move(cmd.x, cmd.y, { steps: cmd.steps || 1 });
+      } else if (cmd.action === 'down') {
+        await page.mouse.move(cmd.x, cmd.y);
+        await page.mouse.down();
+      } else if (cmd.action === 'up') {
+        await page.mouse.up();
+      } else {
+        throw new Error(`unknown mouse action ${cmd.action}`);
+      }
+      return {};
+    },
+    async text() {
+      return { text: await page.evaluate(() => document.body.innerText) };
+    },
+    async screenshot(cmd) {
+      await page.screenshot({ path: cmd.path });
+      return {};
+    },
+    async select(cmd) {
+      // Mantine select: click the input labelled cmd.label, then the option.
+      const input = page.getByLabel(cmd.label, { exact: true }).first();
+      await input.click();
+      await page.getByRole('option', { name: cmd.option, exact: true }).click();
+      return {};
+    },
+    async check(cmd) {
+      await page.getByLabel(cmd.label, { exact: true }).first().click();
+      return {};
+    },
+  };
+
+  const lines = readline.createInterface({ input: process.stdin });
+  for await (const line of lines) {
+    if (!line.trim()) continue;
+    let cmd;
+    try {
+      cmd = JSON.parse(line);
+    } catch (error) {
+      reply({ ok: false, error: `bad JSON: ${line}` });
+      continue;
+    }
+    if (cmd.cmd === 'close') break;
+    const handler = handlers[cmd.cmd];
+    if (!handler) {
+      reply({ ok: false, error: `unknown command ${cmd.cmd}` });
+      continue;
+    }
+    try {
+      reply({ ok: true, ...(await handler(cmd)) });
+    } catch (error) {
+      reply({ ok: false, error: String(error && error.message ? error.message : error) });
+    }
+  }
+  await context.close();
+  reply({ ok: true, closed: true });
+}
+
+main().catch((error) => {
+  process.stderr.write(String(error && error.stack ? error.stack : error) + '\n');
+  process.exit(1);
+});

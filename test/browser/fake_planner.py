@@ -1,0 +1,104 @@
+"""A stand-in actor_planner for viewer tests: JointState at 100 Hz that follows cmd_vel.
+
+It is not the planner: it integrates root_x/root_y/root_yaw from the last command, publishes a wall
+(TRIANGLE_LIST) when the scene's file name contains 'wall', stops there and reports 'stuck' on
+/diagnostics. Used to test the viewer alone; the end-to-end test runs the real planner.
+"""
+import math
+import os
+import sys
+
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import Point, TwistStamped
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from sensor_msgs.msg import JointState
+from visualization_msgs.msg import Marker, MarkerArray
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), '..', '..'))
+from digital_actor_planner.core.skeleton import Skeleton  # noqa: E402
+
+WALL_X = 1.0
+
+
+class FakePlanner(Node):
+
+    def __init__(self):
+        super().__init__('actor_planner')
+        self.declare_parameter('scene', 'flat.yaml')
+        self.declare_parameter('max_linear_speed', 0.8)
+        self.declare_parameter('max_angular_speed', 1.0)
+        self.names = list(Skeleton().joint_names)
+        self.q = [0.0] * len(self.names)
+        self.q[self.names.index('root_z')] = 0.9
+        self.command = (0.0, 0.0)
+        self.state = 'idle'
+        self.reason = ''
+        self.create_subscription(TwistStamped, 'cmd_vel', self.on_cmd, 10)
+        self.joints = self.create_publisher(JointState, 'joint_states', 10)
+        self.diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self.markers = self.create_publisher(MarkerArray, 'actor_planner/markers', 10)
+        self.create_timer(0.01, self.step)
+        self.create_timer(0.5, self.report)
+
+    def wall(self):
+        return 'wall' in os.path.basename(self.get_parameter('scene').value)
+
+    def on_cmd(self, msg):
+        self.command = (msg.twist.linear.x, msg.twist.angular.z)
+
+    def step(self):
+        lin, ang = self.command
+        ix, iy, iyaw = (self.names.index(n) for n in ('root_x', 'root_y', 'root_yaw'))
+        yaw = self.q[iyaw]
+        x = self.q[ix] + lin * 0.01 * math.cos(yaw)
+        self.state, self.reason = ('walking' if lin or ang else 'idle'), ''
+        if self.wall() and x > WALL_X - 0.3:
+            x = min(x, self.q[ix])
+            if lin > 0:
+                self.state, self.reason = 'stuck', 'no feasible footstep: wall ahead'
+        self.q[ix] = x
+        self.q[iy] += lin * 0.01 * math.sin(yaw)
+        self.q[iyaw] += ang * 0.01
+        msg = JointState(name=self.names, position=self.q)
+        msg.header.stamp = self.get_clock().now().to_msg()
+        self.joints.publish(msg)
+
+    def report(self):
+        status = DiagnosticStatus(name='actor_planner: state', hardware_id='actor_planner',
+                                  message=self.state)
+        status.values = [KeyValue(key='state', value=self.state),
+                         KeyValue(key='reason', value=self.reason),
+                         KeyValue(key='planning_time_last_ms', value='1.5')]
+        self.diagnostics.publish(DiagnosticArray(status=[status]))
+        array = MarkerArray()
+        if self.wall():
+            marker = Marker(ns='environment', id=0, type=Marker.TRIANGLE_LIST)
+            marker.header.frame_id = 'world'
+            marker.scale.x = marker.scale.y = marker.scale.z = 1.0
+            marker.pose.orientation.w = 1.0
+            marker.color.r, marker.color.g, marker.color.b, marker.color.a = 0.7, 0.6, 0.5, 1.0
+            a, b, c, d = ((WALL_X, -1.0, 0.0), (WALL_X, 1.0, 0.0), (WALL_X, 1.0, 2.0),
+                          (WALL_X, -1.0, 2.0))
+            marker.points = [Point(x=p[0], y=p[1], z=p[2]) for p in (a, b, c, a, c, d)]
+            array.markers.append(marker)
+        else:
+            array.markers.append(Marker(action=Marker.DELETEALL))
+        self.markers.publish(array)
+
+
+def main():
+    rclpy.init()
+    node = FakePlanner()
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()
+
+
+if __name__ == '__main__':
+    main()
