@@ -80,14 +80,16 @@ class ServoBus:
             raise BusError(f'{self.port_name}: not open')
         return self.port
 
-    def ping(self, ids: Iterable[int]) -> Dict[int, int]:
-        """Ping each ID; return {id: model number} for those that answered."""
+    def ping(self, ids: Iterable[int], attempts: int = 3) -> Dict[int, int]:
+        """Ping each ID (up to ``attempts`` times); return {id: model} for those that answered."""
         port = self._require()
         found = {}
         for servo_id in ids:
-            model, result, _ = self._guard(self.packet.ping, port, servo_id)
-            if result == sdk.COMM_SUCCESS:
-                found[servo_id] = model
+            for _ in range(attempts):
+                model, result, _ = self._guard(self.packet.ping, port, servo_id)
+                if result == sdk.COMM_SUCCESS:
+                    found[servo_id] = model
+                    break
         return found
 
     def set_torque(self, ids: Iterable[int], enabled: bool) -> Dict[int, bool]:
@@ -131,7 +133,12 @@ class ServoBus:
             return {}
         out = {}
         for servo_id in ids:
-            raw = group.getData(servo_id, PRESENT_POSITION, POSITION_BYTES)
+            try:
+                raw = group.getData(servo_id, PRESENT_POSITION, POSITION_BYTES)
+            except IndexError:
+                # A late status packet of another length was taken for this servo's reply.
+                self.last_result = sdk.COMM_RX_CORRUPT
+                return {}
             out[servo_id] = raw - (1 << 32) if raw & (1 << 31) else raw
         return out
 
@@ -149,4 +156,7 @@ class ServoBus:
         group = self._read_errors
         if self._guard(group.txRxPacket) != sdk.COMM_SUCCESS:
             return {}
-        return {i: group.getData(i, HARDWARE_ERROR_STATUS, 1) for i in ids}
+        try:
+            return {i: group.getData(i, HARDWARE_ERROR_STATUS, 1) for i in ids}
+        except IndexError:
+            return {}
