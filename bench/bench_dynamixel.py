@@ -1,0 +1,141 @@
+"""Control-cycle time of the Dynamixel bridge against the emulator with 1 Mbps wire time.
+
+One control cycle = one sync write of 18 goal positions + one sync read of 18 present
+positions (the node also reads Hardware Error Status every ``health_check_period``). The
+emulator runs in its own process and releases every status packet only after its bytes would
+have crossed the wire (10 bits per byte) plus the servo's Return Delay Time. The bus limit is
+computed from the bytes that actually crossed the bus in the same run.
+
+    .venv/bin/python bench/bench_dynamixel.py [--cycles 1000] [--return-delay-us 0]
+"""
+import argparse
+from dataclasses import replace
+import multiprocessing
+import os
+import statistics
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, '..', 'test'))
+
+import dynamixel_emulator as emu  # noqa: E402
+
+from digital_actor_planner.core.skeleton import Skeleton  # noqa: E402
+from digital_actor_planner.dynamixel.bus import BusError, ServoBus  # noqa: E402
+from digital_actor_planner.dynamixel.config import load_config  # noqa: E402
+from digital_actor_planner.dynamixel.controller import BridgeController  # noqa: E402
+
+BAUD = 1_000_000
+
+
+def _serve(link, ids, return_delay_us, ready, pipe):
+    emulator = emu.DynamixelEmulator(ids, link, baud_rate=BAUD, wire_time=True)
+    for servo_id in ids:
+        emulator.set_register(servo_id, emu.RETURN_DELAY_TIME, return_delay_us // 2)
+    emulator.start()
+    ready.set()
+    while True:
+        request = pipe.recv()
+        if request == 'stop':
+            break
+        with emulator.lock:
+            pipe.send((emulator.bytes_in, emulator.bytes_out, emulator.wire_busy_s,
+                       dict(emulator.instruction_counts)))
+    emulator.stop()
+    pipe.send('stopped')
+
+
+def _measure(step, cycles, counters):
+    before = counters()
+    times = []
+    for _ in range(cycles):
+        start = time.perf_counter()
+        step()
+        times.append(time.perf_counter() - start)
+    after = counters()
+    bytes_on_wire = (after[0] - before[0]) + (after[1] - before[1])
+    return times, bytes_on_wire, after[2] - before[2]
+
+
+def _report(label, times, bytes_on_wire, cycles, delays_per_cycle, return_delay_s):
+    mean = statistics.fmean(times)
+    limit = bytes_on_wire / cycles * 10.0 / BAUD + delays_per_cycle * return_delay_s
+    ordered = sorted(times)
+    print(f'{label}:')
+    print(f'  bytes on the wire per cycle   {bytes_on_wire / cycles:8.1f}')
+    print(f'  bus limit (packet sizes)      {limit * 1e3:8.3f} ms  = {1 / limit:7.1f} Hz')
+    print(f'  measured cycle  mean          {mean * 1e3:8.3f} ms  = {1 / mean:7.1f} Hz')
+    print(f'                  median / p99  {ordered[len(ordered) // 2] * 1e3:8.3f} / '
+          f'{ordered[int(len(ordered) * 0.99)] * 1e3:.3f} ms')
+    print(f'  achieved rate / limit rate    {limit / mean * 100:8.1f} %')
+    return limit / mean
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--cycles', type=int, default=1000)
+    parser.add_argument('--return-delay-us', type=int, default=0,
+                        help='Return Delay Time of every servo (X-series default: 500 us)')
+    args = parser.parse_args(argv)
+    skeleton = Skeleton()
+    config = load_config(os.path.join(HERE, '..', 'config', 'dynamixel.yaml'), skeleton)
+    ids = [s.id for s in config.servos]
+    folder = tempfile.mkdtemp(prefix='bench_dynamixel_')
+    link = os.path.join(folder, 'ttyDXL')
+    context = multiprocessing.get_context('fork')
+    ready = context.Event()
+    ours, theirs = context.Pipe()
+    server = context.Process(target=_serve, args=(link, ids, args.return_delay_us, ready, theirs),
+                             daemon=True)
+    server.start()
+    try:
+        if not ready.wait(10.0):
+            raise RuntimeError('emulator did not start')
+
+        def counters():
+            ours.send('counters')
+            return ours.recv()
+
+        bus = ServoBus(link, BAUD)
+        bus.open()
+        found = bus.ping(ids)
+        assert len(found) == len(ids), found
+        goals = {i: 2048 + i for i in ids}
+        print(f'{len(ids)} servos, {BAUD} bps, Return Delay Time {args.return_delay_us} us, '
+              f'{args.cycles} cycles, python {sys.version.split()[0]}')
+        times, wire, _ = _measure(lambda: (bus.write_goals(goals), bus.read_positions(ids)),
+                                  args.cycles, counters)
+        ratio = _report('sync write + sync read (ServoBus)', times, wire, args.cycles, len(ids),
+                        args.return_delay_us * 1e-6)
+        bus.close()
+
+        config = replace(config, port=link)
+        controller = BridgeController(config, ServoBus(link, BAUD), bus_error=BusError)
+        controller.start(time.monotonic())
+        names = config.joint_names
+        state = {'k': 0}
+
+        def control_cycle():
+            state['k'] += 1
+            controller.on_joint_state(names, [0.01 * (state['k'] % 50)] * len(names),
+                                      time.monotonic())
+            controller.cycle(time.monotonic())
+        before = counters()[3].get(emu.SYNC_READ, 0)
+        times, wire, _ = _measure(control_cycle, args.cycles, counters)
+        reads = counters()[3].get(emu.SYNC_READ, 0) - before
+        _report('full BridgeController.cycle (envelope + health checks)', times, wire,
+                args.cycles, len(ids) * reads / args.cycles, args.return_delay_us * 1e-6)
+        controller.shutdown()
+        print(f'target >= 90 % of the limit-bound rate: {"met" if ratio >= 0.9 else "NOT met"} '
+              f'({ratio * 100:.1f} %)')
+    finally:
+        ours.send('stop')
+        ours.recv()
+        server.join(timeout=5)
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
