@@ -463,7 +463,7 @@ def render_gif(path: str, skeleton, meshes: Sequence, times, frames, *, fps: flo
     roots = frames[:, skeleton.indices('root_x', 'root_y', 'root_z', 'root_yaw')]
     region = (roots[:, :2].min(axis=0) - 3.5, roots[:, :2].max(axis=0) + 3.5)
     # Coarser tiles than the PNG: every polygon costs time in every frame.
-    terrain, terrain_colours = _course_triangles(meshes, region, tile=0.4, budget=6000)
+    terrain, terrain_colours = _course_triangles(meshes, region, tile=0.7, budget=4000)
     terrain_centre = terrain.mean(axis=1) if len(terrain) else np.zeros((0, 3))
     actor = _ActorModel(skeleton)
     feet = _footstep_triangles(skeleton, footsteps)
@@ -479,28 +479,25 @@ def render_gif(path: str, skeleton, meshes: Sequence, times, frames, *, fps: flo
                     len(times) - 1)
     if follow:
         distance = 5.0
-        ahead = np.array([0.0, 0.0, 0.9])
         probe = _Camera.looking_at(np.zeros(3), azimuth, elevation, distance)
-        # A fixed image window around a 2.4 m x 2.4 m box centred on the actor.
+        # A fixed image window around a 3 m x 3 m x 2.1 m box centred on the actor.
         box = np.array([[x, y, z] for x in (-1.5, 1.5) for y in (-1.5, 1.5)
                         for z in (-1.0, 1.1)])
-        limits = _fit_limits(probe.project(box - probe.forward * 0.0)[0], canvas.aspect, 0.0)
+        limits = _fit_limits(probe.project(box)[0], canvas.aspect, 0.0)
     else:
-        low = np.concatenate([roots[:, :3] - [0.8, 0.8, 1.0]])
-        high = np.concatenate([roots[:, :3] + [0.8, 0.8, 0.9]])
-        target = (low.min(axis=0) + high.max(axis=0)) / 2
-        extent = float(np.linalg.norm(high.max(axis=0) - low.min(axis=0)))
-        fixed = _Camera.looking_at(target, azimuth, elevation, max(4.0, 1.6 * extent))
-        corners = np.array([[x, y, z] for x in (low.min(0)[0], high.max(0)[0])
-                            for y in (low.min(0)[1], high.max(0)[1])
-                            for z in (low.min(0)[2], high.max(0)[2])])
+        low = (roots[:, :3] - [0.8, 0.8, 1.0]).min(axis=0)
+        high = (roots[:, :3] + [0.8, 0.8, 0.9]).max(axis=0)
+        fixed = _Camera.looking_at((low + high) / 2, azimuth, elevation,
+                                   max(4.0, 1.6 * float(np.linalg.norm(high - low))))
+        corners = np.array([[x, y, z] for x in (low[0], high[0]) for y in (low[1], high[1])
+                            for z in (low[2], high[2])])
         limits = _fit_limits(fixed.project(corners)[0], canvas.aspect, 0.02)
 
     images = []
     for k in shown:
         if follow:
-            target = roots[k, :3] - [0.0, 0.0, roots[k, 2]] + ahead
-            target[2] += roots[k, 2] - skeleton.leg.standing_height
+            # Look at the middle of the body: 0.9 m above the feet of a standing actor.
+            target = roots[k, :3] + [0.0, 0.0, 0.9 - skeleton.leg.standing_height]
             camera = _Camera.looking_at(target, azimuth, elevation, distance)
             near = np.linalg.norm(terrain_centre[:, :2] - roots[k, :2], axis=1) < 6.0
         else:
