@@ -46,8 +46,9 @@ def _compact(grounds: np.ndarray, ceilings: np.ndarray):
 
 def _intersect(ground_a, ceiling_a, ground_b, ceiling_b):
     """Intersect two rows-of-disjoint-intervals sets: (M, Ka), (M, Kb) -> (M, K)."""
-    ground = np.maximum(ground_a[:, :, None], ground_b[:, None, :]).reshape(len(ground_a), -1)
-    ceiling = np.minimum(ceiling_a[:, :, None], ceiling_b[:, None, :]).reshape(len(ground_a), -1)
+    shape = (len(ground_a), ground_a.shape[1] * ground_b.shape[1])
+    ground = np.maximum(ground_a[:, :, None], ground_b[:, None, :]).reshape(shape)
+    ceiling = np.minimum(ceiling_a[:, :, None], ceiling_b[:, None, :]).reshape(shape)
     empty = ~((ground < np.inf) & (ceiling >= ground))
     ground[empty] = np.inf
     ceiling[empty] = np.inf
@@ -461,14 +462,28 @@ class Environment:
         node_ceiling = node_ceiling.reshape(ny, nx, -1)
         # Conservative over each cell: a height z is free in the cell when it is free at all four
         # corners, so the cell's free intervals are the intersection of the corners' intervals.
-        cell_ground, cell_ceiling = node_ground[:-1, :-1], node_ceiling[:-1, :-1]
-        for corner in ((slice(None, -1), slice(1, None)), (slice(1, None), slice(None, -1)),
-                       (slice(1, None), slice(1, None))):
-            cell_ground, cell_ceiling = _intersect(
-                cell_ground.reshape(-1, cell_ground.shape[-1]),
-                cell_ceiling.reshape(-1, cell_ceiling.shape[-1]),
-                node_ground[corner].reshape(-1, node_ground.shape[-1]),
-                node_ceiling[corner].reshape(-1, node_ceiling.shape[-1]))
+        # Most cells have four identical corners (open floor): only intersect the others.
+        layers = node_ground.shape[-1]
+        corners = [(slice(None, -1), slice(None, -1)), (slice(None, -1), slice(1, None)),
+                   (slice(1, None), slice(None, -1)), (slice(1, None), slice(1, None))]
+        grounds = [node_ground[c].reshape(-1, layers) for c in corners]
+        ceilings = [node_ceiling[c].reshape(-1, layers) for c in corners]
+        uniform = np.ones(len(grounds[0]), dtype=bool)
+        for g, c in zip(grounds[1:], ceilings[1:]):
+            uniform &= np.all((g == grounds[0]) & (c == ceilings[0]), axis=1)
+        mixed = np.flatnonzero(~uniform)
+        cell_ground, cell_ceiling = grounds[0][mixed], ceilings[0][mixed]
+        for g, c in zip(grounds[1:], ceilings[1:]):
+            cell_ground, cell_ceiling = _intersect(cell_ground, cell_ceiling, g[mixed], c[mixed])
+        width = max(1, int(np.isfinite(grounds[0][uniform]).sum(axis=1).max(initial=0)),
+                    cell_ground.shape[1])
+        all_ground = np.full((len(uniform), width), np.inf)
+        all_ceiling = np.full((len(uniform), width), np.inf)
+        all_ground[uniform, :layers] = grounds[0][uniform][:, :width]
+        all_ceiling[uniform, :layers] = ceilings[0][uniform][:, :width]
+        all_ground[mixed, :cell_ground.shape[1]] = cell_ground
+        all_ceiling[mixed, :cell_ground.shape[1]] = cell_ceiling
+        cell_ground, cell_ceiling = all_ground, all_ceiling
         self._layers = cell_ground.shape[-1]
         self._ground = np.ascontiguousarray(cell_ground.reshape(-1, self._layers))
         self._ceiling = np.ascontiguousarray(cell_ceiling.reshape(-1, self._layers))
@@ -496,9 +511,30 @@ class Environment:
         iy1 = np.clip(np.floor((high[:, 1] - y0) / res + 1e-9), -1, ny - 1).astype(np.int64)
         width = np.maximum(ix1 - ix0 + 1, 0)
         count = width * np.maximum(iy1 - iy0 + 1, 0)
+        # Barycentric weights and height are affine in the node indices relative to each
+        # triangle's first covered node: w = a * i + b * j + c. Precompute a, b, c per triangle.
+        det = normal_z
+        ox = x0 + ix0 * res - triangles[:, 0, 0]
+        oy = y0 + iy0 * res - triangles[:, 0, 1]
+        e1x, e1y = edge1[~steep, 0], edge1[~steep, 1]
+        e2x, e2y = edge2[~steep, 0], edge2[~steep, 1]
+        dz1, dz2 = edge1[~steep, 2], edge2[~steep, 2]
+        coefficients = np.empty((len(triangles), 9))
+        coefficients[:, 0] = res * e2y / det
+        coefficients[:, 1] = -res * e2x / det
+        coefficients[:, 2] = (ox * e2y - e2x * oy) / det
+        coefficients[:, 3] = -res * e1y / det
+        coefficients[:, 4] = res * e1x / det
+        coefficients[:, 5] = (e1x * oy - ox * e1y) / det
+        coefficients[:, 6:9] = (coefficients[:, 0:3] * dz1[:, None]
+                                + coefficients[:, 3:6] * dz2[:, None])
+        coefficients[:, 8] += triangles[:, 0, 2]
+        first_node = iy0 * nx + ix0
+        sign = np.where(det > 0, 1, -1).astype(np.int8)
         out_nodes, out_z, out_sign = [], [], []
         cumulative = np.cumsum(count)
         start = 0
+        eps = 1e-9
         while start < len(triangles):
             limit = (cumulative[start - 1] if start else 0) + _RASTER_CHUNK
             stop = max(start + 1, int(np.searchsorted(cumulative, limit, side='right')))
@@ -508,25 +544,17 @@ class Environment:
             total = int(n.sum())
             if total == 0:
                 continue
-            tri = np.repeat(np.arange(len(n)), n)
+            tri = np.repeat(np.arange(sel.start, sel.stop), n)
             local = np.arange(total) - np.repeat(np.cumsum(n) - n, n)
-            w = width[sel][tri]
-            ix = ix0[sel][tri] + local % w
-            iy = iy0[sel][tri] + local // w
-            t = triangles[sel][tri]
-            px = x0 + ix * res - t[:, 0, 0]
-            py = y0 + iy * res - t[:, 0, 1]
-            e1x, e1y = t[:, 1, 0] - t[:, 0, 0], t[:, 1, 1] - t[:, 0, 1]
-            e2x, e2y = t[:, 2, 0] - t[:, 0, 0], t[:, 2, 1] - t[:, 0, 1]
-            det = normal_z[sel][tri]
-            w1 = (px * e2y - e2x * py) / det
-            w2 = (e1x * py - px * e1y) / det
-            eps = 1e-9
+            j, i = np.divmod(local, width[tri])
+            c = coefficients[tri]
+            w1 = c[:, 0] * i + c[:, 1] * j + c[:, 2]
+            w2 = c[:, 3] * i + c[:, 4] * j + c[:, 5]
             inside = (w1 >= -eps) & (w2 >= -eps) & (w1 + w2 <= 1 + eps)
-            z = t[:, 0, 2] + w1 * (t[:, 1, 2] - t[:, 0, 2]) + w2 * (t[:, 2, 2] - t[:, 0, 2])
-            out_nodes.append((iy * nx + ix)[inside])
+            z = c[:, 6] * i + c[:, 7] * j + c[:, 8]
+            out_nodes.append((first_node[tri] + j * nx + i)[inside])
             out_z.append(z[inside])
-            out_sign.append(np.where(det[inside] > 0, 1, -1).astype(np.int8))
+            out_sign.append(sign[tri[inside]])
         if not out_nodes:
             return np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int8)
         return np.concatenate(out_nodes), np.concatenate(out_z), np.concatenate(out_sign)

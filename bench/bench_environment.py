@@ -1,0 +1,104 @@
+"""Benchmark the environment and collision queries the planners call in their loops.
+
+Prints: ground-map construction time for a 20 m x 6 m course, the cost of a 1000-point
+ground_height query, BodyCollision.collides() for one leg and for the whole body, and
+check_trajectory on 10 s at 100 Hz. Run: ``.venv/bin/python bench/bench_environment.py``.
+"""
+import argparse
+import time
+
+import numpy as np
+import trimesh
+
+from digital_actor_planner.core.collision import BodyCollision
+from digital_actor_planner.core.environment import Environment, start_configuration
+from digital_actor_planner.core.skeleton import Skeleton
+from digital_actor_planner.core.trajectory_check import check_trajectory
+
+
+def _box(low, high):
+    low, high = np.asarray(low, float), np.asarray(high, float)
+    mesh = trimesh.creation.box(high - low)
+    mesh.apply_translation((low + high) / 2)
+    return mesh
+
+
+def course_meshes(rng):
+    """A 20 m x 6 m course: floor, stairs, blocks, a table, a beam and a rough terrain patch."""
+    meshes = [_box((0, -3, -0.1), (20, 3, 0.0))]
+    meshes += [_box((3 + 0.3 * i, -3, 0), (3.3 + 0.3 * i, 3, 0.15 * (i + 1))) for i in range(4)]
+    meshes += [_box((x, y, 0), (x + 0.4, y + 0.4, h)) for x, y, h in
+               rng.uniform((6, -2.5, 0.05), (9, 2.5, 0.3), (12, 3))]
+    meshes += [_box((10, 1, 0.7), (11, 2, 0.75)), _box((12, -3, 1.4), (12.2, 3, 1.6))]
+    xs, ys = np.linspace(14, 20, 121), np.linspace(-3, 3, 121)
+    gx, gy = np.meshgrid(xs, ys)
+    gz = 0.05 + 0.04 * rng.standard_normal(gx.shape)
+    vertices = np.column_stack([gx.ravel(), gy.ravel(), gz.ravel()])
+    faces = []
+    for j in range(len(ys) - 1):
+        for i in range(len(xs) - 1):
+            a = j * len(xs) + i
+            faces += [[a, a + 1, a + len(xs) + 1], [a, a + len(xs) + 1, a + len(xs)]]
+    meshes.append(trimesh.Trimesh(vertices, np.array(faces), process=False))
+    return meshes
+
+
+def _per_call(function, repeats):
+    function()
+    start = time.perf_counter()
+    for _ in range(repeats):
+        function()
+    return (time.perf_counter() - start) / repeats
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--repeats', type=int, default=500)
+    args = parser.parse_args()
+    rng = np.random.default_rng(0)
+    meshes = course_meshes(rng)
+    triangles = sum(len(m.faces) for m in meshes)
+
+    times = []
+    for _ in range(3):
+        start = time.perf_counter()
+        environment = Environment(meshes)
+        times.append(time.perf_counter() - start)
+    print(f'Environment construction, 20 m x 6 m, {len(meshes)} meshes, {triangles} '
+          f'triangles, resolution {environment.resolution} m: best {min(times) * 1000:.0f} ms '
+          f'(of 3; {environment._layers} layers per cell at most)')
+
+    xy = rng.uniform((0, -3), (20, 3), (1000, 2))
+    z_ref = rng.uniform(0.0, 2.0, 1000)
+    cost = _per_call(lambda: environment.ground_height(xy, z_ref), args.repeats)
+    print(f'ground_height, 1000 points: {cost * 1e6:.0f} us per query '
+          f'({cost * 1e9 / 1000:.0f} ns per point)')
+
+    skeleton = Skeleton()
+    body = BodyCollision(skeleton, environment)
+    standing = start_configuration(environment, (1.0, 0.0, 0.0), skeleton)
+    configurations = standing + rng.normal(0.0, 0.02, (args.repeats, len(standing)))
+    leg = ['left_thigh', 'left_shank', 'left_foot']
+    for name, links in (('one leg (3 links)', leg), ('whole body (19 links)', None)):
+        iterator = iter(np.concatenate([configurations, configurations]))
+        cost = _per_call(lambda: body.collides(next(iterator), links), args.repeats)
+        print(f'BodyCollision.collides, {name}, new configuration each call: '
+              f'{cost * 1e6:.0f} us')
+    cost = _per_call(lambda: body.collides(standing, leg), args.repeats)
+    print(f'BodyCollision.collides, one leg, same configuration (cached poses): '
+          f'{cost * 1e6:.0f} us')
+    iterator = iter(np.concatenate([configurations, configurations]))
+    cost = _per_call(lambda: body.penetration(next(iterator)), args.repeats // 5)
+    print(f'BodyCollision.penetration, whole body: {cost * 1e6:.0f} us')
+
+    times = np.arange(1000) / 100.0
+    frames = np.tile(standing, (1000, 1))
+    frames[:, skeleton.index['waist_pitch']] = 0.2 * np.sin(times)
+    start = time.perf_counter()
+    report = check_trajectory(skeleton, environment, times, frames)
+    print(f'check_trajectory, 10 s at 100 Hz: {time.perf_counter() - start:.2f} s '
+          f'(ok={report.ok})')
+
+
+if __name__ == '__main__':
+    main()
