@@ -1,7 +1,8 @@
 """actor_planner as a real process: the joint stream, commands, diagnostics, scene reload.
 
-One node process walks the stairs course for the whole module; each test sets up the motion it
-needs (CI-proof: rclpy only, localhost discovery, own ROS_DOMAIN_ID).
+One node process serves the whole module, in file order: it walks the stairs course, then the
+scene is reloaded at run time to the flat course, where the command tests run (each sets up the
+motion it needs). CI-proof: rclpy only, localhost discovery, own ROS_DOMAIN_ID.
 """
 import math
 import os
@@ -83,6 +84,46 @@ def test_forward_command_walks_the_stairs_at_a_steady_100_hz(actor):
     assert values['state'] in ('walking', 'stuck'), values
 
 
+def _set_scene(probe, path):
+    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+    client = probe.node.create_client(SetParameters, '/actor_planner/set_parameters')
+    try:
+        assert client.wait_for_service(timeout_sec=10.0)
+        request = SetParameters.Request(parameters=[Parameter(
+            name='scene', value=ParameterValue(type=ParameterType.PARAMETER_STRING,
+                                               string_value=path))])
+        future = client.call_async(request)
+        assert probe.spin_until(future.done, 30.0)
+        return future.result().results[0]
+    finally:
+        probe.node.destroy_client(client)
+
+
+def test_scene_reload_at_run_time_keeps_the_old_scene_when_broken(actor, tmp_path):
+    _, probe = actor
+    flat = scene('flat')
+    result = _set_scene(probe, flat)
+    assert result.successful, result.reason
+    assert probe.spin_until(lambda: probe.diagnostic_values().get('scene') == flat, 5.0)
+    # The actor stands at the new course's start and still walks.
+    probe.drive(0.5, 0.0, 3.0)
+    assert probe.latest()[ROOT_X] > 0.5
+
+    broken = tmp_path / 'broken.yaml'
+    broken.write_text('meshes: [{file: missing_mesh.stl}]\nstart: [0, 0, 0]\n')
+    count = len(probe.joint_states)
+    result = _set_scene(probe, str(broken))
+    assert not result.successful
+    assert 'missing_mesh.stl' in result.reason or 'broken.yaml' in result.reason, result.reason
+    assert probe.spin_until(lambda: probe.diagnostic_values().get('scene_error'), 5.0)
+    values = probe.diagnostic_values()
+    assert values['scene'] == flat
+    assert 'broken.yaml' in values['scene_error']
+    probe.drive(0.5, 0.0, 2.0)
+    assert len(probe.joint_states) > count + 150
+
+
 def test_zero_command_stops_the_actor_within_one_step(actor):
     _, probe = actor
     probe.drive(0.4, 0.0, 2.0)
@@ -140,44 +181,4 @@ def test_diagnostics_report_state_planning_time_and_stream_health(actor):
     assert float(values['planning_time_p99_ms']) > 0.0
     # One second of a loaded machine; the +-5 % check over 10 s is in the walking test.
     assert abs(float(values['publish_rate_hz']) - 100.0) < 20.0
-    assert values['scene'] == COURSE
-
-
-def _set_scene(probe, path):
-    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
-    from rcl_interfaces.srv import SetParameters
-    client = probe.node.create_client(SetParameters, '/actor_planner/set_parameters')
-    try:
-        assert client.wait_for_service(timeout_sec=10.0)
-        request = SetParameters.Request(parameters=[Parameter(
-            name='scene', value=ParameterValue(type=ParameterType.PARAMETER_STRING,
-                                               string_value=path))])
-        future = client.call_async(request)
-        assert probe.spin_until(future.done, 30.0)
-        return future.result().results[0]
-    finally:
-        probe.node.destroy_client(client)
-
-
-def test_scene_reload_at_run_time_keeps_the_old_scene_when_broken(actor, tmp_path):
-    _, probe = actor
-    flat = scene('flat')
-    result = _set_scene(probe, flat)
-    assert result.successful, result.reason
-    assert probe.spin_until(lambda: probe.diagnostic_values().get('scene') == flat, 5.0)
-    # The actor stands at the new course's start and still walks.
-    probe.drive(0.5, 0.0, 3.0)
-    assert probe.latest()[ROOT_X] > 0.5
-
-    broken = tmp_path / 'broken.yaml'
-    broken.write_text('meshes: [{file: missing_mesh.stl}]\nstart: [0, 0, 0]\n')
-    count = len(probe.joint_states)
-    result = _set_scene(probe, str(broken))
-    assert not result.successful
-    assert 'missing_mesh.stl' in result.reason or 'broken.yaml' in result.reason, result.reason
-    assert probe.spin_until(lambda: probe.diagnostic_values().get('scene_error'), 5.0)
-    values = probe.diagnostic_values()
-    assert values['scene'] == flat
-    assert 'broken.yaml' in values['scene_error']
-    probe.drive(0.5, 0.0, 2.0)
-    assert len(probe.joint_states) > count + 150
+    assert values['scene'] == scene('flat')  # reloaded by the scene test above

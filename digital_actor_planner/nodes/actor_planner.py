@@ -46,6 +46,11 @@ BUFFER_HISTORY = 1.0
 # Mesh triangles drawn in RViz at most (one TRIANGLE_LIST per mesh).
 MAX_MARKER_TRIANGLES = 200_000
 PAST_FOOTSTEPS = 40
+# The planning lead grows to LEAD_SAFETY times the slowest of the last RECENT_BLOCKS planning
+# times, up to MAX_LEAD s.
+LEAD_SAFETY = 1.5
+RECENT_BLOCKS = 10
+MAX_LEAD = 2.0
 
 
 class FrameBuffer:
@@ -341,8 +346,9 @@ class ActorPlannerNode(Node):
                 self.buffer.restart(pending.configuration, self.actor_offset)
                 self.committed_footsteps.clear()
             ahead = self.buffer.end_time - self.playback_time
-            if ahead > self.planning_lead:
-                self._wake.wait(min(ahead - self.planning_lead, 0.05))
+            lead = self._effective_lead()
+            if ahead > lead:
+                self._wake.wait(min(ahead - lead, 0.05))
                 self._wake.clear()
                 continue
             linear_x, angular_z = self.command.current(time.monotonic(), self.cmd_timeout)
@@ -362,6 +368,16 @@ class ActorPlannerNode(Node):
             if block.status == 'walking' and len(block.footsteps):
                 self.committed_footsteps.append(np.asarray(block.footsteps[0], dtype=float))
             self._latest_block = block
+
+    def _effective_lead(self) -> float:
+        """Buffered time (s) below which the next block is planned.
+
+        At least ``planning_lead``, and more when recent blocks took long to plan (a loaded
+        machine), so that playback does not run dry while the next block is planned.
+        """
+        recent = list(self.stats.planning_times)[-RECENT_BLOCKS:]
+        slowest = max((t for t in recent if math.isfinite(t)), default=0.0)
+        return min(MAX_LEAD, max(self.planning_lead, LEAD_SAFETY * slowest))
 
     def _publishing_loop(self) -> None:
         # Ticks on a monotonic schedule; a late tick is published late, missed ticks are skipped
@@ -462,6 +478,7 @@ class ActorPlannerNode(Node):
             'missed_frames': str(self.missed_frames),
             'buffer_underruns': str(self.underruns),
             'buffered_ahead_s': f'{self.buffer.end_time - self.playback_time:.3f}',
+            'planning_lead_s': f'{self._effective_lead():.3f}',
             'scene': self.scene_path,
             'scene_error': self.scene_error,
         }
