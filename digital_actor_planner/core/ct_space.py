@@ -130,36 +130,45 @@ class BodyKinematics:
             positions = np.empty((k, self.link_count, 3))
             rotations[:, 0] = np.eye(3)
             positions[:, 0] = 0.0
-        for step in (self.steps if steps is None else steps):
+        steps = self.steps if steps is None else steps
+        # All joint rotations at once: few large NumPy calls instead of many small ones.
+        revolute = [st for st in steps if st.joint >= 0 and st.kind != 'prismatic']
+        local = {}
+        if revolute:
+            angle = q[:, [st.joint for st in revolute]] * np.array(
+                [st.axis_sign if st.axis_coordinate >= 0 else 1.0 for st in revolute])
+            cos, sin = np.cos(angle), np.sin(angle)
+            mats = np.zeros((k, len(revolute), 3, 3))
+            for n, st in enumerate(revolute):
+                coordinate = st.axis_coordinate
+                if coordinate < 0:
+                    mats[:, n] = _rodrigues(st.axis, q[:, st.joint])
+                    continue
+                a, b = (coordinate + 1) % 3, (coordinate + 2) % 3
+                mats[:, n, coordinate, coordinate] = 1.0
+                mats[:, n, a, a] = cos[:, n]
+                mats[:, n, b, b] = cos[:, n]
+                mats[:, n, b, a] = sin[:, n]
+                mats[:, n, a, b] = -sin[:, n]
+                local[id(st)] = n
+            for n, st in enumerate(revolute):
+                local[id(st)] = n
+        for step in steps:
             parent_rotation = rotations[:, step.parent]
-            base_position = positions[:, step.parent]
             if step.has_offset:
-                base_position = base_position + parent_rotation @ step.origin_translation
+                positions[:, step.child] = (positions[:, step.parent]
+                                            + parent_rotation @ step.origin_translation)
+            else:
+                positions[:, step.child] = positions[:, step.parent]
             base = (parent_rotation if step.origin_rotation is None
                     else parent_rotation @ step.origin_rotation)
             if step.joint < 0:
                 rotations[:, step.child] = base
-                positions[:, step.child] = base_position
-                continue
-            value = q[:, step.joint]
-            if step.kind == 'prismatic':
+            elif step.kind == 'prismatic':
                 rotations[:, step.child] = base
-                positions[:, step.child] = base_position + (base @ step.axis) * value[:, None]
-                continue
-            positions[:, step.child] = base_position
-            coordinate = step.axis_coordinate
-            if coordinate < 0:
-                rotations[:, step.child] = base @ _rodrigues(step.axis, value)
-                continue
-            angle = step.axis_sign * value
-            cos, sin = np.cos(angle)[:, None], np.sin(angle)[:, None]
-            # Right-multiplying by a rotation about axis e_c mixes the other two columns.
-            a, b = (coordinate + 1) % 3, (coordinate + 2) % 3
-            out = rotations[:, step.child]
-            out[:, :, coordinate] = base[:, :, coordinate]
-            column_a, column_b = base[:, :, a], base[:, :, b]
-            out[:, :, a] = column_a * cos + column_b * sin
-            out[:, :, b] = column_b * cos - column_a * sin
+                positions[:, step.child] += (base @ step.axis) * q[:, step.joint, None]
+            else:
+                np.matmul(base, mats[:, local[id(step)]], out=rotations[:, step.child])
         return rotations, positions
 
 
@@ -202,6 +211,8 @@ class BodyShapes:
         self.origin_rotation = np.stack([s.origin[:3, :3] for s in shapes])
         self.origin_translation = np.stack([s.origin[:3, 3] for s in shapes])
         self.kind = tuple(s.kind for s in shapes)
+        self.identity_origin = np.array([np.allclose(s.origin[:3, :3], np.eye(3))
+                                         for s in shapes])
         self.objects = []
         # Per-shape parameters of the box bound: half extents (box), (radius, half length)
         # (cylinder) or radius (sphere), all padded.
@@ -263,8 +274,9 @@ class BodyShapes:
         link_rotation = rotations[:, self.link[shapes]]
         centre = positions[:, self.link[shapes]] + (
             link_rotation @ self.origin_translation[shapes][:, :, None])[..., 0]
-        rotation = link_rotation @ self.origin_rotation[shapes]
-        return rotation, centre
+        if self.identity_origin[shapes].all():
+            return link_rotation, centre
+        return link_rotation @ self.origin_rotation[shapes], centre
 
     def bounds(self, rotation: np.ndarray, centre: np.ndarray,
                shapes: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
@@ -379,12 +391,23 @@ class TimedBody:
         self.environment = environment
         self.frames = np.array(frames, dtype=float)
         self.rotations, self.positions = kinematics.poses(self.frames)
+        self._shape_poses()
+
+    def _shape_poses(self) -> None:
+        shapes = self.shapes
+        every = np.arange(len(shapes.kind))
+        #: (k, S, 3, 3), (k, S, 3) world poses and (k, S, 3) box corners of every shape.
+        self.shape_rotation, self.shape_centre = shapes.poses(self.rotations, self.positions,
+                                                              every)
+        self.shape_lower, self.shape_upper = shapes.bounds(self.shape_rotation,
+                                                           self.shape_centre, every)
 
     def set_branch(self, indices: np.ndarray, values: np.ndarray,
                    steps: Sequence[_Step]) -> None:
         """Fix a planned branch: write its (k, d) values and update the poses of its subtree."""
         self.frames[:, indices] = values
         self.kinematics.poses(self.frames, self.rotations, self.positions, steps)
+        self._shape_poses()
 
 
 class CTSpace:
@@ -427,17 +450,29 @@ class CTSpace:
         self.upper = skeleton.upper[self.indices]
         self.speed_limit = skeleton.velocity_limit[self.indices]
         self.time_weight = float(time_weight)
-        self.steps = body.kinematics.subtree_steps(self.joint_names)
-        moving = {step.child for step in self.steps}
+        steps = body.kinematics.subtree_steps(self.joint_names)
+        moving = {step.child for step in steps}
         shapes = body.shapes
         self.checked = shapes.shapes_of(checked_links)
         self.checked = self.checked[np.isin(shapes.link[self.checked], list(moving))]
+        #: The steps to re-evaluate when the branch moves (all links it carries).
+        self.steps = steps
+        # Only the links on the way to the checked shapes matter for validity.
+        needed = set(shapes.link[self.checked].tolist())
+        parent_of = {step.child: step.parent for step in steps}
+        for link in list(needed):
+            while link in parent_of:
+                link = parent_of[link]
+                needed.add(link)
+        self._check_steps = tuple(step for step in steps if step.child in needed)
         obstacle = shapes.shapes_of(obstacle_links)
         self.pairs = shapes.pairs(self.checked, obstacle)
-        # The obstacle shapes do not move while this branch is planned: bound them once.
-        rotation, centre = shapes.poses(body.rotations, body.positions, self.pairs[:, 1])
-        self._pair_rotation, self._pair_centre = rotation, centre
-        self._pair_lower, self._pair_upper = shapes.bounds(rotation, centre, self.pairs[:, 1])
+        # The obstacle shapes do not move while this branch is planned.
+        other = self.pairs[:, 1]
+        self._pair_rotation = body.shape_rotation[:, other]
+        self._pair_centre = body.shape_centre[:, other]
+        self._pair_lower = body.shape_lower[:, other]
+        self._pair_upper = body.shape_upper[:, other]
         self._pair_column = np.searchsorted(self.checked, self.pairs[:, 0])
         self._prepare_environment()
         self.checks = 0
@@ -654,7 +689,7 @@ class CTSpace:
         full[:, self.indices] = q
         rotations = body.rotations[frames]
         positions = body.positions[frames]
-        body.kinematics.poses(full, rotations, positions, self.steps)
+        body.kinematics.poses(full, rotations, positions, self._check_steps)
         shapes = body.shapes
         rotation, centre = shapes.poses(rotations, positions, self.checked)
         low, high = shapes.bounds(rotation, centre, self.checked)

@@ -252,6 +252,12 @@ class UpperBodyPlanner:
         self._obstacles = {'waist': _LEG_LINKS,
                            'left_arm': _LEG_LINKS + _TRUNK_LINKS,
                            'right_arm': _LEG_LINKS + _TRUNK_LINKS + _ARM_LINKS['left']}
+        self._upper_shapes = self.shapes.shapes_of(
+            _TRUNK_LINKS + _ARM_LINKS['left'] + _ARM_LINKS['right'])
+        self._upper_pairs = np.vstack([
+            self.shapes.pairs(self.shapes.shapes_of(self._checked[name]),
+                              self.shapes.shapes_of(self._obstacles[name]))
+            for name in BRANCH_ORDER])
 
     def _check_input(self, times: np.ndarray, frames: np.ndarray) -> None:
         skeleton = self.skeleton
@@ -301,12 +307,24 @@ class UpperBodyPlanner:
         body = TimedBody(self.kinematics, self.shapes, self.environment, frames)
         out = frames.copy()
         per_branch: Dict[str, dict] = {}
+        if self._nothing_to_plan(times, body):
+            for name in BRANCH_ORDER:
+                per_branch[name] = dict(ok=True, fast=True, nodes=0, backtracks=0, grown=0,
+                                        deviation=0.0, checks=0, time=0.0)
+            return UpperBodyPlan(frames=out, ok=True, reason='', deviation=0.0,
+                                 planning_time=time.perf_counter() - began,
+                                 per_branch=per_branch)
         ok, reason = True, ''
+        last = len(times) - 1
         for name in BRANCH_ORDER:
             tic = time.perf_counter()
             indices = self.indices[name]
-            objective = frames[:, indices].copy()
             start = frames[0, indices].copy()
+            objective = frames[:, indices].copy()
+            # Frame 0 holds the start, not the pattern: continue the pattern back one frame.
+            objective[0] = np.clip(2 * objective[1] - objective[2] if last >= 2
+                                   else objective[1], self.skeleton.lower[indices],
+                                   self.skeleton.upper[indices])
             space = CTSpace(name, body, times, objective, self._checked[name],
                             self._obstacles[name], config.time_weight)
             record = dict(ok=True, fast=False, nodes=0, backtracks=0, grown=0)
@@ -316,28 +334,27 @@ class UpperBodyPlanner:
                 links = self._links_in_collision(frames[0], name)
                 reason = (f'{name} start in collision at t={times[0]:.2f} s'
                           + (f' ({", ".join(links)})' if links else ''))
+            elif self._objective_is_legal(space, start):
+                # Fast path: the objective, joined from the start, is legal at every frame.
+                path = objective.copy()
+                record['fast'] = True
             else:
-                # Fast path: the objective (joined from the start) is legal at every frame.
-                if space.first_invalid_motion((start, 0), (objective[-1], len(times) - 1)) < 0:
-                    path = space.motion_frames((start, 0), (objective[-1], len(times) - 1))
-                    record['fast'] = True
-                else:
-                    result = self.roadmaps[name].solve(
-                        space, start, hold_frames=config.hold_frames,
-                        speed_fraction=config.speed_fraction,
-                        growth_attempts=config.growth_attempts,
-                        node_budget=config.node_budget, max_backtracks=config.max_backtracks)
-                    record.update(nodes=result.nodes, backtracks=result.backtracks,
-                                  grown=result.grown, ok=result.ok)
-                    path = result.path
-                    if not result.ok:
-                        ok = False
-                        reason = f'{name} blocked at t={times[result.blocked_frame]:.2f} s'
+                result = self.roadmaps[name].solve(
+                    space, start, hold_frames=config.hold_frames,
+                    speed_fraction=config.speed_fraction,
+                    growth_attempts=config.growth_attempts,
+                    node_budget=config.node_budget, max_backtracks=config.max_backtracks)
+                record.update(nodes=result.nodes, backtracks=result.backtracks,
+                              grown=result.grown, ok=result.ok)
+                path = result.path
+                if not result.ok:
+                    ok = False
+                    reason = f'{name} blocked at t={times[result.blocked_frame]:.2f} s'
             if path is not None and record['ok']:
                 path[0] = start
                 out[:, indices] = path
                 body.set_branch(indices, path, space.steps)
-            record['deviation'] = float(np.max(np.abs(out[1:, indices] - objective[1:])))
+            record['deviation'] = float(np.max(np.abs(out[1:, indices] - frames[1:, indices])))
             record['checks'] = space.checks
             record['time'] = time.perf_counter() - tic
             per_branch[name] = record
@@ -347,6 +364,36 @@ class UpperBodyPlanner:
         deviation = float(np.max(np.abs(out[1:, upper] - frames[1:, upper])))
         return UpperBodyPlan(frames=out, ok=ok, reason=reason, deviation=deviation,
                              planning_time=time.perf_counter() - began, per_branch=per_branch)
+
+    @staticmethod
+    def _objective_is_legal(space: CTSpace, start: np.ndarray) -> bool:
+        """Whether start, then the objective at frames 1..k-1, is a legal motion."""
+        path = np.vstack([start[None], space.objective[1:]])
+        speed = np.abs(np.diff(path, axis=0)) / np.diff(space.times)[:, None]
+        if np.any(speed > space.speed_limit * (1 + 1e-6)):
+            return False
+        return space.first_invalid(path[1:], np.arange(1, len(path))) < 0
+
+    def _nothing_to_plan(self, times: np.ndarray, body: TimedBody) -> bool:
+        """Broad-phase cull (§5): the whole step's upper body is far from everything.
+
+        True when the input upper-body motion is within the speed limits, no environment
+        triangle comes near the box around the upper body over the whole step, and no box of an
+        upper-body shape meets the box of a body shape it must not touch.
+        """
+        upper = self.upper_indices
+        speed = np.abs(np.diff(body.frames[:, upper], axis=0)) / np.diff(times)[:, None]
+        if np.any(speed > self.skeleton.velocity_limit[upper] * (1 + 1e-6)):
+            return False
+        shapes = self._upper_shapes
+        lower = body.shape_lower[:, shapes].min(axis=(0, 1))
+        upper_corner = body.shape_upper[:, shapes].max(axis=(0, 1))
+        if len(self.environment.triangles_near(lower, upper_corner)):
+            return False
+        a, b = self._upper_pairs[:, 0], self._upper_pairs[:, 1]
+        overlap = np.all((body.shape_upper[:, a] >= body.shape_lower[:, b])
+                         & (body.shape_lower[:, a] <= body.shape_upper[:, b]), axis=-1)
+        return not overlap.any()
 
     def _links_in_collision(self, q: np.ndarray, branch: str) -> list:
         """Names of the branch's links touching the environment at ``q`` (for the reason)."""
