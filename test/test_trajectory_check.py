@@ -188,3 +188,15 @@ def test_ten_seconds_at_100_hz_are_checked_in_seconds(skeleton, floor_world, sta
     assert elapsed < 20.0  # generous on a shared 2-core machine; about 1 s when idle
     sparse = check_trajectory(skeleton, floor_world, times, frames, stride=10)
     assert sparse.frames_checked == 101 and sparse.ok              # every 10th and the last
+
+
+def test_a_link_wholly_inside_a_solid_is_found(skeleton, standing):
+    """FCL tests surfaces; a foot buried inside a block touches none of its triangles."""
+    block = _box((-0.5, 0.02, -0.1), (0.5, 0.5, 0.2))              # around the left foot
+    env = Environment([_box((-3, -3, -0.2), (3, 3, 0.0)), block])
+    times, frames = _hold(standing, 0.1)
+    report = check_trajectory(skeleton, env, times, frames)
+    assert report.penetration['left_foot'] == pytest.approx(0.198, abs=1e-6)
+    assert report.penetration['right_foot'] == 0.0
+    assert any(f.startswith('left_foot penetrates the environment by 198.0 mm')
+               for f in report.failures())

@@ -15,6 +15,7 @@ from typing import Dict, Iterable, List, Optional, Tuple
 
 import fcl
 import numpy as np
+import trimesh
 
 from digital_actor_planner.core.collision import BodyCollision
 
@@ -189,6 +190,47 @@ class _Soles:
         return out
 
 
+def _buried_depths(skeleton, environment, transforms: np.ndarray) -> np.ndarray:
+    """How deep each shape's centre is buried inside a solid: (k, S) m, 0 where it is not.
+
+    FCL tests surfaces, so a shape wholly inside a solid touches no triangle. A centre is inside
+    when the first surface straight above it faces up (a solid's top, or a height-field terrain
+    above it); the depth is what lifts the whole shape out through that surface.
+    """
+    k, count = transforms.shape[:2]
+    if k == 0:
+        return np.zeros((0, count))
+    world = trimesh.util.concatenate([trimesh.Trimesh(m.vertices, m.faces, process=False)
+                                      for m in environment.meshes])
+    centres = transforms[:, :, :3, 3].reshape(-1, 3)
+    directions = np.tile([0.0, 0.0, 1.0], (len(centres), 1))
+    locations, rays, triangles = world.ray.intersects_location(centres, directions,
+                                                               multiple_hits=False)
+    depth = np.zeros(len(centres))
+    facing_up = world.face_normals[triangles, 2] > 0
+    rays, locations = rays[facing_up], locations[facing_up]
+    if len(rays):
+        rotation = transforms[:, :, :3, :3].reshape(-1, 3, 3)[rays]
+        # Reach of each shape below its centre: its support along -z.
+        reach = np.zeros(len(rays))
+        shape_of = np.tile(np.arange(count), k)[rays]
+        for s, shape in enumerate(skeleton.collision_shapes):
+            mask = shape_of == s
+            if not np.any(mask):
+                continue
+            z_axis = rotation[mask, 2, :]  # world z in the shape frame
+            if shape.kind == 'box':
+                reach[mask] = np.abs(z_axis) @ (np.asarray(shape.size, dtype=float) / 2)
+            elif shape.kind == 'cylinder':
+                along = np.minimum(np.abs(z_axis[:, 2]), 1.0)
+                reach[mask] = (shape.size[0] * np.sqrt(1.0 - along ** 2)
+                               + shape.size[1] / 2 * along)
+            else:
+                reach[mask] = shape.size[0]
+        depth[rays] = locations[:, 2] - centres[rays, 2] + reach
+    return depth.reshape(k, count)
+
+
 def check_trajectory(skeleton, environment, times, frames, *, penetration_tol: float = 0.003,
                      foot_rest_tol: float = 0.015, foot_down_tol: float = 0.025,
                      slip_tol: float = 0.01, stride: int = 1,
@@ -289,6 +331,9 @@ def check_trajectory(skeleton, environment, times, frames, *, penetration_tol: f
     soles = _Soles(skeleton, environment, tolerances['foot_down_tol'])
     shape_transforms = (skeleton.shape_transforms(skeleton.forward_kinematics(clean[checked]))
                         if len(checked) else np.zeros((0, len(skeleton.collision_shapes), 4, 4)))
+    buried = _buried_depths(skeleton, environment, shape_transforms)
+    link_shapes = {link: [i for i, shape in enumerate(skeleton.collision_shapes)
+                          if shape.link == link] for link in penetration}
     foot_down_gap, foot_down_time = 0.0, float(times[0])
     corner_runs = {foot: [None] * 4 for foot in FEET}
     slip = {foot: 0.0 for foot in FEET}
@@ -298,6 +343,7 @@ def check_trajectory(skeleton, environment, times, frames, *, penetration_tol: f
         t = float(times[i])
         # No link inside the environment (feet may rest on a surface).
         for link, depth in body.penetration(q, penetration).items():
+            depth = max(depth, float(buried[row, link_shapes[link]].max()))
             if depth > penetration[link]:
                 penetration[link], penetration_time[link] = depth, t
         down = False
@@ -305,7 +351,7 @@ def check_trajectory(skeleton, environment, times, frames, *, penetration_tol: f
             transform = shape_transforms[row, soles.shape_index[foot]]
             # A foot in a surface is down (its depth is judged above); a probe deep inside a
             # solid would not touch its surface.
-            sunk = body.collides(q, (foot,))
+            sunk = buried[row, soles.shape_index[foot]] > 0 or body.collides(q, (foot,))
             stance = sunk or soles.in_stance(foot, transform)
             down = down or stance or soles.down(foot, transform)
             _track_slip(foot, soles, transform, stance, t, corner_runs, slip, slip_time)
