@@ -1,10 +1,12 @@
 """ROS 2 node ``actor_planner``: cmd_vel and a mesh scene in, a 22-DOF JointState stream out.
 
 A thin adapter over :class:`digital_actor_planner.core.actor.Actor` (STYLE: nodes only adapt).
-Three threads share the work so that planning never stalls the stream:
+Planning never stalls the stream:
 
-* a planning worker calls ``actor.plan_next()`` whenever less than ``planning_lead`` seconds of
-  committed frames are buffered ahead of playback (so about one step is buffered);
+* the core runs in a child process (:class:`PlanningProcess`): its NumPy and FCL calls hold
+  the GIL for milliseconds at a time, which would delay a publishing thread in the same process;
+* a planning thread asks it for the next block whenever less than the planning lead of
+  committed frames is buffered ahead of playback (so about one step is buffered);
 * a publishing thread ticks on a monotonic schedule at ``publish_rate`` and publishes the frame
   for "now", interpolated from the buffer; if planning is late it holds the last frame;
 * the executor thread handles cmd_vel, parameter changes, markers and diagnostics.
@@ -14,11 +16,13 @@ from __future__ import annotations
 import collections
 from dataclasses import dataclass
 import math
+import multiprocessing
 import os
+import signal
 import sys
 import threading
 import time
-from typing import Tuple
+from typing import Optional, Tuple
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Point, PoseStamped, Quaternion, Twist, TwistStamped
@@ -51,6 +55,8 @@ PAST_FOOTSTEPS = 40
 LEAD_SAFETY = 1.5
 RECENT_BLOCKS = 10
 MAX_LEAD = 2.0
+# The ground profile marker shows surfaces up to this far above the predicted path (m).
+PROFILE_STEP_UP = 0.5
 
 
 class FrameBuffer:
@@ -195,6 +201,184 @@ def _points(xyz: np.ndarray):
     return [Point(x=float(x), y=float(y), z=float(z)) for x, y, z in xyz]
 
 
+def build_actor(skeleton: Skeleton, actor_config: ActorConfig, scene_path: str,
+                start_pose: Optional[Tuple[float, float, float]]):
+    """Load a scene and place a new actor at its start (or at ``start_pose``).
+
+    Returns
+    -------
+    (Actor, Scene)
+
+    Raises
+    ------
+    ConfigurationError
+        Naming ``scene`` (unreadable, bad mesh, no standing room at the scene's start) or
+        ``start_pose`` (no ground or an obstacle there).
+
+    """
+    try:
+        scene = load_scene(scene_path, skeleton if start_pose is None else None)
+    except (OSError, ValueError) as error:
+        raise ConfigurationError('scene', str(error)) from error
+    try:
+        if start_pose is not None:
+            check_start(scene.environment, start_pose, skeleton)
+        actor = Actor(skeleton, scene.environment, actor_config,
+                      start=tuple(scene.start if start_pose is None else start_pose))
+    except ValueError as error:
+        raise ConfigurationError('scene' if start_pose is None else 'start_pose',
+                                 str(error)) from error
+    return actor, scene
+
+
+def _mesh_arrays(scene) -> list:
+    return [(np.asarray(m.vertices, dtype=float), np.asarray(m.faces, dtype=np.int64))
+            for m in getattr(scene.environment, 'meshes', ())]
+
+
+def _ground_profile(actor: Actor, block) -> np.ndarray:
+    """Walkable ground (p, 3) under the block's predicted path, for the RViz markers."""
+    path = np.asarray(block.path, dtype=float).reshape(-1, 3)
+    if len(path) == 0:
+        return path
+    # §4.2: the ground profile the footstep planner sees, up to a step up above the path.
+    height, _ = actor.environment.ground_height(path[:, :2], path[:, 2] + PROFILE_STEP_UP)
+    return np.column_stack([path[:, :2], height])[np.isfinite(height)]
+
+
+def _planning_process(connection, actor_config: ActorConfig, urdf_path: str, scene_path: str,
+                      start_pose) -> None:
+    """Child process: own the core Actor and answer the node's requests over ``connection``."""
+    # Ctrl-C goes to the whole process group; the node decides when this process ends.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    skeleton = Skeleton(urdf_path)
+    try:
+        actor, scene = build_actor(skeleton, actor_config, scene_path, start_pose)
+    except ConfigurationError as error:
+        connection.send(('error', error.parameter, str(error)))
+        return
+    connection.send(('ready', actor.configuration, _mesh_arrays(scene)))
+    while True:
+        try:
+            request = connection.recv()
+        except (EOFError, OSError):
+            return
+        if request[0] == 'plan':
+            try:
+                warning = actor.set_command(request[1], request[2])
+                block = actor.plan_next()
+                connection.send(('block', warning, block, _ground_profile(actor, block)))
+            except Exception as error:  # noqa: B902 -- reported on diagnostics, stream goes on
+                connection.send(('failed', f'{type(error).__name__}: {error}'))
+        elif request[0] == 'scene':
+            try:
+                new_actor, scene = build_actor(skeleton, actor_config, request[1], start_pose)
+            except ConfigurationError as error:
+                connection.send(('scene', str(error), None, None))
+                continue
+            actor = new_actor
+            connection.send(('scene', '', actor.configuration, _mesh_arrays(scene)))
+        else:
+            return
+
+
+class PlanningFailed(RuntimeError):
+    """The planning process could not plan (or has gone)."""
+
+
+class PlanningProcess:
+    """The core Actor in a child process, driven by request/reply over a pipe.
+
+    Parameters
+    ----------
+    actor_config, urdf_path, scene_path, start_pose
+        As for :func:`build_actor`.
+    timeout
+        Seconds to wait for the child to load the scene.
+
+    Raises
+    ------
+    ConfigurationError
+        The scene or start pose cannot be used.
+
+    """
+
+    def __init__(self, actor_config: ActorConfig, urdf_path: str, scene_path: str,
+                 start_pose, timeout: float = 300.0):
+        context = multiprocessing.get_context('spawn')
+        self._connection, child = context.Pipe()
+        self._lock = threading.Lock()
+        self._process = context.Process(
+            target=_planning_process, name='actor_planning', daemon=True,
+            args=(child, actor_config, urdf_path, scene_path, start_pose))
+        self._process.start()
+        child.close()
+        try:
+            reply = self._receive(timeout)
+        except PlanningFailed as error:
+            self.close()
+            raise ConfigurationError('scene', str(error)) from error
+        if reply[0] == 'error':
+            self.close()
+            raise ConfigurationError(reply[1], reply[2].split(': ', 1)[-1])
+        _, self.configuration, self.meshes = reply
+
+    def _receive(self, timeout: float):
+        try:
+            if not self._connection.poll(timeout):
+                raise PlanningFailed(f'planning process gave no answer in {timeout:g} s')
+            return self._connection.recv()
+        except (EOFError, OSError) as error:
+            raise PlanningFailed(f'planning process exited ({error!r})') from error
+
+    def plan(self, linear_x: float, angular_z: float, timeout: float = 60.0):
+        """Set the command and plan the next block.
+
+        Returns
+        -------
+        (str or None, StepBlock, numpy.ndarray)
+            The clamping warning, the block and the ground profile (p, 3) under its path, m.
+
+        """
+        with self._lock:
+            try:
+                self._connection.send(('plan', linear_x, angular_z))
+            except OSError as error:
+                raise PlanningFailed(f'planning process exited ({error!r})') from error
+            reply = self._receive(timeout)
+        if reply[0] == 'failed':
+            raise PlanningFailed(reply[1])
+        return reply[1], reply[2], reply[3]
+
+    def load_scene(self, scene_path: str, timeout: float = 300.0):
+        """Replace the actor by one on a new scene; return (configuration (22,), meshes).
+
+        Raises
+        ------
+        ConfigurationError
+            The scene cannot be used; the old actor stays.
+
+        """
+        with self._lock:
+            self._connection.send(('scene', scene_path))
+            _, error, configuration, meshes = self._receive(timeout)
+        if error:
+            raise ConfigurationError('scene', error.split(': ', 1)[-1])
+        return configuration, meshes
+
+    def close(self) -> None:
+        """Ask the child to finish; terminate it if it does not."""
+        try:
+            self._connection.send(('stop',))
+        except (OSError, ValueError):
+            pass
+        self._process.join(timeout=5.0)
+        if self._process.is_alive():
+            self._process.terminate()
+            self._process.join(timeout=5.0)
+        self._connection.close()
+
+
 class ActorPlannerNode(Node):
     """Stream the digital actor's whole-body motion as JointState, directed by cmd_vel."""
 
@@ -207,14 +391,16 @@ class ActorPlannerNode(Node):
             validate(self.actor_config)
         except ValueError as error:
             raise ConfigurationError(_field_named(error, self.config), str(error)) from error
-        self.actor, self.scene = self._build_actor(self.config.scene)
+        self.planner = PlanningProcess(self.actor_config, self.skeleton.urdf_path,
+                                       self.config.scene, self.config.start_pose)
+        self.meshes = self.planner.meshes
         self.scene_path = self.config.scene
         self.scene_error = ''
         self.cmd_timeout = self.config.cmd_timeout
         self.planning_lead = self.config.planning_lead
         self.period = 1.0 / self.config.publish_rate
 
-        self.buffer = FrameBuffer(self.actor.configuration)
+        self.buffer = FrameBuffer(self.planner.configuration)
         self.actor_offset = 0.0  # buffer time of the current actor's clock zero
         self.command = CommandState()
         self.stats = PlanningStats()
@@ -225,7 +411,7 @@ class ActorPlannerNode(Node):
         self.committed_footsteps = collections.deque(maxlen=PAST_FOOTSTEPS)
         self._latest_block = None
         self._markers_block = None
-        self._pending_actor = None
+        self._pending_start = None
         self._pending_lock = threading.Lock()
         self._stop = threading.Event()
         self._wake = threading.Event()
@@ -261,31 +447,6 @@ class ActorPlannerNode(Node):
         except ParameterUninitializedException:
             return None
 
-    def _build_actor(self, scene_path: str):
-        """Load a scene and place a new actor at its start (or at ``start_pose``).
-
-        Raises
-        ------
-        ConfigurationError
-            Naming ``scene`` (unreadable, bad mesh, no standing room at the scene's start) or
-            ``start_pose`` (no ground or an obstacle there).
-
-        """
-        start = self.config.start_pose
-        try:
-            scene = load_scene(scene_path, self.skeleton if start is None else None)
-        except (OSError, ValueError) as error:
-            raise ConfigurationError('scene', str(error)) from error
-        try:
-            if start is not None:
-                check_start(scene.environment, start, self.skeleton)
-            actor = Actor(self.skeleton, scene.environment, self.actor_config,
-                          start=tuple(scene.start if start is None else start))
-        except ValueError as error:
-            raise ConfigurationError('scene' if start is None else 'start_pose',
-                                     str(error)) from error
-        return actor, scene
-
     def _make_interfaces(self) -> None:
         latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL,
                              reliability=ReliabilityPolicy.RELIABLE)
@@ -319,16 +480,16 @@ class ActorPlannerNode(Node):
                 self.cmd_timeout = float(parameter.value)
             elif parameter.name == 'scene':
                 try:
-                    actor, scene = self._build_actor(str(parameter.value))
-                except ConfigurationError as error:
+                    configuration, meshes = self.planner.load_scene(str(parameter.value))
+                except (ConfigurationError, PlanningFailed) as error:
                     self.scene_error = f'{parameter.value}: {error}'
                     self.get_logger().error(f'scene not reloaded, keeping {self.scene_path}: '
                                             f'{error}')
                     return SetParametersResult(successful=False,
                                                reason=f'scene not loaded: {error}')
                 with self._pending_lock:
-                    self._pending_actor = actor
-                self.scene, self.scene_path, self.scene_error = scene, str(parameter.value), ''
+                    self._pending_start = configuration
+                self.meshes, self.scene_path, self.scene_error = meshes, str(parameter.value), ''
                 self._wake.set()
                 self._publish_environment()
                 self.get_logger().info(f'scene reloaded: {self.scene_path}')
@@ -339,11 +500,11 @@ class ActorPlannerNode(Node):
         logger = self.get_logger()
         while not self._stop.is_set():
             with self._pending_lock:
-                pending, self._pending_actor = self._pending_actor, None
+                pending, self._pending_start = self._pending_start, None
             if pending is not None:
-                self.actor = pending
+                # A new scene: the new actor's clock starts at 0 from its start pose.
                 self.actor_offset = self.playback_time + self.period
-                self.buffer.restart(pending.configuration, self.actor_offset)
+                self.buffer.restart(pending, self.actor_offset)
                 self.committed_footsteps.clear()
             ahead = self.buffer.end_time - self.playback_time
             lead = self._effective_lead()
@@ -352,22 +513,23 @@ class ActorPlannerNode(Node):
                 self._wake.clear()
                 continue
             linear_x, angular_z = self.command.current(time.monotonic(), self.cmd_timeout)
-            warning = self.actor.set_command(linear_x, angular_z)
-            if warning:
-                logger.warning(warning, throttle_duration_sec=2.0)
             try:
-                block = self.actor.plan_next()
-            except Exception as error:  # noqa: B902 -- keep streaming, report on diagnostics
+                warning, block, profile = self.planner.plan(linear_x, angular_z)
+            except PlanningFailed as error:
                 self.stats.record('stuck', f'planner error: {error}', float('nan'))
                 logger.error(f'planning failed: {error}', throttle_duration_sec=2.0)
                 self._stop.wait(0.1)
                 continue
+            if warning:
+                logger.warning(warning, throttle_duration_sec=2.0)
+            if self._pending_start is not None:
+                continue  # planned on the old scene while the new one loaded
             self.buffer.append(np.asarray(block.times) + self.actor_offset, block.frames,
                                block.velocities, self.playback_time)
             self.stats.record(block.status, block.reason, block.planning_time)
             if block.status == 'walking' and len(block.footsteps):
                 self.committed_footsteps.append(np.asarray(block.footsteps[0], dtype=float))
-            self._latest_block = block
+            self._latest_block = (block, profile)
 
     def _effective_lead(self) -> float:
         """Buffered time (s) below which the next block is planned.
@@ -431,6 +593,7 @@ class ActorPlannerNode(Node):
         self._wake.set()
         for thread in (self._publisher_thread, self._planner_thread):
             thread.join(timeout=5.0)
+        self.planner.close()
 
     # -- executor callbacks -----------------------------------------------------------------
     def _on_cmd_vel(self, twist: Twist) -> None:
@@ -498,8 +661,8 @@ class ActorPlannerNode(Node):
     def _publish_environment(self) -> None:
         array = MarkerArray(markers=[self._header(Marker(action=Marker.DELETEALL))])
         budget = MAX_MARKER_TRIANGLES
-        for index, mesh in enumerate(getattr(self.scene.environment, 'meshes', [])):
-            faces = np.asarray(mesh.faces)[:budget]
+        for index, (vertices, faces) in enumerate(self.meshes):
+            faces = faces[:budget]
             budget -= len(faces)
             if len(faces) == 0:
                 continue
@@ -508,15 +671,16 @@ class ActorPlannerNode(Node):
             marker.pose.orientation.w = 1.0
             marker.scale.x = marker.scale.y = marker.scale.z = 1.0
             marker.color = _color(0.62, 0.64, 0.66)
-            marker.points = _points(np.asarray(mesh.vertices)[faces].reshape(-1, 3))
+            marker.points = _points(vertices[faces].reshape(-1, 3))
             array.markers.append(marker)
         self.environment_pub.publish(array)
 
     def _publish_markers(self) -> None:
-        block = self._latest_block
-        if block is None or block is self._markers_block:
+        latest = self._latest_block
+        if latest is None or latest is self._markers_block:
             return
-        self._markers_block = block
+        self._markers_block = latest
+        block, profile = latest
         markers = [self._header(Marker(action=Marker.DELETEALL))]
         window = np.asarray(block.footsteps, dtype=float).reshape(-1, 4)
         past = list(self.committed_footsteps)
@@ -530,16 +694,16 @@ class ActorPlannerNode(Node):
                 marker.scale.x, marker.scale.y, marker.scale.z = 0.25, 0.1, 0.01
                 marker.color = color
                 markers.append(marker)
-        path = np.asarray(block.path, dtype=float).reshape(-1, 3)
-        if len(path) >= 2:
-            profile = self._header(Marker(ns='ground_profile', id=0, type=Marker.LINE_STRIP,
-                                          action=Marker.ADD))
-            profile.pose.orientation.w = 1.0
-            profile.scale.x = 0.02
-            profile.color = _color(0.9, 0.5, 0.1)
-            profile.points = _points(path)
-            markers.append(profile)
+        if len(profile) >= 2:
+            line = self._header(Marker(ns='ground_profile', id=0, type=Marker.LINE_STRIP,
+                                       action=Marker.ADD))
+            line.pose.orientation.w = 1.0
+            line.scale.x = 0.02
+            line.color = _color(0.9, 0.5, 0.1)
+            line.points = _points(profile + [0.0, 0.0, 0.01])
+            markers.append(line)
         self.markers_pub.publish(MarkerArray(markers=markers))
+        path = np.asarray(block.path, dtype=float).reshape(-1, 3)
         message = Path()
         message.header.frame_id = self.config.frame_id
         message.header.stamp = self.get_clock().now().to_msg()
