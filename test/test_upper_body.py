@@ -1,0 +1,222 @@
+"""Upper-body compliant motion (paper §5): motion patterns and prioritized CT-roadmap planning."""
+import numpy as np
+import pytest
+import trimesh
+
+from digital_actor_planner.core.collision import BodyCollision
+from digital_actor_planner.core.environment import Environment
+from digital_actor_planner.core.skeleton import Skeleton
+from digital_actor_planner.core.upper_body import (
+    motion_patterns, UpperBodyConfig, UpperBodyPlanner, validate_upper_body_config)
+
+RATE = 100.0
+UPPER_LINKS = ['waist', 'torso', 'head', 'left_shoulder', 'right_shoulder',
+               'left_shoulder_roll_link', 'left_upper_arm', 'left_forearm',
+               'right_shoulder_roll_link', 'right_upper_arm', 'right_forearm']
+
+
+@pytest.fixture(scope='module')
+def skeleton():
+    return Skeleton()
+
+
+def box(lower, upper):
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    mesh = trimesh.creation.box(extents=upper - lower)
+    mesh.apply_translation((lower + upper) / 2)
+    return mesh
+
+
+def ground():
+    return box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0])
+
+
+def walk(skeleton, k, x0=-1.0, speed=0.9):
+    """Pelvis along +x at 0.9 m/s, root_z 0.92, legs swinging; upper body = motion patterns."""
+    times = np.arange(k) / RATE
+    q = np.tile(skeleton.neutral(), (k, 1))
+    q[:, skeleton.index['root_x']] = x0 + speed * times
+    q[:, skeleton.index['root_z']] = 0.92
+    phase = 2 * np.pi * times / 1.2
+    q[:, skeleton.index['left_hip_pitch']] = 0.3 * np.sin(phase)
+    q[:, skeleton.index['right_hip_pitch']] = -0.3 * np.sin(phase)
+    return times, motion_patterns(skeleton, q)
+
+
+def planner_for(skeleton, *obstacles, seed=3, config=None):
+    environment = Environment([ground(), *obstacles], resolution=0.05)
+    collision = BodyCollision(skeleton, environment)
+    planner = UpperBodyPlanner(skeleton, collision, config or UpperBodyConfig(),
+                               rng=np.random.default_rng(seed))
+    return planner, collision
+
+
+def upper_columns(skeleton):
+    return np.concatenate([skeleton.branch(b) for b in ('waist', 'left_arm', 'right_arm')])
+
+
+def assert_collision_free(collision, frames):
+    hits = [i for i, q in enumerate(frames) if collision.collides(q, UPPER_LINKS)]
+    assert not hits, f'upper body in collision at frames {hits[:10]}'
+
+
+def assert_limits_and_speeds(skeleton, times, frames):
+    assert skeleton.within_limits(frames).all()
+    speed = np.abs(np.diff(frames, axis=0)) / np.diff(times)[:, None]
+    upper = upper_columns(skeleton)
+    assert np.all(speed[:, upper] <= skeleton.velocity_limit[upper] * (1 + 1e-6))
+
+
+# -- motion patterns (§5.1) -----------------------------------------------------------------
+def test_arms_swing_opposite_to_the_legs_and_the_waist_stays_erect(skeleton):
+    times, frames = walk(skeleton, 120)
+    index = skeleton.index
+    left_arm = frames[:, index['left_shoulder_pitch']]
+    right_arm = frames[:, index['right_shoulder_pitch']]
+    right_leg = frames[:, index['right_hip_pitch']]
+    assert np.corrcoef(left_arm, right_leg)[0, 1] > 0.99
+    assert np.corrcoef(right_arm, right_leg)[0, 1] < -0.99
+    assert 0.15 < left_arm.max() <= 0.35 and abs(left_arm.mean()) < 0.05
+    assert np.all(frames[:, skeleton.branch('waist')] == 0.0)
+    assert np.all(frames[:, index['left_shoulder_roll']] > 0.0)
+    assert skeleton.within_limits(frames).all()
+    # The lower body and root are untouched and the input is not modified.
+    legs = frames.copy()
+    legs[:, upper_columns(skeleton)] = 1.0
+    before = legs.copy()
+    again = motion_patterns(skeleton, legs)
+    lower = np.setdiff1d(np.arange(22), upper_columns(skeleton))
+    assert np.array_equal(again[:, lower], before[:, lower])
+    assert np.array_equal(legs, before)
+    assert np.array_equal(again, frames)
+
+
+@pytest.mark.parametrize('bad', [np.zeros((5, 21)), np.full((3, 22), np.nan)])
+def test_motion_patterns_reject_bad_frames(skeleton, bad):
+    with pytest.raises(ValueError, match='frames'):
+        motion_patterns(skeleton, bad)
+
+
+def test_motion_patterns_reject_bad_amplitude(skeleton):
+    with pytest.raises(ValueError, match='swing_amplitude'):
+        motion_patterns(skeleton, np.tile(skeleton.neutral(), (3, 1)), swing_amplitude=-0.1)
+
+
+# -- planning (§5.2) ------------------------------------------------------------------------
+def test_open_ground_returns_the_motion_pattern_exactly(skeleton):
+    planner, collision = planner_for(skeleton)
+    times, frames = walk(skeleton, 60)
+    plan = planner.plan(times, frames)
+    assert plan.ok and plan.reason == ''
+    assert plan.deviation == 0.0
+    assert np.array_equal(plan.frames, frames)
+    assert set(plan.per_branch) == {'waist', 'left_arm', 'right_arm'}
+    assert plan.planning_time < 0.5
+
+
+def test_low_beam_makes_the_waist_bend_and_the_pattern_returns_after_it(skeleton):
+    beam = box([0.3, -1.0, 1.60], [0.5, 1.0, 1.80])
+    planner, collision = planner_for(skeleton, beam)
+    times, frames = walk(skeleton, 260)
+    # Walking upright would hit the beam.
+    assert any(collision.collides(q, UPPER_LINKS) for q in frames)
+    plan = planner.plan(times, frames)
+    assert plan.ok, plan.reason
+    assert_collision_free(collision, plan.frames)
+    assert_limits_and_speeds(skeleton, times, plan.frames)
+    pitch = plan.frames[:, skeleton.index['waist_pitch']]
+    assert pitch.max() > 0.7
+    upper = upper_columns(skeleton)
+    deviation = np.abs(plan.frames[:, upper] - frames[:, upper]).max(axis=1)
+    assert deviation[:20].max() == 0.0, 'no bending long before the beam'
+    assert deviation[-20:].max() < 0.02, 'back to the pattern after the beam'
+    assert plan.deviation == pytest.approx(deviation.max())
+    # Lower body and root are never changed.
+    lower = np.setdiff1d(np.arange(22), upper)
+    assert np.array_equal(plan.frames[:, lower], frames[:, lower])
+
+
+def test_table_beside_the_path_makes_that_arm_flex(skeleton):
+    table = box([0.0, 0.21, 0.0], [0.8, 1.0, 0.78])
+    planner, collision = planner_for(skeleton, table)
+    times, frames = walk(skeleton, 200)
+    assert any(collision.collides(q, ['left_forearm']) for q in frames)
+    plan = planner.plan(times, frames)
+    assert plan.ok, plan.reason
+    assert_collision_free(collision, plan.frames)
+    assert_limits_and_speeds(skeleton, times, plan.frames)
+    elbow = skeleton.index['left_elbow']
+    assert (plan.frames[:, elbow] - frames[:, elbow]).max() > 0.2
+    assert plan.per_branch['right_arm']['deviation'] == 0.0
+    assert plan.per_branch['waist']['deviation'] == 0.0
+
+
+def test_beam_at_waist_height_is_reported_blocked(skeleton):
+    beam = box([0.3, -1.0, 1.05], [0.5, 1.0, 1.30])
+    planner, _ = planner_for(skeleton, beam)
+    times, frames = walk(skeleton, 200)
+    plan = planner.plan(times, frames)
+    assert not plan.ok
+    assert plan.reason.startswith('waist blocked at t=')
+    blocked_at = float(plan.reason.split('t=')[1].split()[0])
+    # The waist reaches the beam's near face at about x = 0.3 - 0.09 (t ~ 1.3 s).
+    assert 1.0 < blocked_at < 1.6
+    assert plan.planning_time < 5.0
+
+
+def test_upper_body_starting_in_collision_is_reported(skeleton):
+    # A box around the head at the start position only.
+    block = box([-1.1, -0.2, 1.55], [-0.9, 0.2, 1.8])
+    planner, _ = planner_for(skeleton, block)
+    times, frames = walk(skeleton, 60)
+    plan = planner.plan(times, frames)
+    assert not plan.ok
+    assert 'waist start in collision at t=0.00 s' in plan.reason
+    assert 'head' in plan.reason
+
+
+def test_successive_steps_join_continuously_and_are_deterministic(skeleton):
+    table = box([0.0, 0.21, 0.0], [0.8, 1.0, 0.78])
+    times, frames = walk(skeleton, 241)
+    results = []
+    for seed in (5, 5):
+        planner, collision = planner_for(skeleton, table, seed=seed)
+        planned = frames.copy()
+        for begin in range(0, 240, 60):
+            block = planned[begin:begin + 61].copy()
+            plan = planner.plan(times[begin:begin + 61], block)
+            assert plan.ok, plan.reason
+            assert np.array_equal(plan.frames[0], block[0]), 'frame 0 is the start'
+            planned[begin:begin + 61] = plan.frames
+        results.append(planned)
+    assert np.array_equal(results[0], results[1]), 'deterministic for a seeded rng'
+    assert_collision_free(collision, results[0])
+    assert_limits_and_speeds(skeleton, times, results[0])
+
+
+@pytest.mark.parametrize('field, value', [
+    ('roadmap_radius', 0.0), ('node_budget', 0), ('max_backtracks', -1),
+    ('speed_fraction', 1.5), ('hold_frames', 2.5), ('arm_weights', (1.0, 1.0, 1.0)),
+    ('waist_weights', (1.0, -1.0)), ('time_weight', float('nan')), ('max_roadmap_nodes', 3)])
+def test_bad_config_names_the_field(skeleton, field, value):
+    config = UpperBodyConfig(**{field: value})
+    with pytest.raises(ValueError, match=field):
+        validate_upper_body_config(config)
+    with pytest.raises(ValueError, match=field):
+        planner_for(skeleton, config=config)
+
+
+def test_objective_outside_limits_names_the_joint(skeleton):
+    planner, _ = planner_for(skeleton)
+    times, frames = walk(skeleton, 30)
+    frames[10, skeleton.index['right_elbow']] = -0.5
+    with pytest.raises(ValueError, match='right_elbow'):
+        planner.plan(times, frames)
+
+
+def test_times_must_increase(skeleton):
+    planner, _ = planner_for(skeleton)
+    times, frames = walk(skeleton, 30)
+    times[5] = times[4]
+    with pytest.raises(ValueError, match='times'):
+        planner.plan(times, frames)
