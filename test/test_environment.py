@@ -282,3 +282,16 @@ def test_load_scene_with_a_skeleton_checks_the_start(tmp_path):
     load_scene(path)  # no skeleton: no start check
     with pytest.raises(SceneError, match=r'scene\.yaml.*inside an obstacle'):
         load_scene(path, skeleton=Skeleton())
+
+
+def test_a_closed_mesh_wound_inside_out_is_still_a_solid():
+    floor = _box((-1, -1, -0.1), (2, 1, 0.0))
+    block = _box((0.5, -0.5, 0.0), (1.0, 0.5, 0.3))
+    block.faces = block.faces[:, ::-1]          # normals point inwards
+    assert block.volume < 0
+    env = Environment([floor, block])
+    height, clearance = env.ground_height(np.array([[0.75, 0.0], [0.0, 0.0]]), 0.2)
+    assert np.isnan(height[0])                  # inside the block
+    assert height[1] == pytest.approx(0.0, abs=1e-9) and np.isinf(clearance[1])
+    height, _ = env.ground_height(np.array([[0.75, 0.0]]), 1.0)
+    assert height[0] == pytest.approx(0.3, abs=1e-9)

@@ -416,7 +416,14 @@ class Environment:
         self._inverse_resolution = 1.0 / res
         self._shape = (int(counts[1]), int(counts[0]))  # (ny, nx)
         nx, ny = int(counts[0]), int(counts[1])
-        triangles = np.concatenate([v[f] for v, f in zip(self._vertices, self._faces)])
+        parts = []
+        for mesh, vertices, faces in zip(self.meshes, self._vertices, self._faces):
+            # A closed mesh wound inside out (negative volume) would read as free space inside
+            # and solid outside: flip its faces for the depth count.
+            if mesh.is_watertight and mesh.volume < 0:
+                faces = faces[:, ::-1]
+            parts.append(vertices[faces])
+        triangles = np.concatenate(parts)
         nodes, heights, signs = self._rasterise(triangles, nx, ny)
 
         order = np.lexsort((-heights, nodes))
