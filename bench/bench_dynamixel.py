@@ -50,16 +50,18 @@ def _serve(link, ids, return_delay_us, ready, pipe):
 def _measure(step, cycles, counters):
     before = counters()
     times = []
+    cpu = time.process_time()
     for _ in range(cycles):
         start = time.perf_counter()
         step()
         times.append(time.perf_counter() - start)
+    cpu = (time.process_time() - cpu) / cycles
     after = counters()
     bytes_on_wire = (after[0] - before[0]) + (after[1] - before[1])
-    return times, bytes_on_wire, after[2] - before[2]
+    return times, bytes_on_wire, cpu
 
 
-def _report(label, times, bytes_on_wire, cycles, delays_per_cycle, return_delay_s):
+def _report(label, times, bytes_on_wire, cpu, cycles, delays_per_cycle, return_delay_s):
     mean = statistics.fmean(times)
     limit = bytes_on_wire / cycles * 10.0 / BAUD + delays_per_cycle * return_delay_s
     ordered = sorted(times)
@@ -69,6 +71,7 @@ def _report(label, times, bytes_on_wire, cycles, delays_per_cycle, return_delay_
     print(f'  measured cycle  mean          {mean * 1e3:8.3f} ms  = {1 / mean:7.1f} Hz')
     print(f'                  median / p99  {ordered[len(ordered) // 2] * 1e3:8.3f} / '
           f'{ordered[int(len(ordered) * 0.99)] * 1e3:.3f} ms')
+    print(f'  bridge-side CPU per cycle     {cpu * 1e3:8.3f} ms')
     print(f'  achieved rate / limit rate    {limit / mean * 100:8.1f} %')
     return limit / mean
 
@@ -104,11 +107,12 @@ def main(argv=None) -> int:
         assert len(found) == len(ids), found
         goals = {i: 2048 + i for i in ids}
         print(f'{len(ids)} servos, {BAUD} bps, Return Delay Time {args.return_delay_us} us, '
-              f'{args.cycles} cycles, python {sys.version.split()[0]}')
-        times, wire, _ = _measure(lambda: (bus.write_goals(goals), bus.read_positions(ids)),
-                                  args.cycles, counters)
-        ratio = _report('sync write + sync read (ServoBus)', times, wire, args.cycles, len(ids),
-                        args.return_delay_us * 1e-6)
+              f'{args.cycles} cycles, python {sys.version.split()[0]}, {os.cpu_count()} cores, '
+              f'load average {os.getloadavg()[0]:.1f}')
+        times, wire, cpu = _measure(
+            lambda: (bus.write_goals(goals), bus.read_positions(ids)), args.cycles, counters)
+        ratio = _report('sync write + sync read (ServoBus)', times, wire, cpu, args.cycles,
+                        len(ids), args.return_delay_us * 1e-6)
         bus.close()
 
         config = replace(config, port=link)
@@ -123,9 +127,9 @@ def main(argv=None) -> int:
                                       time.monotonic())
             controller.cycle(time.monotonic())
         before = counters()[3].get(emu.SYNC_READ, 0)
-        times, wire, _ = _measure(control_cycle, args.cycles, counters)
+        times, wire, cpu = _measure(control_cycle, args.cycles, counters)
         reads = counters()[3].get(emu.SYNC_READ, 0) - before
-        _report('full BridgeController.cycle (envelope + health checks)', times, wire,
+        _report('full BridgeController.cycle (envelope + health checks)', times, wire, cpu,
                 args.cycles, len(ids) * reads / args.cycles, args.return_delay_us * 1e-6)
         controller.shutdown()
         print(f'target >= 90 % of the limit-bound rate: {"met" if ratio >= 0.9 else "NOT met"} '

@@ -6,6 +6,7 @@ shutdown, 2 for invalid configuration, 3 when required servos are missing at sta
 """
 from __future__ import annotations
 
+import signal
 import sys
 import time
 from typing import Dict, List, Optional
@@ -14,9 +15,10 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 import rclpy
 from rclpy.exceptions import (InvalidParameterTypeException, InvalidParameterValueException,
                               ParameterException)
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.signals import SignalHandlerOptions
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from sensor_msgs.msg import JointState
 
@@ -172,25 +174,33 @@ class DynamixelBridge(Node):
 
 def main(args=None) -> int:
     """Run the bridge until SIGINT/SIGTERM; switch torque off on the way out."""
-    rclpy.init(args=args)
+    # Own signal handling: the context must stay valid while torque is switched off, and a
+    # signal must not tear it down in the middle of a control cycle.
+    stop = []
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    previous = {sig: signal.signal(sig, lambda number, frame: stop.append(number))
+                for sig in (signal.SIGINT, signal.SIGTERM)}
     node = None
     code = 0
     try:
         node = DynamixelBridge()
-        rclpy.spin(node)
+        executor = SingleThreadedExecutor()
+        executor.add_node(node)
+        while not stop and rclpy.ok():
+            executor.spin_once(timeout_sec=0.05)
     except ConfigError as error:
         print(f'dynamixel_bridge: invalid configuration: {error}', file=sys.stderr)
         code = EXIT_BAD_CONFIG
     except StartupError as error:
         print(f'dynamixel_bridge: {error}', file=sys.stderr)
         code = EXIT_MISSING_SERVOS
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
     finally:
         if node is not None:
             node.controller.shutdown()
             node.destroy_node()
         rclpy.try_shutdown()
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
     sys.exit(code)
 
 
