@@ -1,0 +1,140 @@
+"""Configuration-time space of a branch (paper §5.2): kinematics, validity, forward-only motion."""
+import numpy as np
+import pytest
+import trimesh
+
+from digital_actor_planner.core.collision import BodyCollision
+from digital_actor_planner.core.ct_space import (
+    BodyKinematics, BodyShapes, CTSpace, EnvironmentIndex, TimedBody)
+from digital_actor_planner.core.environment import Environment
+from digital_actor_planner.core.skeleton import Skeleton
+from digital_actor_planner.core.upper_body import motion_patterns
+
+TRUNK = ('waist', 'torso', 'head', 'left_shoulder', 'right_shoulder')
+LEGS = ('pelvis', 'left_hip', 'right_hip', 'left_thigh', 'right_thigh', 'left_shank',
+        'right_shank', 'left_foot', 'right_foot')
+
+
+@pytest.fixture(scope='module')
+def skeleton():
+    return Skeleton()
+
+
+def box(lower, upper):
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    mesh = trimesh.creation.box(extents=upper - lower)
+    mesh.apply_translation((lower + upper) / 2)
+    return mesh
+
+
+@pytest.fixture(scope='module')
+def beam_world(skeleton):
+    environment = Environment([box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0]),
+                               box([0.3, -1.0, 1.60], [0.5, 1.0, 1.80])], resolution=0.05)
+    collision = BodyCollision(skeleton, environment)
+    k = 200
+    times = np.arange(k) / 100.0
+    q = np.tile(skeleton.neutral(), (k, 1))
+    q[:, skeleton.index['root_x']] = -1.0 + 0.9 * times
+    q[:, skeleton.index['root_z']] = 0.92
+    q[:, skeleton.index['left_hip_pitch']] = 0.3 * np.sin(2 * np.pi * times / 1.2)
+    q[:, skeleton.index['right_hip_pitch']] = -q[:, skeleton.index['left_hip_pitch']]
+    frames = motion_patterns(skeleton, q)
+    body = TimedBody(BodyKinematics(skeleton), BodyShapes(skeleton),
+                     EnvironmentIndex(environment.meshes, environment.objects), frames)
+    space = CTSpace('waist', body, times, frames[:, skeleton.branch('waist')], TRUNK, LEGS)
+    return space, collision, frames
+
+
+def test_kinematics_match_the_skeleton(skeleton):
+    rng = np.random.default_rng(0)
+    q = skeleton.lower + rng.random((40, 22)) * (np.minimum(skeleton.upper, 3)
+                                                 - np.maximum(skeleton.lower, -3))
+    q = np.clip(q, skeleton.lower, skeleton.upper)
+    expected = skeleton.forward_kinematics(q)
+    rotations, positions = BodyKinematics(skeleton).poses(q)
+    assert np.allclose(rotations, expected[:, :, :3, :3], atol=1e-12)
+    assert np.allclose(positions, expected[:, :, :3, 3], atol=1e-12)
+
+
+def test_validity_agrees_with_body_collision(skeleton, beam_world):
+    space, collision, frames = beam_world
+    disagreements = []
+    for frame in (60, 100, 133, 160):
+        for pitch in np.arange(-0.3, 1.21, 0.15):
+            q = np.array([0.0, pitch])
+            full = frames[frame].copy()
+            full[skeleton.index['waist_pitch']] = pitch
+            expected = not (collision.collides(full, TRUNK)
+                            or collision.self_collides(full, TRUNK, LEGS[1:]))
+            if space.is_valid(q, frame) != expected:
+                disagreements.append((frame, round(pitch, 2)))
+    assert not disagreements
+    # Both outcomes occur: upright hits the beam at frame 160, a deep bend passes under it.
+    assert not space.is_valid(np.array([0.0, 0.0]), 160)
+    assert space.is_valid(np.array([0.0, 0.9]), 160)
+
+
+def test_out_of_limits_is_invalid(beam_world):
+    space, _, _ = beam_world
+    assert not space.is_valid(np.array([0.0, 1.3]), 10)
+    assert not space.is_valid(np.array([-0.9, 0.0]), 10)
+    assert space.is_valid(np.array([0.0, 0.0]), 10)
+
+
+def test_motion_must_go_forward_in_time(beam_world):
+    space, _, frames = beam_world
+    q = np.zeros(2)
+    assert space.check_motion((q, 10), (q, 20))
+    assert not space.check_motion((q, 20), (q, 10))
+    assert not space.check_motion((q, 20), (q, 20))
+
+
+def test_motion_must_respect_speed_limits(beam_world):
+    space, _, _ = beam_world
+    # 2.5 rad/s: 0.5 rad takes 0.2 s = 20 frames.
+    assert space.check_motion((np.zeros(2), 10), (np.array([0.0, 0.5]), 30))
+    assert not space.check_motion((np.zeros(2), 10), (np.array([0.0, 0.5]), 25))
+    assert space.first_invalid_motion((np.zeros(2), 10), (np.array([0.0, 0.5]), 25)) == 11
+
+
+def test_motion_through_an_obstacle_is_invalid_though_its_ends_are_legal(beam_world):
+    space, _, _ = beam_world
+    upright, bent = np.zeros(2), np.array([0.0, 0.9])
+    assert space.is_valid(upright, 96) and space.is_valid(bent, 136)
+    # Bending while the head is right before the beam sweeps the head into it.
+    bad = space.first_invalid_motion((upright, 96), (bent, 136))
+    assert 96 < bad < 136
+    # Bending earlier passes.
+    assert space.check_motion((upright, 40), (bent, 80))
+
+
+def test_motion_between_objective_states_follows_the_objective(skeleton):
+    times = np.arange(20) / 100.0
+    objective = np.stack([0.3 * np.sin(times * 8), np.full(20, 0.06), np.zeros(20),
+                          0.25 + 0.1 * np.sin(times * 8)], axis=1)
+    q = np.tile(skeleton.neutral(), (20, 1))
+    q[:, skeleton.branch('left_arm')] = objective
+    environment = Environment([box([-1, -1, -0.1], [1, 1, 0])], resolution=0.05)
+    body = TimedBody(BodyKinematics(skeleton), BodyShapes(skeleton),
+                     EnvironmentIndex(environment.meshes), q)
+    space = CTSpace('left_arm', body, times, objective, ('left_upper_arm',), ('torso',))
+    path = space.motion_frames((objective[2], 2), (objective[15], 15))
+    assert np.allclose(path, objective[2:16])
+    offset = np.array([0.0, 0.0, 0.0, 0.4])
+    path = space.motion_frames((objective[2] + offset, 2), (objective[15], 15))
+    assert np.allclose(path[0] - objective[2], offset)
+    assert np.allclose(path[-1], objective[15])
+    q_mid, t_mid = space.interpolate((objective[2] + offset, 2), (objective[12], 12), 0.5)
+    assert t_mid == pytest.approx(0.07)
+    assert q_mid[3] == pytest.approx(np.interp(0.07, times, objective[:, 3]) + 0.2)
+    assert space.distance((objective[2], 2), (objective[2], 12)) == pytest.approx(0.1)
+    assert space.dimension == 4 and space.frame_count == 20
+
+
+def test_bad_inputs_raise(skeleton, beam_world):
+    space, _, frames = beam_world
+    with pytest.raises(ValueError, match='padding'):
+        BodyShapes(skeleton, padding=-0.01)
+    with pytest.raises(ValueError, match='objective shape'):
+        CTSpace('waist', space.body, space.times[:10], frames[:, :2], TRUNK, LEGS)
