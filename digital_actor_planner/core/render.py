@@ -95,12 +95,19 @@ def _check_size(size):
 
 
 # -- course geometry -------------------------------------------------------------------------
-def _split_faces(triangles: np.ndarray, tile: float, max_count: int = 60000) -> np.ndarray:
+def _split_faces(triangles: np.ndarray, tile: float,
+                 max_count: int = 60000) -> Tuple[np.ndarray, np.ndarray]:
     """Split triangles (T, 3, 3) at their longest edge until every edge is below ``tile`` m.
 
     Longest-edge bisection keeps the pieces well shaped, which the depth sort needs.
+
+    Returns
+    -------
+    tuple
+        pieces (P, 3, 3) and the index (P,) of the triangle each piece came from.
     """
-    done = []
+    parent = np.arange(len(triangles))
+    done, done_parent = [], []
     while len(triangles):
         edges = np.stack([triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 1],
                           triangles[:, 0] - triangles[:, 2]], axis=1)
@@ -108,9 +115,11 @@ def _split_faces(triangles: np.ndarray, tile: float, max_count: int = 60000) -> 
         longest = np.argmax(length, axis=1)
         small = length[np.arange(len(triangles)), longest] <= tile
         done.append(triangles[small])
-        triangles, longest = triangles[~small], longest[~small]
+        done_parent.append(parent[small])
+        triangles, longest, parent = triangles[~small], longest[~small], parent[~small]
         if len(triangles) == 0 or sum(len(d) for d in done) + 2 * len(triangles) > max_count:
             done.append(triangles)
+            done_parent.append(parent)
             break
         # Rotate each triangle so that its longest edge runs from vertex 0 to vertex 1.
         roll = np.stack([longest, (longest + 1) % 3, (longest + 2) % 3], axis=1)
@@ -119,7 +128,10 @@ def _split_faces(triangles: np.ndarray, tile: float, max_count: int = 60000) -> 
         triangles = np.concatenate([
             np.stack([triangles[:, 0], middle, triangles[:, 2]], axis=1),
             np.stack([middle, triangles[:, 1], triangles[:, 2]], axis=1)])
-    return np.concatenate(done) if done else triangles
+        parent = np.concatenate([parent, parent])
+    if not done:
+        return triangles, parent
+    return np.concatenate(done), np.concatenate(done_parent)
 
 
 def _resample_heightfield(mesh, region, budget: int) -> np.ndarray:
@@ -160,7 +172,7 @@ def _course_triangles(meshes, region, tile=_TILE, budget=_FACE_BUDGET):
         faces = faces[inside]
         if len(faces) > budget:
             faces = _resample_heightfield(mesh, region, budget // 2)
-        faces = _split_faces(faces, tile)
+        faces, _ = _split_faces(faces, tile)
         centre = faces.mean(axis=1)
         faces = faces[(centre[:, 0] >= x0) & (centre[:, 0] <= x1) & (centre[:, 1] >= y0)
                       & (centre[:, 1] <= y1)]
@@ -169,7 +181,49 @@ def _course_triangles(meshes, region, tile=_TILE, budget=_FACE_BUDGET):
                                (len(faces), 1)))
     if not triangles:
         return np.zeros((0, 3, 3)), np.zeros((0, 3))
-    return np.concatenate(triangles), np.concatenate(colours)
+    owner = np.concatenate([np.full(len(t), i) for i, t in enumerate(triangles)])
+    triangles, colours = np.concatenate(triangles), np.concatenate(colours)
+    keep = ~_inside_other(meshes, _nudged_centres(triangles), owner)
+    triangles, colours, owner = triangles[keep], colours[keep], owner[keep]
+    # Faces that cross into another solid (the foot of a block sunk into the floor) are split
+    # finer, so that the visible part ends close to the true intersection line.
+    for level in (3, 9):
+        centres = triangles.mean(axis=1, keepdims=True)
+        corners = (triangles + 0.02 * (centres - triangles)).reshape(-1, 3)
+        crossing = _inside_other(meshes, corners, owner.repeat(3)).reshape(-1, 3).any(axis=1)
+        if not np.any(crossing):
+            break
+        pieces, parent = _split_faces(triangles[crossing], tile / level)
+        parent = np.flatnonzero(crossing)[parent]
+        visible = ~_inside_other(meshes, _nudged_centres(pieces), owner[parent])
+        pieces, parent = pieces[visible], parent[visible]
+        triangles = np.concatenate([triangles[~crossing], pieces])
+        colours = np.concatenate([colours[~crossing], colours[parent]])
+        owner = np.concatenate([owner[~crossing], owner[parent]])
+    return triangles, colours
+
+
+def _nudged_centres(triangles: np.ndarray) -> np.ndarray:
+    """Face centres moved 2 mm out along the normal: (T, 3), for inside/outside tests."""
+    return triangles.mean(axis=1) + 2e-3 * _normals(triangles)
+
+
+def _inside_other(meshes, points: np.ndarray, owner: np.ndarray) -> np.ndarray:
+    """Mark points (N, 3) that lie inside a closed course mesh other than their ``owner`` (N,).
+
+    Solids that overlap (a walkway sunk into the floor slab) hide each other's faces; drawn
+    anyway they would poke through in the depth sort.
+    """
+    inside = np.zeros(len(points), dtype=bool)
+    for index, mesh in enumerate(meshes):
+        if len(mesh.faces) == 0 or not mesh.is_watertight:
+            continue
+        low, high = mesh.bounds
+        near = np.flatnonzero((owner != index) & np.all(points >= low, axis=1)
+                              & np.all(points <= high, axis=1) & ~inside)
+        if len(near):
+            inside[near[mesh.contains(points[near])]] = True
+    return inside
 
 
 def _normals(triangles: np.ndarray) -> np.ndarray:
@@ -396,7 +450,16 @@ def render_png(path: str, skeleton, meshes: Sequence, times, frames, *, footstep
     terrain, terrain_colours = _course_triangles(meshes, region)
 
     wanted = np.linspace(times[0], times[-1], int(n_poses))
-    keys = np.unique(np.clip(np.searchsorted(times, wanted), 0, len(times) - 1))
+    keys, spans = [], []
+    for k in np.unique(np.clip(np.searchsorted(times, wanted), 0, len(times) - 1)):
+        # A pose where the previous key pose stood (the actor stopped) is drawn once, with
+        # the time span in its label.
+        if keys and (np.linalg.norm(roots[k, :2] - roots[keys[-1], :2]) < 0.15
+                     and abs(roots[k, 3] - roots[keys[-1], 3]) < 0.2):
+            spans[-1][1] = times[k]
+        else:
+            keys.append(k)
+            spans.append([times[k], times[k]])
     actor = _ActorModel(skeleton)
     bodies = [actor.triangles(frames[k]) for k in keys]
     feet = _footstep_triangles(skeleton, footsteps)
@@ -407,7 +470,11 @@ def render_png(path: str, skeleton, meshes: Sequence, times, frames, *, footstep
                                                            _ACTOR_BIAS),
                            np.full(len(feet), _FOOTSTEP_BIAS)])
 
-    body_points = np.concatenate([b.reshape(-1, 3) for b in bodies] + [feet.reshape(-1, 3)])
+    # Frame the poses with at least a metre of course around each.
+    surround = np.array([[dx, dy, -skeleton.leg.standing_height] for dx in (-1.0, 1.0)
+                         for dy in (-1.0, 1.0)])
+    body_points = np.concatenate([b.reshape(-1, 3) for b in bodies] + [feet.reshape(-1, 3)]
+                                 + [roots[k, :3] + surround for k in keys])
     low, high = body_points.min(axis=0), body_points.max(axis=0)
     target = (low + high) / 2
     extent = float(np.linalg.norm(high - low))
@@ -417,10 +484,11 @@ def render_png(path: str, skeleton, meshes: Sequence, times, frames, *, footstep
     flat, _ = camera.project(body_points)
     limits = _fit_limits(flat, canvas.aspect)
     labels = []
-    for k, body in zip(keys, bodies):
+    for (start, end), body in zip(spans, bodies):
         top = body.reshape(-1, 3)[np.argmax(body[:, :, 2].ravel())] + [0.0, 0.0, 0.05]
         (x, y), _ = camera.project(top)
-        labels.append((x, y, f't = {times[k]:.1f} s'))
+        span = f'{start:.1f} s' if end - start < 0.05 else f'{start:.1f}-{end:.1f} s'
+        labels.append((x, y, f't = {span}'))
     canvas.draw(camera, triangles, colours, bias, limits, labels)
     _write_atomically(path, canvas.save_png)
 
