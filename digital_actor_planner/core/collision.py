@@ -108,8 +108,8 @@ class BodyCollision:
         self._reach = [float(np.linalg.norm(h[1])) if h[0] == 'box' else
                        float(math.hypot(*h[1])) if h[0] == 'cylinder' else float(h[1][0])
                        for h in self._half_extent]
-        self._mesh_low = [tuple(float(v) for v in m.bounds[0]) for m in environment.meshes]
-        self._mesh_high = [tuple(float(v) for v in m.bounds[1]) for m in environment.meshes]
+        self._mesh_boxes = [(i, tuple(float(v) for v in m.bounds.ravel()))
+                            for i, m in enumerate(environment.meshes)]
         self.link_shapes: Dict[str, Tuple[int, ...]] = {}
         for i, shape in enumerate(self.shapes):
             self.link_shapes[shape.link] = self.link_shapes.get(shape.link, ()) + (i,)
@@ -150,8 +150,9 @@ class BodyCollision:
                 axis_sign = (principal, float(np.sign(j.axis[principal])))
             else:
                 axis_sign = None
-            self._joint_of[j.child] = (j.parent, rotation,
-                                       tuple(float(v) for v in j.origin[:3, 3]),
+            offset = (tuple(float(v) for v in j.origin[:3, 3]) if np.any(j.origin[:3, 3])
+                      else None)
+            self._joint_of[j.child] = (j.parent, rotation, offset,
                                        skeleton.index.get(j.name, -1), j.kind,
                                        tuple(float(v) for v in j.axis), axis_sign)
         self._shape_origin = []
@@ -181,9 +182,12 @@ class BodyCollision:
             return pose
         parent, rotation0, offset0, qi, kind, axis, axis_sign = joint
         base_rotation, base_position = self._link_pose(parent)
-        moved = _apply(base_rotation, offset0)
-        position = (base_position[0] + moved[0], base_position[1] + moved[1],
-                    base_position[2] + moved[2])
+        if offset0 is None:
+            position = base_position
+        else:
+            moved = _apply(base_rotation, offset0)
+            position = (base_position[0] + moved[0], base_position[1] + moved[1],
+                        base_position[2] + moved[2])
         rotation = base_rotation if rotation0 is None else _matmul(base_rotation, rotation0)
         if qi >= 0:
             value = self._cache_values[qi]
@@ -227,11 +231,9 @@ class BodyCollision:
         """Indices of environment meshes whose bounds overlap the placed shape's bounding box."""
         x, y, z = self._placed[shape][1]
         reach = self._reach[shape]
-        low, high = self._mesh_low, self._mesh_high
-        return [i for i in range(len(low))
-                if low[i][0] <= x + reach and x - reach <= high[i][0]
-                and low[i][1] <= y + reach and y - reach <= high[i][1]
-                and low[i][2] <= z + reach and z - reach <= high[i][2]]
+        x0, x1, y0, y1, z0, z1 = x - reach, x + reach, y - reach, y + reach, z - reach, z + reach
+        return [i for i, (lx, ly, lz, hx, hy, hz) in self._mesh_boxes
+                if lx <= x1 and x0 <= hx and ly <= y1 and y0 <= hy and lz <= z1 and z0 <= hz]
 
     def _shapes_of(self, links: Optional[Iterable[str]]) -> List[Tuple[str, Tuple[int, ...]]]:
         if links is None:
