@@ -352,6 +352,13 @@ class Environment:
     objects
         The FCL collision objects, in mesh order.
 
+    Notes
+    -----
+    Queries: :meth:`ground_height` (highest walkable surface at or below a height, and the room
+    above it) and :meth:`lowest_ground`; exact tests go through :class:`collision.BodyCollision`.
+    Construction rasterises every triangle on a ``resolution`` grid (about 1 s for a 20 m x 6 m
+    course at 2 cm); memory is two floats per grid cell and layer.
+
     """
 
     def __init__(self, meshes: Sequence[trimesh.Trimesh], names: Optional[Sequence[str]] = None,
