@@ -1,0 +1,116 @@
+"""The CT-roadmap best-first planner (paper §5.2, Figure 5)."""
+import numpy as np
+import pytest
+import trimesh
+
+from digital_actor_planner.core.ct_roadmap import CTRoadmap
+from digital_actor_planner.core.ct_space import (
+    BodyKinematics, BodyShapes, CTSpace, EnvironmentIndex, TimedBody)
+from digital_actor_planner.core.environment import Environment
+from digital_actor_planner.core.skeleton import Skeleton
+from digital_actor_planner.core.upper_body import motion_patterns
+
+TRUNK = ('waist', 'torso', 'head', 'left_shoulder', 'right_shoulder')
+LEGS = ('pelvis', 'left_hip', 'right_hip', 'left_thigh', 'right_thigh', 'left_shank',
+        'right_shank', 'left_foot', 'right_foot')
+PATTERNS = np.array([(0.0, 0.3), (0.0, 0.6), (0.0, 0.9), (0.4, 0.0), (-0.4, 0.0)])
+
+
+@pytest.fixture(scope='module')
+def skeleton():
+    return Skeleton()
+
+
+def box(lower, upper):
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    mesh = trimesh.creation.box(extents=upper - lower)
+    mesh.apply_translation((lower + upper) / 2)
+    return mesh
+
+
+def waist_space(skeleton, beam_bottom):
+    meshes = [box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0])]
+    if beam_bottom is not None:
+        meshes.append(box([0.3, -1.0, beam_bottom], [0.5, 1.0, beam_bottom + 0.2]))
+    environment = Environment(meshes, resolution=0.05)
+    k = 220
+    times = np.arange(k) / 100.0
+    q = np.tile(skeleton.neutral(), (k, 1))
+    q[:, skeleton.index['root_x']] = -1.0 + 0.9 * times
+    q[:, skeleton.index['root_z']] = 0.92
+    frames = motion_patterns(skeleton, q)
+    body = TimedBody(BodyKinematics(skeleton), BodyShapes(skeleton),
+                     EnvironmentIndex(environment.meshes, environment.objects), frames)
+    return CTSpace('waist', body, times, frames[:, skeleton.branch('waist')], TRUNK, LEGS)
+
+
+@pytest.fixture(scope='module')
+def beam_space(skeleton):
+    return waist_space(skeleton, 1.60)
+
+
+def roadmap(seed=0, patterns=PATTERNS, max_nodes=32):
+    return CTRoadmap(patterns, np.ones(2), radius=0.3, max_nodes=max_nodes,
+                     rng=np.random.default_rng(seed))
+
+
+def test_open_space_follows_the_objective(skeleton):
+    space = waist_space(skeleton, None)
+    result = roadmap().solve(space, np.zeros(2))
+    assert result.ok and result.blocked_frame == -1
+    assert np.array_equal(result.path, space.objective)
+    assert result.backtracks == 0
+
+
+def test_search_passes_under_the_beam_forward_in_time(beam_space):
+    space = beam_space
+    result = roadmap().solve(space, np.zeros(2))
+    assert result.ok
+    path = result.path
+    assert path.shape == (space.frame_count, 2)
+    # Every frame legal, every step within the speed limit.
+    assert space.first_invalid(path[1:], np.arange(1, space.frame_count)) == -1
+    speed = np.abs(np.diff(path, axis=0)) / np.diff(space.times)[:, None]
+    assert np.all(speed <= space.speed_limit * (1 + 1e-6))
+    assert path[:, 1].max() > 0.7
+    # Best first: it stays on the objective until it must leave it, and comes back.
+    assert np.all(path[:30] == 0.0)
+    assert np.abs(path[-10:]).max() < 1e-9
+    assert result.backtracks >= 1, 'the bend has to start before the search meets the beam'
+
+
+def test_search_is_deterministic_for_a_seed(beam_space):
+    first = roadmap(seed=7).solve(beam_space, np.zeros(2))
+    second = roadmap(seed=7).solve(beam_space, np.zeros(2))
+    assert np.array_equal(first.path, second.path)
+    assert first.nodes == second.nodes
+
+
+def test_roadmap_grows_when_its_patterns_are_not_enough(beam_space):
+    # Only turns in the initial roadmap: the bend must come from grown nodes.
+    graph = roadmap(patterns=np.array([(0.4, 0.0), (-0.4, 0.0)]), max_nodes=40)
+    result = graph.solve(beam_space, np.zeros(2), node_budget=600, max_backtracks=200)
+    assert result.grown > 0
+    assert len(graph.nodes) == len(graph.patterns) + len(graph.grown_nodes)
+    assert len(graph.nodes) <= 40
+    if result.ok:
+        assert beam_space.first_invalid(result.path[1:],
+                                        np.arange(1, beam_space.frame_count)) == -1
+
+
+def test_impassable_beam_fails_at_the_beam(skeleton):
+    space = waist_space(skeleton, 1.05)
+    result = roadmap().solve(space, np.zeros(2))
+    assert not result.ok
+    # The torso reaches x = 0.3 with the pelvis at about x = 0.19 (frame ~132).
+    assert 110 < result.blocked_frame < 160
+
+
+def test_roadmap_rejects_bad_parameters():
+    with pytest.raises(ValueError, match='radius'):
+        CTRoadmap(PATTERNS, np.ones(2), radius=0.0, max_nodes=10, rng=np.random.default_rng())
+    with pytest.raises(ValueError, match='weights'):
+        CTRoadmap(PATTERNS, np.array([1.0, 0.0]), radius=0.3, max_nodes=10,
+                  rng=np.random.default_rng())
+    with pytest.raises(ValueError, match='joints'):
+        CTRoadmap(PATTERNS, np.ones(3), radius=0.3, max_nodes=10, rng=np.random.default_rng())
