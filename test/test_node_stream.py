@@ -136,13 +136,14 @@ def test_zero_command_stops_the_actor_within_one_step(actor):
 
 def test_turning_command_turns_the_actor_the_commanded_way(actor):
     _, probe = actor
-    _stop(probe)
-    before = probe.latest()[ROOT_YAW]
-    probe.drive(0.2, 0.6, 4.0)
-    after = probe.latest()[ROOT_YAW]
-    assert after - before > 0.5, f'root_yaw went {before:.2f} -> {after:.2f} rad'
-    probe.drive(0.2, -0.6, 4.0)
-    assert probe.latest()[ROOT_YAW] < after - 0.5
+    for angular_z in (0.6, -0.6):
+        _stop(probe)
+        before = probe.latest()[ROOT_YAW]
+        probe.drive(0.2, angular_z, 4.0)
+        after = probe.latest()[ROOT_YAW]
+        assert (after - before) * math.copysign(1.0, angular_z) > 0.5, \
+            f'angular.z {angular_z}: root_yaw {before:.2f} -> {after:.2f} rad; ' \
+            f'{probe.diagnostic_values().get("_message")}'
 
 
 def test_silence_stops_the_actor_after_cmd_timeout(actor):
