@@ -29,6 +29,7 @@ STATUS = 0x55
 PING, READ, WRITE, REG_WRITE, ACTION = 0x01, 0x02, 0x03, 0x04, 0x05
 FACTORY_RESET, REBOOT = 0x06, 0x08
 SYNC_READ, SYNC_WRITE, BULK_READ, BULK_WRITE = 0x82, 0x83, 0x92, 0x93
+FAST_SYNC_READ = 0x8A
 
 # Status packet error byte (bits 0..6 = error number, bit 7 = hardware alert).
 ERR_RESULT_FAIL, ERR_INSTRUCTION, ERR_CRC, ERR_DATA_RANGE, ERR_DATA_LENGTH = 1, 2, 3, 4, 5
@@ -435,6 +436,8 @@ class DynamixelEmulator:
             return []
         if instruction == SYNC_READ:
             return self._sync_read(params)
+        if instruction == FAST_SYNC_READ:
+            return self._fast_sync_read(params)
         if instruction == BULK_WRITE:
             self._bulk_write(params)
             return []
@@ -491,6 +494,32 @@ class DynamixelEmulator:
                 replies.append((self._delay(servo), build_status(servo_id, error, data)))
         return replies
 
+    def _fast_sync_read(self, params: bytes):
+        """One status packet (ID 0xFE) that the servos fill in turn: ERR ID DATA CRC each.
+
+        Each servo's CRC covers the packet up to its own block, so the last one is the CRC of
+        the whole packet. Replies are returned per servo so that wire time is modelled.
+        """
+        if len(params) < 5:
+            return []
+        address, length = struct.unpack_from('<HH', params)
+        servos = [self.servos[i] for i in params[4:] if i in self.servos]
+        if not servos:
+            return []
+        packet = bytearray(HEADER + bytes([BROADCAST_ID]) + struct.pack(
+            '<H', 1 + len(servos) * (length + 4)) + bytes([STATUS]))
+        replies = []
+        start = 0
+        for servo in servos:
+            error, data = servo.read(address, length)
+            if len(data) != length:
+                break
+            packet += bytes([error, servo.servo_id]) + data
+            packet += struct.pack('<H', crc16(bytes(packet)))
+            replies.append((self._delay(servo), bytes(packet[start:])))
+            start = len(packet)
+        return replies
+
     def _bulk_write(self, params: bytes) -> None:
         offset = 0
         while offset + 5 <= len(params):
@@ -514,9 +543,11 @@ class DynamixelEmulator:
 
 
 def _wait_until(deadline: float) -> None:
-    """Sleep, then spin the last fraction of a millisecond, for accurate wire timing."""
+    """Sleep until ``deadline`` (monotonic s).
+
+    No busy-wait: deadlines are absolute, so the sleep overshoot (tens of microseconds) delays
+    a release but never accumulates over the status packets of a cycle.
+    """
     remaining = deadline - time.monotonic()
-    if remaining > 0.0004:
-        time.sleep(remaining - 0.0003)
-    while time.monotonic() < deadline:
-        pass
+    if remaining > 0:
+        time.sleep(remaining)

@@ -162,3 +162,18 @@ def test_status_reports_access_errors_and_hardware_alert(bus):
         assert packet.ping(port, 3)[1] == sdk.COMM_RX_TIMEOUT  # nobody has ID 3
     finally:
         port.closePort()
+
+
+def test_fast_sync_read_returns_every_servo_in_one_status_packet(bus):
+    emulator, _ = bus
+    port = sdk.PortHandler(emulator.port_path)
+    assert port.openPort()
+    try:
+        reader = sdk.GroupSyncRead(port, sdk.PacketHandler(2.0), 132, 4)
+        reader.addParam(1)
+        reader.addParam(2)
+        assert reader.fastSyncRead() == sdk.COMM_SUCCESS
+        assert emulator.received[-1][7] == emu.FAST_SYNC_READ
+        assert (reader.getData(1, 132, 4), reader.getData(2, 132, 4)) == (166, 2079)
+    finally:
+        port.closePort()

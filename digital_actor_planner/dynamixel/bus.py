@@ -28,10 +28,14 @@ class ServoBus:
         Serial device path.
     baud_rate
         Bits per second.
+    fast_sync_read
+        Read positions with Fast Sync Read (one status packet for all servos; X-series
+        firmware 45 or newer) instead of Sync Read (one status packet per servo).
 
     """
 
-    def __init__(self, port: str, baud_rate: int):
+    def __init__(self, port: str, baud_rate: int, fast_sync_read: bool = False):
+        self.fast_sync_read = bool(fast_sync_read)
         self.port_name = port
         self.baud_rate = int(baud_rate)
         self.port = None
@@ -128,14 +132,15 @@ class ServoBus:
                 self._read_position.addParam(servo_id)
             self._read_ids = ids
         group = self._read_position
-        self.last_result = self._guard(group.txRxPacket)
+        self.last_result = self._guard(
+            group.fastSyncRead if self.fast_sync_read else group.txRxPacket)
         if self.last_result != sdk.COMM_SUCCESS:
             return {}
         out = {}
         for servo_id in ids:
             try:
                 raw = group.getData(servo_id, PRESENT_POSITION, POSITION_BYTES)
-            except IndexError:
+            except (IndexError, TypeError):
                 # A late status packet of another length was taken for this servo's reply.
                 self.last_result = sdk.COMM_RX_CORRUPT
                 return {}

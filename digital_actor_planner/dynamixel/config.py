@@ -66,6 +66,7 @@ class BridgeConfig:
     reconnect_backoff_min: float = 0.2
     reconnect_backoff_max: float = 5.0
     health_check_period: float = 0.2
+    fast_sync_read: bool = False
 
     @property
     def joint_names(self) -> Tuple[str, ...]:
@@ -147,7 +148,8 @@ def validate(config: BridgeConfig, skeleton: Skeleton) -> None:
 _SCALARS = {'port': str, 'baud_rate': int, 'control_rate': float, 'joint_state_topic': str,
             'watchdog_timeout': float, 'torque_off_on_shutdown': bool,
             'require_all_servos': bool, 'dry_run': bool, 'reconnect_backoff_min': float,
-            'reconnect_backoff_max': float, 'health_check_period': float}
+            'reconnect_backoff_max': float, 'health_check_period': float,
+            'fast_sync_read': bool}
 
 
 def config_from_parameters(parameters: Mapping[str, object], skeleton: Skeleton) -> BridgeConfig:

@@ -59,6 +59,8 @@ _PARAMETERS = {
                               {'floating_point_range': _float_range(0.01, 60.0)}),
     'reconnect_backoff_max': (5.0, 'Longest delay (s) between reconnect attempts.',
                               {'floating_point_range': _float_range(0.01, 600.0)}),
+    'fast_sync_read': (False, 'Read positions with Fast Sync Read (X-series firmware >= 45).',
+                       {}),
     'health_check_period': (0.2, 'Seconds between Hardware Error Status reads.',
                             {'floating_point_range': _float_range(0.01, 60.0)}),
 }
@@ -90,7 +92,8 @@ class DynamixelBridge(Node):
             bus, bus_error = None, RuntimeError
         else:
             from digital_actor_planner.dynamixel.bus import BusError, ServoBus
-            bus, bus_error = ServoBus(self.config.port, self.config.baud_rate), BusError
+            bus = ServoBus(self.config.port, self.config.baud_rate, self.config.fast_sync_read)
+            bus_error = BusError
         self.controller = BridgeController(self.config, bus, log=self._log, bus_error=bus_error)
         self.controller.start(time.monotonic())
         self.feedback_publisher = self.create_publisher(JointState, '~/joint_states', 10)
