@@ -1,0 +1,255 @@
+"""Benchmark the upper-body planner (paper §5) per step, side by side with OMPL.
+
+Courses: open ground, a low beam (underside 1.60 m: the waist must bend), a table beside the
+path (top 0.78 m: the left arm must flex) and two pillars closer than the shoulders (the waist
+must turn). The actor walks along +x at 0.9 m/s. A reference CT-roadmap plan over the whole walk
+gives the start state of every step window (61 frames = 0.6 s at 100 Hz, one every
+``--stride`` frames), so every per-step problem is feasible and both planners get the same
+problems: the same branch CT-spaces, time grid and validity checker (``CTSpace``), waist, then
+left arm, then right arm, with the earlier branches fixed.
+
+The OMPL peers (RRTConnect and PRM) plan each branch that is not free along its motion pattern
+over (branch joints x time) with a motion validator that allows only forward time and joint
+speeds within the limits and checks collisions at every frame between the ends. Their goal is
+the motion pattern at the last frame when it is legal there, else the reference plan's
+configuration (a legal one); the CT-roadmap accepts any legal configuration at the last frame.
+
+Usage::
+
+    .venv/bin/python bench/bench_upper_body.py [--repeat 3] [--stride 10] [--ompl-time 0.5]
+"""
+import argparse
+import sys
+import time
+
+import numpy as np
+import trimesh
+
+from digital_actor_planner.core.collision import BodyCollision
+from digital_actor_planner.core.ct_space import CTSpace, TimedBody
+from digital_actor_planner.core.environment import Environment
+from digital_actor_planner.core.skeleton import Skeleton
+from digital_actor_planner.core.upper_body import (
+    BRANCH_ORDER, motion_patterns, UpperBodyConfig, UpperBodyPlanner)
+
+RATE = 100.0
+WINDOW = 61
+
+
+def _box(lower, upper):
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    mesh = trimesh.creation.box(extents=upper - lower)
+    mesh.apply_translation((lower + upper) / 2)
+    return mesh
+
+
+def courses():
+    """Name -> obstacle meshes (the ground is added to each)."""
+    return {
+        'open': [],
+        'beam 1.60 m': [_box([0.6, -1.0, 1.60], [0.8, 1.0, 1.80])],
+        'table': [_box([0.3, 0.21, 0.0], [1.1, 1.0, 0.78])],
+        'pillars': [_box([0.6, 0.235, 0.0], [0.75, 0.6, 2.2]),
+                    _box([0.6, -0.6, 0.0], [0.75, -0.235, 2.2])],
+    }
+
+
+def walk(skeleton, k=320, x0=-1.0, speed=0.9):
+    times = np.arange(k) / RATE
+    q = np.tile(skeleton.neutral(), (k, 1))
+    q[:, skeleton.index['root_x']] = x0 + speed * times
+    q[:, skeleton.index['root_z']] = 0.92
+    phase = 2 * np.pi * times / 1.2
+    q[:, skeleton.index['left_hip_pitch']] = 0.3 * np.sin(phase)
+    q[:, skeleton.index['right_hip_pitch']] = -0.3 * np.sin(phase)
+    return times, motion_patterns(skeleton, q)
+
+
+class OmplBranchPlanner:
+    """Prioritized waist -> left arm -> right arm planning with an OMPL planner per branch."""
+
+    def __init__(self, planner_name, time_limit):
+        from ompl import base, geometric, util
+        util.setLogLevel(util.LogLevel.LOG_NONE)
+        self.base, self.geometric = base, geometric
+        self.planner_name = planner_name
+        self.time_limit = time_limit
+
+    def _solve_branch(self, space, start, goal):
+        base, geometric = self.base, self.geometric
+        d = space.dimension
+        times = space.times
+        t0, t1 = float(times[0]), float(times[-1])
+        state_space = base.RealVectorStateSpace(d + 1)
+        bounds = base.RealVectorBounds(d + 1)
+        for i in range(d):
+            bounds.setLow(i, float(space.lower[i]))
+            bounds.setHigh(i, float(space.upper[i]))
+        bounds.setLow(d, t0)
+        bounds.setHigh(d, t1)
+        state_space.setBounds(bounds)
+        info = base.SpaceInformation(state_space)
+
+        def frame_of(t):
+            return int(np.clip(np.rint((t - t0) * RATE), 0, len(times) - 1))
+
+        def valid(state):
+            q = np.array([state[i] for i in range(d)])
+            return space.is_valid(q, frame_of(state[d]))
+
+        class ForwardInTime(base.MotionValidator):
+            """Only forward time, bounded speed, collision-free at every frame between."""
+
+            def checkMotion(self, a, b, *rest):
+                ta, tb = a[d], b[d]
+                if not tb > ta:
+                    return False
+                qa = np.array([a[i] for i in range(d)])
+                qb = np.array([b[i] for i in range(d)])
+                if np.any(np.abs(qb - qa) > space.speed_limit * (tb - ta)):
+                    return False
+                fa, fb = frame_of(ta), frame_of(tb)
+                frames = np.arange(fa + 1, fb + 1)
+                if not len(frames):
+                    return space.is_valid(qb, fb)
+                s = np.clip((times[frames] - ta) / (tb - ta), 0.0, 1.0)
+                rows = qa + s[:, None] * (qb - qa)
+                return space.first_invalid(rows, frames) < 0
+
+        info.setStateValidityChecker(valid)
+        validator = ForwardInTime(info)
+        info.setMotionValidator(validator)
+        info.setup()
+        problem = base.ProblemDefinition(info)
+        start_state, goal_state = info.allocState(), info.allocState()
+        for i in range(d):
+            start_state[i] = float(start[i])
+            goal_state[i] = float(goal[i])
+        start_state[d], goal_state[d] = t0, t1
+        problem.setStartAndGoalStates(start_state, goal_state)
+        planner = (geometric.RRTConnect(info) if self.planner_name == 'RRTConnect'
+                   else geometric.PRM(info))
+        planner.setProblemDefinition(problem)
+        planner.setup()
+        planner.solve(self.time_limit)
+        if not problem.hasExactSolution():
+            return None
+        path = problem.getSolutionPath()
+        states = [(np.array([path.getState(i)[j] for j in range(d)]), path.getState(i)[d])
+                  for i in range(path.getStateCount())]
+        stamps = np.array([t for _, t in states])
+        if np.any(np.diff(stamps) <= 0):
+            return None  # an undirected roadmap edge taken backwards in time
+        values = np.array([q for q, _ in states])
+        out = np.stack([np.interp(times, stamps, values[:, j]) for j in range(d)], axis=1)
+        out[0] = start
+        return out
+
+    def plan(self, planner, times, frames, reference):
+        """Plan one step; return (ok, deviation rad, seconds)."""
+        began = time.perf_counter()
+        body = TimedBody(planner.kinematics, planner.shapes, planner.environment, frames)
+        out = frames.copy()
+        for name in BRANCH_ORDER:
+            indices = planner.indices[name]
+            start = frames[0, indices].copy()
+            objective = frames[:, indices].copy()
+            objective[0] = np.clip(2 * objective[1] - objective[2],
+                                   planner.skeleton.lower[indices],
+                                   planner.skeleton.upper[indices])
+            space = CTSpace(name, body, times, objective, planner._checked[name],
+                            planner._obstacles[name])
+            if not space.is_valid(start, 0):
+                return False, 0.0, time.perf_counter() - began
+            if planner._objective_is_legal(space, start):
+                path = objective.copy()
+                path[0] = start
+            else:
+                goal = (objective[-1] if space.is_valid(objective[-1], len(times) - 1)
+                        else reference[-1, indices])
+                path = self._solve_branch(space, start, goal)
+                if path is None:
+                    return False, 0.0, time.perf_counter() - began
+            out[:, indices] = path
+            body.set_branch(indices, path, space.steps)
+        upper = planner.upper_indices
+        deviation = float(np.max(np.abs(out[1:, upper] - frames[1:, upper])))
+        return True, deviation, time.perf_counter() - began
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser.add_argument('--repeat', type=int, default=3, help='CT-roadmap runs per window')
+    parser.add_argument('--stride', type=int, default=10, help='frames between windows')
+    parser.add_argument('--ompl-time', type=float, default=0.5,
+                        help='OMPL time limit per branch problem, s')
+    parser.add_argument('--no-ompl', action='store_true', help='benchmark the CT-roadmap only')
+    args = parser.parse_args(argv)
+
+    skeleton = Skeleton()
+    times, frames = walk(skeleton)
+    ground = _box([-2.5, -1.5, -0.1], [3.5, 1.5, 0.0])
+    peers = {}
+    if not args.no_ompl:
+        try:
+            peers = {name: OmplBranchPlanner(name, args.ompl_time)
+                     for name in ('RRTConnect', 'PRM')}
+        except ImportError as error:
+            print(f'ompl does not import: {error!r}; benchmarking the CT-roadmap only')
+    rows = {}
+    per_course = []
+    for course, obstacles in courses().items():
+        environment = Environment([ground, *obstacles], resolution=0.05)
+        collision = BodyCollision(skeleton, environment)
+        reference_planner = UpperBodyPlanner(skeleton, collision, UpperBodyConfig(),
+                                             rng=np.random.default_rng(0))
+        reference = reference_planner.plan(times, frames)
+        if not reference.ok:
+            print(f'{course}: no reference plan ({reference.reason}); skipped')
+            continue
+        planner = UpperBodyPlanner(skeleton, collision, UpperBodyConfig(),
+                                   rng=np.random.default_rng(1))
+        course_times = []
+        for begin in range(0, len(times) - WINDOW + 1, args.stride):
+            window = slice(begin, begin + WINDOW)
+            step_times, step_frames = times[window], frames[window].copy()
+            step_frames[0] = reference.frames[begin]
+            for _ in range(args.repeat):
+                plan = planner.plan(step_times, step_frames)
+                rows.setdefault('CT-roadmap', []).append(
+                    (plan.ok, plan.deviation, plan.planning_time, course))
+                course_times.append(plan.planning_time)
+            for name, peer in peers.items():
+                ok, deviation, seconds = peer.plan(planner, step_times, step_frames,
+                                                   reference.frames[window])
+                rows.setdefault(name, []).append((ok, deviation, seconds, course))
+        ms = np.array(course_times) * 1e3
+        per_course.append((course, len(ms), np.percentile(ms, 50), np.percentile(ms, 99),
+                           ms.max(), reference.deviation))
+
+    print('\n### Upper-body planning per step (61 frames = 0.6 s), CT-roadmap\n')
+    print('| course | plans | p50 ms | p99 ms | max ms | max deviation of the walk, rad |')
+    print('|---|---:|---:|---:|---:|---:|')
+    for course, n, p50, p99, worst, deviation in per_course:
+        print(f'| {course} | {n} | {p50:.2f} | {p99:.2f} | {worst:.2f} | {deviation:.3f} |')
+
+    print('\n### Peer comparison on the same per-step problems (obstacle courses)\n')
+    print('| planner | problems | success | p50 ms | p99 ms | mean deviation rad | '
+          'max deviation rad |')
+    print('|---|---:|---:|---:|---:|---:|---:|')
+    for name, results in rows.items():
+        results = [r for r in results if r[3] != 'open']
+        ok = np.array([r[0] for r in results])
+        ms = np.array([r[2] for r in results]) * 1e3
+        deviation = np.array([r[1] for r in results if r[0]])
+        mean_dev = deviation.mean() if len(deviation) else float('nan')
+        max_dev = deviation.max() if len(deviation) else float('nan')
+        print(f'| {name} | {len(results)} | {ok.mean() * 100:.1f} % | '
+              f'{np.percentile(ms, 50):.2f} | {np.percentile(ms, 99):.2f} | '
+              f'{mean_dev:.3f} | {max_dev:.3f} |')
+    print(f'\n(command: {" ".join([sys.executable.split("/")[-1]] + sys.argv)}; '
+          f'OMPL time limit {args.ompl_time} s per branch problem)')
+
+
+if __name__ == '__main__':
+    main()
