@@ -30,8 +30,8 @@ from digital_actor_planner.dynamixel.controller import BridgeController  # noqa:
 BAUD = 1_000_000
 
 
-def _serve(link, ids, return_delay_us, ready, pipe):
-    emulator = emu.DynamixelEmulator(ids, link, baud_rate=BAUD, wire_time=True)
+def _serve(link, ids, return_delay_us, wire_time, ready, pipe):
+    emulator = emu.DynamixelEmulator(ids, link, baud_rate=BAUD, wire_time=wire_time)
     for servo_id in ids:
         emulator.set_register(servo_id, emu.RETURN_DELAY_TIME, return_delay_us // 2)
     emulator.start()
@@ -81,6 +81,8 @@ def main(argv=None) -> int:
     parser.add_argument('--cycles', type=int, default=1000)
     parser.add_argument('--return-delay-us', type=int, default=0,
                         help='Return Delay Time of every servo (X-series default: 500 us)')
+    parser.add_argument('--no-wire-time', action='store_true',
+                        help='answer instantly: the software floor, not a bus model')
     args = parser.parse_args(argv)
     skeleton = Skeleton()
     config = load_config(os.path.join(HERE, '..', 'config', 'dynamixel.yaml'), skeleton)
@@ -90,8 +92,9 @@ def main(argv=None) -> int:
     context = multiprocessing.get_context('fork')
     ready = context.Event()
     ours, theirs = context.Pipe()
-    server = context.Process(target=_serve, args=(link, ids, args.return_delay_us, ready, theirs),
-                             daemon=True)
+    server = context.Process(
+        target=_serve, daemon=True,
+        args=(link, ids, args.return_delay_us, not args.no_wire_time, ready, theirs))
     server.start()
     try:
         if not ready.wait(10.0):
@@ -102,7 +105,9 @@ def main(argv=None) -> int:
             return ours.recv()
 
         goals = {i: 2048 + i for i in ids}
-        print(f'{len(ids)} servos, {BAUD} bps, Return Delay Time {args.return_delay_us} us, '
+        print(f'{len(ids)} servos, {BAUD} bps '
+              f'({"NO wire time: software floor" if args.no_wire_time else "wire time modelled"})'
+              f', Return Delay Time {args.return_delay_us} us, '
               f'{args.cycles} cycles, python {sys.version.split()[0]}, {os.cpu_count()} cores, '
               f'load average {os.getloadavg()[0]:.1f}')
         ratios = {}
