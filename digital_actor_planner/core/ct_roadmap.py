@@ -80,13 +80,15 @@ class CTRoadmap:
         Distance r of a grown node from the current one (weighted norm), rad.
     max_nodes
         Largest roadmap size; the oldest grown nodes are forgotten first.
+    max_candidates
+        Neighbours tried per state, the closest to the objective first.
     rng
         Random generator for growth directions.
 
     """
 
     def __init__(self, patterns: np.ndarray, weights: np.ndarray, radius: float,
-                 max_nodes: int, rng: np.random.Generator):
+                 max_nodes: int, rng: np.random.Generator, max_candidates: int = 8):
         patterns = np.atleast_2d(np.asarray(patterns, dtype=float))
         weights = np.asarray(weights, dtype=float)
         if patterns.shape[1] != weights.shape[0]:
@@ -103,6 +105,9 @@ class CTRoadmap:
         self.weights = weights
         self.radius = float(radius)
         self.max_nodes = int(max_nodes)
+        if not max_candidates >= 1:
+            raise ValueError(f'max_candidates must be >= 1, got {max_candidates}')
+        self.max_candidates = int(max_candidates)
         self.rng = rng
         self.grown_nodes = np.zeros((0, patterns.shape[1]))
 
@@ -238,7 +243,11 @@ class CTRoadmap:
         legal = space.valid_rows(space.objective[frames] + targets, frames)
         closeness = self.closeness(targets)
         order = np.lexsort((frames if not on_objective else -frames, np.round(closeness, 6)))
-        return [(float(closeness[i]), int(frames[i]), targets[i]) for i in order if legal[i]]
+        ranked = [(float(closeness[i]), int(frames[i]), targets[i]) for i in order if legal[i]]
+        # The neighbours closest to the objective, plus holding the current posture.
+        hold = [c for c in ranked[self.max_candidates:]
+                if np.array_equal(c[2], state.deviation)]
+        return ranked[:self.max_candidates] + hold
 
     def _advance(self, space: CTSpace, state: _State, visited: set, hold_frames: int,
                  speed_fraction: float) -> Optional[_State]:

@@ -590,7 +590,7 @@ class CTSpace:
         rows, frames, segments, early = [], [], [], []
         for qb, ib in goals:
             if ib <= ia:
-                segments.append((0, 0))
+                segments.append((segments[-1][1] if segments else 0,) * 2)
                 early.append(ia)
                 continue
             path = self.motion_frames((qa, ia), (qb, ib))
@@ -598,7 +598,7 @@ class CTSpace:
             too_fast = np.flatnonzero(np.any(speed > self.speed_limit * (1 + SPEED_TOLERANCE),
                                              axis=1))
             end = ib if not len(too_fast) else ia + 1 + int(too_fast[0])
-            begin = sum(len(r) for r in rows)
+            begin = segments[-1][1] if segments else 0
             rows.append(path[1:end - ia + 1] if not len(too_fast) else path[1:end - ia])
             frames.append(np.arange(ia + 1, ia + 1 + len(rows[-1])))
             segments.append((begin, begin + len(rows[-1])))
