@@ -19,6 +19,7 @@ Usage::
     .venv/bin/python bench/bench_upper_body.py [--repeat 3] [--stride 10] [--ompl-time 0.5]
 """
 import argparse
+import os
 import sys
 import time
 
@@ -248,7 +249,8 @@ def main(argv=None):
               f'{np.percentile(ms, 50):.2f} | {np.percentile(ms, 99):.2f} | '
               f'{mean_dev:.3f} | {max_dev:.3f} |')
     print(f'\n(command: {" ".join([sys.executable.split("/")[-1]] + sys.argv)}; '
-          f'OMPL time limit {args.ompl_time} s per branch problem)')
+          f'OMPL time limit {args.ompl_time} s per branch problem; load average '
+          f'{", ".join(f"{x:.1f}" for x in os.getloadavg())} on {os.cpu_count()} cores)')
 
 
 if __name__ == '__main__':
