@@ -356,6 +356,11 @@ class DynamixelEmulator:
             if shutdown:
                 servo.table[TORQUE_ENABLE] = 0
 
+    def disconnect_servo(self, servo_id: int) -> None:
+        """Take one servo off the bus (a broken cable): it stops answering."""
+        with self.lock:
+            self.servos.pop(servo_id)
+
     def goal_history(self, servo_id: int) -> List[Tuple[float, int]]:
         with self.lock:
             return list(self.servos[servo_id].goal_history)

@@ -279,6 +279,22 @@ def test_missing_servo_is_named_in_diagnostics(rig):
                   and r.goal('left_elbow') == expected_ticks('left_elbow', 1.0))
 
 
+def test_servo_dropping_off_the_bus_is_named_and_the_rest_keep_going(rig):
+    r = rig()
+    r.emulator.start()
+    r.start_bridge()
+    r.wait_connected()
+    r.emulator.disconnect_servo(ID['right_elbow'])
+    assert r.wait(lambda: r.status('dynamixel_bridge: right_elbow') is not None
+                  and 'missing' in r.status('dynamixel_bridge: right_elbow').message,
+                  timeout=10.0)
+    r.feedback.clear()
+    assert r.wait(lambda: (r.stream({'left_elbow': 0.9}, 0.05) or True)
+                  and r.goal('left_elbow') == expected_ticks('left_elbow', 0.9)
+                  and r.feedback and len(r.feedback[-1].name) == 17)
+    assert 'right_elbow' not in r.feedback[-1].name
+
+
 def test_missing_servo_is_fatal_when_all_are_required(rig):
     r = rig(ids=[i for i in range(1, 19) if i != ID['right_ankle']])
     r.emulator.start()

@@ -208,6 +208,8 @@ class BridgeController:
             self.read_failures += 1
             if not os.path.exists(self.config.port):
                 self._lost(now, f'{self.config.port}: device disappeared')
+            elif self.read_failures >= 3:
+                self._find_silent_servos(now)
             return None
         self.read_failures = 0
         names, positions = [], []
@@ -217,6 +219,20 @@ class BridgeController:
                 positions.append(servo.to_angle(ticks[servo.id]))
         self.last_feedback = Feedback(tuple(names), np.array(positions))
         return self.last_feedback
+
+    def _find_silent_servos(self, now: float) -> None:
+        """Ping the servos after repeated failed reads; drop the silent ones from the cycle."""
+        try:
+            found = self.bus.ping(self.present)
+        except self.bus_error as error:
+            self._lost(now, str(error))
+            return
+        silent = [i for i in self.present if i not in found]
+        if silent:
+            self.log('error', f'servos stopped answering: {self._names(silent)}')
+            self.present = tuple(i for i in self.present if i in found)
+            self.missing = tuple(s.id for s in self.servos if s.id not in self.present)
+            self.read_failures = 0
 
     def _dry_run_log(self, commanded: np.ndarray, now: float) -> None:
         ticks = tuple(s.to_ticks(commanded[i]) for i, s in enumerate(self.servos))
