@@ -1,0 +1,222 @@
+"""Benchmark the actor_planner joint stream: jitter, missed frames, command latency, actors per core.
+
+    .venv/bin/python bench/bench_stream.py [--duration 60] [--course stairs_up]
+        [--actors 1,5,10,20] [--actors-duration 20] [--skip-latency]
+
+Prints numbers; asserts nothing. Every node runs as its own process (the venv's console
+script), with localhost discovery in ROS_DOMAIN_ID 40-59 by default.
+
+* Stream health: one actor walks the course while a probe records joint_states. Jitter is the
+  deviation of the header-stamp interval from the period (the node's publish instants), missed
+  frames are the periods without a message.
+* Command latency: from publishing a forward command to the first frame whose root moved, and from
+  publishing a zero command to the first frame of a still actor; beside a bare rclpy
+  publish -> echo -> receive round trip measured in the same run.
+* Actors per core: N actor processes pinned to CPU 0 (the probe on the other CPU) all walking;
+  the stream rate and missed frames of the worst one.
+"""
+import argparse
+import math
+import os
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, '..', 'test'))
+
+from ros_harness import NodeProcess, ros_env  # noqa: E402
+from test_node_helpers import node_command, Probe, ROOT_X, ROOT_Y, ROOT_YAW, scene  # noqa: E402
+
+PERIOD = 0.01
+ECHO = '''
+import sys, rclpy
+from std_msgs.msg import Header
+rclpy.init()
+node = rclpy.create_node('bench_echo')
+pub = node.create_publisher(Header, 'bench_pong', 10)
+node.create_subscription(Header, 'bench_ping', pub.publish, 10)
+try:
+    rclpy.spin(node)
+except Exception:
+    pass
+'''
+
+
+def stamps_of(messages) -> np.ndarray:
+    """Header stamps (s) of JointState messages."""
+    return np.array([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m in messages])
+
+
+def stream_health(stamps: np.ndarray) -> dict:
+    """Jitter (ms) and missed frames of a stream from its header stamps."""
+    gaps = np.diff(np.sort(stamps))
+    jitter = np.abs(gaps - PERIOD) * 1e3
+    missed = int(np.sum(np.maximum(0, np.round(gaps / PERIOD) - 1)))
+    span = stamps.max() - stamps.min()
+    return {'frames': len(stamps), 'rate_hz': (len(stamps) - 1) / span if span > 0 else 0.0,
+            'jitter_p50_ms': float(np.percentile(jitter, 50)),
+            'jitter_p99_ms': float(np.percentile(jitter, 99)),
+            'jitter_max_ms': float(jitter.max()), 'missed': missed,
+            'longest_gap_ms': float(gaps.max() * 1e3)}
+
+
+def health_line(name: str, h: dict) -> str:
+    return (f'{name}: {h["frames"]} frames, {h["rate_hz"]:.2f} Hz, jitter p50 '
+            f'{h["jitter_p50_ms"]:.3f} ms p99 {h["jitter_p99_ms"]:.3f} ms max '
+            f'{h["jitter_max_ms"]:.2f} ms, missed {h["missed"]}, longest gap '
+            f'{h["longest_gap_ms"]:.1f} ms')
+
+
+def bench_stream(domain: int, course: str, duration: float, folder: str) -> None:
+    process = NodeProcess(node_command('-p', f'scene:={scene(course)}'), ros_env(domain),
+                          log_path=os.path.join(folder, 'stream.log'))
+    probe = Probe(domain)
+    try:
+        if not probe.wait_for_stream(process, 120.0):
+            print('node did not start:\n' + process.output())
+            return
+        started = probe.drive(0.5, 0.0, duration)
+        messages = [m for t, m in list(probe.joint_states) if t >= started + 1.0]
+        print(health_line(f'stream walking {course} for {duration:.0f} s',
+                          stream_health(stamps_of(messages))))
+        values = probe.diagnostic_values()
+        print(f'  node diagnostics: state {values.get("state")}, planning p50 '
+              f'{values.get("planning_time_p50_ms")} ms p99 {values.get("planning_time_p99_ms")}'
+              f' ms, missed {values.get("missed_frames")}, underruns '
+              f'{values.get("buffer_underruns")}, lead {values.get("planning_lead_s")} s')
+    finally:
+        probe.close()
+        process.stop()
+
+
+def _moved(q, reference, tolerance=1e-3) -> bool:
+    return bool(np.any(np.abs(q[[ROOT_X, ROOT_Y, ROOT_YAW]] -
+                              reference[[ROOT_X, ROOT_Y, ROOT_YAW]]) > tolerance))
+
+
+def bench_latency(domain: int, folder: str, trials: int) -> None:
+    from std_msgs.msg import Header
+    env = ros_env(domain)
+    process = NodeProcess(node_command('-p', f'scene:={scene("slope")}'), env,
+                          log_path=os.path.join(folder, 'latency.log'))
+    echo = NodeProcess([sys.executable, '-c', ECHO], env,
+                       log_path=os.path.join(folder, 'echo.log'))
+    probe = Probe(domain)
+    try:
+        if not probe.wait_for_stream(process, 120.0):
+            print('node did not start:\n' + process.output())
+            return
+        # Bare rclpy round trip: probe -> echo process -> probe.
+        pongs = []
+        ping = probe.node.create_publisher(Header, 'bench_ping', 10)
+        probe.node.create_subscription(Header, 'bench_pong',
+                                       lambda m: pongs.append(time.monotonic()), 10)
+        probe.spin_until(lambda: ping.get_subscription_count() > 0, 30.0)
+        round_trips = []
+        for _ in range(200):
+            count = len(pongs)
+            sent = time.monotonic()
+            ping.publish(Header())
+            if probe.spin_until(lambda: len(pongs) > count, 2.0):
+                round_trips.append(pongs[-1] - sent)
+            probe.spin(0.005)
+        start_latency, stop_latency = [], []
+        for _ in range(trials):
+            probe.command = (0.0, 0.0)
+            if probe.wait_until_still(timeout=15.0) == math.inf:
+                continue
+            reference = probe.latest()
+            sent = probe.drive(0.6, 0.0, 0.0)
+            if probe.spin_until(lambda: _moved(probe.latest(), reference), 10.0):
+                start_latency.append(probe.joint_states[-1][0] - sent)
+            probe.spin(1.5)
+            stopped = probe.drive(0.0, 0.0, 0.0)
+            still = probe.wait_until_still(timeout=15.0, still_for=0.5, tolerance=1e-4)
+            if still < math.inf:
+                stop_latency.append(still - stopped)
+
+        def summary(values):
+            if not values:
+                return 'no samples'
+            v = np.array(values) * 1e3
+            return (f'p50 {np.percentile(v, 50):.1f} ms, p99 {np.percentile(v, 99):.1f} ms, '
+                    f'max {v.max():.1f} ms (n={len(v)})')
+        print(f'bare rclpy round trip (publish -> echo -> receive): {summary(round_trips)}')
+        print(f'command -> first frame that moves: {summary(start_latency)}')
+        print(f'stop command -> still actor: {summary(stop_latency)}')
+    finally:
+        probe.close()
+        echo.stop()
+        process.stop()
+
+
+def bench_actors(domain: int, counts, duration: float, course: str, folder: str) -> None:
+    cpus = sorted(os.sched_getaffinity(0))
+    node_cpu, probe_cpu = cpus[0], cpus[-1]
+    os.sched_setaffinity(0, {probe_cpu})
+    for count in counts:
+        processes, probes = [], []
+        try:
+            for i in range(count):
+                command = ['taskset', '-c', str(node_cpu)] + node_command(
+                    '-r', f'__ns:=/actor{i}', '-p', f'scene:={scene(course)}')
+                processes.append(NodeProcess(command, ros_env(domain), log_path=os.path.join(
+                    folder, f'actors{count}_{i}.log')))
+            for i in range(count):
+                probes.append(Probe(domain, namespace=f'/actor{i}'))
+            ready = all(p.wait_for_stream(processes[i], 300.0) for i, p in enumerate(probes))
+            if not ready:
+                print(f'{count} actors: not all started')
+                continue
+            for p in probes:
+                p.command = (0.5, 0.0)
+            began = time.monotonic()
+            while time.monotonic() < began + duration:
+                for p in probes:
+                    p.spin(0.01)
+            healths = []
+            for p in probes:
+                messages = [m for t, m in list(p.joint_states) if t >= began + 2.0]
+                healths.append(stream_health(stamps_of(messages)))
+            worst = min(healths, key=lambda h: h['rate_hz'])
+            moved = sum(p.latest()[ROOT_X] > 0.5 for p in probes)
+            realtime = all(abs(h['rate_hz'] - 100.0) <= 5.0 for h in healths)
+            print(f'{count:2d} actors on one core: worst rate {worst["rate_hz"]:.1f} Hz, '
+                  f'jitter p99 worst {max(h["jitter_p99_ms"] for h in healths):.2f} ms, missed '
+                  f'{sum(h["missed"] for h in healths)} of '
+                  f'{sum(h["frames"] + h["missed"] for h in healths)}, {moved}/{count} walked '
+                  f'> 0.5 m, real time (+-5 %): {"yes" if realtime else "no"}')
+        finally:
+            for p in probes:
+                p.close()
+            for process in processes:
+                process.stop()
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser.add_argument('--duration', type=float, default=60.0,
+                        help='seconds of walking for the stream health run')
+    parser.add_argument('--course', default='stairs_up')
+    parser.add_argument('--actors', default='1,5,10,20')
+    parser.add_argument('--actors-duration', type=float, default=20.0)
+    parser.add_argument('--trials', type=int, default=5)
+    parser.add_argument('--domain', type=int, default=40)
+    parser.add_argument('--skip-latency', action='store_true')
+    args = parser.parse_args()
+    print(f'machine: {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.2f}')
+    folder = tempfile.mkdtemp(prefix='bench_stream_')
+    bench_stream(args.domain, args.course, args.duration, folder)
+    if not args.skip_latency:
+        bench_latency(args.domain + 1, folder, args.trials)
+    counts = [int(c) for c in args.actors.split(',') if c]
+    if counts:
+        bench_actors(args.domain + 2, counts, args.actors_duration, args.course, folder)
+    print(f'node logs: {folder}; load average now {os.getloadavg()[0]:.2f}')
+
+
+if __name__ == '__main__':
+    main()
