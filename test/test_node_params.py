@@ -4,17 +4,11 @@ import subprocess
 
 import pytest
 from ros_harness import ros_env
-from test_node_helpers import node_command, scene
+from test_node_helpers import node_command
 
 pytestmark = [pytest.mark.ros]
 
 DOMAIN_ID = int(os.environ.get('ACTOR_NODE_TEST_DOMAIN', '31')) + 2
-
-
-def _broken_scene(folder):
-    path = folder / 'broken.yaml'
-    path.write_text('meshes: [{file: no_such_mesh.stl}]\n')
-    return str(path)
 
 
 CASES = [
@@ -29,26 +23,41 @@ CASES = [
     ('frame_id', ['-p', 'frame_id:=""']),
     ('scene', ['-p', 'scene:=/no/such/scene.yaml']),
     ('scene', 'broken'),
+    ('start_pose', ['-p', 'start_pose:=[500.0, 500.0, 0.0]']),  # no ground there
 ]
 
 
-@pytest.mark.parametrize('parameter, arguments', CASES,
+@pytest.fixture(scope='module')
+def runs(tmp_path_factory):
+    """Start every bad configuration at once (node start-up is mostly imports) and collect."""
+    folder = tmp_path_factory.mktemp('bad_parameters')
+    broken = folder / 'broken.yaml'
+    broken.write_text('meshes: [{file: no_such_mesh.stl}]\n')
+    processes = []
+    for _, arguments in CASES:
+        if arguments == 'broken':
+            arguments = ['-p', f'scene:={broken}']
+        processes.append(subprocess.Popen(node_command(*arguments), env=ros_env(DOMAIN_ID),
+                                          stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                                          text=True, start_new_session=True))
+    results = []
+    try:
+        for process in processes:
+            output, _ = process.communicate(timeout=300)
+            results.append((process.returncode, output))
+    finally:
+        for process in processes:
+            if process.poll() is None:
+                process.kill()
+                process.wait()
+    return results
+
+
+@pytest.mark.parametrize('case', range(len(CASES)),
                          ids=[f'{name}-{i}' for i, (name, _) in enumerate(CASES)])
-def test_bad_parameter_exits_non_zero_naming_it(parameter, arguments, tmp_path):
-    if arguments == 'broken':
-        arguments = ['-p', f'scene:={_broken_scene(tmp_path)}']
-    result = subprocess.run(node_command(*arguments), env=ros_env(DOMAIN_ID),
-                            capture_output=True, text=True, timeout=120)
-    output = result.stdout + result.stderr
-    assert result.returncode != 0, output
-    assert parameter in output, output
+def test_bad_parameter_exits_non_zero_naming_it(case, runs):
+    parameter = CASES[case][0]
+    returncode, output = runs[case]
+    assert returncode != 0, output
+    assert f"parameter '{parameter}'" in output, output
     assert 'Traceback' not in output, output
-
-
-def test_start_pose_without_ground_is_rejected(tmp_path):
-    arguments = ['-p', f'scene:={scene("flat")}', '-p', 'start_pose:=[500.0, 500.0, 0.0]']
-    result = subprocess.run(node_command(*arguments), env=ros_env(DOMAIN_ID),
-                            capture_output=True, text=True, timeout=120)
-    output = result.stdout + result.stderr
-    assert result.returncode != 0, output
-    assert 'start_pose' in output, output
