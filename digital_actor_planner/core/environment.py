@@ -523,8 +523,7 @@ class Environment:
         ix1 = np.clip(np.floor((high[:, 0] - x0) / res + 1e-9), -1, nx - 1).astype(np.int64)
         iy0 = np.clip(np.ceil((low[:, 1] - y0) / res - 1e-9), 0, ny - 1).astype(np.int64)
         iy1 = np.clip(np.floor((high[:, 1] - y0) / res + 1e-9), -1, ny - 1).astype(np.int64)
-        width = np.maximum(ix1 - ix0 + 1, 0)
-        count = width * np.maximum(iy1 - iy0 + 1, 0)
+        rows = np.maximum(iy1 - iy0 + 1, 0) * (ix1 >= ix0)
         # Barycentric weights and height are affine in the node indices relative to each
         # triangle's first covered node: w = a * i + b * j + c. Precompute a, b, c per triangle.
         det = normal_z
@@ -545,22 +544,50 @@ class Environment:
         coefficients[:, 8] += triangles[:, 0, 2]
         first_node = iy0 * nx + ix0
         sign = np.where(det > 0, 1, -1).astype(np.int8)
+        # Scan line by grid row: each (triangle, row) pair covers the nodes between the
+        # triangle's edges on that row, so slivers cost their area, not their bounding box.
+        estimate = np.abs(det) / 2 / res ** 2 + 2 * rows
         out_nodes, out_z, out_sign = [], [], []
-        cumulative = np.cumsum(count)
+        cumulative = np.cumsum(estimate)
         start = 0
         eps = 1e-9
         while start < len(triangles):
-            limit = (cumulative[start - 1] if start else 0) + _RASTER_CHUNK
+            limit = (cumulative[start - 1] if start else 0.0) + _RASTER_CHUNK
             stop = max(start + 1, int(np.searchsorted(cumulative, limit, side='right')))
-            sel = slice(start, stop)
+            sel = np.arange(start, stop)
             start = stop
-            n = count[sel]
-            total = int(n.sum())
+            n = rows[sel]
+            pairs = int(n.sum())
+            if pairs == 0:
+                continue
+            tri = np.repeat(sel, n)
+            j = np.arange(pairs) - np.repeat(np.cumsum(n) - n, n)
+            y = y0 + (iy0[tri] + j) * res
+            t = triangles[tri]
+            left = np.full(pairs, np.inf)
+            right = np.full(pairs, -np.inf)
+            for a_, b_ in ((0, 1), (1, 2), (2, 0)):
+                ya, yb = t[:, a_, 1], t[:, b_, 1]
+                xa, xb = t[:, a_, 0], t[:, b_, 0]
+                span = yb - ya
+                with np.errstate(divide='ignore', invalid='ignore'):
+                    u = (y - ya) / span
+                crosses = (span != 0) & (u >= -1e-9) & (u <= 1 + 1e-9)
+                x = np.where(crosses, xa + np.clip(u, 0.0, 1.0) * (xb - xa), np.nan)
+                left = np.fmin(left, x)
+                right = np.fmax(right, x)
+            first = np.maximum(np.ceil((left - x0) / res - 1e-7), ix0[tri])
+            last = np.minimum(np.floor((right - x0) / res + 1e-7), ix1[tri])
+            ok = np.isfinite(first) & np.isfinite(last) & (last >= first)
+            tri, j = tri[ok], j[ok]
+            first = first[ok].astype(np.int64) - ix0[tri]
+            width = last[ok].astype(np.int64) - ix0[tri] - first + 1
+            total = int(width.sum())
             if total == 0:
                 continue
-            tri = np.repeat(np.arange(sel.start, sel.stop), n)
-            local = np.arange(total) - np.repeat(np.cumsum(n) - n, n)
-            j, i = np.divmod(local, width[tri])
+            owner = np.repeat(np.arange(len(tri)), width)
+            i = first[owner] + np.arange(total) - np.repeat(np.cumsum(width) - width, width)
+            tri, j = tri[owner], j[owner]
             c = coefficients[tri]
             w1 = c[:, 0] * i + c[:, 1] * j + c[:, 2]
             w2 = c[:, 3] * i + c[:, 4] * j + c[:, 5]
