@@ -379,15 +379,12 @@ class CTRoadmap:
         itself a legal motion: the relays are legal departure points for later backtracking.
         """
         parent = stack[-1]
-        span = child.frame - parent.frame
         for frame in range(parent.frame + spacing, child.frame - spacing // 2, spacing):
             share = (space.times[frame] - space.times[parent.frame]) / (
                 space.times[child.frame] - space.times[parent.frame])
             relay = _State(parent.deviation + share * (child.deviation - parent.deviation),
                            frame, relay=True)
-            relay.failures = []
             stack.append(relay)
-        del span
         stack.append(child)
 
     def _passable(self, space: CTSpace, frame: int, samples: int = 16) -> bool:
