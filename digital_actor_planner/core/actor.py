@@ -146,6 +146,8 @@ class Actor:
         self._walk = WalkGenerator(skeleton, config.gait_config(), self._footstep_config)
         self._collision = body_collision or BodyCollision(skeleton, environment)
         self._leg_links = LEG_LINKS
+        self._lower_body = np.concatenate([skeleton.branch(b) for b in
+                                           ('root', 'left_leg', 'right_leg')])
         if upper_body_planner is None and config.plan_upper_body:
             from .upper_body import UpperBodyPlanner
             upper_body_planner = UpperBodyPlanner(skeleton, self._collision)
@@ -295,7 +297,7 @@ class Actor:
         """3D check of the legs against the environment at a subset of frames."""
         if not self.config.verify_collisions:
             return None
-        step = max(1, frames.shape[0] // 16)
+        step = 2
         for j in list(range(0, frames.shape[0], step)) + [frames.shape[0] - 1]:
             if self._collision.collides(frames[j], self._leg_links):
                 links = self._collision.links_in_collision(frames[j], self._leg_links)
@@ -372,8 +374,24 @@ class Actor:
         middle = path.poses(np.array([0.5 * (stance_s + s1)]))[0]
         rise = float(window.heights[0]) - stance.feet[stance.stance_side].sole
         duration = self._walk.step_duration(float(window.lengths[0]), v, rise)
-        return self._walk.step(stance, landing_xy, landing_yaw, float(window.heights[0]),
-                               float(window.pitches[0]), middle, duration, self._obstacles)
+        return self._timed_step(stance, landing_xy, landing_yaw, float(window.heights[0]),
+                                float(window.pitches[0]), middle, duration)
+
+    def _timed_step(self, stance, landing_xy, landing_yaw, sole, pitch, target, duration,
+                    to_rest=False):
+        """Generate a step, slowing it down until every joint respects its speed limit."""
+        rate = self.config.frame_rate
+        for _ in range(3):
+            motion = self._walk.step(stance, landing_xy, landing_yaw, sole, pitch, target,
+                                     duration, self._obstacles, to_rest=to_rest)
+            lower = self._lower_body
+            frames = np.vstack([self._configuration[None, lower], motion.frames[:, lower]])
+            speed = np.abs(np.diff(frames, axis=0)) * rate / self.skeleton.velocity_limit[lower]
+            ratio = float(np.max(speed))
+            if ratio <= 0.95:
+                return motion
+            duration = np.ceil(duration * ratio / 0.85 * rate) / rate
+        raise GaitError(f'step needs joint speeds {ratio:.2f} x the limits')
 
     def _closing_step(self, started: float) -> Optional[StepBlock]:
         """Bring the feet side by side when the command stops (the actor stops within a step)."""
@@ -396,8 +414,8 @@ class Actor:
             return None
         duration = self._walk.step_duration(max(distance, 0.3), 0.6, abs(swing.sole - sole))
         try:
-            motion = self._walk.step(stance, landing_xy, foot.yaw, sole, 0.0, target, duration,
-                                     self._obstacles, to_rest=True)
+            motion = self._timed_step(stance, landing_xy, foot.yaw, sole, 0.0, target, duration,
+                                      to_rest=True)
         except GaitError:
             return None
         if self._verify(motion.frames) is not None:

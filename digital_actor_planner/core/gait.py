@@ -273,7 +273,9 @@ class WalkGenerator:
         hip1 = pelvis_target[:2] + _lateral(yaw1, w_s)
         lam1 = float(np.dot(hip1 - foot_s.xy, d_s))
         progress = _ease(tau, stance.at_rest, to_rest)
-        yaw = yaw0 + (yaw1 - yaw0) * smoothstep(tau)
+        # The pelvis turns once the swing foot is off the ground: turning it moves the swing
+        # hip's plane sideways, which would drag a foot still on the ground.
+        yaw = yaw0 + (yaw1 - yaw0) * smoothstep((tau - 0.2) / 0.8)
         lam = lam0 + (lam1 - lam0) * progress
         stance_hip_xy = foot_s.xy + lam[:, None] * d_s
         pelvis_xy = stance_hip_xy - _lateral(yaw, w_s)
@@ -287,32 +289,54 @@ class WalkGenerator:
         lateral_error = float(np.linalg.norm(land_xy - np.asarray(landing_xy)))
 
         # Swing foot: straight horizontal line with Bezier timing, lifted to clear the ground.
-        p = smoothstep(tau)
-        plane_yaw = foot_w.yaw + _wrap(landing.yaw - foot_w.yaw) * p
+        # The curve parameter is eased in time so the foot leaves and meets the ground at rest.
+        bezier = 0.5 * (tau + smoothstep(tau))
+        # The foot rises before it moves forward and is over its foothold before it descends.
+        # A foot lifting from a heel-off is already rolling forward on its toe: no pause.
+        delay = 0.0 if foot_w.pitch < -0.05 else 0.12
+        p = smoothstep((bezier - delay) / (0.88 - delay))
+        # The foot turns to its new heading only once it is off the ground (§4: hip yaw).
+        plane_yaw = foot_w.yaw + _wrap(landing.yaw - foot_w.yaw) * smoothstep((bezier - 0.2)
+                                                                              / 0.55)
         wanted_xy = foot_w.xy + p[:, None] * (landing.xy - foot_w.xy)
         direction = np.stack([np.cos(plane_yaw), np.sin(plane_yaw)], axis=-1)
         forward = np.sum((wanted_xy - swing_hip_xy) * direction, axis=-1)
         swing_xy = swing_hip_xy + forward[:, None] * direction
-        swing_pitch = foot_w.pitch + (landing.pitch - foot_w.pitch) * p
-        swing_z, lift = self._swing_heights(tau, foot_w, landing, swing_xy, plane_yaw,
-                                            swing_profile)
-
+        # The sole levels out early in the swing (after a heel-off) and takes the landing
+        # pitch late, so it is flat while it travels over the ground.
+        swing_pitch = (foot_w.pitch * (1.0 - smoothstep((bezier - 0.15) / 0.35))
+                       + landing.pitch * smoothstep((bezier - 0.65) / 0.35))
         # Pelvis height: key-frame shape by category, bounded by what both legs can reach.
         rise = landing.sole - foot_s.sole
         if rise > 0.03:
             category, weight = 'uphill', smoothstep((tau - 0.35) / 0.65)
         elif rise < -0.03:
-            category, weight = 'downhill', smoothstep((tau - 0.1) / 0.75)
+            category, weight = 'downhill', smoothstep((tau - 0.3) / 0.65)
         else:
             category, weight = 'level', smoothstep(tau)
         nominal = 0.5 * (foot_s.z + landing.z) + leg.thigh + leg.shank - cfg.pelvis_height_drop
         wanted_z = z0 + (nominal - z0) * weight
         r = cfg.reach_fraction * (leg.thigh + leg.shank)
-        stance_bound = foot_s.z + np.sqrt(np.maximum(r * r - lam * lam, 0.0))
-        swing_bound = swing_z + np.sqrt(np.maximum(r * r - forward * forward, 0.0))
         if np.any(np.abs(lam) > r) or np.any(np.abs(forward) > r):
             raise GaitError('footstep out of leg reach')
-        z = np.minimum(wanted_z, np.minimum(stance_bound, swing_bound))
+        stance_bound = foot_s.z + np.sqrt(np.maximum(r * r - lam * lam, 0.0))
+        fade = np.minimum(1.0, 6.0 * (1 - tau))
+        ankle_low = self._leg_lower[swing_side][3] + 0.02
+        ankle_high = self._leg_upper[swing_side][3] - 0.02
+        # The swing sole's real pitch depends on the leg posture (the ankle has limits), and the
+        # posture on the swing height: two passes make the clearance test use the real pitch.
+        for _ in range(5):
+            swing_z, lift = self._swing_heights(bezier, foot_w, landing, swing_xy, plane_yaw,
+                                                swing_pitch, swing_profile)
+            swing_bound = swing_z + np.sqrt(np.maximum(r * r - forward * forward, 0.0))
+            z = np.minimum(wanted_z, np.minimum(stance_bound, swing_bound))
+            hip = np.column_stack([swing_hip_xy, z])
+            ankle = np.column_stack([swing_xy, swing_z])
+            joints, _, _ = leg_inverse_kinematics(leg, hip, ankle, plane_yaw, yaw, swing_pitch)
+            correction = (np.clip(joints[:, 3], ankle_low, ankle_high) - joints[:, 3]) * fade
+            if np.max(np.abs(correction)) < 0.005:
+                break
+            swing_pitch = swing_pitch + correction
 
         foot_end = [None, None]
         foot_end[stance_side] = foot_s
@@ -333,8 +357,11 @@ class WalkGenerator:
             if side == swing_side:
                 # A foot in the air may point its toes (push-off) or lift them: its pitch is
                 # free, so the ankle stays inside its range; contact frames are unchanged.
-                joints[:, 3] = np.clip(joints[:, 3], self._leg_lower[side][3] + 0.02,
-                                       self._leg_upper[side][3] - 0.02)
+                # It rolls on from a heel-off at lift-off; the correction fades out towards
+                # touchdown, where the sole must meet its foothold flat.
+                wanted = np.clip(joints[:, 3], self._leg_lower[side][3] + 0.02,
+                                 self._leg_upper[side][3] - 0.02)
+                joints[:, 3] += (wanted - joints[:, 3]) * np.minimum(1.0, 6.0 * (1 - tau))
             if np.max(reach) > 1.0 + 1e-9:
                 raise GaitError(f'{"left" if side == LEFT else "right"} leg out of reach')
             low, high = self._leg_lower[side], self._leg_upper[side]
@@ -388,7 +415,8 @@ class WalkGenerator:
         return joints, end
 
     def _swing_heights(self, tau, lift_foot: FootPose, landing: FootPose, swing_xy, plane_yaw,
-                       swing_profile):
+                       swing_pitch, swing_profile):
+        # ``tau`` here is the Bezier parameter of each frame (k,), in [0, 1].
         """Ankle heights of the swinging foot: a cubic Bezier raised until it clears (§4.1).
 
         The control points sit above the lift-off and touchdown points; when the sole would
@@ -398,27 +426,35 @@ class WalkGenerator:
         cfg, leg = self.config, self.leg
         z0, z1 = lift_foot.z, landing.z
         # Sole footprint (heel..toe, across the width) at each sampled swing position.
-        along = np.linspace(-leg.heel, leg.toe, 6)
+        along = np.linspace(-leg.heel, leg.toe, 11)
         across = np.array([-0.5, 0.0, 0.5]) * leg.foot_width
-        samples = np.arange(0, tau.size, max(1, tau.size // 24))
+        samples = np.unique(np.append(np.arange(0, tau.size, max(1, tau.size // 30)),
+                                      tau.size - 1))
         d = np.stack([np.cos(plane_yaw[samples]), np.sin(plane_yaw[samples])], axis=-1)
         n = np.stack([-d[:, 1], d[:, 0]], axis=-1)
         points = (swing_xy[samples, None, None, :] + along[None, :, None, None] * d[:, None, None]
                   + across[None, None, :, None] * n[:, None, None])
         z_ref = max(z0, z1) + cfg.max_swing_lift
-        tops = swing_profile(points.reshape(-1, 2), z_ref).reshape(len(samples), -1)
+        tops = swing_profile(points.reshape(-1, 2), z_ref).reshape(len(samples), along.size, -1)
+        # Ground relative to a sole pitched like the foot: what the ankle must stay above.
+        tops = tops - along[None, :, None] * np.sin(swing_pitch[samples])[:, None, None]
         with np.errstate(invalid='ignore'):
-            ground = np.nanmax(np.where(np.isnan(tops), -np.inf, tops), axis=1)
+            ground = np.nanmax(np.where(np.isnan(tops), -np.inf, tops).reshape(len(samples), -1),
+                               axis=1)
         b = tau[samples]
-        ramp = np.minimum(1.0, 5.0 * np.minimum(b, 1.0 - b))
-        need = ground + leg.ankle_height + cfg.swing_clearance * ramp
+        ramp = np.minimum(1.0, 10.0 * np.minimum(b, 1.0 - b))
+        need = (ground + leg.ankle_height * np.cos(swing_pitch[samples])
+                + cfg.swing_clearance * ramp)
         basis_1 = 3 * b * (1 - b) ** 2
         basis_2 = 3 * b * b * (1 - b)
-        h1 = cfg.swing_lift + max(0.0, z1 - z0)
+        # Off a heel-off the toe is on the ground: lift more briskly so it does not scuff.
+        h1 = cfg.swing_lift * (2.0 if lift_foot.pitch < -0.05 else 1.0) + max(0.0, z1 - z0)
         h2 = cfg.swing_lift + 0.5 * max(0.0, z0 - z1)
         for _ in range(12):
             curve = (1 - b) ** 3 * z0 + basis_1 * (z0 + h1) + basis_2 * (z1 + h2) + b ** 3 * z1
-            short = need - curve
+            # Near lift-off and touchdown the sole is by definition at its foothold: the
+            # conservative map may read a few mm high there (the 3D check is exact).
+            short = need - curve - 0.015 * (1.0 - ramp)
             if np.all(short <= 1e-4):
                 break
             worst = int(np.argmax(short))
