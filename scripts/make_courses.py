@@ -34,6 +34,10 @@ DEFAULT_OUT = os.path.join(HERE, '..', 'config', 'scenes')
 SLAB_BOTTOM = -0.2      # floor slabs are 0.2 m thick with their top at z = 0
 WALK_SPEED = 0.8        # m/s, commanded walking speed on every course
 FLOOR_HALF_WIDTH = 2.0  # m, floor extent either side of a straight path
+# Underside of the low beams above the ground, m: the standing head (top 1.75 m) hits it, a
+# waist bent forward 0.6 rad clears it by 2 cm (waist joint 1.02 m, head centre 0.62 m above
+# it, radius 0.11 m); the least bend that passes is 0.55 rad.
+LOW_BEAM_UNDERSIDE = 1.66
 
 
 # -- mesh builders -----------------------------------------------------------------------
@@ -205,7 +209,7 @@ def straight(duration, speed=WALK_SPEED):
 def course_flat():
     return dict(
         description='10 m straight on a flat floor.',
-        meshes=[('floor', 'stl', slab(-2.0, 14.0), None)],
+        meshes=[('floor', 'stl', slab(-2.0, 16.0), None)],
         start=[0.0, 0.0, 0.0], expect={'reach_x': 9.0}, commands=straight(14.0))
 
 
@@ -213,7 +217,7 @@ def course_slope():
     rise = 0.6
     run = rise / math.tan(math.radians(12.0))
     x_up, plateau = 1.5, 2.0
-    xs = [-2.0, x_up, x_up + run, x_up + run + plateau, x_up + 2 * run + plateau, 15.0]
+    xs = [-2.0, x_up, x_up + run, x_up + run + plateau, x_up + 2 * run + plateau, 16.0]
     points = list(zip(xs, [0.0, 0.0, rise, rise, 0.0, 0.0]))
     return dict(
         description=(f'Flat, a 12 degree ramp up ({run:.2f} m long) to a {rise} m plateau '
@@ -237,7 +241,7 @@ def stair_profile(x_first, heights, tread, floor_x0, floor_top, end_x, end_top):
 def course_stairs_up():
     rise, tread = 0.15, 0.30
     ground = profile_solid(stair_profile(1.5, [rise * k for k in range(1, 5)], tread, -2.0, 0.0,
-                                         7.0, 5 * rise), -FLOOR_HALF_WIDTH, FLOOR_HALF_WIDTH,
+                                         11.0, 5 * rise), -FLOOR_HALF_WIDTH, FLOOR_HALF_WIDTH,
                            SLAB_BOTTOM)
     return dict(
         description=(f'Five steps up (rise {rise} m, tread {tread} m) from x = 1.5 m to a '
@@ -249,7 +253,7 @@ def course_stairs_up():
 def course_stairs_down():
     rise, tread = 0.15, 0.30
     ground = profile_solid(stair_profile(1.5, [rise * k for k in range(4, 0, -1)], tread, -2.0,
-                                         5 * rise, 9.0, 0.0), -FLOOR_HALF_WIDTH,
+                                         5 * rise, 11.0, 0.0), -FLOOR_HALF_WIDTH,
                            FLOOR_HALF_WIDTH, SLAB_BOTTOM)
     return dict(
         description=(f'Start on a landing {5 * rise:.2f} m high; five steps down (rise {rise} m, '
@@ -261,7 +265,7 @@ def course_stairs_down():
 def course_gap():
     x0, width, depth = 3.0, 0.45, 1.0
     ground = profile_solid([(-2.0, 0.0), (x0, 0.0), (x0, -depth), (x0 + width, -depth),
-                            (x0 + width, 0.0), (12.0, 0.0)], -FLOOR_HALF_WIDTH,
+                            (x0 + width, 0.0), (13.0, 0.0)], -FLOOR_HALF_WIDTH,
                            FLOOR_HALF_WIDTH, -depth - 0.2)
     return dict(
         description=(f'A ditch {width} m wide and {depth} m deep across the path at '
@@ -274,13 +278,13 @@ def course_figure8_trap():
     height, pit_x0, pit_length = 0.33, 2.0, 0.35
     half = 0.6
     walkway = merge(box(-2.0, pit_x0, -half, half, -0.1, height),
-                    box(pit_x0 + pit_length, 8.0, -half, half, -0.1, height))
+                    box(pit_x0 + pit_length, 11.0, -half, half, -0.1, height))
     return dict(
         description=('Paper Figure 8: a walkway 0.33 m high with a pit 0.35 m long down to the '
                      'ground at x = 2.0 m. Stepping down into it is allowed (<= 0.35 m), '
                      'climbing out is not (> 0.30 m): a one-step window gets stuck, n = 3 '
                      'strides over.'),
-        meshes=[('ground', 'stl', slab(-2.0, 8.0), None),
+        meshes=[('ground', 'stl', slab(-2.0, 11.0), None),
                 ('walkway', 'obj', walkway, None)],
         start=[0.0, 0.0, 0.0],
         expect={'reach_x': 5.0, 'trap_x': [pit_x0, pit_x0 + pit_length]},
@@ -295,13 +299,13 @@ def course_blocks():
     return dict(
         description=('Blocks 0.10 m (x 1.5-2.3), 0.20 m (x 3.3-4.2) and 0.28 m (x 5.2-6.2) '
                      'high with floor between: step onto and off each.'),
-        meshes=[('floor', 'glb', slab(-2.0, 12.0), None),
+        meshes=[('floor', 'glb', slab(-2.0, 15.0), None),
                 ('blocks', 'ply', blocks, None)],
-        start=[0.0, 0.0, 0.0], expect={'reach_x': 8.0}, commands=straight(12.0))
+        start=[0.0, 0.0, 0.0], expect={'reach_x': 7.0}, commands=straight(14.0))
 
 
 def course_rough():
-    xs = np.arange(-2.0, 12.0 + 1e-9, 0.05)
+    xs = np.arange(-2.0, 14.0 + 1e-9, 0.05)
     ys = np.arange(-1.5, 1.5 + 1e-9, 0.05)
     heights = bumps(xs, ys, 0.04, seed=8, x_flat_until=1.0, x_flat_from=9.0)
     return dict(
@@ -339,12 +343,12 @@ def course_wall():
 
 
 def course_low_beam():
-    beam_x, underside = 3.0, 1.60
+    beam_x, underside = 3.0, LOW_BEAM_UNDERSIDE
     return dict(
         description=(f'A beam across the path at x = {beam_x} m, underside {underside} m: the '
-                     'standing head hits it; bending the waist forward (about 0.75 rad at '
-                     'standing height) passes under.'),
-        meshes=[('floor', 'stl', slab(-2.0, 10.0), None),
+                     'standing head hits it; bending the waist forward about 0.6 rad passes '
+                     'under (0.55 rad at least, standing height).'),
+        meshes=[('floor', 'stl', slab(-2.0, 12.0), None),
                 ('beam', 'glb', beam_with_posts(underside), [beam_x, 0.0, 0.0, 0.0, 0.0, 0.0])],
         start=[0.0, 0.0, 0.0],
         expect={'reach_x': 5.5, 'obstacle_x': [beam_x - 0.8, beam_x + 0.3],
@@ -395,7 +399,7 @@ def course_table():
         description=(f'A table (top 0.78 m) on the left of the path from x = {table_x0} m, '
                      f'near edge at y = {edge_y} m, under the hanging left hand; books and a '
                      'jar at the edge are in the swinging arm\'s way: the left elbow flexes.'),
-        meshes=[('floor', 'stl', slab(-2.0, 9.0), None),
+        meshes=[('floor', 'stl', slab(-2.0, 11.0), None),
                 ('table', 'obj', table, pose),
                 ('objects', 'glb', objects, pose)],
         start=[0.0, 0.0, 0.0],
@@ -412,7 +416,7 @@ def course_pillars():
     return dict(
         description=(f'Two round pillars at x = {pillar_x} m leaving a {2 * half_gap:.2f} m gap, '
                      'narrower than the shoulders (0.52 m): passable by turning the waist.'),
-        meshes=[('floor', 'ply', slab(-2.0, 9.0), None),
+        meshes=[('floor', 'ply', slab(-2.0, 11.0), None),
                 ('pillar', 'stl', pillar, [pillar_x, centre, 0.0, 0.0, 0.0, 0.0]),
                 ('pillar', 'stl', pillar, [pillar_x, -centre, 0.0, 0.0, 0.0, 0.0])],
         start=[0.0, 0.0, 0.0],
@@ -422,16 +426,17 @@ def course_pillars():
 
 
 def course_uneven_beam():
-    xs = np.arange(-2.0, 10.0 + 1e-9, 0.05)
+    xs = np.arange(-2.0, 13.0 + 1e-9, 0.05)
     ys = np.arange(-1.5, 1.5 + 1e-9, 0.05)
     heights = bumps(xs, ys, 0.03, seed=9, x_flat_until=1.0, x_flat_from=7.0)
     platform_top, beam_x = 0.12, 3.6
     platform = box(2.6, 4.6, -0.8, 0.8, -0.2, platform_top)
-    underside = platform_top + 1.60
+    underside = platform_top + LOW_BEAM_UNDERSIDE
     return dict(
         description=('Bumpy ground (+-3 cm) with a platform 0.12 m high from x = 2.6 m to '
                      f'4.6 m and a beam over it at x = {beam_x} m, underside {underside:.2f} m '
-                     '(1.60 m above the platform): step up, bend under, step down.'),
+                     f'({LOW_BEAM_UNDERSIDE} m above the platform): step up, bend under, step '
+                     'down.'),
         meshes=[('terrain', 'ply', heightfield_solid(xs, ys, heights, SLAB_BOTTOM), None),
                 ('platform', 'obj', platform, None),
                 ('beam', 'glb', beam_with_posts(underside), [beam_x, 0.0, 0.0, 0.0, 0.0, 0.0])],
