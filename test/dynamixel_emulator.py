@@ -356,10 +356,15 @@ class DynamixelEmulator:
             if shutdown:
                 servo.table[TORQUE_ENABLE] = 0
 
-    def disconnect_servo(self, servo_id: int) -> None:
+    def disconnect_servo(self, servo_id: int) -> Servo:
         """Take one servo off the bus (a broken cable): it stops answering."""
         with self.lock:
-            self.servos.pop(servo_id)
+            return self.servos.pop(servo_id)
+
+    def connect_servo(self, servo: Servo) -> None:
+        """Put a servo (back) on the bus."""
+        with self.lock:
+            self.servos[servo.servo_id] = servo
 
     def goal_history(self, servo_id: int) -> List[Tuple[float, int]]:
         with self.lock:

@@ -284,7 +284,7 @@ def test_servo_dropping_off_the_bus_is_named_and_the_rest_keep_going(rig):
     r.emulator.start()
     r.start_bridge()
     r.wait_connected()
-    r.emulator.disconnect_servo(ID['right_elbow'])
+    servo = r.emulator.disconnect_servo(ID['right_elbow'])
     assert r.wait(lambda: r.status('dynamixel_bridge: right_elbow') is not None
                   and 'missing' in r.status('dynamixel_bridge: right_elbow').message,
                   timeout=10.0)
@@ -293,6 +293,12 @@ def test_servo_dropping_off_the_bus_is_named_and_the_rest_keep_going(rig):
                   and r.goal('left_elbow') == expected_ticks('left_elbow', 0.9)
                   and r.feedback and len(r.feedback[-1].name) == 17)
     assert 'right_elbow' not in r.feedback[-1].name
+    # plugged back in: it is found again, switched on and driven (backoff max is 0.4 s)
+    servo.table[emu.TORQUE_ENABLE] = 0
+    r.emulator.connect_servo(servo)
+    assert r.wait(lambda: (r.stream({'right_elbow': 0.5}, 0.05) or True)
+                  and r.goal('right_elbow') == expected_ticks('right_elbow', 0.5), timeout=10.0)
+    assert r.emulator.register(ID['right_elbow'], emu.TORQUE_ENABLE) == 1
 
 
 def test_missing_servo_is_fatal_when_all_are_required(rig):

@@ -90,6 +90,7 @@ class BridgeController:
         self.read_failures = 0
         self.cycles = 0
         self.last_health_check = -np.inf
+        self.next_missing_ping = 0.0
         self.last_feedback: Optional[Feedback] = None
         self._last_dry_log = -np.inf
         self._last_dry_ticks: Optional[Tuple[int, ...]] = None
@@ -193,6 +194,9 @@ class BridgeController:
             if now < self.next_attempt or not self._connect(now):
                 return None
             commanded = self.envelope.commanded.copy()
+        if self.missing and now >= self.next_missing_ping:
+            self._recover_missing(now)
+            commanded = self.envelope.commanded.copy()
         try:
             self.bus.write_goals(self._goals(commanded))
             ticks = self.bus.read_positions(self.present)
@@ -233,6 +237,33 @@ class BridgeController:
             self.present = tuple(i for i in self.present if i in found)
             self.missing = tuple(s.id for s in self.servos if s.id not in self.present)
             self.read_failures = 0
+
+    def _recover_missing(self, now: float) -> None:
+        """Ping the missing servos now and then; bring back those that answer again."""
+        self.next_missing_ping = now + self.config.reconnect_backoff_max
+        try:
+            found = self.bus.ping(self.missing, attempts=1)
+            if not found:
+                return
+            ticks = self.bus.read_positions(tuple(found))
+            if len(ticks) != len(found):
+                return
+            for i, servo in enumerate(self.servos):
+                if servo.id in ticks:
+                    # Hold where it is: the rate limiter takes it from there.
+                    angle = min(max(servo.to_angle(ticks[servo.id]), servo.min_position),
+                                servo.max_position)
+                    self.envelope.commanded[i] = self.envelope.target[i] = angle
+            self.present = tuple(s.id for s in self.servos
+                                 if s.id in self.present or s.id in found)
+            self.missing = tuple(s.id for s in self.servos if s.id not in self.present)
+            back = [i for i in found if i not in self.faulted]
+            self.bus.write_goals({i: g for i, g in self._goals(self.envelope.commanded).items()
+                                  if i in back})
+            self.bus.set_torque(back, True)
+            self.log('info', f'servos answering again: {self._names(found)}')
+        except self.bus_error as error:
+            self._lost(now, str(error))
 
     def _dry_run_log(self, commanded: np.ndarray, now: float) -> None:
         ticks = tuple(s.to_ticks(commanded[i]) for i, s in enumerate(self.servos))
