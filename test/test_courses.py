@@ -7,6 +7,7 @@ posture the planner is meant to find.
 """
 import csv
 import glob
+import importlib.util
 import math
 import os
 
@@ -300,3 +301,18 @@ def test_pillars_pass_only_with_the_waist_turned(skeleton):
         assert world.colliding_links(skeleton, turned) == set(), x
         fully = posture(skeleton, x, 0.0, 0.0, waist_yaw=0.8)
         assert world.colliding_links(skeleton, fully) == set(), x
+
+
+def test_committed_courses_are_what_the_script_makes(tmp_path):
+    spec = importlib.util.spec_from_file_location(
+        'make_courses', os.path.join(ROOT, 'scripts', 'make_courses.py'))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    module.main(['--out', str(tmp_path)])
+    made = sorted(os.path.relpath(p, tmp_path)
+                  for p in glob.glob(str(tmp_path / '**' / '*.*'), recursive=True))
+    assert len(made) > 2 * len(COURSES)
+    for relative in made:
+        with open(tmp_path / relative, 'rb') as new, \
+                open(os.path.join(SCENES, relative), 'rb') as committed:
+            assert new.read() == committed.read(), relative
