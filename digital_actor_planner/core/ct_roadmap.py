@@ -16,6 +16,7 @@ legal configuration at the final frame k.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import time
 from typing import List, Optional, Tuple
 
 import numpy as np
@@ -138,7 +139,8 @@ class CTRoadmap:
     # -- search --------------------------------------------------------------------------
     def solve(self, space: CTSpace, start: np.ndarray, hold_frames: int = 5,
               speed_fraction: float = 0.8, growth_attempts: int = 4,
-              node_budget: int = 400, max_backtracks: int = 60) -> SearchResult:
+              node_budget: int = 400, max_backtracks: int = 60,
+              deadline: Optional[float] = None) -> SearchResult:
         """Search forward in time from ``start`` at frame 0 to any legal state at frame k-1.
 
         Parameters
@@ -155,6 +157,8 @@ class CTRoadmap:
             Random directions tried when growing a node at distance r.
         node_budget, max_backtracks
             Search limits; exceeding either fails the search.
+        deadline
+            ``time.perf_counter()`` value after which the search gives up (None: no limit).
 
         Returns
         -------
@@ -179,7 +183,8 @@ class CTRoadmap:
                 return SearchResult(True, self._path(space, stack), -1, nodes, backtracks,
                                     grown)
             nodes += 1
-            if nodes > node_budget or backtracks > max_backtracks:
+            if nodes > node_budget or backtracks > max_backtracks or (
+                    deadline is not None and time.perf_counter() > deadline):
                 break
             child = self._advance(space, state, visited, hold_frames, speed_fraction)
             if child is None and not state.grew:

@@ -467,6 +467,13 @@ class CTSpace:
         self._check_steps = tuple(step for step in steps if step.child in needed)
         obstacle = shapes.shapes_of(obstacle_links)
         self.pairs = shapes.pairs(self.checked, obstacle)
+        self._reach_centre, self._reach = self._reach_bound()
+        # Body shapes the branch can never reach during the step need no checks.
+        gap = np.maximum(np.maximum(body.shape_lower[:, self.pairs[:, 1]]
+                                    - self._reach_centre[:, None], 0.0),
+                         self._reach_centre[:, None] - body.shape_upper[:, self.pairs[:, 1]])
+        reachable = np.any(np.linalg.norm(gap, axis=-1) <= self._reach, axis=0)
+        self.pairs = self.pairs[reachable]
         # The obstacle shapes do not move while this branch is planned.
         other = self.pairs[:, 1]
         self._pair_rotation = body.shape_rotation[:, other]
@@ -477,16 +484,18 @@ class CTSpace:
         self._prepare_environment()
         self.checks = 0
 
-    def _prepare_environment(self) -> None:
-        """Keep only triangles the branch could reach during the step (§5: broad phase)."""
+    def _reach_bound(self) -> Tuple[np.ndarray, float]:
+        """Centre (k, 3) and radius (m) of a ball holding the checked shapes at every frame.
+
+        The centre is the branch's first joint, which the branch itself cannot move; the radius
+        is the longest chain of joint offsets from it plus the shape's own extent.
+        """
         shapes = self.body.shapes
-        env = self.body.environment
-        root = self.steps[0].parent if self.steps else 0
-        centre = self.body.positions[:, root]
-        # Reach: the farthest any checked shape point can get from the branch's root link
-        # origin in any configuration, summed along the chain.
-        link_reach = {root: 0.0}
-        for step in self.steps:
+        if not self.steps:
+            return self.body.positions[:, 0], 0.0
+        first = self.steps[0].child
+        link_reach = {first: 0.0}
+        for step in self.steps[1:]:
             link_reach[step.child] = (link_reach.get(step.parent, 0.0)
                                       + float(np.linalg.norm(step.origin_translation)))
         reach = 0.0
@@ -494,6 +503,12 @@ class CTSpace:
             radius = float(np.linalg.norm(shapes.half[shape]))
             offset = float(np.linalg.norm(shapes.origin_translation[shape]))
             reach = max(reach, link_reach.get(int(shapes.link[shape]), 0.0) + offset + radius)
+        return self.body.positions[:, first], reach
+
+    def _prepare_environment(self) -> None:
+        """Keep only triangles the branch could reach during the step (§5: broad phase)."""
+        env = self.body.environment
+        centre, reach = self._reach_centre, self._reach
         lower = centre.min(axis=0) - reach
         upper = centre.max(axis=0) + reach
         near = env.triangles_near(lower, upper)

@@ -101,6 +101,8 @@ class UpperBodyConfig:
         Distance r of a node grown when the search is stuck, rad (weighted norm).
     node_budget
         States a branch search may expand per plan.
+    time_budget
+        Wall time a branch search may take per plan, s.
     max_backtracks
         Backtracking steps a branch search may take per plan.
     max_roadmap_nodes
@@ -121,6 +123,7 @@ class UpperBodyConfig:
 
     roadmap_radius: float = 0.3
     node_budget: int = 300
+    time_budget: float = 0.5
     max_backtracks: int = 40
     max_roadmap_nodes: int = 64
     hold_frames: int = 5
@@ -141,6 +144,7 @@ def validate_upper_body_config(config: UpperBodyConfig) -> UpperBodyConfig:
             raise ValueError(f'{name} must be {kind} > 0, got {value!r}')
 
     positive('roadmap_radius', config.roadmap_radius)
+    positive('time_budget', config.time_budget)
     for name in ('node_budget', 'max_roadmap_nodes', 'hold_frames', 'growth_attempts'):
         positive(name, getattr(config, name), integer=True)
     if not (isinstance(config.max_backtracks, (int, np.integer))
@@ -343,7 +347,8 @@ class UpperBodyPlanner:
                     space, start, hold_frames=config.hold_frames,
                     speed_fraction=config.speed_fraction,
                     growth_attempts=config.growth_attempts,
-                    node_budget=config.node_budget, max_backtracks=config.max_backtracks)
+                    node_budget=config.node_budget, max_backtracks=config.max_backtracks,
+                    deadline=time.perf_counter() + config.time_budget)
                 record.update(nodes=result.nodes, backtracks=result.backtracks,
                               grown=result.grown, ok=result.ok)
                 path = result.path
