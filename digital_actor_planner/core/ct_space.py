@@ -229,6 +229,7 @@ class BodyShapes:
                 geometry = fcl.Sphere(half[0])
             self.half[i] = half
             self.objects.append(fcl.CollisionObject(geometry, fcl.Transform()))
+        self._request = fcl.CollisionRequest()
         self.is_box = np.array([k == 'box' for k in self.kind])
         self.is_cylinder = np.array([k == 'cylinder' for k in self.kind])
         self.is_sphere = np.array([k == 'sphere' for k in self.kind])
@@ -303,7 +304,7 @@ class BodyShapes:
         obj = self.objects[shape]
         obj.setTransform(fcl.Transform(rotation, centre))
         result = fcl.CollisionResult()
-        fcl.collide(obj, other, fcl.CollisionRequest(), result)
+        fcl.collide(obj, other, self._request, result)
         return bool(result.is_collision)
 
 
