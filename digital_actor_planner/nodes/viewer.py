@@ -105,13 +105,14 @@ class PlannerDiagnostics:
 def parse_planner_diagnostics(statuses, node_name: str) -> Optional[PlannerDiagnostics]:
     """Pick the planner's status out of a DiagnosticArray's ``status`` list.
 
-    A status belongs to the planner when its name or hardware id contains ``node_name``. The state
+    A status belongs to the planner when its hardware id is ``node_name`` (fully qualified, as
+    ``/ns/actor_planner``) or its name starts with it. The state
     comes from a ``state`` key (else the message's first word), the reason from ``reason``
     (else the rest of the message) and the planning time from the first key naming the last
     (or else the median) planning time, in ms or s as the key says.
     """
     for status in statuses:
-        if node_name not in status.name and node_name not in status.hardware_id:
+        if status.hardware_id != node_name and not status.name.startswith(node_name + ':'):
             continue
         values = {kv.key.strip().lower(): kv.value.strip() for kv in status.values}
         message = status.message.strip()
@@ -346,6 +347,7 @@ def _build_node_class():
             self._max_speeds = (config.max_linear_speed, config.max_angular_speed)
             self._speeds_known = False
             self._scenes = shipped_scenes()
+            self._planner_name = (self.get_namespace().rstrip('/') + '/' + PLANNER_NODE)
 
             self.port = pick_port(config.host, config.port)
             self.server = viser.ViserServer(host=config.host, port=self.port, verbose=False)
@@ -361,10 +363,12 @@ def _build_node_class():
                                  reliability=ReliabilityPolicy.RELIABLE)
             self.create_subscription(String, 'robot_description', self._on_description, latched)
             self.create_subscription(JointState, 'joint_states', self._on_joint_states, 10)
-            self.create_subscription(MarkerArray, f'{PLANNER_NODE}/markers', self._on_markers,
-                                     QoSProfile(depth=10,
-                                                durability=DurabilityPolicy.VOLATILE))
-            self.create_subscription(Path, f'{PLANNER_NODE}/path', self._on_path, 10)
+            # The planner latches its markers (transient local), as RViz expects.
+            for topic in ('markers', 'environment'):
+                self.create_subscription(
+                    MarkerArray, f'{PLANNER_NODE}/{topic}',
+                    lambda msg, topic=topic: self._on_markers(topic, msg), latched)
+            self.create_subscription(Path, f'{PLANNER_NODE}/path', self._on_path, latched)
             self.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics, 10)
             if config.cmd_vel_stamped:
                 self._cmd_type = TwistStamped
@@ -387,6 +391,8 @@ def _build_node_class():
         def _build_page(self) -> None:
             server = self.server
             server.scene.set_up_direction('+z')
+            # Shadows cost the most per frame; software-rendered browsers keep up without them.
+            server.scene.configure_default_lights(enabled=True, cast_shadow=False)
             server.initial_camera.position = (-3.0, -3.5, 2.6)
             server.initial_camera.look_at = (0.0, 0.0, 0.8)
             server.scene.add_grid('/ground_grid', width=40.0, height=40.0, cell_size=0.5,
@@ -451,6 +457,7 @@ def _build_node_class():
                 pad.scale = radius
 
         def _on_pad_drag(self, client, event) -> None:
+            self.get_logger().debug(f'pad drag {event.phase} {event.end_screen_pos}')
             height = max(1, int(client.camera.image_height))
             width = max(1, int(client.camera.image_width))
             if event.phase == 'start':
@@ -484,6 +491,8 @@ def _build_node_class():
                 self._send(lin, ang)
 
         def _send(self, linear_x: float, angular_z: float) -> None:
+            if not self.context.ok():
+                return   # shutting down: a browser closing now must not publish
             msg = self._cmd_type()
             twist = msg.twist if self.config.cmd_vel_stamped else msg
             if self.config.cmd_vel_stamped:
@@ -563,7 +572,7 @@ def _build_node_class():
                 self._latest_joints = (tuple(msg.name), positions)
 
         def _on_diagnostics(self, msg) -> None:
-            parsed = parse_planner_diagnostics(msg.status, PLANNER_NODE)
+            parsed = parse_planner_diagnostics(msg.status, self._planner_name)
             if parsed is not None:
                 self._diagnostics = parsed
 
@@ -575,21 +584,26 @@ def _build_node_class():
                 self.server.scene.add_line_segments('/planner/path', segments,
                                                     colors=(30, 120, 255), line_width=3.0)
 
-        def _on_markers(self, msg) -> None:
+        def _on_markers(self, topic: str, msg) -> None:
             Marker = self._msg['Marker']
+            # DELETEALL clears what this topic showed (one RViz display per topic); markers
+            # re-sent unchanged right after it are kept instead of being rebuilt.
+            stale = set()
             with self.server.atomic():
                 for marker in msg.markers:
-                    key = (marker.ns, marker.id)
+                    key = (topic, marker.ns, marker.id)
                     if marker.action == Marker.DELETEALL:
-                        for old in list(self._markers):
-                            if not marker.ns or old[0] == marker.ns:
-                                self._markers.pop(old)[1].remove()
-                        continue
-                    if marker.action == Marker.DELETE:
+                        stale |= {k for k in self._markers if k[0] == topic}
+                    elif marker.action == Marker.DELETE:
+                        stale.discard(key)
                         if key in self._markers:
                             self._markers.pop(key)[1].remove()
-                        continue
-                    self._show_marker(key, marker)
+                    else:
+                        stale.discard(key)
+                        self._show_marker(key, marker)
+                for key in stale:
+                    if key in self._markers:
+                        self._markers.pop(key)[1].remove()
 
         def _show_marker(self, key, marker) -> None:
             Marker = self._msg['Marker']
@@ -599,7 +613,7 @@ def _build_node_class():
                          marker.scale.z, marker.color.r, marker.color.g, marker.color.b,
                          marker.color.a)
             old = self._markers.get(key)
-            name = f'/planner/{marker.ns or "markers"}/{marker.id}'
+            name = f'/planner/{key[0]}/{marker.ns or "markers"}/{marker.id}'
             rgb, opacity = marker_color(marker)
             position = (marker.pose.position.x, marker.pose.position.y,
                         marker.pose.position.z)

@@ -5,6 +5,7 @@
 // screenshot {path}, select {label, option}, check {label}, close.
 'use strict';
 
+const fs = require('fs');
 const readline = require('readline');
 const { chromium } = require('playwright-core');
 
@@ -21,7 +22,7 @@ async function main() {
     executablePath,
     headless: true,
     args: CHROMIUM_FLAGS,
-    viewport: { width: 1280, height: 800 },
+    viewport: { width: 960, height: 640 },
   });
   const page = context.pages()[0] || await context.newPage();
   const reply = (obj) => process.stdout.write(JSON.stringify(obj) + '\n');
@@ -34,14 +35,18 @@ async function main() {
     },
     async canvas() {
       // The 3D view is the largest canvas on the page.
-      const boxes = [];
-      for (const handle of await page.$$('canvas')) {
-        const box = await handle.boundingBox();
-        if (box) boxes.push(box);
-      }
-      boxes.sort((a, b) => b.width * b.height - a.width * a.height);
-      if (!boxes.length) throw new Error('no canvas on the page');
-      return { box: boxes[0] };
+      const box = await page.evaluate(() => {
+        let best = null;
+        for (const canvas of document.querySelectorAll('canvas')) {
+          const r = canvas.getBoundingClientRect();
+          if (!best || r.width * r.height > best.width * best.height) {
+            best = { x: r.x, y: r.y, width: r.width, height: r.height };
+          }
+        }
+        return best;
+      });
+      if (!box) throw new Error('no canvas on the page');
+      return { box };
     },
     async mouse(cmd) {
       if (cmd.action === 'move') {
@@ -60,7 +65,15 @@ async function main() {
       return { text: await page.evaluate(() => document.body.innerText) };
     },
     async screenshot(cmd) {
-      await page.screenshot({ path: cmd.path });
+      // Straight from the DevTools protocol: page.screenshot() waits for fonts and a quiet
+      // frame, which a continuously rendering WebGL page on a software rasteriser may not give.
+      const session = await context.newCDPSession(page);
+      try {
+        const shot = await session.send('Page.captureScreenshot', { format: 'png' });
+        fs.writeFileSync(cmd.path, Buffer.from(shot.data, 'base64'));
+      } finally {
+        await session.detach();
+      }
       return {};
     },
     async select(cmd) {

@@ -13,6 +13,7 @@ from geometry_msgs.msg import Point, TwistStamped
 import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile
 from sensor_msgs.msg import JointState
 from visualization_msgs.msg import Marker, MarkerArray
 
@@ -38,7 +39,8 @@ class FakePlanner(Node):
         self.create_subscription(TwistStamped, 'cmd_vel', self.on_cmd, 10)
         self.joints = self.create_publisher(JointState, 'joint_states', 10)
         self.diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
-        self.markers = self.create_publisher(MarkerArray, 'actor_planner/markers', 10)
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self.markers = self.create_publisher(MarkerArray, '~/environment', latched)
         self.create_timer(0.01, self.step)
         self.create_timer(0.5, self.report)
 
@@ -66,7 +68,8 @@ class FakePlanner(Node):
         self.joints.publish(msg)
 
     def report(self):
-        status = DiagnosticStatus(name='actor_planner: state', hardware_id='actor_planner',
+        name = self.get_fully_qualified_name()
+        status = DiagnosticStatus(name=f'{name}: actor planner', hardware_id=name,
                                   message=self.state)
         status.values = [KeyValue(key='state', value=self.state),
                          KeyValue(key='reason', value=self.reason),
