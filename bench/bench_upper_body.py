@@ -202,7 +202,7 @@ def main(argv=None):
     for course, obstacles in courses().items():
         environment = Environment([ground, *obstacles], resolution=0.05)
         collision = BodyCollision(skeleton, environment)
-        reference_planner = UpperBodyPlanner(skeleton, collision, UpperBodyConfig(),
+        reference_planner = UpperBodyPlanner(skeleton, collision, UpperBodyConfig(time_budget=60.0),
                                              rng=np.random.default_rng(0))
         reference = reference_planner.plan(times, frames)
         if not reference.ok:
@@ -218,12 +218,12 @@ def main(argv=None):
             for _ in range(args.repeat):
                 plan = planner.plan(step_times, step_frames)
                 rows.setdefault('CT-roadmap', []).append(
-                    (plan.ok, plan.deviation, plan.planning_time, course))
+                    (plan.ok, plan.deviation, plan.planning_time, course, begin))
                 course_times.append(plan.planning_time)
             for name, peer in peers.items():
                 ok, deviation, seconds = peer.plan(planner, step_times, step_frames,
                                                    reference.frames[window])
-                rows.setdefault(name, []).append((ok, deviation, seconds, course))
+                rows.setdefault(name, []).append((ok, deviation, seconds, course, begin))
         ms = np.array(course_times) * 1e3
         per_course.append((course, len(ms), np.percentile(ms, 50), np.percentile(ms, 99),
                            ms.max(), reference.deviation))
@@ -235,9 +235,15 @@ def main(argv=None):
         print(f'| {course} | {n} | {p50:.2f} | {p99:.2f} | {worst:.2f} | {deviation:.3f} |')
 
     print('\n### Peer comparison on the same per-step problems (obstacle courses)\n')
-    print('| planner | problems | success | p50 ms | p99 ms | mean deviation rad | '
-          'max deviation rad |')
-    print('|---|---:|---:|---:|---:|---:|---:|')
+    print('Deviation: largest |planned - motion pattern| over the step, rad. "common" is the mean '
+          'over the problems every planner solved.\n')
+    print('| planner | problems | success | p50 ms | p99 ms | mean deviation | '
+          'max deviation | mean deviation, common |')
+    print('|---|---:|---:|---:|---:|---:|---:|---:|')
+    solved = {}
+    for name, results in rows.items():
+        solved[name] = {(r[3], r[4]): r[1] for r in results if r[0] and r[3] != 'open'}
+    common = set.intersection(*(set(v) for v in solved.values())) if solved else set()
     for name, results in rows.items():
         results = [r for r in results if r[3] != 'open']
         ok = np.array([r[0] for r in results])
@@ -245,9 +251,11 @@ def main(argv=None):
         deviation = np.array([r[1] for r in results if r[0]])
         mean_dev = deviation.mean() if len(deviation) else float('nan')
         max_dev = deviation.max() if len(deviation) else float('nan')
+        common_dev = (np.mean([solved[name][key] for key in common]) if common
+                      else float('nan'))
         print(f'| {name} | {len(results)} | {ok.mean() * 100:.1f} % | '
               f'{np.percentile(ms, 50):.2f} | {np.percentile(ms, 99):.2f} | '
-              f'{mean_dev:.3f} | {max_dev:.3f} |')
+              f'{mean_dev:.3f} | {max_dev:.3f} | {common_dev:.3f} ({len(common)}) |')
     print(f'\n(command: {" ".join([sys.executable.split("/")[-1]] + sys.argv)}; '
           f'OMPL time limit {args.ompl_time} s per branch problem; load average '
           f'{", ".join(f"{x:.1f}" for x in os.getloadavg())} on {os.cpu_count()} cores)')
