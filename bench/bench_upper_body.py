@@ -202,7 +202,8 @@ def main(argv=None):
     for course, obstacles in courses().items():
         environment = Environment([ground, *obstacles], resolution=0.05)
         collision = BodyCollision(skeleton, environment)
-        reference_planner = UpperBodyPlanner(skeleton, collision, UpperBodyConfig(time_budget=60.0),
+        reference_planner = UpperBodyPlanner(skeleton, collision,
+                                             UpperBodyConfig(time_budget=60.0),
                                              rng=np.random.default_rng(0))
         reference = reference_planner.plan(times, frames)
         if not reference.ok:
