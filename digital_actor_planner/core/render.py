@@ -372,13 +372,13 @@ class _Canvas:
             label.remove()
         self.labels = [self.axes.text(x, y, text, ha='center', va='bottom', fontsize=9,
                                       color=(0.1, 0.1, 0.15)) for x, y, text in labels]
-        self.figure.canvas.draw()
 
     def save_png(self, path: str) -> None:
         self.figure.savefig(path, dpi=100, facecolor=self.figure.get_facecolor())
 
     def rgb(self) -> np.ndarray:
-        """The drawn image as (height, width, 3) uint8."""
+        """Render and return the image as (height, width, 3) uint8."""
+        self.figure.canvas.draw()
         return np.asarray(self.figure.canvas.buffer_rgba())[:, :, :3].copy()
 
 
@@ -576,7 +576,7 @@ def render_gif(path: str, skeleton, meshes: Sequence, times, frames, *, fps: flo
         bias = np.concatenate([np.zeros(int(near.sum())), actor_bias, feet_bias])
         canvas.title.set_text(f'{title + "   " if title else ""}t = {times[k]:.1f} s')
         canvas.draw(camera, triangles, colours, bias, limits)
-        images.append(Image.fromarray(canvas.rgb()).quantize(colors=96, method=2))
+        images.append(Image.fromarray(canvas.rgb()).quantize(colors=255, method=2))
 
     def write(temporary):
         images[0].save(temporary, format='GIF', save_all=True, append_images=images[1:],
