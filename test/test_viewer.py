@@ -1,0 +1,138 @@
+"""Unit tests of the viewer helpers: drag mapping, status line, diagnostics, scenes, port."""
+import glob
+import math
+import os
+import socket
+
+from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+import numpy as np
+import pytest
+
+from digital_actor_planner.nodes.viewer import (
+    config_from_args, build_parser, drag_to_command, normalize_namespace, pad_pose,
+    parse_planner_diagnostics, pick_port, shipped_scenes, status_text, StreamMonitor,
+    triangle_list_mesh, ViewerConfig, validate)
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def test_drag_up_walks_forward_and_left_turns_left():
+    # Screen y grows downward: dragging up is a negative dy (mouse_teleop convention).
+    lin, ang = drag_to_command((100, 300), (100, 250), span=100, max_linear_speed=0.8,
+                               max_angular_speed=1.0)
+    assert lin == pytest.approx(0.4) and ang == pytest.approx(0.0)
+    lin, ang = drag_to_command((100, 300), (50, 300), span=100, max_linear_speed=0.8,
+                               max_angular_speed=1.0)
+    assert lin == pytest.approx(0.0) and ang == pytest.approx(0.5)
+    lin, ang = drag_to_command((100, 300), (180, 360), span=100, max_linear_speed=0.8,
+                               max_angular_speed=1.0)
+    assert lin == pytest.approx(-0.6 * 0.8) and ang == pytest.approx(-0.8)
+
+
+def test_drag_is_clamped_to_the_maximum_speeds():
+    lin, ang = drag_to_command((0, 0), (-1000, -1000), span=100, max_linear_speed=0.8,
+                               max_angular_speed=1.2)
+    assert (lin, ang) == (pytest.approx(0.8), pytest.approx(1.2))
+
+
+@pytest.mark.parametrize('kwargs, word', [
+    ({'span': 0.0}, 'span'),
+    ({'span': float('nan')}, 'span'),
+    ({'max_linear_speed': -1.0}, 'max_linear_speed'),
+    ({'max_angular_speed': float('inf')}, 'max_angular_speed'),
+])
+def test_drag_bad_input_names_the_value(kwargs, word):
+    args = {'span': 100.0, 'max_linear_speed': 0.8, 'max_angular_speed': 1.0}
+    args.update(kwargs)
+    with pytest.raises(ValueError, match=word):
+        drag_to_command((0, 0), (0, -10), **args)
+
+
+def _status(state, reason='', planning='2.500', hardware_id='/actor_planner'):
+    values = [KeyValue(key='state', value=state), KeyValue(key='reason', value=reason),
+              KeyValue(key='planning_time_p99_ms', value='9.000'),
+              KeyValue(key='planning_time_last_ms', value=planning)]
+    return DiagnosticStatus(name=f'{hardware_id}: actor planner', hardware_id=hardware_id,
+                            message=state, values=values)
+
+
+def test_diagnostics_of_the_planner_in_the_namespace_are_picked():
+    other = _status('walking', hardware_id='/other/actor_planner')
+    mine = _status('stuck', 'no feasible footstep', hardware_id='/a/actor_planner')
+    parsed = parse_planner_diagnostics([other, mine], '/a/actor_planner')
+    assert parsed.state == 'stuck'
+    assert parsed.reason == 'no feasible footstep'
+    assert parsed.planning_time_ms == pytest.approx(2.5)
+    assert parse_planner_diagnostics([other], '/a/actor_planner') is None
+
+
+def test_status_line_waiting_walking_stuck_and_planner_gone():
+    stream = StreamMonitor(window=1.0)
+    assert status_text(0.0, stream, None, planner_present=False).startswith(
+        'waiting for joint_states')
+    for k in range(101):
+        stream.add(10.0 + k * 0.01)
+    walking = parse_planner_diagnostics([_status('walking')], '/actor_planner')
+    text = status_text(11.0, stream, walking, planner_present=True)
+    assert 'walking' in text and 'planning 2.5 ms' in text and 'stream 100 Hz' in text
+    stuck = parse_planner_diagnostics([_status('stuck', 'wall ahead')], '/actor_planner')
+    assert 'stuck (wall ahead)' in status_text(11.0, stream, stuck, planner_present=True)
+    gone = status_text(14.0, stream, stuck, planner_present=False)
+    assert gone.startswith('planner stopped') and '3.0 s' in gone
+
+
+def test_every_shipped_course_is_offered():
+    scenes = shipped_scenes()
+    on_disk = glob.glob(os.path.join(REPO, 'config', 'scenes', '*.yaml'))
+    assert sorted(scenes) == sorted(os.path.splitext(os.path.basename(p))[0] for p in on_disk)
+    assert all(os.path.isabs(p) and os.path.isfile(p) for p in scenes.values())
+    assert 'wall' in scenes
+
+
+def test_busy_port_moves_to_the_next_free_one():
+    with socket.socket() as holder:
+        holder.bind(('127.0.0.1', 0))
+        holder.listen(1)
+        busy = holder.getsockname()[1]
+        chosen = pick_port('127.0.0.1', busy)
+        assert chosen != busy and chosen > busy
+    with pytest.raises(ValueError, match='70000'):
+        pick_port('127.0.0.1', 70000)
+
+
+def test_triangle_list_becomes_a_mesh_and_bad_lists_are_named():
+    points = np.arange(18, dtype=float).reshape(6, 3)
+    vertices, faces = triangle_list_mesh(points)
+    assert vertices.shape == (6, 3) and faces.tolist() == [[0, 1, 2], [3, 4, 5]]
+    with pytest.raises(ValueError, match=r'\(4, 3\)'):
+        triangle_list_mesh(np.zeros((4, 3)))
+
+
+def test_pad_sits_where_it_is_drawn_on_screen():
+    # Camera at the origin looking along +x (OpenCV axes: z forward, y down, x right).
+    rotation = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
+    w = math.sqrt(1.0 + np.trace(rotation)) / 2.0
+    wxyz = np.array([w, (rotation[2, 1] - rotation[1, 2]) / (4 * w),
+                     (rotation[0, 2] - rotation[2, 0]) / (4 * w),
+                     (rotation[1, 0] - rotation[0, 1]) / (4 * w)])
+    center = pad_pose(np.zeros(3), wxyz, fov=math.pi / 2, aspect=1.0, screen_uv=(0.5, 0.5),
+                      depth=2.0)
+    assert center == pytest.approx([2.0, 0.0, 0.0])
+    lower_left = pad_pose(np.zeros(3), wxyz, fov=math.pi / 2, aspect=1.0,
+                          screen_uv=(0.0, 1.0), depth=1.0)
+    # Left of the view is +y (world), the bottom is -z.
+    assert lower_left == pytest.approx([1.0, 1.0, -1.0])
+
+
+def test_options_and_namespace_are_checked():
+    config = config_from_args(build_parser().parse_args(['--port', '9000', '--twist']))
+    assert config.port == 9000 and not config.cmd_vel_stamped
+    assert config.host == '127.0.0.1'
+    with pytest.raises(ValueError, match='render_rate'):
+        validate(ViewerConfig(render_rate=0.0))
+    with pytest.raises(ValueError, match='port'):
+        validate(ViewerConfig(port=0))
+    assert normalize_namespace('') == '/'
+    assert normalize_namespace('actor1/') == '/actor1'
+    with pytest.raises(ValueError, match='a-b'):
+        normalize_namespace('a-b')
