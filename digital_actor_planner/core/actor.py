@@ -40,6 +40,7 @@ class ActorConfig:
     max_attempts: int = 6
     verify_collisions: bool = True
     plan_upper_body: bool = True
+    upper_body_preview: float = 0.5
     footsteps: FootstepConfig = field(default_factory=FootstepConfig)
     gait: GaitConfig = field(default_factory=GaitConfig)
 
@@ -288,10 +289,35 @@ class Actor:
         full_times = np.concatenate([[0.0], times])
         # Continuity: frame 0 is the previous step's planned upper body.
         full[0, upper] = self._configuration[upper]
-        plan = self._upper.plan(full_times, full)
+        k = full.shape[0]
+        # Receding horizon: plan over this step plus a preview of the pelvis carrying on, so
+        # the waist starts to bend before an obstacle is reached; commit only this step.
+        preview = self._preview(full_times, full)
+        plan = None
+        if preview is not None:
+            plan = self._upper.plan(*preview)
+        if plan is None or not plan.ok:
+            plan = self._upper.plan(full_times, full)
         if not plan.ok:
             return frames, False, plan.reason
-        return plan.frames[1:], True, ''
+        return plan.frames[1:k], True, ''
+
+    def _preview(self, times: np.ndarray, frames: np.ndarray):
+        """Extend a step's frames by ``upper_body_preview`` s of the pelvis moving on."""
+        duration = self.config.upper_body_preview
+        if duration <= 0 or frames.shape[0] < 3:
+            return None
+        dt = 1.0 / self.config.frame_rate
+        count = int(round(duration * self.config.frame_rate))
+        root = self.skeleton.branch('root')
+        span = min(frames.shape[0] - 1, int(round(0.2 * self.config.frame_rate)))
+        velocity = (frames[-1, root] - frames[-1 - span, root]) / (span * dt)
+        velocity[2] = 0.0
+        steps = np.arange(1, count + 1)[:, None] * dt
+        extra = np.repeat(frames[-1:], count, axis=0)
+        extra[:, root] = frames[-1, root] + velocity * steps
+        extra = self._with_patterns(extra)
+        return (np.concatenate([times, times[-1] + steps[:, 0]]), np.vstack([frames, extra]))
 
     def _verify(self, frames: np.ndarray) -> Optional[str]:
         """3D check of the legs against the environment at a subset of frames."""
@@ -351,8 +377,11 @@ class Actor:
                 continue
             frames, ok, upper_reason = self._upper_body(motion.times, motion.frames)
             if not ok:
-                return self._stuck(f'upper body blocked: {upper_reason}', started, footsteps,
-                                   path_points)
+                # §3.2: the step is not taken; other footsteps may leave the upper body time.
+                banned.append(window.indices[0])
+                reason = f'upper body blocked: {upper_reason}'
+                start = None
+                continue
             self._window, self._window_command = window, (v, w)
             self._previous_length = float(window.lengths[0])
             return self._commit('walking', '', motion.times, frames, motion.stance, footsteps,
