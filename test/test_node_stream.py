@@ -172,6 +172,21 @@ def test_nan_and_inf_commands_are_ignored_and_the_stream_goes_on(actor):
     assert 'non-finite cmd_vel' in process.output()
 
 
+def test_speeds_beyond_the_limits_are_clamped_with_a_warning(actor):
+    process, probe = actor
+    assert _set_scene(probe, scene('flat')).successful  # back to the start of open ground
+    _stop(probe)
+    began = probe.drive(9.0, 0.0, 4.0)
+    times, frames = probe.positions_since(began + 2.0)
+    distance = math.hypot(frames[-1, ROOT_X] - frames[0, ROOT_X],
+                          frames[-1, ROOT_Y] - frames[0, ROOT_Y])
+    speed = distance / (times[-1] - times[0])
+    assert 0.1 < speed < 1.2 * 1.5, f'{speed:.2f} m/s for a 9 m/s command (limit 1.2 m/s); ' \
+        f'{probe.diagnostic_values().get("_message")}'
+    assert 'clamped' in process.output()
+    _stop(probe)
+
+
 def test_diagnostics_report_state_planning_time_and_stream_health(actor):
     _, probe = actor
     assert probe.spin_until(lambda: probe.diagnostic_values(), 5.0)

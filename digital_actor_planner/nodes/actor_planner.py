@@ -379,6 +379,19 @@ class PlanningProcess:
         self._connection.close()
 
 
+def real_time(priority: int) -> bool:
+    """Put the calling thread under SCHED_FIFO at ``priority``; False when not permitted.
+
+    Children forked later start with normal scheduling (SCHED_RESET_ON_FORK).
+    """
+    try:
+        policy = os.SCHED_FIFO | getattr(os, 'SCHED_RESET_ON_FORK', 0)
+        os.sched_setscheduler(threading.get_native_id(), policy, os.sched_param(priority))
+    except (AttributeError, OSError):
+        return False
+    return True
+
+
 class ActorPlannerNode(Node):
     """Stream the digital actor's whole-body motion as JointState, directed by cmd_vel."""
 
@@ -498,6 +511,10 @@ class ActorPlannerNode(Node):
     # -- threads ------------------------------------------------------------------------------
     def _planning_loop(self) -> None:
         logger = self.get_logger()
+        if self.config.stream_priority > 1:
+            # This thread and the executor hold the GIL only briefly; below the stream's
+            # priority they cannot be preempted by other programs while holding it.
+            real_time(self.config.stream_priority - 1)
         while not self._stop.is_set():
             with self._pending_lock:
                 pending, self._pending_start = self._pending_start, None
@@ -544,13 +561,9 @@ class ActorPlannerNode(Node):
     def _publishing_loop(self) -> None:
         # Ticks on a monotonic schedule; a late tick is published late, missed ticks are skipped
         # (and counted), so the stream never bunches up.
-        if self.config.stream_priority > 0:
-            try:
-                os.sched_setscheduler(threading.get_native_id(), os.SCHED_FIFO,
-                                      os.sched_param(self.config.stream_priority))
-            except (AttributeError, OSError) as error:
-                self.get_logger().info(f'joint_states thread keeps normal scheduling '
-                                       f'(SCHED_FIFO not permitted: {error})')
+        if self.config.stream_priority > 0 and not real_time(self.config.stream_priority):
+            self.get_logger().info('joint_states thread keeps normal scheduling (SCHED_FIFO '
+                                   'not permitted); set stream_priority 0 to silence this')
         start = time.monotonic()
         clock_zero = start
         tick = 0
@@ -737,6 +750,8 @@ def main(args=None) -> int:
         rclpy.logging.get_logger('actor_planner').fatal(f'invalid configuration: {error}')
         rclpy.try_shutdown()
         return 2
+    if node.config.stream_priority > 1:
+        real_time(node.config.stream_priority - 1)  # the executor thread, see _planning_loop
     try:
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
