@@ -323,11 +323,9 @@ class Actor:
         """3D check of the legs against the environment at a subset of frames."""
         if not self.config.verify_collisions:
             return None
-        step = 2
-        for j in list(range(0, frames.shape[0], step)) + [frames.shape[0] - 1]:
-            if self._collision.collides(frames[j], self._leg_links):
-                links = self._collision.links_in_collision(frames[j], self._leg_links)
-                return f'leg collides with the environment ({", ".join(links)})'
+        index, links = self._collision.first_collision(frames, self._leg_links)
+        if index >= 0:
+            return f'leg collides with the environment ({", ".join(links)})'
         return None
 
     def _walk_step(self, v: float, w: float, started: float) -> StepBlock:

@@ -278,6 +278,75 @@ class BodyCollision:
                     return True
         return False
 
+    def first_collision(self, frames: np.ndarray, links: Optional[Iterable[str]] = None,
+                        margin: float = 0.02) -> Tuple[int, List[str]]:
+        """First frame of a motion at which the given links touch the environment.
+
+        Batched: forward kinematics for all frames at once, then a broad phase that drops every
+        shape whose bounding sphere is clear of the ground map by ``margin`` (nothing below it
+        within reach, no ceiling inside it, no wall beside it), then exact FCL tests of the rest
+        in time order.
+
+        Parameters
+        ----------
+        frames
+            (k, 22) configurations, rad or m.
+        links
+            Link names; None = every link with a shape.
+        margin
+            Broad-phase clearance, m.
+
+        Returns
+        -------
+        tuple
+            (frame index, link names) of the first collision, or (-1, []) when free.
+
+        """
+        frames = np.atleast_2d(np.asarray(frames, dtype=float))
+        if frames.shape[1:] != (len(self.skeleton.joint_names),):
+            raise ValueError(f'frames must have shape (k, {len(self.skeleton.joint_names)}), '
+                             f'got {frames.shape}')
+        chosen = [s for _, shapes in self._shapes_of(links) for s in shapes]
+        if not chosen or frames.shape[0] == 0:
+            return -1, []
+        transforms = self.skeleton.shape_transforms(self.skeleton.forward_kinematics(frames))
+        transforms = transforms[:, chosen]
+        centres = transforms[..., :3, 3]
+        reach = np.array([self._reach[s] for s in chosen])[None, :]
+        offsets = np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1]], dtype=float)
+        points = centres[:, :, None, :2] + offsets[None, None] * reach[..., None, None]
+        top = np.broadcast_to(centres[..., 2] + reach, centres.shape[:2])
+        ground, room = self.environment.ground_height(
+            points.reshape(-1, 2), np.repeat(top.ravel(), offsets.shape[0]))
+        ground = ground.reshape(points.shape[:3])
+        room = room.reshape(points.shape[:3])
+        with np.errstate(invalid='ignore'):
+            bottom_clear = np.all(centres[..., 2, None] - reach[..., None] - ground > margin,
+                                  axis=-1)
+            ceiling_clear = np.all(ground + room > top[..., None] + margin, axis=-1)
+        suspect = ~(bottom_clear & ceiling_clear)
+        targets = self.environment.objects
+        for j in np.flatnonzero(np.any(suspect, axis=1)):
+            hits = []
+            for column in np.flatnonzero(suspect[j]):
+                shape = chosen[column]
+                obj = self._objects[shape]
+                obj.setTransform(fcl.Transform(transforms[j, column, :3, :3],
+                                               transforms[j, column, :3, 3]))
+                self._placed.pop(shape, None)
+                self._placed[shape] = (tuple(transforms[j, column, :3, :3].ravel()),
+                                       tuple(transforms[j, column, :3, 3]))
+                if any(fcl.collide(obj, targets[m], self._request, fcl.CollisionResult())
+                       for m in self._candidates(shape)):
+                    hits.append(self.shapes[shape].link)
+            if hits:
+                self._cache_values = None
+                self._placed = {}
+                return int(j), sorted(set(hits))
+        self._cache_values = None
+        self._placed = {}
+        return -1, []
+
     def links_in_collision(self, q, links: Optional[Iterable[str]] = None) -> List[str]:
         """Names of the given links that touch the environment, in ``links`` order."""
         q = self._check_q(q)
