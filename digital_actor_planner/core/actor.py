@@ -165,6 +165,8 @@ class Actor:
         self._window_command = None
         self.status = 'idle'
         self.reason = ''
+        self._failure = None
+        self._steps = 0
 
     # -- state ---------------------------------------------------------------------------
     @property
@@ -226,6 +228,10 @@ class Actor:
                 if block is not None:
                     return block
             return self._hold('idle', '', started)
+        # Nothing has changed since the last failed attempt: the answer is the same (§3.2,
+        # the actor stays stuck until the user steers it somewhere else).
+        if self._failure is not None and self._failure[0] == (self._steps, v, w):
+            return self._stuck(self._failure[1], started, np.zeros((0, 4)), np.zeros((0, 3)))
         return self._walk_step(v, w, started)
 
     def _standing_configuration(self) -> np.ndarray:
@@ -273,6 +279,7 @@ class Actor:
         absolute = self._time + times
         self._configuration = frames[-1].copy()
         self._stance = stance
+        self._steps += 1
         self._time = float(absolute[-1])
         self.status, self.reason = status, reason
         return StepBlock(status, reason, absolute, frames, velocities, footsteps, path,
@@ -384,6 +391,7 @@ class Actor:
             self._previous_length = float(window.lengths[0])
             return self._commit('walking', '', motion.times, frames, motion.stance, footsteps,
                                 path_points, started, motion.category)
+        self._failure = ((self._steps, v, w), reason)
         return self._stuck(reason, started, np.zeros((0, 4)), path_points)
 
     def _stuck(self, reason: str, started: float, footsteps, path_points) -> StepBlock:

@@ -325,10 +325,17 @@ class BodyCollision:
                                   axis=-1)
             ceiling_clear = np.all(ground + room > top[..., None] + margin, axis=-1)
         suspect = ~(bottom_clear & ceiling_clear)
+        # A shape that has not moved since its last exact test (a stance foot) needs no other.
+        moved = np.ones(suspect.shape, dtype=bool)
+        moved[1:] = np.max(np.abs(np.diff(transforms[..., :3, :], axis=0)), axis=(-2, -1)) > 1e-7
         targets = self.environment.objects
+        tested = np.zeros(len(chosen), dtype=bool)
         for j in np.flatnonzero(np.any(suspect, axis=1)):
             hits = []
             for column in np.flatnonzero(suspect[j]):
+                if tested[column] and not moved[j, column]:
+                    continue
+                tested[column] = True
                 shape = chosen[column]
                 obj = self._objects[shape]
                 obj.setTransform(fcl.Transform(transforms[j, column, :3, :3],

@@ -155,7 +155,7 @@ class _Search:
     """Per-call memo of foothold and swing tests (cleared every plan)."""
 
     footholds: Dict[Tuple[int, int], Foothold] = field(default_factory=dict)
-    swings: Dict[Tuple[int, int, int], bool] = field(default_factory=dict)
+    swings: Dict[tuple, bool] = field(default_factory=dict)
     feasible: Dict[Tuple[int, ...], Optional[float]] = field(default_factory=dict)
 
 
@@ -281,6 +281,12 @@ class FootstepPlanner:
             memo.feasible[config] = result
             return result
 
+        # No configuration can be collision-free if some footstep has no foothold in reach.
+        for i in range(n):
+            reach = [(i, c) for c in range(i * m + 1 + m)]
+            if not any(self._memo_foothold(profile, memo, int(sides[i]), key, stance_s, lengths)
+                       for key in reach):
+                return None
         # Breadth-first search from q_init to the nearest collision-free configuration.
         queue, seen, found = deque([q]), {q}, None
         while queue:
@@ -328,6 +334,17 @@ class FootstepPlanner:
         return self._window(profile, best, lengths, sides, stance_s, best_effort,
                             (m + 1) ** n, memo)
 
+    def _memo_foothold(self, profile, memo, side, key, stance_s, lengths) -> bool:
+        """Whether footstep ``key[0]`` has a usable foothold at cumulative index ``key[1]``."""
+        hold = memo.footholds.get(key)
+        if hold is None:
+            i, cumulative = key
+            s = (stance_s + (i + 1) * self.config.step_length_min
+                 + cumulative * self.config.step_increment)
+            hold = self.foothold(profile, side, s)
+            memo.footholds[key] = hold
+        return hold.ok
+
     @staticmethod
     def _neighbours(config: Tuple[int, ...], m: int):
         for i in range(len(config)):
@@ -338,15 +355,17 @@ class FootstepPlanner:
 
     def _effort(self, profile, config, lengths, sides, stance_s, stance_height, swing_s,
                 swing_height, s_init, previous_length, memo, banned) -> Optional[float]:
+        """Effort of a footstep configuration, or None if it is not collision-free."""
         cfg = self.config
         if config[0] in banned:
             return None
         span = cfg.step_length_max - cfg.step_length_min
-        # Position of each foot before the step: (arc length, height) by side.
-        last = {int(1 - sides[0]): (stance_s, stance_height),
-                int(sides[0]): (swing_s, swing_height)}
+        up, down = cfg.max_step_up, cfg.max_step_down
+        # Where each foot was before its step: an index into ``placed`` (-2 swing, -1 stance).
+        placed = {-2: (swing_s, swing_height), -1: (stance_s, stance_height)}
         s, height_before, effort, length_before = stance_s, stance_height, 0.0, previous_length
         cumulative = 0
+        previous_key = {int(sides[0]): -2, int(1 - sides[0]): -1}
         for i, j in enumerate(config):
             length = lengths[j]
             s += length
@@ -360,21 +379,23 @@ class FootstepPlanner:
             if not hold.ok:
                 return None
             rise = hold.height - height_before
-            if rise > cfg.max_step_up or -rise > cfg.max_step_down:
+            if rise > up or -rise > down:
                 return None
-            s_from, h_from = last[side]
-            swing_key = (side, int(round(s_from / 1e-4)), int(round(s / 1e-4)))
+            origin = previous_key[side]
+            swing_key = (origin, key)
             clear = memo.swings.get(swing_key)
             if clear is None:
+                s_from, h_from = placed[origin]
                 clear = self.swing_clear(profile, side, s_from, h_from, s, hold.height)
                 memo.swings[swing_key] = clear
             if not clear:
                 return None
             effort += (cfg.weight_length * ((length - s_init) / span) ** 2
-                       + cfg.weight_height * (rise / max(cfg.max_step_up, 1e-6)) ** 2
+                       + cfg.weight_height * (rise / max(up, 1e-6)) ** 2
                        + cfg.weight_pitch * (hold.pitch / max(cfg.max_foot_pitch, 1e-6)) ** 2
                        + cfg.weight_smooth * ((length - length_before) / span) ** 2)
-            last[side] = (s, hold.height)
+            placed[key] = (s, hold.height)
+            previous_key[side] = key
             height_before, length_before = hold.height, length
         return effort
 
