@@ -117,7 +117,7 @@ def test_demo_in_browser_walk_turn_stop_and_stuck(artifacts_dir, monkeypatch):
         start_x = recorder.latest()[1]
         start_yaw = recorder.latest()[2]
         page.press(*center)
-        up = (center[0], center[1] - 110)
+        up = (center[0], center[1] - 100)
         page.move_to(center, up)
         assert wait_for(lambda: recorder.latest()[1] > start_x + 0.3, 120,
                         spin=recorder.spin), f'root_x stayed near {start_x}'
@@ -125,7 +125,7 @@ def test_demo_in_browser_walk_turn_stop_and_stuck(artifacts_dir, monkeypatch):
         assert 'walking' in page.wait_for_text('walking', 60)
 
         # Drag to the side (still forward): the actor turns left.
-        side = (center[0] - 110, center[1] - 110)
+        side = (center[0] - 100, center[1] - 100)
         yaw_before = recorder.latest()[2]
         page.move_to(up, side)
         assert wait_for(lambda: recorder.latest()[2] > yaw_before + 0.2, 120,
@@ -148,7 +148,7 @@ def test_demo_in_browser_walk_turn_stop_and_stuck(artifacts_dir, monkeypatch):
         assert 'idle' in page.wait_for_text('idle', 120)
         center = page.pad_center()
         page.press(*center)
-        page.move_to(center, (center[0], center[1] - 110))
+        page.move_to(center, (center[0], center[1] - 100))
         text = page.wait_for_text('stuck', 240)
         page.release()
         assert 'stuck' in text, text

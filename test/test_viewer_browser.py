@@ -114,14 +114,14 @@ def test_viewer_page_waits_steers_and_survives_planner_death(
                         spin=listener.spin)
         center = page.pad_center()
         page.press(*center)
-        up = (center[0], center[1] - 150)
+        up = (center[0], center[1] - 100)
         page.move_to(center, up)
         assert wait_for(lambda: any(c[1] > 0.2 for c in listener.commands), 60,
                         spin=listener.spin), listener.commands
         forward = [c for c in listener.commands if c[1] > 0.2]
         assert all(abs(c[2]) < 0.2 for c in forward), 'a straight-up drag must not turn'
         assert 'walking' in page.wait_for_text('walking', 60)
-        left = (center[0] - 150, center[1] - 150)
+        left = (center[0] - 100, center[1] - 100)
         page.move_to(up, left)
         assert wait_for(lambda: any(c[2] > 0.3 for c in listener.commands), 60,
                         spin=listener.spin), 'dragging left must turn left (+angular.z)'

@@ -77,9 +77,10 @@ async function main() {
       return {};
     },
     async select(cmd) {
-      // Mantine select: click the input labelled cmd.label, then the option.
+      // Mantine searchable select: click the input labelled cmd.label, type, pick the option.
       const input = page.getByLabel(cmd.label, { exact: true }).first();
       await input.click();
+      await input.fill(cmd.option);
       await page.getByRole('option', { name: cmd.option, exact: true }).click();
       return {};
     },
