@@ -13,7 +13,7 @@ import time
 import numpy as np
 
 from digital_actor_planner.cli import read_commands
-from digital_actor_planner.core.actor import Actor, ActorConfig
+from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
 from digital_actor_planner.core.environment import load_scene
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.core.trajectory_check import check_trajectory
@@ -28,13 +28,9 @@ def run(name, skeleton, upper_body=True, window_steps=3, check=True):
     actor = Actor(skeleton, scene.environment,
                   ActorConfig(plan_upper_body=upper_body, window_steps=window_steps),
                   start=scene.start)
-    blocks, row = [], 0
     started = time.perf_counter()
-    while actor.time < commands[-1].time - 1e-9:
-        while row + 1 < len(commands) and commands[row + 1].time <= actor.time + 1e-9:
-            row += 1
-        actor.set_command(commands[row].linear_x, commands[row].angular_z)
-        blocks.append(actor.plan_next())
+    blocks = run_commands(actor, [c.time for c in commands], [c.linear_x for c in commands],
+                          [c.angular_z for c in commands])
     wall = time.perf_counter() - started
     times = np.concatenate([b.times for b in blocks])
     frames = np.vstack([b.frames for b in blocks])

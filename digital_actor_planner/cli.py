@@ -92,7 +92,7 @@ def _publish(temporary: str, path: str) -> None:
 
 def simulate(args) -> int:
     """Run ``digital-actor simulate``."""
-    from digital_actor_planner.core.actor import Actor, ActorConfig, validate
+    from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands, validate
     from digital_actor_planner.core.environment import load_scene, SceneError
     from digital_actor_planner.core.skeleton import Skeleton
 
@@ -110,29 +110,23 @@ def simulate(args) -> int:
         return EXIT_BAD_INPUT
 
     actor = Actor(skeleton, scene.environment, config, start=scene.start)
-    end_time = commands[-1].time
-    blocks = []
     events = []
-    warned = set()
     wall_start = time.perf_counter()
-    row = 0
-    while actor.time < end_time - 1e-9:
-        while row + 1 < len(commands) and commands[row + 1].time <= actor.time + 1e-9:
-            row += 1
-        command = commands[row] if commands[row].time <= actor.time + 1e-9 else None
-        linear, angular = (command.linear_x, command.angular_z) if command else (0.0, 0.0)
-        warning = actor.set_command(linear, angular)
-        if warning and command is not None and command.line not in warned:
-            warned.add(command.line)
-            print(f'digital-actor simulate: warning: {args.commands}:{command.line}: {warning}',
-                  file=sys.stderr)
-        block = actor.plan_next()
-        blocks.append(block)
-        if block.status == 'stuck' and (not events or events[-1]['reason'] != block.reason
-                                        or events[-1]['end'] < block.times[0] - 0.011):
+
+    def warn(row, message):
+        print(f'digital-actor simulate: warning: {args.commands}:{commands[row].line}: {message}',
+              file=sys.stderr)
+
+    blocks = run_commands(actor, [c.time for c in commands], [c.linear_x for c in commands],
+                          [c.angular_z for c in commands], on_warning=warn)
+    for block in blocks:
+        if block.status != 'stuck':
+            continue
+        if (not events or events[-1]['reason'] != block.reason
+                or events[-1]['end'] < block.times[0] - 1.5 / config.frame_rate):
             events.append({'time': round(float(block.times[0]), 3), 'reason': block.reason,
                            'end': float(block.times[-1])})
-        elif block.status == 'stuck':
+        else:
             events[-1]['end'] = float(block.times[-1])
     wall = time.perf_counter() - wall_start
     times = np.concatenate([b.times for b in blocks]) if blocks else np.zeros(0)

@@ -485,3 +485,41 @@ class Actor:
         s = np.linspace(0.0, max(s_end, 0.1), 24)
         poses = path.poses(s)
         return np.column_stack([poses[:, :2], np.full(s.size, self._stance.feet[0].sole)])
+
+
+def run_commands(actor: Actor, times, linear, angular, on_warning=None):
+    """Drive an actor with a timed command stream until the stream's end time.
+
+    Each command holds from its time until the next one (as a mouse teleop's stream would);
+    the last time is the end of the run. Blocks are planned back to back, each with the command
+    in force at its start.
+
+    Parameters
+    ----------
+    actor
+        The actor to drive (its clock is used as is).
+    times, linear, angular
+        (c,) command times (s, increasing), forward speeds (m/s) and turn rates (rad/s).
+    on_warning
+        Optional callable (index, message) told when a command had to be clamped.
+
+    Returns
+    -------
+    list of StepBlock
+
+    """
+    times = np.asarray(times, dtype=float)
+    if times.ndim != 1 or times.size == 0 or np.any(np.diff(times) <= 0):
+        raise ValueError(f'command times must be a non-empty increasing sequence, got {times}')
+    blocks, row, warned = [], 0, set()
+    while actor.time < times[-1] - 1e-9:
+        while row + 1 < times.size and times[row + 1] <= actor.time + 1e-9:
+            row += 1
+        active = times[row] <= actor.time + 1e-9
+        warning = actor.set_command(float(linear[row]) if active else 0.0,
+                                    float(angular[row]) if active else 0.0)
+        if warning and active and row not in warned and on_warning is not None:
+            warned.add(row)
+            on_warning(row, warning)
+        blocks.append(actor.plan_next())
+    return blocks
