@@ -230,7 +230,7 @@ class CTRoadmap:
             targets, frames = [], []
         for node in nodes:
             travel = self._travel_frames(space, here, node - state.deviation, speed_fraction)
-            if node is not None and not np.any(node - state.deviation):
+            if not np.any(node - state.deviation):
                 travel = hold_frames
             arrival = here + travel
             if arrival > last:
