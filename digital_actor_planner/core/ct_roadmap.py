@@ -130,11 +130,15 @@ class CTRoadmap:
     # -- timing helpers ------------------------------------------------------------------
     @staticmethod
     def _travel_frames(space: CTSpace, frame: int, change: np.ndarray,
-                       speed_fraction: float) -> int:
-        """Frames needed to change the deviation by ``change`` (d,) at a fraction of the limit."""
-        step = float(np.mean(np.diff(space.times))) if space.frame_count > 1 else 1.0
-        seconds = float(np.max(np.abs(change) / (speed_fraction * space.speed_limit)))
-        return max(1, int(np.ceil(seconds / step - 1e-9)))
+                       speed_fraction: float) -> np.ndarray:
+        """Frames needed to change the deviation by ``change`` (..., d) at a fraction of the limit.
+
+        Returns an int (or an int array for a batch of changes), at least 1.
+        """
+        step = (space.times[-1] - space.times[0]) / max(space.frame_count - 1, 1)
+        seconds = np.max(np.abs(change) / (speed_fraction * space.speed_limit), axis=-1)
+        frames = np.maximum(1, np.ceil(seconds / step - 1e-9).astype(int))
+        return int(frames) if np.ndim(frames) == 0 else frames
 
     # -- search --------------------------------------------------------------------------
     def solve(self, space: CTSpace, start: np.ndarray, hold_frames: int = 5,
@@ -228,8 +232,8 @@ class CTRoadmap:
             # Backtracking set a sub-goal: stay among the nodes legal at the blocking frame.
             nodes = state.allowed
             targets, frames = [], []
-        for node in nodes:
-            travel = self._travel_frames(space, here, node - state.deviation, speed_fraction)
+        travels = self._travel_frames(space, here, nodes - state.deviation, speed_fraction)
+        for node, travel in zip(nodes, travels):
             if not np.any(node - state.deviation):
                 travel = hold_frames
             arrival = here + travel
