@@ -359,11 +359,16 @@ class Actor:
         if self._window is not None and self._window_command == (v, w):
             # §4.2: slide the window by one step; the new last step starts at s_init.
             start = tuple(self._window.indices[1:]) + (init_index,)
+        # The pelvis may turn at most max_heading_change per step (hip yaw range, §4).
+        max_length = cfg.gait.max_heading_change / max(abs(path.curvature), 1e-9)
+        if max_length < fcfg.step_length_min:
+            max_length = fcfg.step_length_min
         banned, reason = [], 'no collision-free footstep window'
         for _ in range(cfg.max_attempts):
             window = self._planner.plan(profile, stance.stance_side, stance_s, stance_foot.sole,
                                         swing_s, swing_foot.sole, s_init, self._previous_length,
-                                        start=start, banned_first=tuple(banned))
+                                        start=start, banned_first=tuple(banned),
+                                        max_length=max_length)
             if window is None:
                 break
             footsteps = self._footstep_poses(path, window)

@@ -234,7 +234,8 @@ class FootstepPlanner:
     def plan(self, profile: GroundProfile, stance_side: int, stance_s: float,
              stance_height: float, swing_s: float, swing_height: float, s_init: float,
              previous_length: float, start: Optional[Tuple[int, ...]] = None,
-             banned_first: Tuple[int, ...] = ()) -> Optional[FootstepWindow]:
+             banned_first: Tuple[int, ...] = (),
+             max_length: float = np.inf) -> Optional[FootstepWindow]:
         """Plan the next n footsteps.
 
         Parameters
@@ -254,6 +255,9 @@ class FootstepPlanner:
             actor passes the slid previous window (s_2, ..., s_n, s_init).
         banned_first
             Interval indices that s_1 must not take (the walk generator could not realise them).
+        max_length
+            Longest footstep allowed here, m (on a tight turn the heading change per step
+            bounds the step length).
 
         Returns
         -------
@@ -271,11 +275,15 @@ class FootstepPlanner:
         memo = _Search()
         sides = np.array([(1 - stance_side) if i % 2 == 0 else stance_side for i in range(n)])
         banned = set(int(b) for b in banned_first)
+        banned_lengths = set(int(j) for j in np.flatnonzero(lengths > max_length + 1e-9))
 
         def evaluate(config: Tuple[int, ...]) -> Optional[float]:
             """Effort of a configuration, or None if it is not collision-free."""
             if config in memo.feasible:
                 return memo.feasible[config]
+            if banned_lengths.intersection(config):
+                memo.feasible[config] = None
+                return None
             result = self._effort(profile, config, lengths, sides, stance_s, stance_height,
                                   swing_s, swing_height, s_init, previous_length, memo, banned)
             memo.feasible[config] = result

@@ -1,0 +1,42 @@
+"""Shared, cached course simulations for the tests (each course is planned once per session)."""
+import functools
+import os
+
+import numpy as np
+
+from digital_actor_planner.cli import read_commands
+from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
+from digital_actor_planner.core.environment import load_scene
+from digital_actor_planner.core.skeleton import Skeleton
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SCENES = os.path.join(ROOT, 'config', 'scenes')
+
+
+@functools.lru_cache(maxsize=None)
+def skeleton():
+    return Skeleton()
+
+
+@functools.lru_cache(maxsize=None)
+def scene(name):
+    return load_scene(os.path.join(SCENES, name + '.yaml'), skeleton())
+
+
+@functools.lru_cache(maxsize=None)
+def simulate(name, window_steps=3, upper_body=True):
+    """Plan course ``name``: (scene, times (k,), frames (k, 22), blocks)."""
+    sc = scene(name)
+    commands = read_commands(os.path.join(SCENES, name + '.csv'))
+    actor = Actor(skeleton(), sc.environment,
+                  ActorConfig(window_steps=window_steps, plan_upper_body=upper_body),
+                  start=sc.start)
+    blocks = run_commands(actor, [c.time for c in commands], [c.linear_x for c in commands],
+                          [c.angular_z for c in commands])
+    times = np.concatenate([b.times for b in blocks])
+    frames = np.vstack([b.frames for b in blocks])
+    return sc, times, frames, tuple(blocks)
+
+
+def course_names():
+    return sorted(os.path.splitext(f)[0] for f in os.listdir(SCENES) if f.endswith('.yaml'))

@@ -1,0 +1,114 @@
+"""The sliding-window footstep planner (§4.2) on synthetic ground profiles."""
+import numpy as np
+import pytest
+
+from digital_actor_planner.core.footsteps import (
+    FootstepConfig, FootstepPlanner, GroundProfile, LEFT, RIGHT, validate_footstep_config)
+from digital_actor_planner.core.skeleton import Skeleton
+
+DS = 0.02
+
+
+@pytest.fixture(scope='module')
+def leg():
+    return Skeleton().leg
+
+
+def profile_from(height_of, length=4.0, s0=-0.3):
+    """A two-track profile from a height function of arc length (NaN = hole)."""
+    s = s0 + DS * np.arange(int(length / DS))
+    h = np.array([height_of(v) for v in s], dtype=float)
+    both = np.vstack([h, h])
+    obstacle = both.copy()
+    return GroundProfile(s0=s0, ds=DS, height=both, low=both.copy(),
+                         headroom=np.full_like(both, np.inf), obstacle=obstacle)
+
+
+def plan(planner, profile, s_init=0.5, start=None, banned=()):
+    return planner.plan(profile, RIGHT, 0.0, 0.0, 0.0, 0.0, s_init, 0.5, start=start,
+                        banned_first=banned)
+
+
+def test_flat_ground_keeps_the_neutral_length(leg):
+    planner = FootstepPlanner(FootstepConfig(), leg)
+    window = plan(planner, profile_from(lambda s: 0.0), s_init=0.55)
+    assert window is not None
+    assert len(window.lengths) == 3
+    np.testing.assert_allclose(window.lengths, window.lengths[0])
+    assert abs(window.lengths[0] - 0.55) <= FootstepConfig().step_increment / 2 + 1e-9
+    assert list(window.sides) == [LEFT, RIGHT, LEFT]
+
+
+def test_a_hole_is_strided_over_and_no_foot_lands_in_it(leg):
+    hole = (0.9, 1.3)
+    planner = FootstepPlanner(FootstepConfig(), leg)
+    window = plan(planner, profile_from(lambda s: np.nan if hole[0] < s < hole[1] else 0.0))
+    assert window is not None
+    for s in window.arc_lengths:
+        assert s + leg.toe <= hole[0] + 1e-9 or s - leg.heel >= hole[1] - 1e-9
+
+
+def test_a_step_up_higher_than_allowed_makes_the_window_infeasible(leg):
+    planner = FootstepPlanner(FootstepConfig(), leg)
+    wall = profile_from(lambda s: 0.0 if s < 0.6 else 0.5)
+    window = plan(planner, wall)
+    assert window is None
+    stairs = profile_from(lambda s: 0.0 if s < 0.6 else 0.15)
+    window = plan(planner, stairs)
+    assert window is not None and max(window.heights) == pytest.approx(0.15, abs=0.02)
+
+
+def test_window_slides_from_the_previous_solution(leg):
+    planner = FootstepPlanner(FootstepConfig(), leg)
+    profile = profile_from(lambda s: 0.0)
+    first = plan(planner, profile)
+    slid = tuple(first.indices[1:]) + (first.indices[0],)
+    second = plan(planner, profile, start=slid)
+    assert second.indices == slid  # already optimal: hill-climbing keeps it
+    assert second.evaluated <= 2 * 3 + 1
+
+
+def test_banned_first_step_is_avoided(leg):
+    planner = FootstepPlanner(FootstepConfig(), leg)
+    profile = profile_from(lambda s: 0.0)
+    first = plan(planner, profile)
+    other = plan(planner, profile, banned=(first.indices[0],))
+    assert other.indices[0] != first.indices[0]
+
+
+def test_search_is_near_optimal_and_much_cheaper_than_exhaustive(leg):
+    """BFS + hill-climbing vs the exhaustive optimum of the same window (issue 2 benchmark)."""
+    rng = np.random.default_rng(7)
+    planner = FootstepPlanner(FootstepConfig(), leg)
+    ratios, evaluated = [], []
+    for _ in range(15):
+        holes = np.sort(rng.uniform(0.3, 2.6, size=2))
+        levels = rng.choice([0.0, 0.1, 0.2], size=3)
+
+        def height(s, holes=holes, levels=levels):
+            if holes[0] < s < holes[0] + 0.3 or holes[1] < s < holes[1] + 0.25:
+                return np.nan
+            return levels[int(np.clip(s // 1.2, 0, 2))]
+
+        profile = profile_from(height)
+        s_init = float(rng.uniform(0.3, 0.7))
+        window = plan(planner, profile, s_init=s_init)
+        best = planner.plan_exhaustive(profile, RIGHT, 0.0, 0.0, 0.0, 0.0, s_init, 0.5)
+        assert (window is None) == (best is None)
+        if window is None:
+            continue
+        assert window.effort >= best.effort - 1e-12
+        ratios.append((window.effort + 1e-3) / (best.effort + 1e-3))
+        evaluated.append(window.evaluated / best.evaluated)
+    assert len(ratios) >= 5, 'too few feasible random profiles for the comparison to mean much'
+    assert np.median(ratios) <= 1.05
+    assert np.median(evaluated) < 0.1
+
+
+def test_config_validation_names_the_field(leg):
+    with pytest.raises(ValueError, match='window_steps'):
+        validate_footstep_config(FootstepConfig(window_steps=0))
+    with pytest.raises(ValueError, match='step_length_min'):
+        validate_footstep_config(FootstepConfig(step_length_min=0.9, step_length_max=0.8))
+    with pytest.raises(ValueError, match='step_intervals'):
+        FootstepPlanner(FootstepConfig(step_intervals=0), leg)

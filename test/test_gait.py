@@ -1,0 +1,129 @@
+"""Walk generation of single steps (§4.1): key frames, IK, Bezier swing, pelvis."""
+import numpy as np
+import pytest
+
+from digital_actor_planner.core.footsteps import LEFT, RIGHT
+from digital_actor_planner.core.gait import (
+    GaitConfig, GaitError, leg_inverse_kinematics, standing_stance, validate_gait_config,
+    WalkGenerator)
+from digital_actor_planner.core.skeleton import Skeleton
+
+
+@pytest.fixture(scope='module')
+def skeleton():
+    return Skeleton()
+
+
+@pytest.fixture(scope='module')
+def walker(skeleton):
+    return WalkGenerator(skeleton)
+
+
+def flat(height=0.0):
+    return lambda xy, z_ref: np.full(len(xy), height)
+
+
+def foot_world(skeleton, frames, link):
+    return skeleton.forward_kinematics(frames)[:, skeleton.link_index[link], :3, 3]
+
+
+def test_leg_ik_round_trips_through_forward_kinematics(skeleton):
+    leg = skeleton.leg
+    q = skeleton.neutral()
+    q[skeleton.index['left_hip_pitch']] = 0.4
+    q[skeleton.index['left_knee']] = 0.9
+    q[skeleton.index['left_ankle']] = 0.2
+    t = skeleton.forward_kinematics(q)
+    hip = t[skeleton.link_index['left_hip'], :3, 3][None]
+    ankle = t[skeleton.link_index['left_foot'], :3, 3][None]
+    joints, lateral, reach = leg_inverse_kinematics(leg, hip, ankle, np.zeros(1), np.zeros(1),
+                                                    np.array([0.4 - 0.9 + 0.2]))
+    np.testing.assert_allclose(joints[0], [0.0, 0.4, 0.9, 0.2], atol=1e-9)
+    assert abs(lateral[0]) < 1e-12 and reach[0] < 1.0
+
+
+def level_step(skeleton, walker, length=0.5, height=0.0, speed=0.8):
+    stance = standing_stance(skeleton, 0.0, 0.0, 0.0, 0.0, stance_side=RIGHT)
+    target = np.array([length, skeleton.leg.hip_half_width])
+    duration = walker.step_duration(length, speed, height)
+    edge = length - skeleton.leg.heel - 0.03
+
+    def ground(xy, z_ref):  # a step edge just behind the landing foothold
+        return np.where(xy[:, 0] > edge, height, 0.0)
+
+    return stance, walker.step(stance, target, 0.0, height, 0.0,
+                               np.array([length / 2, 0.0, 0.0]), duration, ground)
+
+
+def test_level_step_keeps_the_stance_foot_still_and_lands_where_planned(skeleton, walker):
+    stance, motion = level_step(skeleton, walker)
+    assert motion.category == 'level'
+    right = foot_world(skeleton, motion.frames, 'right_foot')
+    np.testing.assert_allclose(right, right[0][None].repeat(len(right), 0), atol=1e-9)
+    left = foot_world(skeleton, motion.frames, 'left_foot')
+    np.testing.assert_allclose(left[-1, :2], [0.5, skeleton.leg.hip_half_width], atol=1e-6)
+    assert left[-1, 2] == pytest.approx(skeleton.leg.ankle_height + 0.002, abs=1e-6)
+    assert np.max(left[:, 2]) > left[-1, 2] + 0.04  # the swing foot really lifts
+    assert np.all(skeleton.within_limits(motion.frames))
+    assert motion.stance.stance_side == LEFT
+
+
+def test_pelvis_moves_forward_continuously(skeleton, walker):
+    _, motion = level_step(skeleton, walker)
+    x = motion.frames[:, skeleton.index['root_x']]
+    assert np.all(np.diff(x) >= -1e-12)
+    assert x[-1] == pytest.approx(0.25, abs=1e-6)
+
+
+def test_uphill_and_downhill_key_frames_differ_as_in_figure_4(skeleton, walker):
+    z = skeleton.index['root_z']
+    _, up = level_step(skeleton, walker, length=0.4, height=0.15)
+    _, down = level_step(skeleton, walker, length=0.4, height=-0.15)
+    assert up.category == 'uphill' and down.category == 'downhill'
+    k_up, k_down = len(up.frames), len(down.frames)
+    # Uphill the front leg bends first: the pelvis holds its height while the foot goes up,
+    # and the front knee lands more bent than on level ground.
+    _, level = level_step(skeleton, walker, length=0.4, height=0.0)
+    rise = up.frames[:, z] - up.frames[0, z]
+    assert abs(rise[k_up // 3]) < 0.01
+    knee = skeleton.index['left_knee']
+    assert up.frames[-1, knee] > level.frames[-1, knee] + 0.1
+    # Downhill the rear leg bends first: before touchdown the pelvis is already well down and
+    # the rear (stance) knee is more bent than on level ground at the same phase.
+    drop = down.frames[0, z] - down.frames[:, z]
+    assert drop[int(0.8 * k_down)] > 0.05
+    rear = skeleton.index['right_knee']
+    k_level = len(level.frames)
+    assert down.frames[int(0.8 * k_down), rear] > level.frames[int(0.8 * k_level), rear] + 0.1
+
+
+def test_swing_is_lifted_over_an_obstacle(skeleton, walker):
+    stance = standing_stance(skeleton, 0.0, 0.0, 0.0, 0.0, stance_side=RIGHT)
+
+    def bump(xy, z_ref):
+        return np.where((xy[:, 0] > 0.3) & (xy[:, 0] < 0.4), 0.15, 0.0)
+
+    target = np.array([0.7, skeleton.leg.hip_half_width])
+    motion = walker.step(stance, target, 0.0, 0.0, 0.0, np.array([0.35, 0.0, 0.0]), 0.9, bump)
+    left = foot_world(skeleton, motion.frames, 'left_foot')
+    over = (left[:, 0] > 0.3 - skeleton.leg.toe) & (left[:, 0] < 0.4 + skeleton.leg.heel)
+    assert np.any(over)
+    assert np.all(left[over, 2] - skeleton.leg.ankle_height > 0.15)
+    assert motion.swing_lift > walker.config.swing_lift
+
+
+def test_unreachable_step_is_refused(skeleton, walker):
+    stance = standing_stance(skeleton, 0.0, 0.0, 0.0, 0.0, stance_side=RIGHT)
+    with pytest.raises(GaitError):
+        walker.step(stance, np.array([1.6, 0.09]), 0.0, 0.0, 0.0, np.array([0.8, 0.0, 0.0]),
+                    0.8, flat())
+    with pytest.raises(GaitError):
+        walker.step(stance, np.array([0.4, 0.09]), 0.0, 0.9, 0.0, np.array([0.2, 0.0, 0.0]),
+                    0.8, flat())
+
+
+def test_gait_config_validation_names_the_field():
+    with pytest.raises(ValueError, match='frame_rate'):
+        validate_gait_config(GaitConfig(frame_rate=5.0))
+    with pytest.raises(ValueError, match='min_step_time'):
+        validate_gait_config(GaitConfig(min_step_time=1.0, max_step_time=0.5))

@@ -1,0 +1,49 @@
+"""Path prediction from a velocity command (§3.2)."""
+import numpy as np
+import pytest
+
+from digital_actor_planner.core.path import predict_path
+
+
+def test_straight_command_predicts_a_straight_line_along_the_heading():
+    path = predict_path(1.0, 2.0, np.pi / 2, 0.8, 0.0, 3.0)
+    poses = path.poses(np.array([0.0, 1.0, 3.0]))
+    np.testing.assert_allclose(poses[:, 0], 1.0, atol=1e-12)
+    np.testing.assert_allclose(poses[:, 1], [2.0, 3.0, 5.0], atol=1e-12)
+    np.testing.assert_allclose(poses[:, 2], np.pi / 2)
+
+
+def test_turning_command_predicts_an_arc_of_radius_v_over_w():
+    path = predict_path(0.0, 0.0, 0.0, 1.0, 0.5, 10.0)
+    assert path.curvature == pytest.approx(0.5)
+    s = np.linspace(0, np.pi / 0.5, 20)  # half a circle of radius 2
+    poses = path.poses(s)
+    np.testing.assert_allclose(np.hypot(poses[:, 0], poses[:, 1] - 2.0), 2.0, atol=1e-12)
+    assert poses[-1, 0] == pytest.approx(0.0, abs=1e-9)
+    assert poses[-1, 1] == pytest.approx(4.0)
+    assert poses[-1, 2] == pytest.approx(np.pi)
+
+
+def test_pure_turn_walks_a_tight_circle_instead_of_an_infinite_curvature():
+    path = predict_path(0.0, 0.0, 0.0, 0.0, 1.0, 2.0, min_turn_speed=0.25)
+    assert path.curvature == pytest.approx(4.0)
+
+
+def test_offset_tracks_and_projection():
+    path = predict_path(0.0, 0.0, 0.0, 1.0, 0.2, 5.0)
+    s = np.array([0.0, 1.0, 2.5])
+    left = path.offset_points(s, 0.09)
+    right = path.offset_points(s, -0.09)
+    np.testing.assert_allclose(np.linalg.norm(left - right, axis=1), 0.18)
+    for value, point in zip(s, path.poses(s)[:, :2]):
+        assert path.project(point) == pytest.approx(value, abs=1e-9)
+
+
+@pytest.mark.parametrize('args, word', [
+    ((0, 0, 0, float('nan'), 0, 1), 'non-finite'),
+    ((0, 0, 0, -0.5, 0, 1), 'linear speed'),
+    ((0, 0, 0, 0.5, 0, 0), 'length'),
+])
+def test_bad_input_is_named(args, word):
+    with pytest.raises(ValueError, match=word):
+        predict_path(*args)

@@ -1,0 +1,88 @@
+"""The actor walks every shipped course, judged by the independent checker (issue 2 + 3).
+
+The checker uses the URDF's own collision geometry with FCL at every frame, not the planner's
+ground map: no link penetrates by more than 3 mm (feet resting <= 15 mm), a foot is always down,
+limits hold, no NaN or jumps, a stance foot slides <= 1 cm.
+"""
+import numpy as np
+import pytest
+
+from course_runs import course_names, scene, simulate, skeleton
+from digital_actor_planner.core.trajectory_check import check_trajectory
+
+FEASIBLE = [n for n in course_names() if not scene(n).expect.get('stuck')]
+INFEASIBLE = [n for n in course_names() if scene(n).expect.get('stuck')]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize('name', FEASIBLE)
+def test_actor_crosses_the_course_without_touching_it(name):
+    sc, times, frames, blocks = simulate(name)
+    report = check_trajectory(skeleton(), sc.environment, times, frames)
+    assert report.ok, f'{name}: ' + '; '.join(report.failures()[:6])
+    expect = sc.expect
+    x, y, yaw = frames[-1, 0], frames[-1, 1], frames[-1, 3]
+    if 'reach_x' in expect:
+        assert x >= expect['reach_x'], f'{name}: stopped at x = {x:.2f} m'
+    if 'reach_y' in expect:
+        assert y >= expect['reach_y'], f'{name}: stopped at y = {y:.2f} m'
+    if 'final_yaw' in expect:
+        assert abs(yaw - expect['final_yaw']) <= expect.get('yaw_tolerance', 0.2)
+    walking = [b for b in blocks if b.status == 'walking']
+    assert len(walking) >= 5
+    # Real time: the plan per step stays far below the step's own duration.
+    assert np.median([b.planning_time for b in walking]) < 0.25
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize('name', INFEASIBLE)
+def test_actor_stops_cleanly_before_an_impassable_obstacle(name):
+    sc, times, frames, blocks = simulate(name)
+    report = check_trajectory(skeleton(), sc.environment, times, frames)
+    assert report.ok, f'{name}: ' + '; '.join(report.failures()[:6])
+    assert blocks[-1].status == 'stuck' and blocks[-1].reason
+    assert np.max(frames[:, 0]) < sc.expect['stop_before_x']
+    # Stopped means still: the last second of frames does not move.
+    last = frames[times > times[-1] - 1.0]
+    assert np.ptp(last, axis=0).max() < 1e-9
+
+
+@pytest.mark.slow
+def test_stuck_actor_goes_on_when_steered_away():
+    from digital_actor_planner.core.actor import Actor, ActorConfig
+    sc = scene('wall')
+    actor = Actor(skeleton(), sc.environment, ActorConfig(), start=sc.start)
+    actor.set_command(0.8, 0.0)
+    while actor.status != 'stuck':
+        actor.plan_next()
+        assert actor.time < 20.0
+    stuck_x = actor.configuration[0]
+    actor.set_command(0.3, 1.0)  # turn left, away from the wall
+    blocks = [actor.plan_next() for _ in range(5)]
+    assert all(b.status == 'walking' for b in blocks), [b.reason for b in blocks]
+    assert actor.configuration[3] > 0.8  # turned left
+    assert actor.configuration[1] > 0.2 and actor.configuration[0] < stuck_x + 0.6
+
+
+@pytest.mark.slow
+def test_figure8_one_step_window_falls_into_the_trap_three_step_window_strides_over():
+    """Paper Figure 8: n = 1 steps into the pit (or is stuck); n = 3, m = 13 strides over."""
+    sc, times, frames, blocks = simulate('figure8_trap', window_steps=1)
+    x0, x1 = sc.expect['trap_x']
+    feet = skeleton().forward_kinematics(frames[::5])
+    soles = [feet[:, skeleton().link_index[f], :3, 3] for f in ('left_foot', 'right_foot')]
+    in_pit = any(np.any((p[:, 0] > x0) & (p[:, 0] < x1) & (p[:, 2] < 0.1)) for p in soles)
+    assert in_pit or blocks[-1].status == 'stuck'
+    assert frames[-1, 0] < x1 + 0.5
+    sc, times, frames, blocks = simulate('figure8_trap', window_steps=3)
+    for p in [skeleton().forward_kinematics(frames[::5])[:, skeleton().link_index[f], :3, 3]
+              for f in ('left_foot', 'right_foot')]:
+        assert not np.any((p[:, 0] > x0) & (p[:, 0] < x1) & (p[:, 2] < 0.2))
+    assert frames[-1, 0] >= sc.expect['reach_x']
+
+
+def test_planning_is_deterministic():
+    a = simulate('rough')[2]
+    from course_runs import simulate as fresh
+    b = fresh.__wrapped__('rough')[2]
+    np.testing.assert_array_equal(a, b)
