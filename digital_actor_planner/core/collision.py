@@ -309,8 +309,9 @@ class BodyCollision:
         chosen = [s for _, shapes in self._shapes_of(links) for s in shapes]
         if not chosen or frames.shape[0] == 0:
             return -1, []
-        transforms = self.skeleton.shape_transforms(self.skeleton.forward_kinematics(frames))
-        transforms = transforms[:, chosen]
+        names = {self.shapes[s].link for s in chosen}
+        transforms = self.skeleton.shape_transforms(
+            self.skeleton.forward_kinematics(frames, links=names), shapes=chosen)
         centres = transforms[..., :3, 3]
         reach = np.array([self._reach[s] for s in chosen])[None, :]
         offsets = np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1]], dtype=float)

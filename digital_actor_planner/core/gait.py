@@ -426,9 +426,9 @@ class WalkGenerator:
         cfg, leg = self.config, self.leg
         z0, z1 = lift_foot.z, landing.z
         # Sole footprint (heel..toe, across the width) at each sampled swing position.
-        along = np.linspace(-leg.heel, leg.toe, 11)
-        across = np.array([-0.5, 0.0, 0.5]) * leg.foot_width
-        samples = np.unique(np.append(np.arange(0, tau.size, max(1, tau.size // 30)),
+        along = np.linspace(-leg.heel, leg.toe, 9)
+        across = np.array([-0.5, 0.5]) * leg.foot_width
+        samples = np.unique(np.append(np.arange(0, tau.size, max(1, tau.size // 24)),
                                       tau.size - 1))
         d = np.stack([np.cos(plane_yaw[samples]), np.sin(plane_yaw[samples])], axis=-1)
         n = np.stack([-d[:, 1], d[:, 0]], axis=-1)

@@ -244,6 +244,7 @@ class Skeleton:
         self._chain = tuple(order)
         self.link_names: Tuple[str, ...] = (self.root_link,) + tuple(j.child for j in order)
         self.link_index = {name: i for i, name in enumerate(self.link_names)}
+        self._partial_plans = {}
         self._chain_plan = tuple(
             (self.link_index[j.parent], self.link_index[j.child], j.origin,
              self.index.get(j.name, -1), j.kind, j.axis) for j in order)
@@ -334,13 +335,33 @@ class Skeleton:
         return np.all((q >= self.lower - tolerance) & (q <= self.upper + tolerance), axis=-1)
 
     # -- kinematics ----------------------------------------------------------------------
-    def forward_kinematics(self, q: np.ndarray) -> np.ndarray:
+    def _plan_for(self, links):
+        """The kinematic chain entries needed to place ``links`` (cached per link set)."""
+        key = frozenset(links)
+        plan = self._partial_plans.get(key)
+        if plan is None:
+            needed = set()
+            for link in key:
+                if link not in self.link_index:
+                    raise ValueError(f'unknown link {link!r}')
+                while link != self.root_link and link not in needed:
+                    needed.add(link)
+                    link = next(j.parent for j in self._chain if j.child == link)
+            plan = tuple(entry for entry, joint in zip(self._chain_plan, self._chain)
+                         if joint.child in needed)
+            self._partial_plans[key] = plan
+        return plan
+
+    def forward_kinematics(self, q: np.ndarray, links=None) -> np.ndarray:
         """World transforms of every link.
 
         Parameters
         ----------
         q
             (22,) or (k, 22) configurations, rad or m.
+        links
+            Optional link names: only these links (and their ancestors) are computed; the
+            other entries of the result are left unset.
 
         Returns
         -------
@@ -355,11 +376,13 @@ class Skeleton:
             raise ValueError(f'configuration has {qs.shape[-1]} values, expected '
                              f'{len(self.joint_names)}')
         k = qs.shape[0]
-        out = np.empty((k, len(self.link_names), 4, 4))
+        out = np.empty((k, len(self.link_names), 4, 4)) if links is None else np.zeros(
+            (k, len(self.link_names), 4, 4))
         out[:, 0] = np.eye(4)
         motion = np.zeros((k, 4, 4))
         motion[:, 3, 3] = 1.0
-        for parent, child, origin, qi, kind, axis in self._chain_plan:
+        plan = self._chain_plan if links is None else self._plan_for(links)
+        for parent, child, origin, qi, kind, axis in plan:
             base = out[:, parent] @ origin
             if qi < 0:
                 out[:, child] = base
@@ -377,13 +400,15 @@ class Skeleton:
         """World transform(s) of one link: (4, 4) or (k, 4, 4)."""
         return self.forward_kinematics(q)[..., self.link_index[link], :, :]
 
-    def shape_transforms(self, link_transforms: np.ndarray) -> np.ndarray:
+    def shape_transforms(self, link_transforms: np.ndarray, shapes=None) -> np.ndarray:
         """World transforms of every collision shape, in ``collision_shapes`` order.
 
         Parameters
         ----------
         link_transforms
             (L, 4, 4) or (k, L, 4, 4) from :meth:`forward_kinematics`.
+        shapes
+            Optional indices into ``collision_shapes``: only those shapes, in that order.
 
         Returns
         -------
@@ -391,6 +416,8 @@ class Skeleton:
             (S, 4, 4) or (k, S, 4, 4).
 
         """
-        idx = [self.link_index[s.link] for s in self.collision_shapes]
-        origins = np.stack([s.origin for s in self.collision_shapes])
+        chosen = (self.collision_shapes if shapes is None
+                  else [self.collision_shapes[i] for i in shapes])
+        idx = [self.link_index[s.link] for s in chosen]
+        origins = np.stack([s.origin for s in chosen])
         return link_transforms[..., idx, :, :] @ origins

@@ -1,0 +1,107 @@
+"""Lower-body planning cost per step, and the footstep search against the exhaustive optimum.
+
+Run: .venv/bin/python bench/bench_lower_body.py [--courses flat stairs_up ...]
+
+For every walking step on the lower-body courses (upper-body planning off) it records the wall
+and CPU time of the whole step (profile + footstep window + leg motion + 3D check), and for every
+footstep window it also solves the same window exhaustively to compare effort and time (issue 2:
+effort ratio <= 1.05, time <= 1/20). CPU time is reported because the machine may be shared.
+"""
+import argparse
+import os
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
+
+from course_runs import scene, skeleton  # noqa: E402
+from digital_actor_planner.cli import read_commands  # noqa: E402
+from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
+from digital_actor_planner.core.footsteps import FootstepPlanner  # noqa: E402
+
+COURSES = ('flat', 'slope', 'stairs_up', 'stairs_down', 'gap', 'figure8_trap', 'blocks',
+           'rough', 'turn')
+ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..')
+
+
+class ComparingPlanner(FootstepPlanner):
+    """Footstep planner that also solves each window exhaustively and records both."""
+
+    def __init__(self, inner):
+        super().__init__(inner.config, inner.leg)
+        self.records = []
+
+    def plan(self, profile, stance_side, stance_s, stance_height, swing_s, swing_height, s_init,
+             previous_length, start=None, banned_first=(), max_length=np.inf):
+        t0 = time.process_time()
+        window = super().plan(profile, stance_side, stance_s, stance_height, swing_s,
+                              swing_height, s_init, previous_length, start=start,
+                              banned_first=banned_first, max_length=max_length)
+        t1 = time.process_time()
+        if not banned_first:
+            best = self.plan_exhaustive(profile, stance_side, stance_s, stance_height, swing_s,
+                                        swing_height, s_init, previous_length)
+            t2 = time.process_time()
+            if window is not None and best is not None:
+                self.records.append(((window.effort + 1e-3) / (best.effort + 1e-3),
+                                     (t1 - t0) / max(t2 - t1, 1e-9)))
+        return window
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--courses', nargs='*', default=COURSES)
+    args = parser.parse_args(argv)
+    wall_all, cpu_all, ratios, speed = [], [], [], []
+    print(f'load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores')
+    print('| course | steps | wall p50 ms | wall p99 ms | CPU p50 ms | CPU p99 ms | x real time |')
+    print('|---|---:|---:|---:|---:|---:|---:|')
+    for name in args.courses:
+        sc = scene(name)
+        commands = read_commands(os.path.join(ROOT, 'config', 'scenes', name + '.csv'))
+        actor = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False),
+                      start=sc.start)
+        cpu = []
+        plan_next = actor.plan_next
+
+        def timed():
+            c0 = time.process_time()
+            block = plan_next()
+            if block.status == 'walking':
+                cpu.append(time.process_time() - c0)
+            return block
+
+        actor.plan_next = timed
+        started = time.perf_counter()
+        blocks = run_commands(actor, [c.time for c in commands], [c.linear_x for c in commands],
+                              [c.angular_z for c in commands])
+        elapsed = time.perf_counter() - started
+        wall = [b.planning_time for b in blocks if b.status == 'walking']
+        wall_all += wall
+        cpu_all += cpu
+        print(f'| {name} | {len(wall)} | {1e3 * np.percentile(wall, 50):.2f} | '
+              f'{1e3 * np.percentile(wall, 99):.2f} | {1e3 * np.percentile(cpu, 50):.2f} | '
+              f'{1e3 * np.percentile(cpu, 99):.2f} | {blocks[-1].times[-1] / elapsed:.0f} |')
+        comparing = ComparingPlanner(actor._planner)
+        actor2 = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False),
+                       start=sc.start)
+        actor2._planner = comparing
+        run_commands(actor2, [c.time for c in commands], [c.linear_x for c in commands],
+                     [c.angular_z for c in commands])
+        ratios += [r[0] for r in comparing.records]
+        speed += [r[1] for r in comparing.records]
+    print(f'| all | {len(wall_all)} | {1e3 * np.percentile(wall_all, 50):.2f} | '
+          f'{1e3 * np.percentile(wall_all, 99):.2f} | {1e3 * np.percentile(cpu_all, 50):.2f} | '
+          f'{1e3 * np.percentile(cpu_all, 99):.2f} | |')
+    print()
+    print(f'footstep windows compared with the exhaustive optimum: {len(ratios)}')
+    print(f'effort ratio (search / optimum): median {np.median(ratios):.3f}, '
+          f'p95 {np.percentile(ratios, 95):.3f}, max {np.max(ratios):.3f}')
+    print(f'time ratio (search / exhaustive): median {np.median(speed):.4f}, '
+          f'p95 {np.percentile(speed, 95):.4f}')
+
+
+if __name__ == '__main__':
+    main()

@@ -1,0 +1,50 @@
+#!/usr/bin/env python3
+"""Render the README pictures with `digital-actor simulate --render` (the project draws itself).
+
+Run: .venv/bin/python scripts/make_pictures.py   (writes docs/images/*.png and *.gif)
+"""
+import os
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SCENES = os.path.join(ROOT, 'config', 'scenes')
+IMAGES = os.path.join(ROOT, 'docs', 'images')
+
+PICTURES = [
+    ('stairs_up', 'stairs_up.png', []),
+    ('stairs_down', 'stairs_down.gif', []),
+    ('figure8_trap', 'figure8_n3.png', ['--window-steps', '3']),
+    ('figure8_trap', 'figure8_n1.png', ['--window-steps', '1']),
+    ('blocks', 'blocks.png', []),
+    ('rough', 'rough.png', []),
+    ('turn', 'turn.png', []),
+    ('wall', 'wall.png', []),
+    ('low_beam', 'low_beam.png', []),
+    ('low_beam', 'low_beam.gif', []),
+    ('table', 'table.png', []),
+    ('pillars', 'pillars.png', []),
+    ('uneven_beam', 'uneven_beam.png', []),
+]
+
+
+def main():
+    os.makedirs(IMAGES, exist_ok=True)
+    env = dict(os.environ, MPLBACKEND='Agg')
+    for course, picture, extra in PICTURES:
+        with tempfile.TemporaryDirectory() as tmp:
+            command = [sys.executable, '-m', 'digital_actor_planner.cli', 'simulate',
+                       '--scene', os.path.join(SCENES, course + '.yaml'),
+                       '--commands', os.path.join(SCENES, course + '.csv'),
+                       '--out', os.path.join(tmp, 'trajectory.csv'),
+                       '--render', os.path.join(IMAGES, picture)] + extra
+            result = subprocess.run(command, capture_output=True, text=True, env=env)
+            print(picture, result.stdout.strip() or result.stderr.strip())
+            if result.returncode != 0:
+                return result.returncode
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
