@@ -1,0 +1,62 @@
+"""Upper-body compliant motion on the obstacle courses (issue 3, paper §5).
+
+Collision-freedom of every link on these courses is judged in test_walk_courses.py; here: the
+upper body keeps its motion pattern on open ground, leaves it where the course demands (bend the
+waist under a beam, flex the elbow at a table, turn the waist between pillars) and returns to it.
+"""
+import numpy as np
+import pytest
+
+from course_runs import scene, simulate, skeleton
+from digital_actor_planner.core.upper_body import motion_patterns
+
+COURSES = ['low_beam', 'table', 'pillars', 'uneven_beam']
+
+
+def deviation(frames):
+    sk = skeleton()
+    upper = np.concatenate([sk.branch('waist'), sk.branch('left_arm'), sk.branch('right_arm')])
+    objective = motion_patterns(sk, frames)
+    return np.abs(frames[:, upper] - objective[:, upper]), [sk.joint_names[i] for i in upper]
+
+
+@pytest.mark.slow
+def test_open_ground_keeps_the_motion_pattern_exactly():
+    _, _, frames, _ = simulate('flat')
+    dev, _ = deviation(frames)
+    assert dev.max() < 1e-9
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize('name', COURSES)
+def test_upper_body_leaves_its_pattern_only_at_the_obstacle_and_returns(name):
+    sc, times, frames, _ = simulate(name)
+    expect = sc.expect
+    x0, x1 = expect['obstacle_x']
+    dev, names = deviation(frames)
+    x = frames[:, 0]
+    before = x < x0 - 1.0
+    assert np.any(before) and dev[before].max() < 1e-6, 'deviates long before the obstacle'
+    column = names.index(expect['deviation'])
+    near = (x > x0 - 0.8) & (x < x1 + 0.3)
+    assert dev[near, column].max() > 0.1, f'{expect["deviation"]} never left its pattern'
+    assert frames[-1, 0] > x1 + 1.0, 'the actor did not get past the obstacle'
+    assert dev[-20:].max() < 1e-3, 'the upper body did not return to its motion pattern'
+
+
+@pytest.mark.slow
+def test_upper_body_respects_joint_and_speed_limits_everywhere():
+    sk = skeleton()
+    for name in COURSES:
+        _, times, frames, _ = simulate(name)
+        assert np.all(sk.within_limits(frames, tolerance=1e-9)), name
+        speed = np.abs(np.diff(frames, axis=0)) / np.diff(times)[:, None]
+        assert np.all(speed <= sk.velocity_limit * 1.05 + 1e-9), name
+
+
+@pytest.mark.slow
+def test_too_low_beam_stops_with_the_upper_body_named():
+    _, _, frames, blocks = simulate('beam_too_low')
+    assert blocks[-1].status == 'stuck'
+    assert 'upper body' in blocks[-1].reason
+    assert scene('beam_too_low').expect['stop_before_x'] > frames[:, 0].max()
