@@ -43,7 +43,7 @@ class ChromiumPage:
             self._replies.put(line)
         self._replies.put(None)
 
-    def send(self, timeout=60.0, **command):
+    def send(self, timeout=180.0, **command):
         """Run one driver command; returns its reply dict, raises RuntimeError on failure."""
         self.proc.stdin.write(json.dumps(command) + '\n')
         self.proc.stdin.flush()
@@ -59,7 +59,7 @@ class ChromiumPage:
         return reply
 
     def open(self, url):
-        self.send(cmd='open', url=url, timeout=90.0)
+        self.send(cmd='open', url=url, timeout=240.0)
 
     def text(self):
         return self.send(cmd='text')['text']
@@ -76,7 +76,7 @@ class ChromiumPage:
         return text
 
     def screenshot(self, path):
-        self.send(cmd='screenshot', path=path, timeout=90.0)
+        self.send(cmd='screenshot', path=path, timeout=240.0)
 
     def pad_center(self):
         box = self.send(cmd='canvas')['box']

@@ -29,8 +29,8 @@ async function main() {
 
   const handlers = {
     async open(cmd) {
-      await page.goto(cmd.url, { waitUntil: 'load', timeout: 30000 });
-      await page.waitForSelector('canvas', { timeout: 30000 });
+      await page.goto(cmd.url, { waitUntil: 'load', timeout: 200000 });
+      await page.waitForSelector('canvas', { timeout: 200000 });
       return {};
     },
     async canvas() {
