@@ -740,8 +740,9 @@ def _field_named(error: Exception, config: PlannerNodeConfig) -> str:
 
 def main(args=None) -> int:
     """Run the node until interrupted; exit status 2 on a bad configuration."""
-    # A pure-Python planning thread holds the GIL; a short switch interval bounds how long the
-    # publishing thread waits for it after waking (the default 5 ms would be the jitter).
+    # The executor and planning threads hold the GIL at times; a short switch interval bounds
+    # how long the publishing thread waits for it after waking (the default 5 ms would be the
+    # jitter).
     sys.setswitchinterval(0.0005)
     rclpy.init(args=args)
     try:
@@ -750,8 +751,19 @@ def main(args=None) -> int:
         rclpy.logging.get_logger('actor_planner').fatal(f'invalid configuration: {error}')
         rclpy.try_shutdown()
         return 2
-    if node.config.stream_priority > 1:
+    if node.config.stream_priority > 2:
         real_time(node.config.stream_priority - 1)  # the executor thread, see _planning_loop
+        # The DDS threads too: publish() takes locks they hold, so they must not wait behind
+        # the planning processes (which stay at normal priority).
+        tasks = '/proc/self/task'
+        for thread_id in (os.listdir(tasks) if os.path.isdir(tasks) else ()):
+            try:
+                if os.sched_getscheduler(int(thread_id)) == os.SCHED_OTHER:
+                    os.sched_setscheduler(int(thread_id), os.SCHED_FIFO | getattr(
+                        os, 'SCHED_RESET_ON_FORK', 0),
+                        os.sched_param(node.config.stream_priority - 2))
+            except OSError:
+                pass
     try:
         rclpy.spin(node)
     except (KeyboardInterrupt, ExternalShutdownException):
