@@ -63,7 +63,10 @@ setup_test_tools() {
   # check_urdf for the URDF test; chromium + xvfb for the browser test (see README).
   apt_install liburdfdom-tools
   if [ -f "$HERE/test/browser/package.json" ]; then
-    apt_install chromium nodejs npm
+    # Commands, not package names: a machine may have Node.js (with npm) from elsewhere.
+    command -v chromium >/dev/null || apt_install chromium
+    command -v node >/dev/null || apt_install nodejs
+    command -v npm >/dev/null || apt_install npm
     if [ ! -d "$HERE/test/browser/node_modules/playwright-core" ]; then
       log "installing playwright-core (npm, pinned)"
       (cd "$HERE/test/browser" && npm ci --silent --no-audit --no-fund)
