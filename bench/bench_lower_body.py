@@ -1,6 +1,7 @@
-"""Lower-body planning cost per step, and the footstep search against the exhaustive optimum.
+"""Planning cost per step, and the footstep search against the exhaustive optimum.
 
 Run: .venv/bin/python bench/bench_lower_body.py [--courses flat stairs_up ...]
+     .venv/bin/python bench/bench_lower_body.py --whole-body   (obstacle courses, upper body on)
 
 For every walking step on the lower-body courses (upper-body planning off) it records the wall
 and CPU time of the whole step (profile + footstep window + leg motion + 3D check), and for every
@@ -23,6 +24,7 @@ from digital_actor_planner.core.footsteps import FootstepPlanner  # noqa: E402
 
 COURSES = ('flat', 'slope', 'stairs_up', 'stairs_down', 'gap', 'figure8_trap', 'blocks',
            'rough', 'turn')
+OBSTACLE_COURSES = ('low_beam', 'table', 'pillars', 'uneven_beam')
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..')
 
 
@@ -52,16 +54,20 @@ class ComparingPlanner(FootstepPlanner):
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument('--courses', nargs='*', default=COURSES)
+    parser.add_argument('--courses', nargs='*')
+    parser.add_argument('--whole-body', action='store_true',
+                        help='plan the upper body too (default courses: the obstacle courses)')
     args = parser.parse_args(argv)
+    courses = args.courses or (OBSTACLE_COURSES if args.whole_body else COURSES)
+    upper = args.whole_body
     wall_all, cpu_all, ratios, speed = [], [], [], []
     print(f'load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores')
     print('| course | steps | wall p50 ms | wall p99 ms | CPU p50 ms | CPU p99 ms | x real time |')
     print('|---|---:|---:|---:|---:|---:|---:|')
-    for name in args.courses:
+    for name in courses:
         sc = scene(name)
         commands = read_commands(os.path.join(ROOT, 'config', 'scenes', name + '.csv'))
-        actor = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False),
+        actor = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=upper),
                       start=sc.start)
         cpu = []
         plan_next = actor.plan_next
@@ -84,6 +90,8 @@ def main(argv=None):
         print(f'| {name} | {len(wall)} | {1e3 * np.percentile(wall, 50):.2f} | '
               f'{1e3 * np.percentile(wall, 99):.2f} | {1e3 * np.percentile(cpu, 50):.2f} | '
               f'{1e3 * np.percentile(cpu, 99):.2f} | {blocks[-1].times[-1] / elapsed:.0f} |')
+        if upper:
+            continue
         comparing = ComparingPlanner(actor._planner)
         actor2 = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False),
                        start=sc.start)
@@ -95,6 +103,8 @@ def main(argv=None):
     print(f'| all | {len(wall_all)} | {1e3 * np.percentile(wall_all, 50):.2f} | '
           f'{1e3 * np.percentile(wall_all, 99):.2f} | {1e3 * np.percentile(cpu_all, 50):.2f} | '
           f'{1e3 * np.percentile(cpu_all, 99):.2f} | |')
+    if upper:
+        return
     print()
     print(f'footstep windows compared with the exhaustive optimum: {len(ratios)}')
     print(f'effort ratio (search / optimum): median {np.median(ratios):.3f}, '
