@@ -278,7 +278,7 @@ class ViewerConfig:
     max_angular_speed: float = 1.0
     cmd_vel_stamped: bool = True
     cmd_rate: float = 20.0
-    render_rate: float = 30.0
+    render_rate: float = 20.0
     drag_span: float = 0.25
     urdf_wait: float = 2.0
     follow: bool = True
@@ -334,6 +334,8 @@ def _build_node_class():
             self._latest_joints: Optional[Tuple[Tuple[str, ...], np.ndarray]] = None
             self._rendered_stamp = None
             self._last_pose = None
+            self._sent_frames: Dict[int, tuple] = {}
+            self._last_path = b''
             self._urdf_source: Optional[str] = None
             self._urdf = None
             self._actor_position = np.zeros(3)
@@ -579,6 +581,9 @@ def _build_node_class():
         def _on_path(self, msg) -> None:
             points = np.array([[p.pose.position.x, p.pose.position.y, p.pose.position.z]
                                for p in msg.poses], dtype=np.float64).reshape(-1, 3)
+            if points.tobytes() == self._last_path:
+                return
+            self._last_path = points.tobytes()
             segments = polyline_segments(points + np.array([0.0, 0.0, 0.02]))
             if len(segments):
                 self.server.scene.add_line_segments('/planner/path', segments,
@@ -689,6 +694,7 @@ def _build_node_class():
                 self._urdf_source = text
                 self._rendered_stamp = None
                 self._last_pose = None
+                self._sent_frames = {}
 
         def _render(self) -> None:
             self.load_fallback_urdf_if_needed()
@@ -706,7 +712,7 @@ def _build_node_class():
             by_name = dict(zip(names, positions))
             configuration = np.array([by_name.get(n, 0.0) for n in urdf_names])
             with self.server.atomic():
-                _update_urdf_pose(urdf, dict(zip(urdf_names, configuration)))
+                _update_urdf_pose(urdf, dict(zip(urdf_names, configuration)), self._sent_frames)
             self._actor_position = np.array([by_name.get(n, 0.0) for n in ROOT_JOINTS[:3]])
             if self._follow.value:
                 self._follow_actor()
@@ -745,11 +751,13 @@ def _build_node_class():
     return ActorViewer
 
 
-def _update_urdf_pose(urdf, positions: Dict[str, float]) -> None:
+def _update_urdf_pose(urdf, positions: Dict[str, float], sent: Dict[int, tuple]) -> None:
     """Move a ViserUrdf's joint frames to ``positions`` (rad or m by joint name).
 
     yourdfpy's ``update_cfg`` rebuilds its whole scene graph (about 5 ms a frame); the joint
-    frames only need each joint's own parent->child transform, computed here directly.
+    frames only need each joint's own parent->child transform, computed here directly. Frames
+    whose transform did not change since the last call (``sent``, updated here) are not re-sent,
+    so a browser on a slow machine gets only what moved.
     """
     from viser import transforms
     joints = getattr(urdf, '_joint_map_values', None)
@@ -758,7 +766,7 @@ def _update_urdf_pose(urdf, positions: Dict[str, float]) -> None:
         urdf.update_cfg(np.array([positions.get(n, 0.0)
                                   for n in urdf.get_actuated_joint_names()]))
         return
-    for joint, frame in zip(joints, frames):
+    for index, (joint, frame) in enumerate(zip(joints, frames)):
         origin = np.eye(4) if joint.origin is None else np.asarray(joint.origin)
         rotation = transforms.SO3.from_matrix(origin[:3, :3])
         translation = origin[:3, 3].copy()
@@ -768,8 +776,11 @@ def _update_urdf_pose(urdf, positions: Dict[str, float]) -> None:
             rotation = rotation @ transforms.SO3.exp(axis * value)
         elif joint.type == 'prismatic':
             translation = translation + origin[:3, :3] @ (axis * value)
-        frame.wxyz = rotation.wxyz
-        frame.position = translation * urdf._scale
+        pose = (tuple(np.round(rotation.wxyz, 5)), tuple(np.round(translation * urdf._scale, 4)))
+        if sent.get(index) == pose:
+            continue
+        sent[index] = pose
+        frame.wxyz, frame.position = pose
 
 
 def _unit_box() -> Tuple[np.ndarray, np.ndarray]:
@@ -798,7 +809,7 @@ def build_parser(prog: str = 'digital-actor view') -> argparse.ArgumentParser:
                         help='m/s at a full drag (the planner\'s own limit is used when found)')
     parser.add_argument('--max-angular-speed', type=float, default=1.0,
                         help='rad/s at a full drag (the planner\'s own limit is used when found)')
-    parser.add_argument('--render-rate', type=float, default=30.0,
+    parser.add_argument('--render-rate', type=float, default=20.0,
                         help='how often the page is updated with the latest pose (Hz)')
     parser.add_argument('--no-follow', action='store_true',
                         help='start with the follow camera off')
