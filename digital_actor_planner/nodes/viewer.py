@@ -463,8 +463,10 @@ def _build_node_class():
             height = max(1, int(client.camera.image_height))
             width = max(1, int(client.camera.image_width))
             if event.phase == 'start':
-                self._drag_start[client.client_id] = tuple(event.start_screen_pos)
-            start = self._drag_start.get(client.client_id, tuple(event.start_screen_pos))
+                # The pointer where the drag was confirmed (a few pixels from the press): the
+                # grab point's own projection drifts while the follow camera moves the pad.
+                self._drag_start[client.client_id] = tuple(event.end_screen_pos)
+            start = self._drag_start.get(client.client_id, tuple(event.end_screen_pos))
             if event.phase == 'end':
                 self._drag_start.pop(client.client_id, None)
                 self._release()
