@@ -441,10 +441,10 @@ class Actor:
         swing_side = 1 - stance.stance_side
         offset = 2 * (leg.hip_half_width if swing_side == LEFT else -leg.hip_half_width)
         landing_xy = foot.xy + offset * np.array([-np.sin(foot.yaw), np.cos(foot.yaw)])
-        sole = foot.sole + np.tan(foot.pitch) * 0.0
+        sole = foot.sole
         middle_xy = foot.xy + 0.5 * (landing_xy - foot.xy)
         target = np.array([middle_xy[0], middle_xy[1], foot.yaw])
-        ground, room = self.environment.ground_height(landing_xy[None, :], sole + 0.05)
+        ground, _ = self.environment.ground_height(landing_xy[None, :], sole + 0.05)
         if np.isnan(ground[0]) or abs(ground[0] - sole) > 0.01 or abs(foot.pitch) > 0.05:
             return None
         swing = stance.feet[swing_side]

@@ -1,0 +1,77 @@
+"""The actor pipeline: commands in, timed frames out, one block at a time (§3.2)."""
+import numpy as np
+import pytest
+
+from course_runs import scene, skeleton
+from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands, validate
+
+
+@pytest.fixture
+def actor():
+    sc = scene('flat')
+    return Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False), start=sc.start)
+
+
+def test_blocks_are_contiguous_at_the_frame_rate(actor):
+    actor.set_command(0.8, 0.0)
+    blocks = [actor.plan_next() for _ in range(6)]
+    times = np.concatenate([b.times for b in blocks])
+    np.testing.assert_allclose(np.diff(times), 0.01, atol=1e-9)
+    assert times[0] == pytest.approx(0.01)
+    assert actor.time == pytest.approx(times[-1])
+    np.testing.assert_array_equal(actor.configuration, blocks[-1].frames[-1])
+    for b in blocks:
+        assert b.frames.shape == (b.times.size, 22) and b.velocities.shape == b.frames.shape
+
+
+def test_no_command_means_standing_still(actor):
+    block = actor.plan_next()
+    assert block.status == 'idle'
+    assert np.ptp(block.frames, axis=0).max() == 0.0
+
+
+def test_zero_command_stops_the_actor_within_one_step(actor):
+    actor.set_command(1.0, 0.0)
+    for _ in range(5):
+        actor.plan_next()
+    actor.set_command(0.0, 0.0)
+    first = actor.plan_next()
+    assert first.status == 'idle' and first.category == 'closing'
+    x = actor.configuration[0]
+    still = actor.plan_next()
+    assert still.category == '' and np.ptp(still.frames, axis=0).max() == 0.0
+    assert still.frames[-1, 0] == pytest.approx(x)
+    feet = skeleton().forward_kinematics(still.frames[-1])
+    left = feet[skeleton().link_index['left_foot'], :3, 3]
+    right = feet[skeleton().link_index['right_foot'], :3, 3]
+    assert abs(left[0] - right[0]) < 0.01  # side by side
+
+
+def test_commands_are_clamped_and_nan_is_refused(actor):
+    warning = actor.set_command(9.0, -7.0)
+    assert 'clamped' in warning and actor.command == (1.2, -1.0)
+    assert actor.set_command(0.5, 0.2) is None
+    with pytest.raises(ValueError, match='finite'):
+        actor.set_command(float('nan'), 0.0)
+    assert actor.command == (0.5, 0.2)  # the bad command did not replace the good one
+    assert actor.set_command(-1.0, 0.0) is not None and actor.command[0] == 0.0
+
+
+def test_speed_follows_the_command(actor):
+    blocks = run_commands(actor, [0.0, 6.0], [0.5, 0.0], [0.0, 0.0])
+    slow = actor.configuration[0]
+    sc = scene('flat')
+    fast_actor = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False),
+                       start=sc.start)
+    run_commands(fast_actor, [0.0, 6.0], [1.1, 0.0], [0.0, 0.0])
+    assert fast_actor.configuration[0] > slow + 0.8
+    assert all(b.status in ('walking', 'idle') for b in blocks)
+
+
+@pytest.mark.parametrize('field, value', [
+    ('window_steps', 0), ('step_intervals', 0), ('max_linear_speed', 0.0),
+    ('frame_rate', 5.0), ('step_length_min', 0.9), ('hold_time', float('nan')),
+])
+def test_bad_configuration_names_the_field(field, value):
+    with pytest.raises(ValueError, match=field if field != 'step_length_min' else 'step_length'):
+        validate(ActorConfig(**{field: value}))
