@@ -231,10 +231,11 @@ def test_validation_names_the_bad_parameter():
               'window_steps': 3, 'step_intervals': 13, 'step_length_min': 0.15,
               'step_length_max': 0.8, 'max_linear_speed': 1.2, 'max_angular_speed': 1.0,
               'cmd_timeout': 0.5, 'frame_id': 'world', 'cmd_vel_stamped': True,
-              'publish_robot_description': True}
+              'publish_robot_description': True, 'planning_lead': 0.3, 'stream_priority': 0}
     validate_node_config(read_node_config(values.get))
     for name, bad in (('step_length_min', 0.9), ('scene', '/no/such/scene.yaml'),
                       ('frame_id', ' '), ('start_pose', [0.0, float('nan'), 0.0]),
+                      ('planning_lead', float('inf')),
                       ('start_pose', [1.0, 2.0])):
         with pytest.raises(ConfigurationError, match=name) as caught:
             validate_node_config(read_node_config(dict(values, **{name: bad}).get))

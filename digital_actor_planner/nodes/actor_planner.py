@@ -466,7 +466,8 @@ class ActorPlannerNode(Node):
         self.joint_state_msg = JointState()
         self.joint_state_msg.header.frame_id = self.config.frame_id
         self.joint_state_msg.name = list(self.skeleton.joint_names)
-        self.joint_state_pub = self.create_publisher(JointState, 'joint_states', 10)
+        # Half a second of history, so a reliable subscriber that is briefly busy loses nothing.
+        self.joint_state_pub = self.create_publisher(JointState, 'joint_states', 50)
         self.diagnostics_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self.markers_pub = self.create_publisher(MarkerArray, '~/markers', latched)
         self.environment_pub = self.create_publisher(MarkerArray, '~/environment', latched)
