@@ -53,6 +53,10 @@ def stamps_of(messages) -> np.ndarray:
 
 def stream_health(stamps: np.ndarray) -> dict:
     """Jitter (ms) and missed frames of a stream from its header stamps."""
+    if len(stamps) < 3:
+        return {'frames': len(stamps), 'rate_hz': 0.0, 'jitter_p50_ms': math.nan,
+                'jitter_p99_ms': math.nan, 'jitter_max_ms': math.nan, 'missed': 0,
+                'longest_gap_ms': math.nan}
     gaps = np.diff(np.sort(stamps))
     jitter = np.abs(gaps - PERIOD) * 1e3
     missed = int(np.sum(np.maximum(0, np.round(gaps / PERIOD) - 1)))
