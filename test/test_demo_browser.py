@@ -121,14 +121,15 @@ def test_demo_in_browser_walk_turn_stop_and_stuck(artifacts_dir, monkeypatch):
         page.move_to(center, up)
         assert wait_for(lambda: recorder.latest()[1] > start_x + 0.3, 120,
                         spin=recorder.spin), f'root_x stayed near {start_x}'
-        assert abs(recorder.latest()[2] - start_yaw) < 0.15, 'a straight-up drag turned the actor'
+        # The pelvis swings a little with each step; a turn is well beyond that.
+        assert abs(recorder.latest()[2] - start_yaw) < 0.3, 'a straight-up drag turned the actor'
         assert 'walking' in page.wait_for_text('walking', 60)
 
         # Drag to the side (still forward): the actor turns left.
         side = (center[0] - 100, center[1] - 100)
         yaw_before = recorder.latest()[2]
         page.move_to(up, side)
-        assert wait_for(lambda: recorder.latest()[2] > yaw_before + 0.2, 120,
+        assert wait_for(lambda: recorder.latest()[2] > yaw_before + 0.6, 120,
                         spin=recorder.spin), 'dragging left did not turn the actor left'
         walking_shot = os.path.join(artifacts_dir, 'demo.png')
         page.screenshot(walking_shot)

@@ -15,6 +15,7 @@ import glob
 import io
 import math
 import os
+import signal
 import socket
 import sys
 import threading
@@ -858,21 +859,35 @@ def main(argv: Optional[List[str]] = None) -> int:
     except ValueError as error:
         print(f'actor_viewer: {error}', file=sys.stderr)
         return 2
-    rclpy.init(args=['actor_viewer'] + ros_args)
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.signals import SignalHandlerOptions
+
+    # Our own SIGINT/SIGTERM handling: a KeyboardInterrupt raised inside rclpy's message
+    # conversion surfaces as an unrelated RuntimeError, so Ctrl-C only sets a flag here.
+    stop = threading.Event()
+    previous = {sig: signal.signal(sig, lambda *_: stop.set())
+                for sig in (signal.SIGINT, signal.SIGTERM)}
+    rclpy.init(args=['actor_viewer'] + ros_args,
+               signal_handler_options=SignalHandlerOptions.NO)
     node = None
+    executor = SingleThreadedExecutor()
     try:
         node = _build_node_class()(config, namespace)
-        rclpy.spin(node)
+        executor.add_node(node)
+        while not stop.is_set() and rclpy.ok():
+            executor.spin_once(timeout_sec=0.1)
     except OSError as error:
         print(f'actor_viewer: {error}', file=sys.stderr)
         return 1
-    except (KeyboardInterrupt, ExternalShutdownException):
+    except ExternalShutdownException:
         pass
     finally:
+        executor.shutdown()
         if node is not None and getattr(node, 'server', None) is not None:
             node.destroy_node()
-        if rclpy.ok():
-            rclpy.try_shutdown()
+        rclpy.try_shutdown()
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
     return 0
 
 
