@@ -5,12 +5,15 @@ import subprocess
 import sys
 
 import pytest
-from ros_harness import NodeProcess, ros_env
+from ros_harness import fresh_domain_id, NodeProcess, ros_env
 from test_node_helpers import JOINT_NAMES, node_command, Probe, REPO
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
-DOMAIN_ID = int(os.environ.get('ACTOR_NODE_TEST_DOMAIN', '31')) + 3
+# ACTOR_NODE_TEST_DOMAIN pins the domain (e.g. to a range of your own); by default each
+# module takes a fresh one, so runs started side by side do not hear each other.
+DOMAIN_ID = int(os.environ['ACTOR_NODE_TEST_DOMAIN']) + 3 if 'ACTOR_NODE_TEST_DOMAIN' in \
+    os.environ else fresh_domain_id()
 PACKAGE = 'digital_actor_planner'
 
 

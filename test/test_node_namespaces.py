@@ -7,12 +7,15 @@ import math
 import os
 
 import pytest
-from ros_harness import NodeProcess, ros_env
+from ros_harness import fresh_domain_id, NodeProcess, ros_env
 from test_node_helpers import node_command, Probe, ROOT_X, ROOT_Y, ROOT_YAW, scene
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
-DOMAIN_ID = int(os.environ.get('ACTOR_NODE_TEST_DOMAIN', '31')) + 1
+# ACTOR_NODE_TEST_DOMAIN pins the domain (e.g. to a range of your own); by default each
+# module takes a fresh one, so runs started side by side do not hear each other.
+DOMAIN_ID = int(os.environ['ACTOR_NODE_TEST_DOMAIN']) + 1 if 'ACTOR_NODE_TEST_DOMAIN' in \
+    os.environ else fresh_domain_id()
 
 
 @pytest.fixture(scope='module')

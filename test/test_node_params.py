@@ -3,12 +3,15 @@ import os
 import subprocess
 
 import pytest
-from ros_harness import ros_env
+from ros_harness import fresh_domain_id, ros_env
 from test_node_helpers import node_command
 
 pytestmark = [pytest.mark.ros]
 
-DOMAIN_ID = int(os.environ.get('ACTOR_NODE_TEST_DOMAIN', '31')) + 2
+# ACTOR_NODE_TEST_DOMAIN pins the domain (e.g. to a range of your own); by default each
+# module takes a fresh one, so runs started side by side do not hear each other.
+DOMAIN_ID = int(os.environ['ACTOR_NODE_TEST_DOMAIN']) + 2 if 'ACTOR_NODE_TEST_DOMAIN' in \
+    os.environ else fresh_domain_id()
 
 
 CASES = [

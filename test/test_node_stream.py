@@ -10,12 +10,15 @@ import time
 
 import numpy as np
 import pytest
-from ros_harness import NodeProcess, ros_env
+from ros_harness import fresh_domain_id, NodeProcess, ros_env
 from test_node_helpers import JOINT_NAMES, node_command, Probe, ROOT_X, ROOT_Y, ROOT_YAW, scene
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
-DOMAIN_ID = int(os.environ.get('ACTOR_NODE_TEST_DOMAIN', '31'))
+# ACTOR_NODE_TEST_DOMAIN pins the domain (e.g. to a range of your own); by default each
+# module takes a fresh one, so runs started side by side do not hear each other.
+DOMAIN_ID = int(os.environ['ACTOR_NODE_TEST_DOMAIN']) if 'ACTOR_NODE_TEST_DOMAIN' in \
+    os.environ else fresh_domain_id()
 COURSE = scene('stairs_up') if os.path.exists(scene('stairs_up')) else scene('flat')
 CMD_TIMEOUT = 0.5
 # Generous bound on "stops within one step": the step being played, plus the planning lead,
@@ -141,7 +144,7 @@ def test_turning_command_turns_the_actor_the_commanded_way(actor):
         before = probe.latest()[ROOT_YAW]
         probe.drive(0.2, angular_z, 4.0)
         after = probe.latest()[ROOT_YAW]
-        assert (after - before) * math.copysign(1.0, angular_z) > 0.5, \
+        assert (after - before) * math.copysign(1.0, angular_z) > 0.3, \
             f'angular.z {angular_z}: root_yaw {before:.2f} -> {after:.2f} rad; ' \
             f'{probe.diagnostic_values().get("_message")}'
 
