@@ -124,6 +124,11 @@ def test_demo_in_browser_walk_turn_stop_and_stuck(artifacts_dir, monkeypatch):
         # The pelvis swings a little with each step; a turn is well beyond that.
         assert abs(recorder.latest()[2] - start_yaw) < 0.3, 'a straight-up drag turned the actor'
         assert 'walking' in page.wait_for_text('walking', 60)
+        walking_shot = os.path.join(artifacts_dir, 'demo.png')
+        page.screenshot(walking_shot)
+        if os.environ.get('DAP_UPDATE_SCREENSHOT') == '1':
+            os.makedirs(os.path.join(REPO, 'docs', 'images'), exist_ok=True)
+            shutil.copy(walking_shot, os.path.join(REPO, 'docs', 'images', 'demo.png'))
 
         # Drag to the side (still forward): the actor turns left.
         side = (center[0] - 100, center[1] - 100)
@@ -131,11 +136,6 @@ def test_demo_in_browser_walk_turn_stop_and_stuck(artifacts_dir, monkeypatch):
         page.move_to(up, side)
         assert wait_for(lambda: recorder.latest()[2] > yaw_before + 0.6, 120,
                         spin=recorder.spin), 'dragging left did not turn the actor left'
-        walking_shot = os.path.join(artifacts_dir, 'demo.png')
-        page.screenshot(walking_shot)
-        if os.environ.get('DAP_UPDATE_SCREENSHOT') == '1':
-            os.makedirs(os.path.join(REPO, 'docs', 'images'), exist_ok=True)
-            shutil.copy(walking_shot, os.path.join(REPO, 'docs', 'images', 'demo.png'))
 
         # Release: the actor comes to a stop (within a step or two).
         page.release()
