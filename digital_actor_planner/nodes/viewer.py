@@ -411,7 +411,7 @@ def _build_node_class():
             self._follow = gui.add_checkbox('follow actor', initial_value=self.config.follow)
             self._speed_note = gui.add_markdown(self._speed_text())
             gui.add_markdown('Drag the grey disc at the lower left: up walks forward, '
-                             'down walks back, left/right turns. Release to stop.')
+                             'left/right turns. Release to stop.')
             server.on_client_connect(self._on_client_connect)
             server.on_client_disconnect(self._on_client_disconnect)
 
