@@ -412,6 +412,14 @@ class Actor:
         landing_yaw = float(path.poses(np.array([s1]))[0, 2])
         stance_s = s1 - float(window.lengths[0])
         middle = path.poses(np.array([0.5 * (stance_s + s1)]))[0]
+        # The hip yaw range bounds how far the feet may point apart (a turn reversed mid-walk):
+        # the new foot turns at most that far from the stance foot; the path catches up.
+        stance_yaw = stance.feet[stance.stance_side].yaw
+        limit = 1.5 * float(self.skeleton.upper[self.skeleton.index['left_hip_yaw']])
+        turn = float(np.clip((landing_yaw - stance_yaw + np.pi) % (2 * np.pi) - np.pi,
+                             -limit, limit))
+        landing_yaw = stance_yaw + turn
+        middle[2] = stance_yaw + 0.5 * turn
         rise = float(window.heights[0]) - stance.feet[stance.stance_side].sole
         duration = self._walk.step_duration(float(window.lengths[0]), v, rise)
         return self._timed_step(stance, landing_xy, landing_yaw, float(window.heights[0]),

@@ -118,10 +118,10 @@ def parameter_declarations() -> List[Tuple[str, Any, ParameterDescriptor]]:
             'Longest step s_max (m).', floats=(0.01, 2.0),
             constraints='step_length_min < step_length_max')),
         ('max_linear_speed', 1.2, _descriptor(
-            'Forward speed limit (m/s); commands beyond it are clamped.', floats=(0.01, 5.0))),
+            'Forward speed limit (m/s); commands beyond it are clamped.', floats=(0.01, 3.0))),
         ('max_angular_speed', 1.0, _descriptor(
             'Turning speed limit (rad/s); commands beyond it are clamped.',
-            floats=(0.01, 10.0))),
+            floats=(0.01, 3.0))),
         ('cmd_timeout', 0.5, _descriptor(
             'No cmd_vel for this long (s) makes the actor come to a stop.', read_only=False,
             floats=(0.01, 3600.0))),
