@@ -313,47 +313,61 @@ class BodyCollision:
         transforms = self.skeleton.shape_transforms(
             self.skeleton.forward_kinematics(frames, links=names), shapes=chosen)
         centres = transforms[..., :3, 3]
-        reach = np.array([self._reach[s] for s in chosen])[None, :]
-        offsets = np.array([[0, 0], [1, 0], [-1, 0], [0, 1], [0, -1]], dtype=float)
-        points = centres[:, :, None, :2] + offsets[None, None] * reach[..., None, None]
-        top = np.broadcast_to(centres[..., 2] + reach, centres.shape[:2])
+        extent = self._aabb_half_extents(chosen, transforms[..., :3, :3])
+        offsets = np.array([[0, 0], [1, 1], [1, -1], [-1, 1], [-1, -1]], dtype=float)
+        points = centres[:, :, None, :2] + offsets[None, None] * extent[:, :, None, :2]
+        top = centres[..., 2] + extent[..., 2]
+        bottom = centres[..., 2] - extent[..., 2]
         ground, room = self.environment.ground_height(
             points.reshape(-1, 2), np.repeat(top.ravel(), offsets.shape[0]))
         ground = ground.reshape(points.shape[:3])
         room = room.reshape(points.shape[:3])
         with np.errstate(invalid='ignore'):
-            bottom_clear = np.all(centres[..., 2, None] - reach[..., None] - ground > margin,
-                                  axis=-1)
+            bottom_clear = np.all(bottom[..., None] - ground > margin, axis=-1)
             ceiling_clear = np.all(ground + room > top[..., None] + margin, axis=-1)
         suspect = ~(bottom_clear & ceiling_clear)
-        # A shape that has not moved since its last exact test (a stance foot) needs no other.
-        moved = np.ones(suspect.shape, dtype=bool)
-        moved[1:] = np.max(np.abs(np.diff(transforms[..., :3, :], axis=0)), axis=(-2, -1)) > 1e-7
+        # A shape where it was at its last exact test (a stance foot) needs no other.
+        poses = transforms[..., :3, :]
         targets = self.environment.objects
-        tested = np.zeros(len(chosen), dtype=bool)
-        for j in np.flatnonzero(np.any(suspect, axis=1)):
-            hits = []
-            for column in np.flatnonzero(suspect[j]):
-                if tested[column] and not moved[j, column]:
-                    continue
-                tested[column] = True
-                shape = chosen[column]
-                obj = self._objects[shape]
-                obj.setTransform(fcl.Transform(transforms[j, column, :3, :3],
-                                               transforms[j, column, :3, 3]))
-                self._placed.pop(shape, None)
-                self._placed[shape] = (tuple(transforms[j, column, :3, :3].ravel()),
-                                       tuple(transforms[j, column, :3, 3]))
-                if any(fcl.collide(obj, targets[m], self._request, fcl.CollisionResult())
-                       for m in self._candidates(shape)):
-                    hits.append(self.shapes[shape].link)
-            if hits:
-                self._cache_values = None
-                self._placed = {}
-                return int(j), sorted(set(hits))
+        last_tested: Dict[int, np.ndarray] = {}
+        hit_frame, hits = -1, []
+        for j, column in np.argwhere(suspect):
+            if hit_frame >= 0 and j != hit_frame:
+                break
+            previous = last_tested.get(column)
+            if previous is not None and np.max(np.abs(poses[j, column] - previous)) <= 1e-7:
+                continue
+            last_tested[column] = poses[j, column]
+            shape = chosen[column]
+            obj = self._objects[shape]
+            obj.setTransform(fcl.Transform(transforms[j, column, :3, :3],
+                                           transforms[j, column, :3, 3]))
+            self._placed[shape] = (tuple(transforms[j, column, :3, :3].ravel()),
+                                   tuple(transforms[j, column, :3, 3]))
+            if any(fcl.collide(obj, targets[m], self._request, fcl.CollisionResult())
+                   for m in self._candidates(shape)):
+                hit_frame = int(j)
+                hits.append(self.shapes[shape].link)
+        # The objects were moved outside the single-configuration cache: forget it.
         self._cache_values = None
         self._placed = {}
-        return -1, []
+        return hit_frame, sorted(set(hits))
+
+    def _aabb_half_extents(self, shapes: Sequence[int], rotations: np.ndarray) -> np.ndarray:
+        """World axis-aligned half extents of shapes: rotations (k, S, 3, 3) -> (k, S, 3), m."""
+        out = np.empty(rotations.shape[:-1])
+        for column, shape in enumerate(shapes):
+            kind, half = self._half_extent[shape]
+            rotation = rotations[:, column]
+            if kind == 'box':
+                out[:, column] = np.abs(rotation) @ half
+            elif kind == 'cylinder':
+                axis = np.abs(rotation[..., 2])
+                out[:, column] = (half[0] * np.sqrt(np.clip(1.0 - axis * axis, 0.0, 1.0))
+                                  + half[1] * axis)
+            else:
+                out[:, column] = half[0]
+        return out
 
     def links_in_collision(self, q, links: Optional[Iterable[str]] = None) -> List[str]:
         """Names of the given links that touch the environment, in ``links`` order."""
