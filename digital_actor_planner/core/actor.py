@@ -41,6 +41,8 @@ class ActorConfig:
     verify_collisions: bool = True
     plan_upper_body: bool = True
     upper_body_preview: float = 0.5
+    upper_body_time_budget: float = 0.5
+    upper_body_attempts: int = 6
     footsteps: FootstepConfig = field(default_factory=FootstepConfig)
     gait: GaitConfig = field(default_factory=GaitConfig)
 
@@ -151,7 +153,11 @@ class Actor:
                                            ('root', 'left_leg', 'right_leg')])
         if upper_body_planner is None and config.plan_upper_body:
             from .upper_body import UpperBodyPlanner
-            upper_body_planner = UpperBodyPlanner(skeleton, self._collision)
+            from .upper_body import UpperBodyConfig
+            upper_body_planner = UpperBodyPlanner(
+                skeleton, self._collision,
+                UpperBodyConfig(time_budget=config.upper_body_time_budget),
+                rng=np.random.default_rng(0))
         self._upper = upper_body_planner
         q = start_configuration(environment, start, skeleton)
         sole = q[skeleton.index['root_z']] - skeleton.leg.standing_height - 0.002
@@ -363,7 +369,7 @@ class Actor:
         max_length = cfg.gait.max_heading_change / max(abs(path.curvature), 1e-9)
         if max_length < fcfg.step_length_min:
             max_length = fcfg.step_length_min
-        banned, reason = [], 'no collision-free footstep window'
+        banned, reason, upper_failures = [], 'no collision-free footstep window', 0
         for _ in range(cfg.max_attempts):
             window = self._planner.plan(profile, stance.stance_side, stance_s, stance_foot.sole,
                                         swing_s, swing_foot.sole, s_init, self._previous_length,
@@ -387,9 +393,12 @@ class Actor:
                 continue
             frames, ok, upper_reason = self._upper_body(motion.times, motion.frames)
             if not ok:
-                # §3.2: the step is not taken; other footsteps may leave the upper body time.
-                banned.append(window.indices[0])
+                # §3.2: the step is not taken; another footstep may leave the upper body time.
                 reason = f'upper body blocked: {upper_reason}'
+                upper_failures += 1
+                if upper_failures >= cfg.upper_body_attempts:
+                    break
+                banned.append(window.indices[0])
                 start = None
                 continue
             self._window, self._window_command = window, (v, w)
