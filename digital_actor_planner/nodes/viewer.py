@@ -321,7 +321,9 @@ def _build_node_class():
     class ActorViewer(Node):
         """Serve the actor, its course and a drag pad in a web page; publish cmd_vel."""
 
-        PAD_UV = (0.14, 0.78)
+        FOLLOW_SLACK = 0.05   # m the actor may move before the follow camera catches up
+        # Far enough from the left edge that a full drag to the left stays on the 3D view.
+        PAD_UV = (0.3, 0.78)
         PAD_RADIUS = 0.09      # fraction of the view height
         PAD_DEPTH = 0.5        # m in front of the camera
 
@@ -721,6 +723,13 @@ def _build_node_class():
                 self._follow_actor()
 
         def _follow_actor(self) -> None:
+            with self._lock:
+                dragging = self._dragging
+            if dragging:
+                # Hold the camera still under a dragging hand; it catches up on release. (Each
+                # camera move re-renders the page; a software-rendered page busy re-rendering
+                # has no time left for the pointer events that steer the actor.)
+                return
             target = self._actor_position
             for client in list(self.server.get_clients().values()):
                 camera = client.camera
@@ -728,7 +737,7 @@ def _build_node_class():
                     look_at, position = camera.look_at, camera.position
                 except AssertionError:
                     continue
-                if np.linalg.norm(look_at - target) < 0.005:
+                if np.linalg.norm(look_at - target) < self.FOLLOW_SLACK:
                     continue
                 # Setting the position translates the camera and its look-at point together,
                 # so the user's orbit angle and distance are kept.

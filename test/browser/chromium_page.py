@@ -10,7 +10,7 @@ import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 CHROMIUM = os.environ.get('CHROMIUM', '/usr/bin/chromium')
-PAD_UV = (0.14, 0.78)   # where the viewer draws the drag pad, as a fraction of the 3D view
+PAD_UV = (0.3, 0.78)   # where the viewer draws the drag pad, as a fraction of the 3D view
 
 
 def missing_tools():
