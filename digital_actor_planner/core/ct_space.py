@@ -26,7 +26,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import fcl
 import numpy as np
 
-from digital_actor_planner.core.skeleton import Skeleton
+from digital_actor_planner.core.skeleton import axis_rotation, Skeleton
 
 #: Relative slack on the joint speed limits, for rounding in interpolation.
 SPEED_TOLERANCE = 1e-6
@@ -142,7 +142,7 @@ class BodyKinematics:
             for n, st in enumerate(revolute):
                 coordinate = st.axis_coordinate
                 if coordinate < 0:
-                    mats[:, n] = _rodrigues(st.axis, q[:, st.joint])
+                    mats[:, n] = axis_rotation(st.axis, q[:, st.joint])
                     continue
                 a, b = (coordinate + 1) % 3, (coordinate + 2) % 3
                 mats[:, n, coordinate, coordinate] = 1.0
@@ -170,23 +170,6 @@ class BodyKinematics:
             else:
                 np.matmul(base, mats[:, local[id(step)]], out=rotations[:, step.child])
         return rotations, positions
-
-
-def _rodrigues(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
-    x, y, z = axis
-    c, s = np.cos(angle), np.sin(angle)
-    t = 1.0 - c
-    out = np.empty(angle.shape + (3, 3))
-    out[..., 0, 0] = t * x * x + c
-    out[..., 0, 1] = t * x * y - s * z
-    out[..., 0, 2] = t * x * z + s * y
-    out[..., 1, 0] = t * x * y + s * z
-    out[..., 1, 1] = t * y * y + c
-    out[..., 1, 2] = t * y * z - s * x
-    out[..., 2, 0] = t * x * z - s * y
-    out[..., 2, 1] = t * y * z + s * x
-    out[..., 2, 2] = t * z * z + c
-    return out
 
 
 class BodyShapes:

@@ -139,7 +139,7 @@ def _origin_matrix(element) -> np.ndarray:
     return transform
 
 
-def _axis_rotation(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
+def axis_rotation(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     """Rodrigues rotation about a unit axis for a batch of angles: (k,) -> (k, 3, 3)."""
     x, y, z = axis
     c, s = np.cos(angle), np.sin(angle)
@@ -391,7 +391,7 @@ class Skeleton:
                 motion[:, :3, :3] = np.eye(3)
                 motion[:, :3, 3] = qs[:, qi, None] * axis
             else:
-                motion[:, :3, :3] = _axis_rotation(axis, qs[:, qi])
+                motion[:, :3, :3] = axis_rotation(axis, qs[:, qi])
                 motion[:, :3, 3] = 0.0
             out[:, child] = base @ motion
         return out[0] if single else out
