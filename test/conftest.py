@@ -14,6 +14,13 @@ def pytest_configure(config):
     config.addinivalue_line('markers', 'slow: takes more than a few seconds')
 
 
+@pytest.fixture(scope='session')
+def skeleton():
+    """The actor model read from the package URDF (shared by the planner tests)."""
+    from digital_actor_planner.core.skeleton import Skeleton
+    return Skeleton()
+
+
 @pytest.fixture
 def artifacts_dir():
     """A folder for files a person may want to look at after the run (screenshots, logs)."""

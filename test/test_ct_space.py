@@ -1,30 +1,17 @@
 """Configuration-time space of a branch (paper §5.2): kinematics, validity, forward-only motion."""
 import numpy as np
 import pytest
-import trimesh
 
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.ct_space import (
     BodyKinematics, BodyShapes, CTSpace, EnvironmentIndex, TimedBody)
 from digital_actor_planner.core.environment import Environment
-from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.core.upper_body import motion_patterns
+from scene_helpers import box
 
 TRUNK = ('waist', 'torso', 'head', 'left_shoulder', 'right_shoulder')
 LEGS = ('pelvis', 'left_hip', 'right_hip', 'left_thigh', 'right_thigh', 'left_shank',
         'right_shank', 'left_foot', 'right_foot')
-
-
-@pytest.fixture(scope='module')
-def skeleton():
-    return Skeleton()
-
-
-def box(lower, upper):
-    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
-    mesh = trimesh.creation.box(extents=upper - lower)
-    mesh.apply_translation((lower + upper) / 2)
-    return mesh
 
 
 @pytest.fixture(scope='module')

@@ -1,30 +1,17 @@
 """Upper-body compliant motion (paper §5): motion patterns and prioritized CT-roadmap planning."""
 import numpy as np
 import pytest
-import trimesh
 
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment
-from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.core.upper_body import (
     motion_patterns, UpperBodyConfig, UpperBodyPlanner, validate_upper_body_config)
+from scene_helpers import box
 
 RATE = 100.0
 UPPER_LINKS = ['waist', 'torso', 'head', 'left_shoulder', 'right_shoulder',
                'left_shoulder_roll_link', 'left_upper_arm', 'left_forearm',
                'right_shoulder_roll_link', 'right_upper_arm', 'right_forearm']
-
-
-@pytest.fixture(scope='module')
-def skeleton():
-    return Skeleton()
-
-
-def box(lower, upper):
-    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
-    mesh = trimesh.creation.box(extents=upper - lower)
-    mesh.apply_translation((lower + upper) / 2)
-    return mesh
 
 
 def ground():
