@@ -15,6 +15,8 @@ import sys
 import threading
 from typing import List, Optional
 
+from digital_actor_planner.nodes.viewer import add_page_options
+
 PR_SET_PDEATHSIG = 1
 URL_PATTERN = re.compile(r'open (http://\S+) in a browser')
 
@@ -24,13 +26,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog='digital-actor demo',
         description='Start the actor planner and a web page to steer it with the mouse.')
-    parser.add_argument('--host', default='127.0.0.1',
-                        help='address to serve the page on (default 127.0.0.1: this machine '
-                             'only; 0.0.0.0 to allow other machines)')
-    parser.add_argument('--port', type=int, default=8080,
-                        help='port of the page; the next free one is used if it is busy')
-    parser.add_argument('--namespace', default='',
-                        help='namespace for the planner and the viewer, e.g. /actor1')
+    add_page_options(parser, 'namespace for the planner and the viewer, e.g. /actor1')
     parser.add_argument('--scene', default=None,
                         help='course: a shipped name (e.g. stairs_up) or a scene YAML/mesh path '
                              '(default: the planner\'s default course)')

@@ -3,28 +3,15 @@ import time
 
 import numpy as np
 import pytest
-import trimesh
 
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment, start_configuration
-from digital_actor_planner.core.skeleton import Skeleton
-
-
-def _box(low, high):
-    low, high = np.asarray(low, float), np.asarray(high, float)
-    mesh = trimesh.creation.box(high - low)
-    mesh.apply_translation((low + high) / 2)
-    return mesh
-
-
-@pytest.fixture(scope='module')
-def skeleton():
-    return Skeleton()
+from scene_helpers import box
 
 
 @pytest.fixture(scope='module')
 def floor_world():
-    return Environment([_box((-3, -3, -0.2), (3, 3, 0.0))])
+    return Environment([box((-3, -3, -0.2), (3, 3, 0.0))])
 
 
 @pytest.fixture(scope='module')
@@ -66,8 +53,8 @@ def test_standing_actor_is_free_and_sunk_feet_report_their_depth(skeleton, body,
 
 def test_penetration_at_a_step_edge_is_the_small_overlap(skeleton):
     """A foot overlapping a step's top edge by 1 mm is 1 mm deep, not a foot length."""
-    step = _box((0.0, -1, 0.0), (1.0, 1, 0.15))
-    env = Environment([_box((-2, -1, -0.1), (2, 1, 0.0)), step])
+    step = box((0.0, -1, 0.0), (1.0, 1, 0.15))
+    env = Environment([box((-2, -1, -0.1), (2, 1, 0.0)), step])
     body = BodyCollision(skeleton, env)
     q = start_configuration(env, (0.3, 0.0, 0.0), skeleton)      # standing on the step
     assert q[skeleton.index['root_z']] == pytest.approx(0.15 + skeleton.leg.standing_height
@@ -84,8 +71,8 @@ def test_penetration_at_a_step_edge_is_the_small_overlap(skeleton):
 
 
 def test_distance_and_link_subsets(skeleton):
-    beam = _box((0.3, -1, 1.6), (0.5, 1, 1.8))                 # at head height
-    env = Environment([_box((-2, -1, -0.1), (2, 1, 0.0)), beam])
+    beam = box((0.3, -1, 1.6), (0.5, 1, 1.8))                 # at head height
+    env = Environment([box((-2, -1, -0.1), (2, 1, 0.0)), beam])
     body = BodyCollision(skeleton, env)
     q = start_configuration(env, (-0.5, 0.0, 0.0), skeleton)
     q[skeleton.index['root_z']] += 0.1

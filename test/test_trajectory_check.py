@@ -3,30 +3,17 @@ import time
 
 import numpy as np
 import pytest
-import trimesh
 
 from digital_actor_planner.core.environment import Environment, start_configuration
-from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.core.trajectory_check import check_trajectory
+from scene_helpers import box
 
 RATE = 100.0
 
 
-def _box(low, high):
-    low, high = np.asarray(low, float), np.asarray(high, float)
-    mesh = trimesh.creation.box(high - low)
-    mesh.apply_translation((low + high) / 2)
-    return mesh
-
-
-@pytest.fixture(scope='module')
-def skeleton():
-    return Skeleton()
-
-
 @pytest.fixture(scope='module')
 def floor_world():
-    return Environment([_box((-3, -3, -0.2), (15, 3, 0.0))])
+    return Environment([box((-3, -3, -0.2), (15, 3, 0.0))])
 
 
 @pytest.fixture(scope='module')
@@ -82,8 +69,8 @@ def test_any_other_link_in_an_obstacle_fails(skeleton, standing):
     q = standing.copy()
     torso_front = 0.11                                               # half the torso depth
     for overlap, ok in ((0.002, True), (0.01, False)):
-        wall = _box((torso_front - overlap, -0.5, 1.1), (0.6, 0.5, 1.4))
-        env = Environment([_box((-3, -3, -0.2), (3, 3, 0.0)), wall])
+        wall = box((torso_front - overlap, -0.5, 1.1), (0.6, 0.5, 1.4))
+        env = Environment([box((-3, -3, -0.2), (3, 3, 0.0)), wall])
         times, frames = _hold(q, 0.2)
         report = check_trajectory(skeleton, env, times, frames)
         assert report.ok is ok, report.failures()
@@ -192,8 +179,8 @@ def test_ten_seconds_at_100_hz_are_checked_in_seconds(skeleton, floor_world, sta
 
 def test_a_link_wholly_inside_a_solid_is_found(skeleton, standing):
     """FCL tests surfaces; a foot buried inside a block touches none of its triangles."""
-    block = _box((-0.5, 0.02, -0.1), (0.5, 0.5, 0.2))              # around the left foot
-    env = Environment([_box((-3, -3, -0.2), (3, 3, 0.0)), block])
+    block = box((-0.5, 0.02, -0.1), (0.5, 0.5, 0.2))              # around the left foot
+    env = Environment([box((-3, -3, -0.2), (3, 3, 0.0)), block])
     times, frames = _hold(standing, 0.1)
     report = check_trajectory(skeleton, env, times, frames)
     assert report.penetration['left_foot'] == pytest.approx(0.198, abs=1e-6)

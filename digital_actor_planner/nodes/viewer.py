@@ -804,17 +804,21 @@ def _unit_box() -> Tuple[np.ndarray, np.ndarray]:
     return corners, faces
 
 
-def build_parser(prog: str = 'digital-actor view') -> argparse.ArgumentParser:
-    """Command-line options of the viewer (also used by ``digital-actor view``)."""
-    parser = argparse.ArgumentParser(
-        prog=prog, description='Show a running actor_planner in a web page and steer it.')
+def add_page_options(parser: argparse.ArgumentParser, namespace_help: str) -> None:
+    """Add the page options shared by the viewer and ``digital-actor demo``."""
     parser.add_argument('--host', default='127.0.0.1',
                         help='address to serve the page on (default 127.0.0.1: this machine '
                              'only; 0.0.0.0 to allow other machines)')
     parser.add_argument('--port', type=int, default=8080,
                         help='port of the page; the next free one is used if it is busy')
-    parser.add_argument('--namespace', default='',
-                        help='namespace of the actor_planner to attach to, e.g. /actor1')
+    parser.add_argument('--namespace', default='', help=namespace_help)
+
+
+def build_parser(prog: str = 'digital-actor view') -> argparse.ArgumentParser:
+    """Command-line options of the viewer (also used by ``digital-actor view``)."""
+    parser = argparse.ArgumentParser(
+        prog=prog, description='Show a running actor_planner in a web page and steer it.')
+    add_page_options(parser, 'namespace of the actor_planner to attach to, e.g. /actor1')
     parser.add_argument('--twist', action='store_true',
                         help='publish geometry_msgs/Twist on cmd_vel (default TwistStamped)')
     parser.add_argument('--max-linear-speed', type=float, default=0.8,
