@@ -6,6 +6,11 @@ emulator runs in its own process and releases every status packet only after its
 have crossed the wire (10 bits per byte) plus the servo's Return Delay Time. The bus limit is
 computed from the bytes that actually crossed the bus in the same run.
 
+The emulator stands in for hardware, which is never descheduled: it serves from a SCHED_FIFO
+thread (when run as root) pinned to the second core, waits out the last 60 us of each wire
+deadline by spinning, and the bridge side is pinned to the first core. Without that, a
+preempted emulator thread (up to 10 ms on this 2-vCPU VM) was being charged to the bridge.
+
     .venv/bin/python bench/bench_dynamixel.py [--cycles 1000] [--return-delay-us 0]
 """
 import argparse
@@ -30,8 +35,16 @@ from digital_actor_planner.dynamixel.controller import BridgeController  # noqa:
 BAUD = 1_000_000
 
 
+def _pin(cpu):
+    """Keep one side of the bus on one core, where the machine has two or more."""
+    if hasattr(os, "sched_setaffinity") and (os.cpu_count() or 1) >= 2:
+        os.sched_setaffinity(0, {cpu})
+
+
 def _serve(link, ids, return_delay_us, wire_time, ready, pipe):
-    emulator = emu.DynamixelEmulator(ids, link, baud_rate=BAUD, wire_time=wire_time)
+    _pin(1)
+    emulator = emu.DynamixelEmulator(ids, link, baud_rate=BAUD, wire_time=wire_time,
+                                      realtime=True)
     for servo_id in ids:
         emulator.set_register(servo_id, emu.RETURN_DELAY_TIME, return_delay_us // 2)
     emulator.start()
@@ -96,6 +109,7 @@ def main(argv=None) -> int:
         target=_serve, daemon=True,
         args=(link, ids, args.return_delay_us, not args.no_wire_time, ready, theirs))
     server.start()
+    _pin(0)
     try:
         if not ready.wait(10.0):
             raise RuntimeError('emulator did not start')

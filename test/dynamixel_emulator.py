@@ -269,7 +269,10 @@ class DynamixelEmulator:
     """
 
     def __init__(self, ids: Iterable[int], link_path: str, baud_rate: int = 1_000_000,
-                 wire_time: bool = False, speed: float = 4000.0):
+                 wire_time: bool = False, speed: float = 4000.0, realtime: bool = False):
+        #: Serve from a SCHED_FIFO thread (when permitted): hardware is never descheduled,
+        #: and on a loaded machine a late emulator would be charged to the host.
+        self.realtime = bool(realtime)
         self.servos: Dict[int, Servo] = {i: Servo(i, speed=speed) for i in ids}
         self.link_path = link_path
         self.baud_rate = int(baud_rate)
@@ -375,6 +378,12 @@ class DynamixelEmulator:
         return count * 10.0 / self.baud_rate
 
     def _serve(self) -> None:
+        _tight_timer_slack()
+        if self.realtime:
+            try:
+                os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(10))
+            except (AttributeError, PermissionError, OSError):
+                pass
         buffer = b''
         while not self._stop.is_set():
             ready, _, _ = select.select([self._master], [], [], 0.05)
@@ -552,12 +561,30 @@ class DynamixelEmulator:
         return replies
 
 
-def _wait_until(deadline: float) -> None:
-    """Sleep until ``deadline`` (monotonic s).
+#: The last stretch before a release deadline is waited for by spinning, not sleeping.
+_SPIN_S = 60e-6
 
-    No busy-wait: deadlines are absolute, so the sleep overshoot (tens of microseconds) delays
-    a release but never accumulates over the status packets of a cycle.
+
+def _tight_timer_slack() -> None:
+    """Ask Linux for 1 us timer slack on this thread (default 50 us); no-op elsewhere."""
+    try:
+        import ctypes
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(29, 1000, 0, 0, 0)  # PR_SET_TIMERSLACK, in nanoseconds
+    except (OSError, AttributeError):
+        pass
+
+
+def _wait_until(deadline: float) -> None:
+    """Wait until ``deadline`` (monotonic s), to within a few microseconds.
+
+    Sleeps until shortly before the deadline, then spins: a real servo answers on time, and a
+    plain sleep overshoots by the kernel's timer slack (50 us by default) plus wake-up latency,
+    which would be charged to the bridge as if the bus were slower. Deadlines are absolute, so
+    nothing accumulates over the status packets of a cycle.
     """
     remaining = deadline - time.monotonic()
-    if remaining > 0:
-        time.sleep(remaining)
+    if remaining > _SPIN_S:
+        time.sleep(remaining - _SPIN_S)
+    while time.monotonic() < deadline:
+        pass

@@ -177,3 +177,69 @@ def test_fast_sync_read_returns_every_servo_in_one_status_packet(bus):
         assert (reader.getData(1, 132, 4), reader.getData(2, 132, 4)) == (166, 2079)
     finally:
         port.closePort()
+
+
+def test_bridge_packet_handler_matches_the_sdk_byte_for_byte():
+    import random
+    from digital_actor_planner.dynamixel.bus import PacketHandler
+    ours, theirs = PacketHandler(), sdk.PacketHandler(2.0)
+    rng = random.Random(7)
+    for size in (0, 1, 2, 15, 104, 300):
+        for _ in range(20):
+            data = [rng.randrange(256) for _ in range(size)]
+            start = rng.randrange(1 << 16)
+            assert ours.updateCRC(start, data, size) == theirs.updateCRC(start, data, size)
+            assert ours.updateCRC(0, data + [1, 2], size) == theirs.updateCRC(0, data, size)
+    # Stuffing: packets without FF FF FD come back unchanged; with it, the SDK's answer.
+    plain = list(emu.build_packet(1, emu.WRITE, bytes([116, 0, 1, 2, 3, 4])))
+    assert ours.addStuffing(list(plain)) == theirs.addStuffing(list(plain)) == plain
+    for params in ([116, 0, 0xFF, 0xFF, 0xFD, 0], [0xFF, 0xFF, 0xFD, 0xFF, 0xFF, 0xFD]):
+        packet = [0xFF, 0xFF, 0xFD, 0, 1, len(params) + 3, 0, emu.WRITE] + params + [0, 0]
+        assert ours.addStuffing(list(packet)) == theirs.addStuffing(list(packet))
+    for body in ([0x55, 0, 1, 2, 3], [0x55, 0, 0xFF, 0xFF, 0xFD, 0xFD, 7],
+                 [0x55, 0xFF, 0xFF, 0xFD, 0xFD, 0xFF, 0xFF, 0xFD, 0xFD]):
+        status = [0xFF, 0xFF, 0xFD, 0, 1, len(body) + 2, 0] + body + [0x12, 0x34]
+        assert ours.removeStuffing(list(status)) == theirs.removeStuffing(list(status))
+
+
+def test_servo_bus_sends_the_golden_sync_write_and_reuses_its_group(bus):
+    from digital_actor_planner.dynamixel.bus import ServoBus
+    emulator, _ = bus
+    servo_bus = ServoBus(emulator.port_path, 57600)
+    servo_bus.open()
+    try:
+        servo_bus.write_goals({1: 150, 2: 170})
+        assert servo_bus.read_positions([1, 2]) == {1: 166, 2: 2079}
+        assert list(emulator.received)[-2] == GOLDEN['sync write']
+        group = servo_bus._write_goal
+        servo_bus.write_goals({1: 300, 2: 4000})
+        servo_bus.read_positions([1, 2])
+        assert servo_bus._write_goal is group
+        assert (emulator.register(1, emu.GOAL_POSITION),
+                emulator.register(2, emu.GOAL_POSITION)) == (300, 4000)
+        servo_bus.write_goals({2: 77})  # another set of IDs: a new group
+        servo_bus.read_positions([1, 2])
+        assert servo_bus._write_goal is not group
+        assert emulator.register(2, emu.GOAL_POSITION) == 77
+        assert emulator.register(1, emu.GOAL_POSITION) == 300
+    finally:
+        servo_bus.close()
+
+
+def test_servo_bus_request_then_collect_positions(bus):
+    from digital_actor_planner.dynamixel.bus import ServoBus
+    emulator, _ = bus
+    servo_bus = ServoBus(emulator.port_path, 57600)
+    servo_bus.open()
+    try:
+        assert servo_bus.collect_positions() == {}  # nothing requested
+        assert servo_bus.request_positions([1, 2])
+        time.sleep(0.01)  # work done here overlaps the replies
+        assert servo_bus.collect_positions() == {1: 166, 2: 2079}
+        assert servo_bus.collect_positions() == {}  # each request is answered once
+        assert not servo_bus.request_positions([])
+        assert servo_bus.request_positions([1, 9])  # ID 9 does not exist: no full answer
+        assert servo_bus.collect_positions() == {}
+        assert servo_bus.read_positions([2]) == {2: 2079}
+    finally:
+        servo_bus.close()

@@ -183,23 +183,35 @@ class BridgeController:
         return self.envelope.command(names, positions, now)
 
     def cycle(self, now: float) -> Optional[Feedback]:
-        """Run one control cycle at time ``now`` (s); return the measured positions, if any."""
-        commanded = self.envelope.step(now)
+        """Run one control cycle at time ``now`` (s); return the measured positions, if any.
+
+        Order on the bus: sync read request, then (while the replies cross the wire) the
+        safety envelope computes this cycle's goals, then the replies are taken and the goals
+        go out in one sync write. The bridge's own computation therefore costs no bus time.
+        """
         self.cycles += 1
         if self.config.dry_run:
+            commanded = self.envelope.step(now)
             self._dry_run_log(commanded, now)
             self.last_feedback = Feedback(self.config.joint_names, commanded)
             return self.last_feedback
+        held = False  # True: the envelope was just reset to where the servos are
         if not self.connected:
             if now < self.next_attempt or not self._connect(now):
+                self.envelope.step(now)
                 return None
-            commanded = self.envelope.commanded.copy()
+            held = True
         if self.missing and now >= self.next_missing_ping:
-            self._recover_missing(now)
-            commanded = self.envelope.commanded.copy()
+            if not held:
+                self.envelope.step(now)
+            self._recover_missing(now)  # sets the envelope of returning servos to where they are
+            held = True
         try:
-            self.bus.write_goals(self._goals(commanded))
-            ticks = self.bus.read_positions(self.present)
+            self.bus.request_positions(self.present)
+            commanded = self.envelope.commanded.copy() if held else self.envelope.step(now)
+            goals = self._goals(commanded)
+            ticks = self.bus.collect_positions()
+            self.bus.write_goals(goals)
             if now - self.last_health_check >= self.config.health_check_period:
                 self.last_health_check = now
                 for servo_id, bits in self.bus.read_hardware_errors(self.present).items():
