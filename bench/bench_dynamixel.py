@@ -44,7 +44,7 @@ def _pin(cpu):
 def _serve(link, ids, return_delay_us, wire_time, ready, pipe):
     _pin(1)
     emulator = emu.DynamixelEmulator(ids, link, baud_rate=BAUD, wire_time=wire_time,
-                                      realtime=True)
+                                     realtime=True)
     for servo_id in ids:
         emulator.set_register(servo_id, emu.RETURN_DELAY_TIME, return_delay_us // 2)
     emulator.start()

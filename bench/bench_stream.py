@@ -12,8 +12,10 @@ script), with localhost discovery in ROS_DOMAIN_ID 40-59 by default.
 * Command latency: from publishing a forward command to the first frame whose root moved, and from
   publishing a zero command to the first frame of a still actor; beside a bare rclpy
   publish -> echo -> receive round trip measured in the same run.
-* Actors per core: N actor processes pinned to CPU 0 (the probe on the other CPU) all walking;
-  the stream rate and missed frames of the worst one.
+* Actors per core: N actors pinned to CPU 0 (the probe on the other CPU) all walking; the
+  stream rate and missed frames of the worst one. By default all N are hosted by one
+  actor_planner process (``--actors NS ...``: one DDS participant, one stream thread, a planning
+  process per actor); ``--one-process-per-actor`` starts N separate nodes instead.
 """
 import argparse
 import collections
@@ -165,21 +167,32 @@ def _node_diagnostics(arrays, prefix: str) -> list:
             if status.name.startswith(prefix) and 'actor planner' in status.name]
 
 
-def bench_actors(domain: int, counts, duration: float, course: str, folder: str) -> None:
+def bench_actors(domain: int, counts, duration: float, course: str, folder: str,
+                 separate: bool = False) -> None:
     cpus = sorted(os.sched_getaffinity(0))
     node_cpu, probe_cpu = cpus[0], cpus[-1]
     os.sched_setaffinity(0, {probe_cpu})
     for count in counts:
         processes, probes = [], []
         try:
-            for i in range(count):
-                command = ['taskset', '-c', str(node_cpu)] + node_command(
-                    '-r', f'__ns:=/actor{i}', '-p', f'scene:={scene(course)}')
+            pin = ['taskset', '-c', str(node_cpu)]
+            if separate:
+                for i in range(count):
+                    command = pin + node_command('-r', f'__ns:=/actor{i}',
+                                                 '-p', f'scene:={scene(course)}')
+                    processes.append(NodeProcess(command, ros_env(domain), log_path=os.path.join(
+                        folder, f'actors{count}_{i}.log')))
+            else:
+                command = node_command('-p', f'scene:={scene(course)}')
+                at = command.index('--ros-args')
+                command = pin + command[:at] + ['--actors'] + [
+                    f'actor{i}' for i in range(count)] + command[at:]
                 processes.append(NodeProcess(command, ros_env(domain), log_path=os.path.join(
-                    folder, f'actors{count}_{i}.log')))
+                    folder, f'actors{count}.log')))
             for i in range(count):
                 probes.append(Probe(domain, namespace=f'/actor{i}'))
-            ready = all(p.wait_for_stream(processes[i], 300.0) for i, p in enumerate(probes))
+            ready = all(p.wait_for_stream(processes[i if separate else 0], 300.0)
+                        for i, p in enumerate(probes))
             if not ready:
                 print(f'{count} actors: not all started')
                 continue
@@ -229,18 +242,23 @@ def main() -> None:
     parser.add_argument('--course', default='stairs_up')
     parser.add_argument('--actors', default='1,5,10,20')
     parser.add_argument('--actors-duration', type=float, default=20.0)
+    parser.add_argument('--one-process-per-actor', action='store_true',
+                        help='actors per core: a node process per actor (default: one process)')
     parser.add_argument('--trials', type=int, default=5)
     parser.add_argument('--domain', type=int, default=40)
     parser.add_argument('--skip-latency', action='store_true')
+    parser.add_argument('--skip-stream', action='store_true')
     args = parser.parse_args()
     print(f'machine: {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.2f}')
     folder = tempfile.mkdtemp(prefix='bench_stream_')
-    bench_stream(args.domain, args.course, args.duration, folder)
+    if not args.skip_stream:
+        bench_stream(args.domain, args.course, args.duration, folder)
     if not args.skip_latency:
         bench_latency(args.domain + 1, folder, args.trials)
     counts = [int(c) for c in args.actors.split(',') if c]
     if counts:
-        bench_actors(args.domain + 2, counts, args.actors_duration, args.course, folder)
+        bench_actors(args.domain + 2, counts, args.actors_duration, args.course, folder,
+                     separate=args.one_process_per_actor)
     print(f'node logs: {folder}; load average now {os.getloadavg()[0]:.2f}')
 
 

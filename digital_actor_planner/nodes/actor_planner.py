@@ -13,6 +13,7 @@ Planning never stalls the stream:
 """
 from __future__ import annotations
 
+import argparse
 import collections
 from dataclasses import dataclass
 import math
@@ -31,9 +32,10 @@ import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 import rclpy
 from rclpy.exceptions import ParameterException, ParameterUninitializedException
-from rclpy.executors import ExternalShutdownException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.utilities import remove_ros_args
 from sensor_msgs.msg import JointState
 from std_msgs.msg import ColorRGBA, String
 from visualization_msgs.msg import Marker, MarkerArray
@@ -392,10 +394,87 @@ def real_time(priority: int) -> bool:
     return True
 
 
+class StreamTicker:
+    """One thread that publishes the joint_states of every actor attached to it.
+
+    Ticks on a monotonic schedule at ``1 / period``; a late tick is published late and the
+    ticks it missed are skipped (and counted by each actor), so a stream never bunches up.
+    Actors hosted in one process share a ticker: one real-time thread instead of one per actor.
+    """
+
+    def __init__(self, period: float, priority: int, warn=None):
+        self.period = float(period)
+        self.priority = int(priority)
+        self._warn = warn
+        self._nodes = []
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread = None
+
+    def attach(self, node: 'ActorPlannerNode') -> None:
+        """Start ticking ``node`` (and start the thread with the first node)."""
+        with self._lock:
+            self._nodes = self._nodes + [node]
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._loop, name='joint_state_stream',
+                                                daemon=True)
+                self._thread.start()
+
+    def detach(self, node: 'ActorPlannerNode') -> None:
+        """Stop ticking ``node``; the thread ends with the last node."""
+        with self._lock:
+            self._nodes = [n for n in self._nodes if n is not node]
+            last = not self._nodes
+            thread = self._thread
+        if last and thread is not None:
+            self._stop.set()
+            if thread is not threading.current_thread():
+                thread.join(timeout=5.0)
+
+    def _loop(self) -> None:
+        if self.priority > 0 and not real_time(self.priority) and self._warn is not None:
+            self._warn('joint_states thread keeps normal scheduling (SCHED_FIFO not '
+                       'permitted); set stream_priority 0 to silence this')
+        start = time.monotonic()
+        tick = 0
+        while not self._stop.is_set():
+            due = start + tick * self.period
+            delay = due - time.monotonic()
+            if delay > 0.0:
+                time.sleep(delay)
+            now = time.monotonic()
+            late_ticks = int((now - due) / self.period)
+            if late_ticks > 0:
+                tick += late_ticks
+            tick += 1
+            for node in self._nodes:
+                try:
+                    node.publish_frame(now, late_ticks)
+                except Exception as error:  # noqa: B902 -- one actor must not stop the others
+                    node.get_logger().error(f'joint_states not published: {error!r}',
+                                            throttle_duration_sec=2.0)
+
+
+class TickerPool:
+    """The stream tickers of one process, one per (publish period, priority)."""
+
+    def __init__(self):
+        self._tickers = {}
+        self._lock = threading.Lock()
+
+    def ticker(self, period: float, priority: int, warn=None) -> StreamTicker:
+        with self._lock:
+            key = (float(period), int(priority))
+            if key not in self._tickers:
+                self._tickers[key] = StreamTicker(period, priority, warn)
+            return self._tickers[key]
+
+
 class ActorPlannerNode(Node):
     """Stream the digital actor's whole-body motion as JointState, directed by cmd_vel."""
 
-    def __init__(self, node_name: str = 'actor_planner', **kwargs):
+    def __init__(self, node_name: str = 'actor_planner', tickers: Optional[TickerPool] = None,
+                 **kwargs):
         super().__init__(node_name, **kwargs)
         self.config = self._declare_and_read()
         self.skeleton = Skeleton()
@@ -428,15 +507,18 @@ class ActorPlannerNode(Node):
         self._pending_lock = threading.Lock()
         self._stop = threading.Event()
         self._wake = threading.Event()
+        # The planning lead in force (s); the stream wakes the planner when less is buffered.
+        self._lead = self.planning_lead
 
         self._make_interfaces()
         self.add_on_set_parameters_callback(self._on_set_parameters)
         self._planner_thread = threading.Thread(target=self._planning_loop,
                                                 name='actor_planning', daemon=True)
-        self._publisher_thread = threading.Thread(target=self._publishing_loop,
-                                                  name='joint_state_stream', daemon=True)
         self._planner_thread.start()
-        self._publisher_thread.start()
+        self._clock_zero = None
+        self._ticker = (tickers or TickerPool()).ticker(
+            self.period, self.config.stream_priority, self.get_logger().info)
+        self._ticker.attach(self)
         self.get_logger().info(
             f'streaming {len(self.skeleton.joint_names)} joints at {self.config.publish_rate:g} '
             f'Hz, scene {self.scene_path}')
@@ -481,8 +563,12 @@ class ActorPlannerNode(Node):
                                      lambda msg: self._on_cmd_vel(msg.twist), 10)
         else:
             self.create_subscription(Twist, 'cmd_vel', self._on_cmd_vel, 10)
-        self.create_timer(1.0, self._publish_diagnostics)
-        self.create_timer(0.2, self._publish_markers)
+        # Diagnostics (1 Hz) and markers (5 Hz) come from a plain thread, not executor timers:
+        # with a dozen actors in one process, rclpy's executor spent most of a core waking up
+        # for their timers, at the stream's priority, starving the planning processes.
+        self._housekeeping_thread = threading.Thread(target=self._housekeeping_loop,
+                                                     name='actor_housekeeping', daemon=True)
+        self._housekeeping_thread.start()
         self._publish_environment()
 
     def _on_set_parameters(self, parameters) -> SetParametersResult:
@@ -525,15 +611,18 @@ class ActorPlannerNode(Node):
                 self.buffer.restart(pending, self.actor_offset)
                 self.committed_footsteps.clear()
             ahead = self.buffer.end_time - self.playback_time
-            lead = self._effective_lead()
+            lead = self._lead = self._effective_lead()
             if ahead > lead:
-                self._wake.wait(min(ahead - lead, 0.05))
+                # Woken by the stream when the buffer runs down to the lead (or a new scene).
+                self._wake.wait(min(ahead - lead, 0.25))
                 self._wake.clear()
                 continue
             linear_x, angular_z = self.command.current(time.monotonic(), self.cmd_timeout)
             try:
                 warning, block, profile = self.planner.plan(linear_x, angular_z)
             except PlanningFailed as error:
+                if self._stop.is_set():
+                    return  # shutting down: the planning process was told to finish
                 self.stats.record('stuck', f'planner error: {error}', float('nan'))
                 logger.error(f'planning failed: {error}', throttle_duration_sec=2.0)
                 self._stop.wait(0.1)
@@ -559,54 +648,64 @@ class ActorPlannerNode(Node):
         slowest = max((t for t in recent if math.isfinite(t)), default=0.0)
         return min(MAX_LEAD, max(self.planning_lead, LEAD_SAFETY * slowest))
 
-    def _publishing_loop(self) -> None:
-        # Ticks on a monotonic schedule; a late tick is published late, missed ticks are skipped
-        # (and counted), so the stream never bunches up.
-        if self.config.stream_priority > 0 and not real_time(self.config.stream_priority):
-            self.get_logger().info('joint_states thread keeps normal scheduling (SCHED_FIFO '
-                                   'not permitted); set stream_priority 0 to silence this')
-        start = time.monotonic()
-        clock_zero = start
-        tick = 0
-        msg = self.joint_state_msg
-        while not self._stop.is_set():
-            due = start + tick * self.period
-            delay = due - time.monotonic()
-            if delay > 0.0:
-                time.sleep(delay)
-            now = time.monotonic()
-            late_ticks = int((now - due) / self.period)
-            if late_ticks > 0:
-                self.missed_frames += late_ticks
-                tick += late_ticks
-            tick += 1
-            play = now - clock_zero
-            end = self.buffer.end_time
-            if play > end:
-                if play - end > self.period:
-                    self.underruns += 1
-                clock_zero = now - end
-                play = end
-            self.playback_time = play
+    def publish_frame(self, now: float, late_ticks: int = 0) -> None:
+        """Publish the frame for monotonic time ``now`` (called by the stream ticker).
+
+        ``late_ticks`` ticks were skipped before this one because the tick came late.
+        """
+        if self._stop.is_set():
+            return
+        self.missed_frames += late_ticks
+        if self._clock_zero is None:
+            self._clock_zero = now
+        play = now - self._clock_zero
+        end = self.buffer.end_time
+        if play > end:
+            if play - end > self.period:
+                self.underruns += 1
+            self._clock_zero = now - end
+            play = end
+        self.playback_time = play
+        if end - play <= self._lead:
             self._wake.set()
-            q, v = self.buffer.sample(play)
-            msg.header.stamp = self.get_clock().now().to_msg()
-            msg.position = q.tolist()
-            msg.velocity = v.tolist()
+        q, v = self.buffer.sample(play)
+        msg = self.joint_state_msg
+        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.position = q.tolist()
+        msg.velocity = v.tolist()
+        try:
+            self.joint_state_pub.publish(msg)
+        except Exception:  # noqa: B902 -- the context is shutting down
+            if self._stop.is_set() or not rclpy.ok(context=self.context):
+                return
+            raise
+        self.tick_times.append(now)
+
+    def _housekeeping_loop(self) -> None:
+        next_diagnostics = time.monotonic() + 1.0
+        while not self._stop.wait(0.2):
             try:
-                self.joint_state_pub.publish(msg)
-            except Exception:  # noqa: B902 -- the context is shutting down
+                self._publish_markers()
+                if time.monotonic() >= next_diagnostics:
+                    next_diagnostics += 1.0
+                    self._publish_diagnostics()
+            except Exception as error:  # noqa: B902 -- the context is shutting down
                 if self._stop.is_set() or not rclpy.ok(context=self.context):
                     return
-                raise
-            self.tick_times.append(now)
+                self.get_logger().error(f'diagnostics/markers not published: {error!r}',
+                                        throttle_duration_sec=2.0)
 
-    def stop(self) -> None:
-        """Stop the planning and publishing threads."""
+    def request_stop(self) -> None:
+        """Tell the threads to finish (without waiting for them)."""
         self._stop.set()
         self._wake.set()
-        for thread in (self._publisher_thread, self._planner_thread):
-            thread.join(timeout=5.0)
+
+    def stop(self) -> None:
+        """Stop streaming and planning, and end the planning process."""
+        self.request_stop()
+        self._ticker.detach(self)
+        self._planner_thread.join(timeout=5.0)
+        self._housekeeping_thread.join(timeout=5.0)
         self.planner.close()
 
     # -- executor callbacks -----------------------------------------------------------------
@@ -739,21 +838,58 @@ def _field_named(error: Exception, config: PlannerNodeConfig) -> str:
     return 'window_steps'
 
 
+def _namespaces(argv) -> list:
+    """The ``--actors NS [NS ...]`` option among the non-ROS arguments ([''] when absent).
+
+    Raises
+    ------
+    ConfigurationError
+        An unknown argument or an invalid / repeated namespace.
+    """
+    parser = argparse.ArgumentParser(
+        prog='actor_planner', description='Stream digital actors as JointState.',
+        epilog='Several actors in one process share one DDS participant and one stream thread.')
+    parser.add_argument('--actors', nargs='+', metavar='NS', default=[''],
+                        help='host one actor per namespace in this process')
+    parsed, unknown = parser.parse_known_args(argv)
+    if unknown:
+        raise ConfigurationError('arguments', f'unknown arguments {unknown}')
+    names = [ns.strip() for ns in parsed.actors]
+    for ns in names:
+        if ns and not all(part and part.replace('_', 'a').isalnum() and not part[0].isdigit()
+                          for part in ns.strip('/').split('/')):
+            raise ConfigurationError('actors', f'invalid namespace {ns!r}')
+    if len(set(names)) != len(names):
+        raise ConfigurationError('actors', f'repeated namespace in {names}')
+    return names
+
+
 def main(args=None) -> int:
-    """Run the node until interrupted; exit status 2 on a bad configuration."""
+    """Run the node(s) until interrupted; exit status 2 on a bad configuration."""
     # The executor and planning threads hold the GIL at times; a short switch interval bounds
     # how long the publishing thread waits for it after waking (the default 5 ms would be the
     # jitter).
     sys.setswitchinterval(0.0005)
     rclpy.init(args=args)
+    logger = rclpy.logging.get_logger('actor_planner')
+    nodes = []
     try:
-        node = ActorPlannerNode()
+        namespaces = _namespaces(remove_ros_args(
+            sys.argv if args is None else args)[1:])
+        tickers = TickerPool()
+        for ns in namespaces:
+            nodes.append(ActorPlannerNode(tickers=tickers,
+                                          **({'namespace': ns} if ns else {})))
     except ConfigurationError as error:
-        rclpy.logging.get_logger('actor_planner').fatal(f'invalid configuration: {error}')
+        logger.fatal(f'invalid configuration: {error}')
+        for node in nodes:
+            node.stop()
+            node.destroy_node()
         rclpy.try_shutdown()
         return 2
-    if node.config.stream_priority > 2:
-        real_time(node.config.stream_priority - 1)  # the executor thread, see _planning_loop
+    priority = nodes[0].config.stream_priority
+    if priority > 2:
+        real_time(priority - 1)  # the executor thread, see _planning_loop
         # The DDS threads too: publish() takes locks they hold, so they must not wait behind
         # the planning processes (which stay at normal priority).
         tasks = '/proc/self/task'
@@ -761,17 +897,22 @@ def main(args=None) -> int:
             try:
                 if os.sched_getscheduler(int(thread_id)) == os.SCHED_OTHER:
                     os.sched_setscheduler(int(thread_id), os.SCHED_FIFO | getattr(
-                        os, 'SCHED_RESET_ON_FORK', 0),
-                        os.sched_param(node.config.stream_priority - 2))
+                        os, 'SCHED_RESET_ON_FORK', 0), os.sched_param(priority - 2))
             except OSError:
                 pass
+    executor = SingleThreadedExecutor()
+    for node in nodes:
+        executor.add_node(node)
     try:
-        rclpy.spin(node)
+        executor.spin()
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
-        node.stop()
-        node.destroy_node()
+        for node in nodes:
+            node.request_stop()
+        for node in nodes:
+            node.stop()
+            node.destroy_node()
         rclpy.try_shutdown()
     return 0
 

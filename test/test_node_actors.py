@@ -1,0 +1,79 @@
+"""Several actors hosted by one actor_planner process (``--actors NS ...``).
+
+One process, one DDS participant and one stream thread for all of them: each actor still has
+its own namespace, its own cmd_vel and its own 100 Hz joint_states. A bad ``--actors`` value is
+a configuration error (exit 2, naming it).
+"""
+import math
+import os
+import subprocess
+
+import pytest
+from ros_harness import fresh_domain_id, NodeProcess, ros_env
+from test_node_helpers import node_command, Probe, ROOT_X, ROOT_YAW, scene
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+DOMAIN_ID = int(os.environ['ACTOR_NODE_TEST_DOMAIN']) + 5 if 'ACTOR_NODE_TEST_DOMAIN' in \
+    os.environ else fresh_domain_id()
+NAMESPACES = ('crowd/a', 'crowd/b', 'crowd/c')
+
+
+def actors_command(*actors, ros_args=()):
+    command = node_command(*ros_args)
+    at = command.index('--ros-args')
+    return command[:at] + ['--actors', *actors] + command[at:]
+
+
+@pytest.fixture(scope='module')
+def crowd(tmp_path_factory):
+    folder = tmp_path_factory.mktemp('crowd')
+    process = NodeProcess(actors_command(*NAMESPACES, ros_args=('-p', f'scene:={scene("flat")}')),
+                          ros_env(DOMAIN_ID), log_path=str(folder / 'crowd.log'))
+    probes = [Probe(DOMAIN_ID, namespace='/' + ns) for ns in NAMESPACES]
+    try:
+        for probe in probes:
+            assert probe.wait_for_stream(process, 120.0), process.output()
+        yield process, probes
+    finally:
+        for probe in probes:
+            probe.close()
+        assert process.stop() == 0, process.output()
+
+
+def test_each_hosted_actor_streams_at_the_publish_rate(crowd):
+    _, probes = crowd
+    counts = [len(p.joint_states) for p in probes]
+    for _ in range(20):
+        for probe in probes:
+            probe.spin(0.05)
+    # 3 s of spinning in turns: every actor's stream kept ~100 Hz (received ones counted).
+    rates = [(len(p.joint_states) - c) / 3.0 for p, c in zip(probes, counts)]
+    assert all(r > 80.0 for r in rates), rates
+    for probe in probes:
+        assert len(probe.joint_states[-1][1].name) == 22
+
+
+def test_each_hosted_actor_follows_only_its_own_command(crowd):
+    _, (a, b, c) = crowd
+    starts = [p.latest().copy() for p in (a, b, c)]
+    a.command = (0.5, 0.0)
+    b.command = (0.0, 0.6)
+    for _ in range(30):
+        for probe in (a, b, c):
+            probe.spin(0.05)
+    a.command = b.command = None
+    moved = [p.latest() - s for p, s in zip((a, b, c), starts)]
+    assert moved[0][ROOT_X] * math.cos(starts[0][ROOT_YAW]) > 0.4, moved[0][ROOT_X]
+    assert moved[1][ROOT_YAW] > 0.4, moved[1][ROOT_YAW]
+    assert abs(moved[2][ROOT_X]) < 1e-6 and abs(moved[2][ROOT_YAW]) < 1e-6
+
+
+@pytest.mark.parametrize('actors, named', [(('a', 'a'), 'repeated'), (('9lives',), '9lives'),
+                                           (('a//b',), 'a//b')])
+def test_bad_actors_option_exits_2_naming_it(actors, named):
+    result = subprocess.run(actors_command(*actors), env=ros_env(DOMAIN_ID),
+                            capture_output=True, text=True, timeout=120)
+    output = result.stdout + result.stderr
+    assert result.returncode == 2, output
+    assert 'actors' in output and named in output, output
