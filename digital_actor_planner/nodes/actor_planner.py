@@ -31,11 +31,13 @@ from nav_msgs.msg import Path
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 import rclpy
-from rclpy.exceptions import ParameterException, ParameterUninitializedException
+from rclpy.exceptions import InvalidNamespaceException, ParameterException, \
+    ParameterUninitializedException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rclpy.utilities import remove_ros_args
+from rclpy.validate_namespace import validate_namespace
 from sensor_msgs.msg import JointState
 from std_msgs.msg import ColorRGBA, String
 from visualization_msgs.msg import Marker, MarkerArray
@@ -856,9 +858,11 @@ def _namespaces(argv) -> list:
         raise ConfigurationError('arguments', f'unknown arguments {unknown}')
     names = [ns.strip() for ns in parsed.actors]
     for ns in names:
-        if ns and not all(part and part.replace('_', 'a').isalnum() and not part[0].isdigit()
-                          for part in ns.strip('/').split('/')):
-            raise ConfigurationError('actors', f'invalid namespace {ns!r}')
+        try:
+            validate_namespace(ns if ns.startswith('/') else '/' + ns)
+        except InvalidNamespaceException as error:
+            raise ConfigurationError('actors', f'invalid namespace {ns!r}: '
+                                     f'{str(error).splitlines()[0]}') from None
     if len(set(names)) != len(names):
         raise ConfigurationError('actors', f'repeated namespace in {names}')
     return names
