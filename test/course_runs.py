@@ -7,6 +7,7 @@ import numpy as np
 from digital_actor_planner.cli import read_commands
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
 from digital_actor_planner.core.environment import load_scene
+from digital_actor_planner.core.footsteps import FootstepConfig
 from digital_actor_planner.core.skeleton import Skeleton
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -24,12 +25,13 @@ def scene(name):
 
 
 @functools.lru_cache(maxsize=None)
-def simulate(name, window_steps=3, upper_body=True):
+def simulate(name, window_steps=3, upper_body=True, greedy_restart=True):
     """Plan course ``name``: (scene, times (k,), frames (k, 22), blocks)."""
     sc = scene(name)
     commands = read_commands(os.path.join(SCENES, name + '.csv'))
     actor = Actor(skeleton(), sc.environment,
-                  ActorConfig(window_steps=window_steps, plan_upper_body=upper_body),
+                  ActorConfig(window_steps=window_steps, plan_upper_body=upper_body,
+                              footsteps=FootstepConfig(greedy_restart=greedy_restart)),
                   start=sc.start)
     blocks = run_commands(actor, [c.time for c in commands], [c.linear_x for c in commands],
                           [c.angular_z for c in commands])

@@ -65,7 +65,9 @@ def test_window_slides_from_the_previous_solution(leg):
     slid = tuple(first.indices[1:]) + (first.indices[0],)
     second = plan(planner, profile, start=slid)
     assert second.indices == slid  # already optimal: hill-climbing keeps it
-    assert second.evaluated <= 2 * 3 + 1
+    # Itself and its neighbours: each footstep one interval longer or shorter (2 n), and each
+    # adjacent pair moved in opposite directions (2 (n - 1)).
+    assert second.evaluated <= 2 * 3 + 2 * 2 + 1
 
 
 def test_banned_first_step_is_avoided(leg):
@@ -105,6 +107,25 @@ def test_search_is_near_optimal_and_much_cheaper_than_exhaustive(leg):
     assert np.median(evaluated) < 0.1
 
 
+def test_greedy_restart_finds_the_stair_by_stair_optimum(leg):
+    """On stairs the paper's search settles on long strides that skip treads; the second climb
+    from a footstep-by-footstep start finds the optimum (one tread per footstep)."""
+    paper = FootstepPlanner(FootstepConfig(greedy_restart=False), leg)
+    planner = FootstepPlanner(FootstepConfig(), leg)
+    paper_ratios, ratios = [], []
+    for tread in (0.3, 0.32, 0.35):
+        stairs = profile_from(
+            lambda s, tread=tread: 0.12 * (np.floor((s - 0.4) / tread) + 1) if s > 0.4 else 0.0)
+        best = planner.plan_exhaustive(stairs, RIGHT, 0.0, 0.0, 0.0, 0.0, 0.5, 0.5)
+        window = plan(planner, stairs)
+        ratios.append((window.effort + 1e-3) / (best.effort + 1e-3))
+        paper_ratios.append((plan(paper, stairs).effort + 1e-3) / (best.effort + 1e-3))
+        # The stair-by-stair configuration: every later foothold one tread further.
+        assert np.allclose(np.diff(window.arc_lengths), tread, atol=0.05)
+    assert max(ratios) <= 1.05
+    assert min(paper_ratios) > 1.2
+
+
 def test_config_validation_names_the_field(leg):
     with pytest.raises(ValueError, match='window_steps'):
         validate_footstep_config(FootstepConfig(window_steps=0))
@@ -112,3 +133,36 @@ def test_config_validation_names_the_field(leg):
         validate_footstep_config(FootstepConfig(step_length_min=0.9, step_length_max=0.8))
     with pytest.raises(ValueError, match='step_intervals'):
         FootstepPlanner(FootstepConfig(step_intervals=0), leg)
+
+
+def test_batched_footholds_agree_with_the_single_foothold(leg):
+    """The planner's batched foothold table gives what :meth:`foothold` gives, sole by sole."""
+    rng = np.random.default_rng(7)
+    planner = FootstepPlanner(FootstepConfig(), leg)
+    count = 200
+    s0 = -0.3
+    steps = np.repeat(rng.choice([0.0, 0.12, 0.3, -0.2], size=count // 10), 10)
+    rough = steps + rng.normal(0.0, 0.002, count) + 0.2 * np.sin(np.arange(count) * 0.05)
+    high = np.vstack([rough, rough + rng.normal(0.0, 0.003, count)])
+    low = high - np.abs(rng.normal(0.0, 0.002, high.shape))
+    high[0, 60:64] = np.nan
+    low[0, 60:64] = np.nan
+    headroom = np.where(rng.random(high.shape) < 0.005, 0.5, np.inf)
+    profile = GroundProfile(s0=s0, ds=DS, height=high, low=low, headroom=headroom,
+                            obstacle=high.copy())
+    s = np.concatenate([np.linspace(s0 - 0.2, s0 + DS * count + 0.2, 700),
+                        rng.uniform(s0, s0 + DS * count, 300)])
+    kinds = set()
+    for side in (LEFT, RIGHT):
+        ok, height, pitch = planner.footholds(profile, side, s)
+        for k, value in enumerate(s):
+            single = planner.foothold(profile, side, float(value))
+            assert ok[k] == single.ok, (side, value)
+            if single.ok:
+                assert height[k] == pytest.approx(single.height, abs=1e-12)
+                assert pitch[k] == pytest.approx(single.pitch, abs=1e-12)
+                kinds.add('flat' if single.pitch != 0.0 else 'edge or level')
+            else:
+                assert np.isnan(height[k])
+                kinds.add('refused')
+    assert kinds == {'flat', 'edge or level', 'refused'}

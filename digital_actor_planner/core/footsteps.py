@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass, field
-from typing import Dict, Optional, Tuple
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -19,9 +19,18 @@ from .skeleton import LegGeometry
 LEFT, RIGHT = 0, 1
 
 
+# Columns of the ankle's sample and its two neighbours in a sole window padded by one.
+_AROUND = np.arange(3)
+
+
 @dataclass(frozen=True)
 class FootstepConfig:
-    """Footstep planner settings (paper defaults n = 3, m = 13). Lengths in m, angles in rad."""
+    """Footstep planner settings (paper defaults n = 3, m = 13). Lengths in m, angles in rad.
+
+    ``greedy_restart``: after the paper's breadth-first search and hill-climbing, climb once
+    more from a footstep-by-footstep greedy configuration and keep the better result (False:
+    the paper's search alone).
+    """
 
     window_steps: int = 3
     step_intervals: int = 13
@@ -38,6 +47,7 @@ class FootstepConfig:
     weight_height: float = 0.5
     weight_pitch: float = 0.2
     weight_smooth: float = 0.3
+    greedy_restart: bool = True
 
     @property
     def step_increment(self) -> float:
@@ -57,6 +67,8 @@ def validate_footstep_config(config: FootstepConfig) -> None:
             or not 1 <= config.step_intervals <= 60):
         raise ValueError(f'step_intervals must be an integer in [1, 60], got '
                          f'{config.step_intervals!r}')
+    if not isinstance(config.greedy_restart, (bool, np.bool_)):
+        raise ValueError(f'greedy_restart must be true or false, got {config.greedy_restart!r}')
     for name in ('step_length_min', 'step_length_max', 'max_step_up', 'max_step_down',
                  'max_swing_height', 'flatness_tolerance', 'max_foot_pitch', 'min_headroom',
                  'weight_length', 'weight_height', 'weight_pitch', 'weight_smooth'):
@@ -152,9 +164,15 @@ class FootstepWindow:
 
 @dataclass
 class _Search:
-    """Per-call memo of foothold and swing tests (cleared every plan)."""
+    """Per-call tables of the window's footholds and memo of swing tests (one per plan).
 
-    footholds: Dict[Tuple[int, int], Foothold] = field(default_factory=dict)
+    ``ok[i][c]``, ``height[i][c]``, ``pitch[i][c]``: the foothold of footstep i when the
+    interval indices of footsteps 1..i+1 sum to c (its arc length depends only on that sum).
+    """
+
+    ok: List[list]
+    height: List[list]
+    pitch: List[list]
     swings: Dict[tuple, bool] = field(default_factory=dict)
     feasible: Dict[Tuple[int, ...], Optional[float]] = field(default_factory=dict)
 
@@ -175,6 +193,15 @@ class FootstepPlanner:
         validate_footstep_config(config)
         self.config = config
         self.leg = leg
+        # Foothold table layout: footstep i at cumulative interval index c = 0..(i + 1) m lies
+        # (i + 1) s_min + c * increment beyond the stance foot.
+        n, m = config.window_steps, config.step_intervals
+        counts = [(i + 1) * m + 1 for i in range(n)]
+        self._table_layout = (
+            np.repeat(np.arange(n), counts),
+            np.concatenate([(i + 1) * config.step_length_min
+                            + config.step_increment * np.arange(counts[i]) for i in range(n)]),
+            [int(b) for b in np.cumsum([0] + counts)])
 
     # -- the ground under a sole -----------------------------------------------------------
     def foothold(self, profile: GroundProfile, side: int, s: float) -> Foothold:
@@ -215,6 +242,73 @@ class FootstepPlanner:
                 and supported.mean() >= cfg.min_support_fraction):
             return Foothold(True, top, 0.0)
         return Foothold(False, np.nan, pitch)
+
+    def footholds(self, profile: GroundProfile, side: int, s: np.ndarray):
+        """:meth:`foothold` for many arc lengths on one side at once.
+
+        Parameters
+        ----------
+        profile
+            Ground under both foot tracks.
+        side
+            0 left, 1 right; one for all or (N,), one per sole.
+        s
+            (N,) ankle arc lengths, m.
+
+        Returns
+        -------
+        tuple
+            (ok (N,) bool, height (N,) m, NaN where not ok, pitch (N,) rad), the same values
+            :meth:`foothold` gives for each ``s``.
+
+        """
+        cfg, leg = self.config, self.leg
+        s = np.asarray(s, dtype=float)
+        count = s.shape[0]
+        side = np.broadcast_to(np.asarray(side, dtype=int), s.shape)[:, None]
+        i0 = np.floor((s - leg.heel - profile.s0) / profile.ds).astype(int)
+        i1 = np.ceil((s + leg.toe - profile.s0) / profile.ds).astype(int)
+        inside = (i0 >= 0) & (i1 < profile.samples)
+        width = i1 - i0 + 1
+        span = np.arange(int(width.max()) if count else 0)
+        index = i0[:, None] + span
+        mask = span < width[:, None]
+        index = np.clip(index, 0, profile.samples - 1)
+        high = profile.height[side, index]
+        low = profile.low[side, index]
+        room = np.where(mask, profile.headroom[side, index], np.inf)
+        usable = inside & ~np.any(mask & np.isnan(high), axis=1)
+        usable &= np.min(room, axis=1) >= cfg.min_headroom
+        high = np.where(mask & ~np.isnan(high), high, 0.0)
+        low = np.where(mask & ~np.isnan(low), low, 0.0)
+        x = profile.s0 + profile.ds * index - s[:, None]
+        mean = np.sum(np.where(mask, x, 0.0), axis=1) / width
+        centred = np.where(mask, x - mean[:, None], 0.0)
+        with np.errstate(invalid='ignore', divide='ignore'):
+            slope = np.where(width > 2, np.sum(centred * high, axis=1)
+                             / np.sum(centred * centred, axis=1), 0.0)
+        pitch = np.arctan(slope)
+        plane = slope[:, None] * x
+        lift = np.max(np.where(mask, high - plane, -np.inf), axis=1)
+        dip = np.min(np.where(mask, low - plane, np.inf), axis=1)
+        steady = np.abs(pitch) <= cfg.max_foot_pitch
+        flat = usable & steady & (lift - dip <= cfg.flatness_tolerance)
+        # At an edge a flat sole may overhang lower ground (see :meth:`foothold`).
+        top = np.max(np.where(mask, high, -np.inf), axis=1)
+        level = top[:, None] - cfg.flatness_tolerance
+        supported = mask & (high >= level) & (low >= level)
+        ankle = np.argmin(np.where(mask, np.abs(x), np.inf), axis=1)
+        # The ankle's sample and its neighbours must be supported; past either end of the sole
+        # there is nothing to ask (a True border column on each side).
+        border = np.ones((count, 1), dtype=bool)
+        padded = np.hstack([border, supported | ~mask, border])
+        around = np.all(padded[np.arange(count)[:, None], ankle[:, None] + _AROUND], axis=1)
+        fraction = np.sum(supported, axis=1) / width
+        edge = usable & steady & ~flat & around & (fraction >= cfg.min_support_fraction)
+        ok = flat | edge
+        height = np.where(flat, lift, np.where(edge, top, np.nan))
+        pitch = np.where(edge, 0.0, np.where(usable, pitch, 0.0))
+        return ok, height, pitch
 
     def swing_clear(self, profile: GroundProfile, side: int, s_from: float, h_from: float,
                     s_to: float, h_to: float) -> bool:
@@ -272,8 +366,8 @@ class FootstepPlanner:
         q = tuple(start) if start is not None else (init_index,) * n
         if len(q) != n or any(not 0 <= j <= m for j in q):
             raise ValueError(f'start configuration {q} is not {n} indices in [0, {m}]')
-        memo = _Search()
         sides = np.array([(1 - stance_side) if i % 2 == 0 else stance_side for i in range(n)])
+        memo = self._search_tables(profile, sides, stance_s)
         banned = set(int(b) for b in banned_first)
         banned_lengths = set(int(j) for j in np.flatnonzero(lengths > max_length + 1e-9))
 
@@ -290,35 +384,49 @@ class FootstepPlanner:
             return result
 
         # No configuration can be collision-free if some footstep has no foothold in reach.
-        for i in range(n):
-            reach = [(i, c) for c in range(i * m + 1 + m)]
-            if not any(self._memo_foothold(profile, memo, int(sides[i]), key, stance_s, lengths)
-                       for key in reach):
-                return None
-        # Breadth-first search from q_init to the nearest collision-free configuration.
-        queue, seen, found = deque([q]), {q}, None
-        while queue:
-            current = queue.popleft()
-            if evaluate(current) is not None:
-                found = current
-                break
-            for neighbour in self._neighbours(current, m):
-                if neighbour not in seen:
-                    seen.add(neighbour)
-                    queue.append(neighbour)
+        if not all(any(row) for row in memo.ok):
+            return None
+
+        def nearest_free(seed: Tuple[int, ...]) -> Optional[Tuple[int, ...]]:
+            """Breadth-first search from ``seed`` to the nearest collision-free configuration."""
+            queue, seen = deque([seed]), {seed}
+            while queue:
+                current = queue.popleft()
+                if evaluate(current) is not None:
+                    return current
+                for neighbour in self._neighbours(current, m, paired=False):
+                    if neighbour not in seen:
+                        seen.add(neighbour)
+                        queue.append(neighbour)
+            return None
+
+        def climb(current: Tuple[int, ...]) -> Tuple[Tuple[int, ...], float]:
+            """Hill-climbing: move to the best neighbour while it improves the effort."""
+            effort = evaluate(current)
+            while True:
+                best, best_effort = None, effort
+                for neighbour in self._neighbours(current, m):
+                    value = evaluate(neighbour)
+                    if value is not None and value < best_effort - 1e-12:
+                        best, best_effort = neighbour, value
+                if best is None:
+                    return current, effort
+                current, effort = best, best_effort
+
+        found = nearest_free(q)
         if found is None:
             return None
-        # Hill-climbing: move to the best neighbour while it improves the effort.
-        current, effort = found, evaluate(found)
-        while True:
-            best, best_effort = None, effort
-            for neighbour in self._neighbours(current, m):
-                value = evaluate(neighbour)
-                if value is not None and value < best_effort - 1e-12:
-                    best, best_effort = neighbour, value
-            if best is None:
-                break
-            current, effort = best, best_effort
+        current, effort = climb(found)
+        if cfg.greedy_restart:
+            # A second hill-climb from a configuration built footstep by footstep: on stairs and
+            # blocks the feasible configurations fall apart into basins (a foothold on every
+            # tread or on every other one) and the first climb cannot leave its basin.
+            seed = self._greedy_seed(memo, lengths, stance_height, s_init, previous_length,
+                                     banned, banned_lengths)
+            if seed is not None and seed != current and evaluate(seed) is not None:
+                other, other_effort = climb(seed)
+                if other_effort < effort - 1e-12:
+                    current, effort = other, other_effort
         return self._window(profile, current, lengths, sides, stance_s, effort,
                             len(memo.feasible), memo)
 
@@ -329,8 +437,8 @@ class FootstepPlanner:
         cfg = self.config
         n, m = cfg.window_steps, cfg.step_intervals
         lengths = cfg.lengths()
-        memo = _Search()
         sides = np.array([(1 - stance_side) if i % 2 == 0 else stance_side for i in range(n)])
+        memo = self._search_tables(profile, sides, stance_s)
         best, best_effort = None, np.inf
         for config in np.ndindex(*([m + 1] * n)):
             value = self._effort(profile, tuple(config), lengths, sides, stance_s, stance_height,
@@ -342,24 +450,69 @@ class FootstepPlanner:
         return self._window(profile, best, lengths, sides, stance_s, best_effort,
                             (m + 1) ** n, memo)
 
-    def _memo_foothold(self, profile, memo, side, key, stance_s, lengths) -> bool:
-        """Whether footstep ``key[0]`` has a usable foothold at cumulative index ``key[1]``."""
-        hold = memo.footholds.get(key)
-        if hold is None:
-            i, cumulative = key
-            s = (stance_s + (i + 1) * self.config.step_length_min
-                 + cumulative * self.config.step_increment)
-            hold = self.foothold(profile, side, s)
-            memo.footholds[key] = hold
-        return hold.ok
+    def _search_tables(self, profile, sides, stance_s) -> _Search:
+        """Every foothold the window can reach, evaluated in one batch."""
+        step, offsets, bounds = self._table_layout
+        ok, height, pitch = self.footholds(profile, sides[step], stance_s + offsets)
+        ok, height, pitch = ok.tolist(), height.tolist(), pitch.tolist()
+        rows = list(zip(bounds[:-1], bounds[1:]))
+        return _Search(ok=[ok[a:b] for a, b in rows], height=[height[a:b] for a, b in rows],
+                       pitch=[pitch[a:b] for a, b in rows])
+
+    def _greedy_seed(self, memo, lengths, stance_height, s_init, previous_length, banned_first,
+                     banned_lengths) -> Optional[Tuple[int, ...]]:
+        """A configuration built footstep by footstep, each the cheapest given the ones before.
+
+        Uses the same effort terms as :meth:`_effort` but not the swing test (the caller
+        evaluates the whole configuration); None when some footstep has no usable foothold.
+        """
+        cfg = self.config
+        m = cfg.step_intervals
+        span = cfg.step_length_max - cfg.step_length_min
+        up, down = cfg.max_step_up, cfg.max_step_down
+        seed, cumulative, height_before, length_before = [], 0, stance_height, previous_length
+        for i in range(cfg.window_steps):
+            ok, height, pitch = memo.ok[i], memo.height[i], memo.pitch[i]
+            best, best_cost = None, np.inf
+            for j in range(m + 1):
+                c = cumulative + j
+                if not ok[c] or j in banned_lengths or (i == 0 and j in banned_first):
+                    continue
+                rise = height[c] - height_before
+                if rise > up or -rise > down:
+                    continue
+                length = lengths[j]
+                cost = (cfg.weight_length * ((length - s_init) / span) ** 2
+                        + cfg.weight_height * (rise / max(up, 1e-6)) ** 2
+                        + cfg.weight_pitch * (pitch[c] / max(cfg.max_foot_pitch, 1e-6)) ** 2
+                        + cfg.weight_smooth * ((length - length_before) / span) ** 2)
+                if cost < best_cost:
+                    best, best_cost = j, cost
+            if best is None:
+                return None
+            seed.append(best)
+            cumulative += best
+            height_before, length_before = height[cumulative], lengths[best]
+        return tuple(seed)
 
     @staticmethod
-    def _neighbours(config: Tuple[int, ...], m: int):
+    def _neighbours(config: Tuple[int, ...], m: int, paired: bool = True):
+        """Configurations one interval away: one footstep longer or shorter, or (``paired``)
+        one footstep longer and the next shorter by the same amount (so the footholds after
+        them stay).
+
+        Because each foothold lies at the sum of the lengths before it, lengthening one footstep
+        alone moves every later foothold; the paired move reaches the neighbour that moves a
+        single foothold, without which hill-climbing stalls on ridges of the effort. The
+        breadth-first search keeps the paper's single-footstep moves.
+        """
         for i in range(len(config)):
             for delta in (-1, 1):
                 j = config[i] + delta
                 if 0 <= j <= m:
                     yield config[:i] + (j,) + config[i + 1:]
+                    if paired and i + 1 < len(config) and 0 <= config[i + 1] - delta <= m:
+                        yield config[:i] + (j, config[i + 1] - delta) + config[i + 2:]
 
     def _effort(self, profile, config, lengths, sides, stance_s, stance_height, swing_s,
                 swing_height, s_init, previous_length, memo, banned) -> Optional[float]:
@@ -380,13 +533,10 @@ class FootstepPlanner:
             cumulative += j
             side = int(sides[i])
             key = (i, cumulative)
-            hold = memo.footholds.get(key)
-            if hold is None:
-                hold = self.foothold(profile, side, s)
-                memo.footholds[key] = hold
-            if not hold.ok:
+            if not memo.ok[i][cumulative]:
                 return None
-            rise = hold.height - height_before
+            hold_height = memo.height[i][cumulative]
+            rise = hold_height - height_before
             if rise > up or -rise > down:
                 return None
             origin = previous_key[side]
@@ -394,28 +544,30 @@ class FootstepPlanner:
             clear = memo.swings.get(swing_key)
             if clear is None:
                 s_from, h_from = placed[origin]
-                clear = self.swing_clear(profile, side, s_from, h_from, s, hold.height)
+                clear = self.swing_clear(profile, side, s_from, h_from, s, hold_height)
                 memo.swings[swing_key] = clear
             if not clear:
                 return None
             effort += (cfg.weight_length * ((length - s_init) / span) ** 2
                        + cfg.weight_height * (rise / max(up, 1e-6)) ** 2
-                       + cfg.weight_pitch * (hold.pitch / max(cfg.max_foot_pitch, 1e-6)) ** 2
+                       + cfg.weight_pitch * (memo.pitch[i][cumulative]
+                                             / max(cfg.max_foot_pitch, 1e-6)) ** 2
                        + cfg.weight_smooth * ((length - length_before) / span) ** 2)
-            placed[key] = (s, hold.height)
+            placed[key] = (s, hold_height)
             previous_key[side] = key
-            height_before, length_before = hold.height, length
+            height_before, length_before = hold_height, length
         return effort
 
     def _window(self, profile, config, lengths, sides, stance_s, effort, evaluated, memo):
         ls = lengths[list(config)]
         arcs = stance_s + np.cumsum(ls)
-        holds = [memo.footholds.get((i, int(np.sum(config[:i + 1]))))
-                 or self.foothold(profile, int(sides[i]), float(arcs[i]))
-                 for i in range(len(config))]
+        cumulative = np.cumsum(config)
         return FootstepWindow(lengths=ls, indices=tuple(int(j) for j in config), arc_lengths=arcs,
-                              heights=np.array([h.height for h in holds]),
-                              pitches=np.array([h.pitch for h in holds]), sides=sides.copy(),
+                              heights=np.array([memo.height[i][c]
+                                                for i, c in enumerate(cumulative)]),
+                              pitches=np.array([memo.pitch[i][c]
+                                                for i, c in enumerate(cumulative)]),
+                              sides=sides.copy(),
                               effort=float(effort), evaluated=int(evaluated))
 
 
