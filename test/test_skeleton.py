@@ -108,3 +108,67 @@ def test_branches(skeleton):
     assert len(skeleton.branch('left_arm')) == 4
     with pytest.raises(ValueError, match='tail'):
         skeleton.branch('tail')
+
+
+def _reference_link_transforms(q_by_name):
+    """Every link's world transform composed joint by joint straight from the URDF text."""
+    import xml.etree.ElementTree as ElementTree
+
+    def rpy_matrix(roll, pitch, yaw):
+        cr, sr, cp, sp, cy, sy = (np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch),
+                                  np.cos(yaw), np.sin(yaw))
+        return np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                         [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                         [-sp, cp * sr, cp * cr]])
+
+    root = ElementTree.parse(default_urdf_path()).getroot()
+    joints = {j.find('child').get('link'): j for j in root.findall('joint')}
+    world = {}
+
+    def transform(link):
+        if link in world:
+            return world[link]
+        joint = joints.get(link)
+        if joint is None:
+            world[link] = np.eye(4)
+            return world[link]
+        origin = joint.find('origin')
+        xyz = [float(v) for v in (origin.get('xyz', '0 0 0') if origin is not None
+                                  else '0 0 0').split()]
+        rpy = [float(v) for v in (origin.get('rpy', '0 0 0') if origin is not None
+                                  else '0 0 0').split()]
+        local = np.eye(4)
+        local[:3, :3] = rpy_matrix(*rpy)
+        local[:3, 3] = xyz
+        motion = np.eye(4)
+        axis_element = joint.find('axis')
+        axis = np.array([float(v) for v in (axis_element.get('xyz') if axis_element is not None
+                                            else '1 0 0').split()])
+        value = q_by_name.get(joint.get('name'), 0.0)
+        if joint.get('type') == 'prismatic':
+            motion[:3, 3] = value * axis
+        elif joint.get('type') in ('revolute', 'continuous'):
+            skew = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]],
+                             [-axis[1], axis[0], 0]])
+            motion[:3, :3] = (np.eye(3) + np.sin(value) * skew
+                              + (1 - np.cos(value)) * skew @ skew)
+        world[link] = transform(joint.find('parent').get('link')) @ local @ motion
+        return world[link]
+
+    return transform
+
+
+def test_forward_kinematics_matches_the_urdf_composed_joint_by_joint(skeleton):
+    rng = np.random.default_rng(11)
+    qs = rng.uniform(np.maximum(skeleton.lower, -2), np.minimum(skeleton.upper, 2), size=(4, 22))
+    batch = skeleton.forward_kinematics(qs)
+    legs = ['left_foot', 'right_shank', 'left_forearm']
+    partial = skeleton.forward_kinematics(qs, links=legs)
+    for q, frames, some in zip(qs, batch, partial):
+        reference = _reference_link_transforms(dict(zip(skeleton.joint_names, q)))
+        for link, index in skeleton.link_index.items():
+            np.testing.assert_allclose(frames[index], reference(link), atol=1e-12,
+                                       err_msg=link)
+        for link in legs:
+            np.testing.assert_allclose(some[skeleton.link_index[link]], reference(link),
+                                       atol=1e-12, err_msg=link)

@@ -325,9 +325,10 @@ class WalkGenerator:
         ankle_high = self._leg_upper[swing_side][3] - 0.02
         # The swing sole's real pitch depends on the leg posture (the ankle has limits), and the
         # posture on the swing height: two passes make the clearance test use the real pitch.
+        footprint = self._swing_footprint(bezier, foot_w, landing, swing_xy, plane_yaw,
+                                          swing_profile)
         for _ in range(5):
-            swing_z, lift = self._swing_heights(bezier, foot_w, landing, swing_xy, plane_yaw,
-                                                swing_pitch, swing_profile)
+            swing_z, lift = self._swing_heights(bezier, foot_w, landing, swing_pitch, footprint)
             swing_bound = swing_z + np.sqrt(np.maximum(r * r - forward * forward, 0.0))
             z = np.minimum(wanted_z, np.minimum(stance_bound, swing_bound))
             hip = np.column_stack([swing_hip_xy, z])
@@ -414,18 +415,18 @@ class WalkGenerator:
             end = foot
         return joints, end
 
-    def _swing_heights(self, tau, lift_foot: FootPose, landing: FootPose, swing_xy, plane_yaw,
-                       swing_pitch, swing_profile):
-        # ``tau`` here is the Bezier parameter of each frame (k,), in [0, 1].
-        """Ankle heights of the swinging foot: a cubic Bezier raised until it clears (§4.1).
+    def _swing_footprint(self, tau, lift_foot: FootPose, landing: FootPose, swing_xy,
+                         plane_yaw, swing_profile):
+        """The ground under the swinging sole at sampled frames (independent of its pitch).
 
-        The control points sit above the lift-off and touchdown points; when the sole would
-        touch the ground profile, both are raised ("the Bezier curve adjustment module") until
-        it is collision-free or the lift limit is reached.
+        Returns
+        -------
+        tuple
+            (samples (s,) frame indices, along (9,) sole offsets heel..toe in m,
+            tops (s, 9, 2) obstacle heights under the sole, m, NaN over empty space).
+
         """
-        cfg, leg = self.config, self.leg
-        z0, z1 = lift_foot.z, landing.z
-        # Sole footprint (heel..toe, across the width) at each sampled swing position.
+        leg = self.leg
         along = np.linspace(-leg.heel, leg.toe, 9)
         across = np.array([-0.5, 0.5]) * leg.foot_width
         samples = np.unique(np.append(np.arange(0, tau.size, max(1, tau.size // 24)),
@@ -434,13 +435,27 @@ class WalkGenerator:
         n = np.stack([-d[:, 1], d[:, 0]], axis=-1)
         points = (swing_xy[samples, None, None, :] + along[None, :, None, None] * d[:, None, None]
                   + across[None, None, :, None] * n[:, None, None])
-        z_ref = max(z0, z1) + cfg.max_swing_lift
+        z_ref = max(lift_foot.z, landing.z) + self.config.max_swing_lift
         tops = swing_profile(points.reshape(-1, 2), z_ref).reshape(len(samples), along.size, -1)
+        return samples, along, tops
+
+    def _swing_heights(self, tau, lift_foot: FootPose, landing: FootPose, swing_pitch,
+                       footprint):
+        # ``tau`` here is the Bezier parameter of each frame (k,), in [0, 1].
+        """Ankle heights of the swinging foot: a cubic Bezier raised until it clears (§4.1).
+
+        The control points sit above the lift-off and touchdown points; when the sole would
+        touch the ground profile, both are raised ("the Bezier curve adjustment module") until
+        it is collision-free or the lift limit is reached. ``footprint`` is
+        :meth:`_swing_footprint` of the same swing.
+        """
+        cfg, leg = self.config, self.leg
+        z0, z1 = lift_foot.z, landing.z
+        samples, along, tops = footprint
         # Ground relative to a sole pitched like the foot: what the ankle must stay above.
         tops = tops - along[None, :, None] * np.sin(swing_pitch[samples])[:, None, None]
-        with np.errstate(invalid='ignore'):
-            ground = np.nanmax(np.where(np.isnan(tops), -np.inf, tops).reshape(len(samples), -1),
-                               axis=1)
+        ground = np.max(np.where(np.isnan(tops), -np.inf, tops).reshape(len(samples), -1),
+                        axis=1)
         b = tau[samples]
         ramp = np.minimum(1.0, 10.0 * np.minimum(b, 1.0 - b))
         need = (ground + leg.ankle_height * np.cos(swing_pitch[samples])

@@ -245,6 +245,7 @@ class Skeleton:
         self.link_names: Tuple[str, ...] = (self.root_link,) + tuple(j.child for j in order)
         self.link_index = {name: i for i, name in enumerate(self.link_names)}
         self._partial_plans = {}
+        self._compiled_plans = {}
         self._chain_plan = tuple(
             (self.link_index[j.parent], self.link_index[j.child], j.origin,
              self.index.get(j.name, -1), j.kind, j.axis) for j in order)
@@ -352,6 +353,42 @@ class Skeleton:
             self._partial_plans[key] = plan
         return plan
 
+    def _compiled(self, plan):
+        """Per-joint constant matrices of a chain plan for :meth:`forward_kinematics`."""
+        # Plans are the cached tuples of ``_chain_plan`` / ``_plan_for``: keyed by identity,
+        # the plan kept alive beside its compiled form.
+        _, compiled = self._compiled_plans.get(id(plan), (None, None))
+        if compiled is None:
+            basis = np.zeros((len(plan), 3, 4, 4))
+            revolute, revolute_q, prismatic, prismatic_q = [], [], [], []
+            for j, (_, _, origin, qi, kind, axis) in enumerate(plan):
+                basis[j, 0] = origin
+                if qi < 0:
+                    continue
+                if kind == 'prismatic':
+                    shift = np.zeros((4, 4))
+                    shift[:3, 3] = axis
+                    basis[j, 1] = origin @ shift
+                    prismatic.append(j)
+                    prismatic_q.append(qi)
+                    continue
+                # Rodrigues: R(q) = (I + K^2) - cos(q) K^2 + sin(q) K.
+                x, y, z = axis
+                skew = np.zeros((4, 4))
+                skew[:3, :3] = [[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]]
+                square = skew @ skew
+                basis[j, 0] = origin @ (np.eye(4) + square)
+                basis[j, 1] = -(origin @ square)
+                basis[j, 2] = origin @ skew
+                revolute.append(j)
+                revolute_q.append(qi)
+            compiled = (tuple(e[0] for e in plan), tuple(e[1] for e in plan),
+                        basis.reshape(len(plan), 3, 16), np.array(revolute, dtype=int),
+                        np.array(revolute_q, dtype=int), np.array(prismatic, dtype=int),
+                        np.array(prismatic_q, dtype=int))
+            self._compiled_plans[id(plan)] = (plan, compiled)
+        return compiled
+
     def forward_kinematics(self, q: np.ndarray, links=None) -> np.ndarray:
         """World transforms of every link.
 
@@ -379,21 +416,19 @@ class Skeleton:
         out = np.empty((k, len(self.link_names), 4, 4)) if links is None else np.zeros(
             (k, len(self.link_names), 4, 4))
         out[:, 0] = np.eye(4)
-        motion = np.zeros((k, 4, 4))
-        motion[:, 3, 3] = 1.0
-        plan = self._chain_plan if links is None else self._plan_for(links)
-        for parent, child, origin, qi, kind, axis in plan:
-            base = out[:, parent] @ origin
-            if qi < 0:
-                out[:, child] = base
-                continue
-            if kind == 'prismatic':
-                motion[:, :3, :3] = np.eye(3)
-                motion[:, :3, 3] = qs[:, qi, None] * axis
-            else:
-                motion[:, :3, :3] = axis_rotation(axis, qs[:, qi])
-                motion[:, :3, 3] = 0.0
-            out[:, child] = base @ motion
+        chain = self._compiled(self._chain_plan if links is None else self._plan_for(links))
+        parents, children, basis, revolute, revolute_q, prismatic, prismatic_q = chain
+        # Every joint's local transform origin @ motion(q) is A + w1 B + w2 C with
+        # (w1, w2) = (cos q, sin q) for a revolute joint, (q, 0) prismatic, (0, 0) fixed.
+        weights = np.zeros((k, len(parents), 1, 3))
+        weights[..., 0] = 1.0
+        angles = qs[:, revolute_q]
+        weights[:, revolute, 0, 1] = np.cos(angles)
+        weights[:, revolute, 0, 2] = np.sin(angles)
+        weights[:, prismatic, 0, 1] = qs[:, prismatic_q]
+        local = (weights @ basis).reshape(k, len(parents), 4, 4)
+        for j, (parent, child) in enumerate(zip(parents, children)):
+            np.matmul(out[:, parent], local[:, j], out=out[:, child])
         return out[0] if single else out
 
     def link_transform(self, q: np.ndarray, link: str) -> np.ndarray:
