@@ -1,8 +1,9 @@
 """Several actors hosted by one actor_planner process (``--actors NS ...``).
 
 One process, one DDS participant and one stream thread for all of them: each actor still has
-its own namespace, its own cmd_vel and its own 100 Hz joint_states. A bad ``--actors`` value is
-a configuration error (exit 2, naming it).
+its own namespace, its own cmd_vel and its own 100 Hz joint_states; they share the planning
+processes (one per core by default, ``--planning-processes K``). A bad ``--actors`` or
+``--planning-processes`` value is a configuration error (exit 2, naming it).
 """
 import math
 import os
@@ -69,11 +70,31 @@ def test_each_hosted_actor_follows_only_its_own_command(crowd):
     assert abs(moved[2][ROOT_X]) < 1e-6 and abs(moved[2][ROOT_YAW]) < 1e-6
 
 
+def _children(pid):
+    """Command lines of a process's child processes (from /proc)."""
+    out = []
+    for task in os.listdir(f'/proc/{pid}/task'):
+        with open(f'/proc/{pid}/task/{task}/children') as listing:
+            for child in listing.read().split():
+                with open(f'/proc/{child}/cmdline', 'rb') as cmdline:
+                    out.append(cmdline.read().replace(b'\0', b' ').decode())
+    return out
+
+
+def test_hosted_actors_share_planning_processes(crowd):
+    """Three actors, one planning process per core at most (the default)."""
+    process, _ = crowd
+    planning = [c for c in _children(process.pid) if 'spawn_main' in c]
+    assert len(planning) == min(len(NAMESPACES), len(os.sched_getaffinity(0))), planning
+
+
 @pytest.mark.parametrize('actors, named', [(('a', 'a'), 'repeated'), (('9lives',), '9lives'),
-                                           (('a//b',), 'a//b')])
+                                           (('a//b',), 'a//b'),
+                                           (('a', '--planning-processes', '-1'),
+                                            'planning-processes')])
 def test_bad_actors_option_exits_2_naming_it(actors, named):
     result = subprocess.run(actors_command(*actors), env=ros_env(DOMAIN_ID),
                             capture_output=True, text=True, timeout=120)
     output = result.stdout + result.stderr
     assert result.returncode == 2, output
-    assert 'actors' in output and named in output, output
+    assert named in output, output

@@ -206,8 +206,11 @@ def _points(xyz: np.ndarray):
 
 
 def build_actor(skeleton: Skeleton, actor_config: ActorConfig, scene_path: str,
-                start_pose: Optional[Tuple[float, float, float]]):
+                start_pose: Optional[Tuple[float, float, float]], scene=None):
     """Load a scene and place a new actor at its start (or at ``start_pose``).
+
+    ``scene``: the scene at ``scene_path`` already loaded (by another actor); it is not
+    loaded again.
 
     Returns
     -------
@@ -221,7 +224,13 @@ def build_actor(skeleton: Skeleton, actor_config: ActorConfig, scene_path: str,
 
     """
     try:
-        scene = load_scene(scene_path, skeleton if start_pose is None else None)
+        if scene is None:
+            scene = load_scene(scene_path)
+        if start_pose is None:
+            try:
+                check_start(scene.environment, scene.start, skeleton)
+            except ValueError as error:
+                raise ValueError(f'{scene_path}: {error}') from error
     except (OSError, ValueError) as error:
         raise ConfigurationError('scene', str(error)) from error
     try:
@@ -250,38 +259,72 @@ def _ground_profile(actor: Actor, block) -> np.ndarray:
     return np.column_stack([path[:, :2], height])[np.isfinite(height)]
 
 
-def _planning_process(connection, actor_config: ActorConfig, urdf_path: str, scene_path: str,
-                      start_pose) -> None:
-    """Child process: own the core Actor and answer the node's requests over ``connection``."""
+class _SceneCache:
+    """Scenes a planning worker has loaded, shared by its actors (keyed by file and version)."""
+
+    def __init__(self):
+        self._scenes = {}
+
+    def build(self, skeleton: Skeleton, actor_config: ActorConfig, scene_path: str, start_pose):
+        try:
+            info = os.stat(scene_path)
+            key = (os.path.abspath(scene_path), info.st_mtime_ns, info.st_size)
+        except OSError:
+            key = None
+        cached = self._scenes.get(key) if key is not None else None
+        actor, scene = build_actor(skeleton, actor_config, scene_path, start_pose, scene=cached)
+        if key is not None:
+            self._scenes[key] = scene
+        return actor, scene
+
+
+def _planning_process(connection) -> None:
+    """Child process: own the core Actors of one or more nodes and answer their requests.
+
+    Requests are tuples whose second item is the actor's id: ``('add', id, actor_config,
+    urdf_path, scene_path, start_pose)``, ``('plan', id, linear_x, angular_z)``,
+    ``('scene', id, scene_path)``, ``('remove', id)``; ``('stop',)`` ends the process.
+    """
     # Ctrl-C goes to the whole process group; the node decides when this process ends.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    skeleton = Skeleton(urdf_path)
-    try:
-        actor, scene = build_actor(skeleton, actor_config, scene_path, start_pose)
-    except ConfigurationError as error:
-        connection.send(('error', error.parameter, str(error)))
-        return
-    connection.send(('ready', actor.configuration, _mesh_arrays(scene)))
+    skeletons, scenes, actors = {}, _SceneCache(), {}
     while True:
         try:
             request = connection.recv()
         except (EOFError, OSError):
             return
-        if request[0] == 'plan':
+        kind = request[0]
+        if kind == 'add':
+            _, key, actor_config, urdf_path, scene_path, start_pose = request
+            skeleton = skeletons.get(urdf_path) or skeletons.setdefault(
+                urdf_path, Skeleton(urdf_path))
             try:
-                warning = actor.set_command(request[1], request[2])
+                actor, scene = scenes.build(skeleton, actor_config, scene_path, start_pose)
+            except ConfigurationError as error:
+                connection.send(('error', error.parameter, str(error)))
+                continue
+            actors[key] = (actor, actor_config, start_pose)
+            connection.send(('ready', actor.configuration, _mesh_arrays(scene)))
+        elif kind == 'plan':
+            actor = actors[request[1]][0]
+            try:
+                warning = actor.set_command(request[2], request[3])
                 block = actor.plan_next()
                 connection.send(('block', warning, block, _ground_profile(actor, block)))
             except Exception as error:  # noqa: B902 -- reported on diagnostics, stream goes on
                 connection.send(('failed', f'{type(error).__name__}: {error}'))
-        elif request[0] == 'scene':
+        elif kind == 'scene':
+            old, actor_config, start_pose = actors[request[1]]
             try:
-                new_actor, scene = build_actor(skeleton, actor_config, request[1], start_pose)
+                actor, scene = scenes.build(old.skeleton, actor_config, request[2], start_pose)
             except ConfigurationError as error:
                 connection.send(('scene', str(error), None, None))
                 continue
-            actor = new_actor
+            actors[request[1]] = (actor, actor_config, start_pose)
             connection.send(('scene', '', actor.configuration, _mesh_arrays(scene)))
+        elif kind == 'remove':
+            actors.pop(request[1], None)
+            connection.send(('removed',))
         else:
             return
 
@@ -290,15 +333,92 @@ class PlanningFailed(RuntimeError):
     """The planning process could not plan (or has gone)."""
 
 
+class PlanningWorker:
+    """A child process that plans for one or more actors, one request at a time.
+
+    The core's NumPy and FCL calls hold the GIL for milliseconds, so they run outside the
+    node's process. Actors sharing a worker share its scene cache and take turns.
+    """
+
+    def __init__(self):
+        context = multiprocessing.get_context('spawn')
+        self._connection, child = context.Pipe()
+        self._lock = threading.Lock()
+        self._process = context.Process(target=_planning_process, name='actor_planning',
+                                        args=(child,), daemon=True)
+        self._process.start()
+        child.close()
+        self._closed = False
+
+    def request(self, message: tuple, timeout: float):
+        """Send one request and wait for its reply (timeout counted from sending), or raise
+        :class:`PlanningFailed`."""
+        with self._lock:
+            try:
+                self._connection.send(message)
+                if not self._connection.poll(timeout):
+                    raise PlanningFailed(f'planning process gave no answer in {timeout:g} s')
+                return self._connection.recv()
+            except (EOFError, OSError, ValueError) as error:
+                raise PlanningFailed(f'planning process exited ({error!r})') from error
+
+    def close(self) -> None:
+        """Ask the child to finish; terminate it if it does not."""
+        if self._closed:
+            return
+        self._closed = True
+        with self._lock:
+            try:
+                self._connection.send(('stop',))
+            except (OSError, ValueError):
+                pass
+        self._process.join(timeout=5.0)
+        if self._process.is_alive():
+            self._process.terminate()
+            self._process.join(timeout=5.0)
+        self._connection.close()
+
+
+class PlanningPool:
+    """Up to ``size`` planning workers, started at once and handed out round-robin.
+
+    Parameters
+    ----------
+    size
+        Number of worker processes (the actors of a process share them).
+
+    """
+
+    def __init__(self, size: int):
+        if size < 1:
+            raise ConfigurationError('planning-processes', f'must be at least 1, got {size}')
+        # Started together so that their imports overlap.
+        self._workers = [PlanningWorker() for _ in range(size)]
+        self._next = 0
+
+    def worker(self) -> PlanningWorker:
+        """The worker for the next actor."""
+        worker = self._workers[self._next % len(self._workers)]
+        self._next += 1
+        return worker
+
+    def close(self) -> None:
+        """End every worker."""
+        for worker in self._workers:
+            worker.close()
+
+
 class PlanningProcess:
-    """The core Actor in a child process, driven by request/reply over a pipe.
+    """One actor's core Actor in a planning worker, driven by request/reply over its pipe.
 
     Parameters
     ----------
     actor_config, urdf_path, scene_path, start_pose
         As for :func:`build_actor`.
     timeout
-        Seconds to wait for the child to load the scene.
+        Seconds to wait for the worker to load the scene.
+    worker
+        A shared :class:`PlanningWorker`; None starts one for this actor alone.
 
     Raises
     ------
@@ -307,18 +427,16 @@ class PlanningProcess:
 
     """
 
+    _ids = iter(range(1 << 62))
+
     def __init__(self, actor_config: ActorConfig, urdf_path: str, scene_path: str,
-                 start_pose, timeout: float = 300.0):
-        context = multiprocessing.get_context('spawn')
-        self._connection, child = context.Pipe()
-        self._lock = threading.Lock()
-        self._process = context.Process(
-            target=_planning_process, name='actor_planning', daemon=True,
-            args=(child, actor_config, urdf_path, scene_path, start_pose))
-        self._process.start()
-        child.close()
+                 start_pose, timeout: float = 300.0, worker: Optional[PlanningWorker] = None):
+        self._owned = worker is None
+        self._worker = PlanningWorker() if worker is None else worker
+        self._id = next(PlanningProcess._ids)
         try:
-            reply = self._receive(timeout)
+            reply = self._worker.request(('add', self._id, actor_config, urdf_path, scene_path,
+                                          start_pose), timeout)
         except PlanningFailed as error:
             self.close()
             raise ConfigurationError('scene', str(error)) from error
@@ -326,14 +444,6 @@ class PlanningProcess:
             self.close()
             raise ConfigurationError(reply[1], reply[2].split(': ', 1)[-1])
         _, self.configuration, self.meshes = reply
-
-    def _receive(self, timeout: float):
-        try:
-            if not self._connection.poll(timeout):
-                raise PlanningFailed(f'planning process gave no answer in {timeout:g} s')
-            return self._connection.recv()
-        except (EOFError, OSError) as error:
-            raise PlanningFailed(f'planning process exited ({error!r})') from error
 
     def plan(self, linear_x: float, angular_z: float, timeout: float = 60.0):
         """Set the command and plan the next block.
@@ -344,12 +454,7 @@ class PlanningProcess:
             The clamping warning, the block and the ground profile (p, 3) under its path, m.
 
         """
-        with self._lock:
-            try:
-                self._connection.send(('plan', linear_x, angular_z))
-            except OSError as error:
-                raise PlanningFailed(f'planning process exited ({error!r})') from error
-            reply = self._receive(timeout)
+        reply = self._worker.request(('plan', self._id, linear_x, angular_z), timeout)
         if reply[0] == 'failed':
             raise PlanningFailed(reply[1])
         return reply[1], reply[2], reply[3]
@@ -363,24 +468,24 @@ class PlanningProcess:
             The scene cannot be used; the old actor stays.
 
         """
-        with self._lock:
-            self._connection.send(('scene', scene_path))
-            _, error, configuration, meshes = self._receive(timeout)
+        try:
+            _, error, configuration, meshes = self._worker.request(
+                ('scene', self._id, scene_path), timeout)
+        except PlanningFailed as failure:
+            raise ConfigurationError('scene', str(failure)) from failure
         if error:
             raise ConfigurationError('scene', error.split(': ', 1)[-1])
         return configuration, meshes
 
     def close(self) -> None:
-        """Ask the child to finish; terminate it if it does not."""
+        """Forget this actor in its worker; end the worker if it was this actor's own."""
+        if self._owned:
+            self._worker.close()
+            return
         try:
-            self._connection.send(('stop',))
-        except (OSError, ValueError):
+            self._worker.request(('remove', self._id), 5.0)
+        except PlanningFailed:
             pass
-        self._process.join(timeout=5.0)
-        if self._process.is_alive():
-            self._process.terminate()
-            self._process.join(timeout=5.0)
-        self._connection.close()
 
 
 def real_time(priority: int) -> bool:
@@ -476,7 +581,7 @@ class ActorPlannerNode(Node):
     """Stream the digital actor's whole-body motion as JointState, directed by cmd_vel."""
 
     def __init__(self, node_name: str = 'actor_planner', tickers: Optional[TickerPool] = None,
-                 **kwargs):
+                 planners: Optional[PlanningPool] = None, **kwargs):
         super().__init__(node_name, **kwargs)
         self.config = self._declare_and_read()
         self.skeleton = Skeleton()
@@ -486,7 +591,8 @@ class ActorPlannerNode(Node):
         except ValueError as error:
             raise ConfigurationError(_field_named(error, self.config), str(error)) from error
         self.planner = PlanningProcess(self.actor_config, self.skeleton.urdf_path,
-                                       self.config.scene, self.config.start_pose)
+                                       self.config.scene, self.config.start_pose,
+                                       worker=planners.worker() if planners else None)
         self.meshes = self.planner.meshes
         self.scene_path = self.config.scene
         self.scene_error = ''
@@ -840,8 +946,17 @@ def _field_named(error: Exception, config: PlannerNodeConfig) -> str:
     return 'window_steps'
 
 
-def _namespaces(argv) -> list:
-    """The ``--actors NS [NS ...]`` option among the non-ROS arguments ([''] when absent).
+def _usable_cores() -> int:
+    """Cores this process may run on (its affinity, e.g. under taskset), at least 1."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
+def _namespaces(argv) -> Tuple[list, int]:
+    """The ``--actors NS [NS ...]`` and ``--planning-processes K`` options among the non-ROS
+    arguments: (namespaces, [''] when absent; number of planning processes).
 
     Raises
     ------
@@ -853,9 +968,15 @@ def _namespaces(argv) -> list:
         epilog='Several actors in one process share one DDS participant and one stream thread.')
     parser.add_argument('--actors', nargs='+', metavar='NS', default=[''],
                         help='host one actor per namespace in this process')
+    parser.add_argument('--planning-processes', type=int, metavar='K', default=0,
+                        help='planning processes shared by the actors (default: one per actor '
+                        'up to the number of usable cores)')
     parsed, unknown = parser.parse_known_args(argv)
     if unknown:
         raise ConfigurationError('arguments', f'unknown arguments {unknown}')
+    if parsed.planning_processes < 0:
+        raise ConfigurationError('planning-processes',
+                                 f'must be at least 1, got {parsed.planning_processes}')
     names = [ns.strip() for ns in parsed.actors]
     for ns in names:
         try:
@@ -865,7 +986,8 @@ def _namespaces(argv) -> list:
                                      f'{str(error).splitlines()[0]}') from None
     if len(set(names)) != len(names):
         raise ConfigurationError('actors', f'repeated namespace in {names}')
-    return names
+    processes = parsed.planning_processes or min(len(names), _usable_cores())
+    return names, processes
 
 
 def main(args=None) -> int:
@@ -876,19 +998,22 @@ def main(args=None) -> int:
     sys.setswitchinterval(0.0005)
     rclpy.init(args=args)
     logger = rclpy.logging.get_logger('actor_planner')
-    nodes = []
+    nodes, planners = [], None
     try:
-        namespaces = _namespaces(remove_ros_args(
+        namespaces, processes = _namespaces(remove_ros_args(
             sys.argv if args is None else args)[1:])
         tickers = TickerPool()
+        planners = PlanningPool(processes)
         for ns in namespaces:
-            nodes.append(ActorPlannerNode(tickers=tickers,
+            nodes.append(ActorPlannerNode(tickers=tickers, planners=planners,
                                           **({'namespace': ns} if ns else {})))
     except ConfigurationError as error:
         logger.fatal(f'invalid configuration: {error}')
         for node in nodes:
             node.stop()
             node.destroy_node()
+        if planners is not None:
+            planners.close()
         rclpy.try_shutdown()
         return 2
     priority = nodes[0].config.stream_priority
@@ -917,6 +1042,7 @@ def main(args=None) -> int:
         for node in nodes:
             node.stop()
             node.destroy_node()
+        planners.close()
         rclpy.try_shutdown()
     return 0
 
