@@ -1,0 +1,106 @@
+"""Actors per core, read from the node's own diagnostics (no joint_states subscriptions).
+
+Run: .venv/bin/python bench/bench_crowd.py [--actors 10 20] [--duration 20] [--course stairs_up]
+
+One ``actor_planner --actors actor0 ...`` process (with its planning processes) is pinned to the
+first CPU; this monitor runs on the last one. It only sends cmd_vel (0.5 m/s, 10 Hz) to every
+actor and reads ``/diagnostics``, so it cannot drop joint_states itself, unlike a probe that
+subscribes to 100 Hz streams of many actors in one Python thread. Per actor it takes the node's
+counts between the first and last diagnostics of the window: publish rate, missed frames,
+buffer underruns, steps planned.
+"""
+import argparse
+import collections
+import os
+import sys
+import time
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
+
+from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
+from geometry_msgs.msg import TwistStamped  # noqa: E402
+import rclpy  # noqa: E402
+from ros_harness import NodeProcess, ros_env  # noqa: E402
+from test_node_helpers import node_command, scene  # noqa: E402
+
+
+def run(count: int, duration: float, course: str, domain: int, log: str) -> str:
+    cpus = sorted(os.sched_getaffinity(0))
+    command = node_command('-p', f'scene:={scene(course)}')
+    at = command.index('--ros-args')
+    command = ['taskset', '-c', str(cpus[0])] + command[:at] + ['--actors'] + [
+        f'actor{i}' for i in range(count)] + command[at:]
+    started = time.monotonic()
+    process = NodeProcess(command, ros_env(domain), log_path=log)
+    os.environ['ROS_DOMAIN_ID'] = str(domain)
+    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    context = rclpy.Context()
+    rclpy.init(context=context)
+    node = rclpy.create_node('crowd_monitor', context=context)
+    executor = rclpy.executors.SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    seen = collections.defaultdict(list)
+
+    def on_diagnostics(array):
+        now = time.monotonic()
+        for status in array.status:
+            if 'actor planner' in status.name:
+                seen[status.name.split('/')[1]].append(
+                    (now, {kv.key: kv.value for kv in status.values}))
+
+    node.create_subscription(DiagnosticArray, '/diagnostics', on_diagnostics, 100)
+    publishers = [node.create_publisher(TwistStamped, f'/actor{i}/cmd_vel', 10)
+                  for i in range(count)]
+    try:
+        while len(seen) < count:
+            if not process.alive() or time.monotonic() - started > 300.0:
+                return f'{count} actors: not all reported ({len(seen)})'
+            executor.spin_once(timeout_sec=0.1)
+        ready = time.monotonic() - started
+        command_msg = TwistStamped()
+        command_msg.twist.linear.x = 0.5
+        began, last = time.monotonic(), 0.0
+        while time.monotonic() < began + duration:
+            if time.monotonic() - last >= 0.1:
+                for publisher in publishers:
+                    publisher.publish(command_msg)
+                last = time.monotonic()
+            executor.spin_once(timeout_sec=0.02)
+        rates, missed, underruns, steps, silent = [], 0, 0, 0, 0
+        for samples in seen.values():
+            window = [v for t, v in samples if began + 3.0 <= t <= began + duration]
+            if len(window) < 2:
+                silent += 1
+                continue
+            rates += [float(v['publish_rate_hz']) for v in window]
+            missed += int(window[-1]['missed_frames']) - int(window[0]['missed_frames'])
+            underruns += int(window[-1]['buffer_underruns']) - int(window[0]['buffer_underruns'])
+            steps += int(window[-1]['steps']) - int(window[0]['steps'])
+        rate = f'{min(rates):.2f}' if rates else 'n/a'
+        return (f'{count} actors: all reporting after {ready:.1f} s; node-measured rate min '
+                f'{rate} Hz, missed frames {missed}, buffer underruns {underruns}, steps '
+                f'{steps} in {duration - 3.0:g} s; {silent} actors sent fewer than 2 '
+                f'diagnostics in the window')
+    finally:
+        executor.shutdown()
+        node.destroy_node()
+        rclpy.shutdown(context=context)
+        process.stop()
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--actors', type=int, nargs='+', default=[10, 20])
+    parser.add_argument('--duration', type=float, default=20.0)
+    parser.add_argument('--course', default='stairs_up')
+    parser.add_argument('--domain', type=int, default=47)
+    args = parser.parse_args()
+    os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[-1]})
+    print(f'machine: {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.2f}')
+    for count in args.actors:
+        print(run(count, args.duration, args.course, args.domain,
+                  f'/tmp/bench_crowd_{count}.log'), flush=True)
+
+
+if __name__ == '__main__':
+    main()
