@@ -205,46 +205,20 @@ class FootstepPlanner:
 
     # -- the ground under a sole -----------------------------------------------------------
     def foothold(self, profile: GroundProfile, side: int, s: float) -> Foothold:
-        """Evaluate a sole with its ankle at arc length ``s`` on ``side``.
-
-        The sole needs support under its whole length that is flat within the tolerance after
-        fitting a plane (so slopes are fine), not steeper than the pitch limit, and with headroom.
+        """Evaluate a sole with its ankle at arc length ``s`` on ``side`` (see :meth:`footholds`).
         """
-        cfg, leg = self.config, self.leg
-        i0 = int(np.floor((s - leg.heel - profile.s0) / profile.ds))
-        i1 = int(np.ceil((s + leg.toe - profile.s0) / profile.ds))
-        if i0 < 0 or i1 >= profile.samples:
-            return Foothold(False, np.nan, 0.0)
-        high = profile.height[side, i0:i1 + 1]
-        if np.any(np.isnan(high)):
-            return Foothold(False, np.nan, 0.0)
-        if np.min(profile.headroom[side, i0:i1 + 1]) < cfg.min_headroom:
-            return Foothold(False, np.nan, 0.0)
-        low = profile.low[side, i0:i1 + 1]
-        x = profile.s0 + profile.ds * np.arange(i0, i1 + 1) - s
-        xc = x - x.mean()
-        slope = float(np.dot(xc, high) / np.dot(xc, xc)) if x.size > 2 else 0.0
-        pitch = float(np.arctan(slope))
-        if abs(pitch) > cfg.max_foot_pitch:
-            return Foothold(False, np.nan, pitch)
-        plane = slope * x
-        # The sole rests on the highest point above the fitted plane; it must not bridge a dip
-        # deeper than the tolerance anywhere under it (neither across nor along the foot).
-        lift = float(np.max(high - plane))
-        if lift - float(np.min(low - plane)) <= cfg.flatness_tolerance:
-            return Foothold(True, lift, pitch)
-        # At an edge (a stair nosing, a block, a ditch) a flat sole may overhang lower ground,
-        # as long as the ankle is over the support and most of the sole is supported.
-        top = float(np.max(high))
-        supported = (high >= top - cfg.flatness_tolerance) & (low >= top - cfg.flatness_tolerance)
-        ankle = int(np.argmin(np.abs(x)))
-        if (supported[max(ankle - 1, 0):ankle + 2].all()
-                and supported.mean() >= cfg.min_support_fraction):
-            return Foothold(True, top, 0.0)
-        return Foothold(False, np.nan, pitch)
+        ok, height, pitch = self.footholds(profile, side, np.array([s], dtype=float))
+        return Foothold(bool(ok[0]), float(height[0]), float(pitch[0]))
 
     def footholds(self, profile: GroundProfile, side: int, s: np.ndarray):
-        """:meth:`foothold` for many arc lengths on one side at once.
+        """Evaluate soles with their ankles at arc lengths ``s``, all at once.
+
+        A sole needs support under its whole length that is flat within the tolerance after
+        fitting a plane (so slopes are fine), not steeper than the pitch limit, and with
+        headroom. It rests on the highest point above the fitted plane and must not bridge a dip
+        deeper than the tolerance anywhere under it (neither across nor along the foot). At an
+        edge (a stair nosing, a block, a ditch) a flat sole may overhang lower ground, as long
+        as the ankle is over the support and most of the sole is supported.
 
         Parameters
         ----------
@@ -258,8 +232,8 @@ class FootstepPlanner:
         Returns
         -------
         tuple
-            (ok (N,) bool, height (N,) m, NaN where not ok, pitch (N,) rad), the same values
-            :meth:`foothold` gives for each ``s``.
+            (ok (N,) bool; sole height under the ankle (N,) m, NaN where not ok; sole pitch
+            (N,) rad, toes up positive, 0 on an edge).
 
         """
         cfg, leg = self.config, self.leg
@@ -293,7 +267,7 @@ class FootstepPlanner:
         dip = np.min(np.where(mask, low - plane, np.inf), axis=1)
         steady = np.abs(pitch) <= cfg.max_foot_pitch
         flat = usable & steady & (lift - dip <= cfg.flatness_tolerance)
-        # At an edge a flat sole may overhang lower ground (see :meth:`foothold`).
+        # At an edge a flat sole may overhang lower ground.
         top = np.max(np.where(mask, high, -np.inf), axis=1)
         level = top[:, None] - cfg.flatness_tolerance
         supported = mask & (high >= level) & (low >= level)
