@@ -157,6 +157,42 @@ def axis_rotation(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     return rot
 
 
+def _compile_plan(plan) -> tuple:
+    """Constant matrices of a kinematic chain plan for :meth:`Skeleton.forward_kinematics`.
+
+    ``plan``: (parent, child, origin (4, 4), q index or -1, kind, axis (3,)) per joint, parents
+    first. Every joint's local transform origin @ motion(q) is A + w1 B + w2 C with (w1, w2) =
+    (cos q, sin q) for a revolute joint, (q, 0) prismatic and (0, 0) fixed.
+    """
+    basis = np.zeros((len(plan), 3, 4, 4))
+    revolute, revolute_q, prismatic, prismatic_q = [], [], [], []
+    for j, (_, _, origin, qi, kind, axis) in enumerate(plan):
+        basis[j, 0] = origin
+        if qi < 0:
+            continue
+        if kind == 'prismatic':
+            shift = np.zeros((4, 4))
+            shift[:3, 3] = axis
+            basis[j, 1] = origin @ shift
+            prismatic.append(j)
+            prismatic_q.append(qi)
+            continue
+        # Rodrigues: R(q) = (I + K^2) - cos(q) K^2 + sin(q) K.
+        x, y, z = axis
+        skew = np.zeros((4, 4))
+        skew[:3, :3] = [[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]]
+        square = skew @ skew
+        basis[j, 0] = origin @ (np.eye(4) + square)
+        basis[j, 1] = -(origin @ square)
+        basis[j, 2] = origin @ skew
+        revolute.append(j)
+        revolute_q.append(qi)
+    return (tuple(e[0] for e in plan), tuple(e[1] for e in plan),
+            basis.reshape(len(plan), 3, 16), np.array(revolute, dtype=int),
+            np.array(revolute_q, dtype=int), np.array(prismatic, dtype=int),
+            np.array(prismatic_q, dtype=int))
+
+
 class Skeleton:
     """The actor's kinematic tree, joint order and limits, read from a URDF.
 
@@ -245,10 +281,10 @@ class Skeleton:
         self.link_names: Tuple[str, ...] = (self.root_link,) + tuple(j.child for j in order)
         self.link_index = {name: i for i, name in enumerate(self.link_names)}
         self._partial_plans = {}
-        self._compiled_plans = {}
         self._chain_plan = tuple(
             (self.link_index[j.parent], self.link_index[j.child], j.origin,
              self.index.get(j.name, -1), j.kind, j.axis) for j in order)
+        self._chain_compiled = _compile_plan(self._chain_plan)
 
         shapes = []
         for link in root.findall('link'):
@@ -337,10 +373,10 @@ class Skeleton:
 
     # -- kinematics ----------------------------------------------------------------------
     def _plan_for(self, links):
-        """The kinematic chain entries needed to place ``links`` (cached per link set)."""
+        """The compiled chain needed to place ``links`` (cached per link set)."""
         key = frozenset(links)
-        plan = self._partial_plans.get(key)
-        if plan is None:
+        compiled = self._partial_plans.get(key)
+        if compiled is None:
             needed = set()
             for link in key:
                 if link not in self.link_index:
@@ -348,45 +384,10 @@ class Skeleton:
                 while link != self.root_link and link not in needed:
                     needed.add(link)
                     link = next(j.parent for j in self._chain if j.child == link)
-            plan = tuple(entry for entry, joint in zip(self._chain_plan, self._chain)
-                         if joint.child in needed)
-            self._partial_plans[key] = plan
-        return plan
-
-    def _compiled(self, plan):
-        """Per-joint constant matrices of a chain plan for :meth:`forward_kinematics`."""
-        # Plans are the cached tuples of ``_chain_plan`` / ``_plan_for``: keyed by identity,
-        # the plan kept alive beside its compiled form.
-        _, compiled = self._compiled_plans.get(id(plan), (None, None))
-        if compiled is None:
-            basis = np.zeros((len(plan), 3, 4, 4))
-            revolute, revolute_q, prismatic, prismatic_q = [], [], [], []
-            for j, (_, _, origin, qi, kind, axis) in enumerate(plan):
-                basis[j, 0] = origin
-                if qi < 0:
-                    continue
-                if kind == 'prismatic':
-                    shift = np.zeros((4, 4))
-                    shift[:3, 3] = axis
-                    basis[j, 1] = origin @ shift
-                    prismatic.append(j)
-                    prismatic_q.append(qi)
-                    continue
-                # Rodrigues: R(q) = (I + K^2) - cos(q) K^2 + sin(q) K.
-                x, y, z = axis
-                skew = np.zeros((4, 4))
-                skew[:3, :3] = [[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]]
-                square = skew @ skew
-                basis[j, 0] = origin @ (np.eye(4) + square)
-                basis[j, 1] = -(origin @ square)
-                basis[j, 2] = origin @ skew
-                revolute.append(j)
-                revolute_q.append(qi)
-            compiled = (tuple(e[0] for e in plan), tuple(e[1] for e in plan),
-                        basis.reshape(len(plan), 3, 16), np.array(revolute, dtype=int),
-                        np.array(revolute_q, dtype=int), np.array(prismatic, dtype=int),
-                        np.array(prismatic_q, dtype=int))
-            self._compiled_plans[id(plan)] = (plan, compiled)
+            compiled = _compile_plan(tuple(entry for entry, joint
+                                           in zip(self._chain_plan, self._chain)
+                                           if joint.child in needed))
+            self._partial_plans[key] = compiled
         return compiled
 
     def forward_kinematics(self, q: np.ndarray, links=None) -> np.ndarray:
@@ -416,10 +417,9 @@ class Skeleton:
         out = np.empty((k, len(self.link_names), 4, 4)) if links is None else np.zeros(
             (k, len(self.link_names), 4, 4))
         out[:, 0] = np.eye(4)
-        chain = self._compiled(self._chain_plan if links is None else self._plan_for(links))
+        chain = self._chain_compiled if links is None else self._plan_for(links)
         parents, children, basis, revolute, revolute_q, prismatic, prismatic_q = chain
-        # Every joint's local transform origin @ motion(q) is A + w1 B + w2 C with
-        # (w1, w2) = (cos q, sin q) for a revolute joint, (q, 0) prismatic, (0, 0) fixed.
+        # Local transforms A + w1 B + w2 C (see _compile_plan), all joints and frames at once.
         weights = np.zeros((k, len(parents), 1, 3))
         weights[..., 0] = 1.0
         angles = qs[:, revolute_q]
