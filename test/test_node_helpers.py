@@ -240,3 +240,25 @@ def test_validation_names_the_bad_parameter():
         with pytest.raises(ConfigurationError, match=name) as caught:
             validate_node_config(read_node_config(dict(values, **{name: bad}).get))
         assert caught.value.parameter == name
+
+
+def test_planning_worker_scene_cache_shares_and_forgets_scenes():
+    """Actors of one worker on the same scene file share the loaded scene; a scene no actor
+    uses any more is dropped."""
+    import gc
+
+    from digital_actor_planner.core.actor import ActorConfig
+    from digital_actor_planner.nodes.actor_planner import _SceneCache
+    cache, skeleton = _SceneCache(), Skeleton()
+    a, scene_a = cache.build(skeleton, ActorConfig(), scene('flat'), None)
+    b, scene_b = cache.build(skeleton, ActorConfig(), scene('flat'), None)
+    assert scene_b is scene_a and b is not a
+    assert b.environment is a.environment
+    del a, b, scene_a, scene_b
+    gc.collect()
+    _, fresh = cache.build(skeleton, ActorConfig(), scene('flat'), None)
+    assert len(cache._scenes) == 1
+    _, other = cache.build(skeleton, ActorConfig(), scene('stairs_up'), None)
+    del fresh
+    gc.collect()
+    assert list(cache._scenes.values()) == [other]

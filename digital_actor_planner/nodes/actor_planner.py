@@ -21,8 +21,10 @@ import multiprocessing
 import os
 import signal
 import sys
+import itertools
 import threading
 import time
+import weakref
 from typing import Optional, Tuple
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -260,10 +262,13 @@ def _ground_profile(actor: Actor, block) -> np.ndarray:
 
 
 class _SceneCache:
-    """Scenes a planning worker has loaded, shared by its actors (keyed by file and version)."""
+    """Scenes a planning worker's actors use, shared among them (keyed by file and version).
+
+    Weak: a scene no actor holds any more (replaced at run time) is forgotten.
+    """
 
     def __init__(self):
-        self._scenes = {}
+        self._scenes = weakref.WeakValueDictionary()
 
     def build(self, skeleton: Skeleton, actor_config: ActorConfig, scene_path: str, start_pose):
         try:
@@ -296,14 +301,15 @@ def _planning_process(connection) -> None:
         kind = request[0]
         if kind == 'add':
             _, key, actor_config, urdf_path, scene_path, start_pose = request
-            skeleton = skeletons.get(urdf_path) or skeletons.setdefault(
-                urdf_path, Skeleton(urdf_path))
+            if urdf_path not in skeletons:
+                skeletons[urdf_path] = Skeleton(urdf_path)
+            skeleton = skeletons[urdf_path]
             try:
                 actor, scene = scenes.build(skeleton, actor_config, scene_path, start_pose)
             except ConfigurationError as error:
                 connection.send(('error', error.parameter, str(error)))
                 continue
-            actors[key] = (actor, actor_config, start_pose)
+            actors[key] = (actor, actor_config, start_pose, scene)
             connection.send(('ready', actor.configuration, _mesh_arrays(scene)))
         elif kind == 'plan':
             actor = actors[request[1]][0]
@@ -314,13 +320,13 @@ def _planning_process(connection) -> None:
             except Exception as error:  # noqa: B902 -- reported on diagnostics, stream goes on
                 connection.send(('failed', f'{type(error).__name__}: {error}'))
         elif kind == 'scene':
-            old, actor_config, start_pose = actors[request[1]]
+            old, actor_config, start_pose, _ = actors[request[1]]
             try:
                 actor, scene = scenes.build(old.skeleton, actor_config, request[2], start_pose)
             except ConfigurationError as error:
                 connection.send(('scene', str(error), None, None))
                 continue
-            actors[request[1]] = (actor, actor_config, start_pose)
+            actors[request[1]] = (actor, actor_config, start_pose, scene)
             connection.send(('scene', '', actor.configuration, _mesh_arrays(scene)))
         elif kind == 'remove':
             actors.pop(request[1], None)
@@ -427,7 +433,7 @@ class PlanningProcess:
 
     """
 
-    _ids = iter(range(1 << 62))
+    _ids = itertools.count()
 
     def __init__(self, actor_config: ActorConfig, urdf_path: str, scene_path: str,
                  start_pose, timeout: float = 300.0, worker: Optional[PlanningWorker] = None):
@@ -954,7 +960,7 @@ def _usable_cores() -> int:
         return os.cpu_count() or 1
 
 
-def _namespaces(argv) -> Tuple[list, int]:
+def _command_line(argv) -> Tuple[list, int]:
     """The ``--actors NS [NS ...]`` and ``--planning-processes K`` options among the non-ROS
     arguments: (namespaces, [''] when absent; number of planning processes).
 
@@ -968,15 +974,12 @@ def _namespaces(argv) -> Tuple[list, int]:
         epilog='Several actors in one process share one DDS participant and one stream thread.')
     parser.add_argument('--actors', nargs='+', metavar='NS', default=[''],
                         help='host one actor per namespace in this process')
-    parser.add_argument('--planning-processes', type=int, metavar='K', default=0,
+    parser.add_argument('--planning-processes', type=int, metavar='K', default=None,
                         help='planning processes shared by the actors (default: one per actor '
                         'up to the number of usable cores)')
     parsed, unknown = parser.parse_known_args(argv)
     if unknown:
         raise ConfigurationError('arguments', f'unknown arguments {unknown}')
-    if parsed.planning_processes < 0:
-        raise ConfigurationError('planning-processes',
-                                 f'must be at least 1, got {parsed.planning_processes}')
     names = [ns.strip() for ns in parsed.actors]
     for ns in names:
         try:
@@ -986,7 +989,9 @@ def _namespaces(argv) -> Tuple[list, int]:
                                      f'{str(error).splitlines()[0]}') from None
     if len(set(names)) != len(names):
         raise ConfigurationError('actors', f'repeated namespace in {names}')
-    processes = parsed.planning_processes or min(len(names), _usable_cores())
+    processes = parsed.planning_processes
+    if processes is None:
+        processes = min(len(names), _usable_cores())
     return names, processes
 
 
@@ -1000,7 +1005,7 @@ def main(args=None) -> int:
     logger = rclpy.logging.get_logger('actor_planner')
     nodes, planners = [], None
     try:
-        namespaces, processes = _namespaces(remove_ros_args(
+        namespaces, processes = _command_line(remove_ros_args(
             sys.argv if args is None else args)[1:])
         tickers = TickerPool()
         planners = PlanningPool(processes)
