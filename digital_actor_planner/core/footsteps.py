@@ -442,7 +442,6 @@ class FootstepPlanner:
         """
         cfg = self.config
         m = cfg.step_intervals
-        span = cfg.step_length_max - cfg.step_length_min
         up, down = cfg.max_step_up, cfg.max_step_down
         seed, cumulative, height_before, length_before = [], 0, stance_height, previous_length
         for i in range(cfg.window_steps):
@@ -455,11 +454,7 @@ class FootstepPlanner:
                 rise = height[c] - height_before
                 if rise > up or -rise > down:
                     continue
-                length = lengths[j]
-                cost = (cfg.weight_length * ((length - s_init) / span) ** 2
-                        + cfg.weight_height * (rise / max(up, 1e-6)) ** 2
-                        + cfg.weight_pitch * (pitch[c] / max(cfg.max_foot_pitch, 1e-6)) ** 2
-                        + cfg.weight_smooth * ((length - length_before) / span) ** 2)
+                cost = self._step_effort(lengths[j], rise, pitch[c], length_before, s_init)
                 if cost < best_cost:
                     best, best_cost = j, cost
             if best is None:
@@ -494,7 +489,6 @@ class FootstepPlanner:
         cfg = self.config
         if config[0] in banned:
             return None
-        span = cfg.step_length_max - cfg.step_length_min
         up, down = cfg.max_step_up, cfg.max_step_down
         # Where each foot was before its step: an index into ``placed`` (-2 swing, -1 stance).
         placed = {-2: (swing_s, swing_height), -1: (stance_s, stance_height)}
@@ -522,15 +516,22 @@ class FootstepPlanner:
                 memo.swings[swing_key] = clear
             if not clear:
                 return None
-            effort += (cfg.weight_length * ((length - s_init) / span) ** 2
-                       + cfg.weight_height * (rise / max(up, 1e-6)) ** 2
-                       + cfg.weight_pitch * (memo.pitch[i][cumulative]
-                                             / max(cfg.max_foot_pitch, 1e-6)) ** 2
-                       + cfg.weight_smooth * ((length - length_before) / span) ** 2)
+            effort += self._step_effort(length, rise, memo.pitch[i][cumulative], length_before,
+                                        s_init)
             placed[key] = (s, hold_height)
             previous_key[side] = key
             height_before, length_before = hold_height, length
         return effort
+
+    def _step_effort(self, length, rise, pitch, length_before, s_init) -> float:
+        """One footstep's share of the effort: length off the neutral one, height change, sole
+        pitch and change of length, each normalised by its range."""
+        cfg = self.config
+        span = cfg.step_length_max - cfg.step_length_min
+        return (cfg.weight_length * ((length - s_init) / span) ** 2
+                + cfg.weight_height * (rise / max(cfg.max_step_up, 1e-6)) ** 2
+                + cfg.weight_pitch * (pitch / max(cfg.max_foot_pitch, 1e-6)) ** 2
+                + cfg.weight_smooth * ((length - length_before) / span) ** 2)
 
     def _window(self, profile, config, lengths, sides, stance_s, effort, evaluated, memo):
         ls = lengths[list(config)]
