@@ -262,3 +262,53 @@ def test_planning_worker_scene_cache_shares_and_forgets_scenes():
     del fresh
     gc.collect()
     assert list(cache._scenes.values()) == [other]
+
+
+class _ScheduledActor:
+    """Stands in for an ActorPlannerNode: due at ``due[name]`` (monotonic s; None: resting),
+    and logs its plans."""
+
+    def __init__(self, name, due, log):
+        self.name, self.due, self.log = name, due, log
+
+    def planning_slack(self):
+        due = self.due.get(self.name)
+        return None if due is None else due - time.monotonic()
+
+    def plan_once(self):
+        self.log.append((self.name, time.monotonic()))
+        self.due[self.name] = None
+
+
+def test_planning_scheduler_plans_the_most_urgent_actor_first_and_skips_resting_ones():
+    from digital_actor_planner.nodes.actor_planner import IDLE_RESCAN, PlanningScheduler
+    scheduler = PlanningScheduler()
+    log, due = [], {}
+    actors = [_ScheduledActor(name, due, log) for name in ('late', 'later', 'resting', 'soon')]
+    try:
+        for actor in actors:
+            scheduler.attach(actor, 0)
+        # Overdue by 0.1 s, by 0.3 s, resting, and due in 0.15 s (one update: the planning
+        # thread sees all four or none).
+        now = time.monotonic()
+        due.update({'late': now - 0.1, 'later': now - 0.3, 'soon': now + 0.15})
+        scheduler.wake.set()
+        deadline = time.monotonic() + 2.0
+        while len(log) < 3 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert [name for name, _ in log] == ['later', 'late', 'soon']
+        assert log[2][1] >= now + 0.14, 'planned before it was due'
+        assert log[2][1] < now + 0.15 + IDLE_RESCAN, 'not woken when it fell due'
+        # A resting actor whose command changes is woken at once, not at the next rescan.
+        time.sleep(0.05)
+        due['resting'] = time.monotonic() - 0.01
+        woken = time.monotonic()
+        scheduler.wake.set()
+        while len(log) < 4 and time.monotonic() < woken + 2.0:
+            time.sleep(0.002)
+        assert [name for name, _ in log][3:] == ['resting']
+        assert log[3][1] - woken < 0.5 * IDLE_RESCAN
+    finally:
+        for actor in actors:
+            scheduler.detach(actor)
+    assert not scheduler._thread.is_alive(), 'the planning thread outlived its last actor'

@@ -201,3 +201,27 @@ def test_diagnostics_report_state_planning_time_and_stream_health(actor):
     # One second of a loaded machine; the +-5 % check over 10 s is in the walking test.
     assert abs(float(values['publish_rate_hz']) - 100.0) < 20.0
     assert values['scene'] == scene('flat')  # reloaded by the scene test above
+
+
+def test_an_actor_at_rest_is_not_planned_for_and_its_stream_does_not_run_dry(actor):
+    _, probe = actor
+    _stop(probe)  # zero commands keep coming, as from a mouse teleop at rest
+
+    def counts():
+        values = probe.diagnostic_values()
+        return int(values['blocks_planned']), int(values['buffer_underruns'])
+
+    probe.spin(1.5)  # a diagnostics message from the rest
+    blocks, underruns = counts()
+    began = time.monotonic()
+    probe.spin(3.0)
+    rested_blocks, rested_underruns = counts()
+    # A resting actor used to plan a 0.1 s hold ten times a second.
+    assert rested_blocks - blocks <= 1, f'{rested_blocks - blocks} blocks planned at rest'
+    assert rested_underruns == underruns, 'holding still was counted as running dry'
+    stamps = [t for t, _ in list(probe.joint_states) if t >= began]
+    assert len(stamps) >= 0.9 * 100 * (stamps[-1] - stamps[0]), 'the stream slowed at rest'
+    probe.drive(0.5, 0.0, 1.5)
+    assert probe.spin_until(lambda: counts()[0] > rested_blocks + 1, 3.0), \
+        'no planning after a forward command'
+    _stop(probe)

@@ -6,7 +6,9 @@ Planning never stalls the stream:
 * the core runs in a child process (:class:`PlanningProcess`): its NumPy and FCL calls hold
   the GIL for milliseconds at a time, which would delay a publishing thread in the same process;
 * a planning thread asks it for the next block whenever less than the planning lead of
-  committed frames is buffered ahead of playback (so about one step is buffered);
+  committed frames is buffered ahead of playback (so about one step is buffered); actors that
+  share a planning process share its planning thread (:class:`PlanningScheduler`), and an actor
+  standing at rest (or stuck) with an unchanged command is not planned for at all;
 * a publishing thread ticks on a monotonic schedule at ``publish_rate`` and publishes the frame
   for "now", interpolated from the buffer; if planning is late it holds the last frame;
 * the executor thread handles cmd_vel, parameter changes, markers and diagnostics.
@@ -33,6 +35,7 @@ from nav_msgs.msg import Path
 import numpy as np
 from rcl_interfaces.msg import SetParametersResult
 import rclpy
+from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.exceptions import InvalidNamespaceException, ParameterException, \
     ParameterUninitializedException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
@@ -56,13 +59,18 @@ BUFFER_HISTORY = 1.0
 # Mesh triangles drawn in RViz at most (one TRIANGLE_LIST per mesh).
 MAX_MARKER_TRIANGLES = 200_000
 PAST_FOOTSTEPS = 40
-# The planning lead grows to LEAD_SAFETY times the slowest of the last RECENT_BLOCKS planning
-# times, up to MAX_LEAD s.
+# The planning lead grows to LEAD_SAFETY times the slowest of the last RECENT_BLOCKS response
+# times (from a block falling due to its commit), up to MAX_LEAD s.
 LEAD_SAFETY = 1.5
 RECENT_BLOCKS = 10
 MAX_LEAD = 2.0
 # The ground profile marker shows surfaces up to this far above the predicted path (m).
 PROFILE_STEP_UP = 0.5
+# A planning thread with nothing due looks again after this long at most (s), e.g. for a
+# command that timed out.
+IDLE_RESCAN = 0.25
+# After a planning failure an actor is asked again after this long (s).
+RETRY_AFTER = 0.1
 
 
 class FrameBuffer:
@@ -174,6 +182,7 @@ class PlanningStats:
     state: str = 'idle'
     reason: str = ''
     steps: int = 0
+    blocks: int = 0
     last_planning_time: float = float('nan')
 
     def __post_init__(self):
@@ -184,6 +193,8 @@ class PlanningStats:
         self.state, self.reason = status, reason
         self.last_planning_time = planning_time
         self.planning_times.append(planning_time)
+        if math.isfinite(planning_time):
+            self.blocks += 1
         if status == 'walking':
             self.steps += 1
 
@@ -312,6 +323,10 @@ def _planning_process(connection) -> None:
             actors[key] = (actor, actor_config, start_pose, scene)
             connection.send(('ready', actor.configuration, _mesh_arrays(scene)))
         elif kind == 'plan':
+            if request[1] not in actors:
+                # Removed while its planning thread was asking: the node is closing.
+                connection.send(('failed', f'no actor {request[1]} in this process'))
+                continue
             actor = actors[request[1]][0]
             try:
                 warning = actor.set_command(request[2], request[3])
@@ -355,6 +370,7 @@ class PlanningWorker:
         self._process.start()
         child.close()
         self._closed = False
+        self.scheduler = PlanningScheduler()
 
     def request(self, message: tuple, timeout: float):
         """Send one request and wait for its reply (timeout counted from sending), or raise
@@ -451,6 +467,11 @@ class PlanningProcess:
             raise ConfigurationError(reply[1], reply[2].split(': ', 1)[-1])
         _, self.configuration, self.meshes = reply
 
+    @property
+    def scheduler(self) -> 'PlanningScheduler':
+        """The planning thread of this actor's worker."""
+        return self._worker.scheduler
+
     def plan(self, linear_x: float, angular_z: float, timeout: float = 60.0):
         """Set the command and plan the next block.
 
@@ -492,6 +513,105 @@ class PlanningProcess:
             self._worker.request(('remove', self._id), 5.0)
         except PlanningFailed:
             pass
+
+
+class PlanningScheduler:
+    """One thread that plans for every actor sharing a planning worker, most urgent first.
+
+    An actor is due when its buffered motion ahead of playback is down to its planning lead;
+    of the due actors, the one with the least motion left goes first. The worker plans one
+    request at a time anyway, so one thread per worker is all the planning threads a process
+    needs (with one thread per actor, 20 idle actors kept a core half busy).
+    """
+
+    def __init__(self):
+        self.wake = threading.Event()
+        self._nodes = []
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread = None
+
+    def attach(self, node: 'ActorPlannerNode', priority: int) -> None:
+        """Plan for ``node`` (the thread starts with the first node, at ``priority`` if > 0)."""
+        with self._lock:
+            self._nodes = self._nodes + [node]
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._loop, args=(priority,),
+                                                name='actor_planning', daemon=True)
+                self._thread.start()
+        self.wake.set()
+
+    def detach(self, node: 'ActorPlannerNode') -> None:
+        """Stop planning for ``node``; the thread ends with the last node."""
+        with self._lock:
+            self._nodes = [n for n in self._nodes if n is not node]
+            last = not self._nodes
+            thread = self._thread
+        if last and thread is not None:
+            self._stop.set()
+            self.wake.set()
+            if thread is not threading.current_thread():
+                thread.join(timeout=5.0)
+
+    def _loop(self, priority: int) -> None:
+        if priority > 0:
+            real_time(priority)
+        while not self._stop.is_set():
+            most_urgent, least_slack, sleep = None, math.inf, IDLE_RESCAN
+            for node in self._nodes:
+                slack = node.planning_slack()
+                if slack is None:
+                    continue
+                if slack <= 0.0 and slack < least_slack:
+                    most_urgent, least_slack = node, slack
+                elif slack > 0.0:
+                    sleep = min(sleep, slack)
+            if most_urgent is None:
+                # Woken early by a stream running low, a command or a new scene.
+                self.wake.wait(sleep)
+                self.wake.clear()
+                continue
+            most_urgent.plan_once()
+
+
+class Housekeeper:
+    """One thread that publishes the markers (5 Hz) and diagnostics (1 Hz) of every actor of a
+    process; plain thread, not executor timers (see ``ActorPlannerNode._make_interfaces``)."""
+
+    def __init__(self):
+        self._nodes = []
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread = None
+
+    def attach(self, node: 'ActorPlannerNode') -> None:
+        """Serve ``node`` (the thread starts with the first node)."""
+        with self._lock:
+            self._nodes = self._nodes + [node]
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._loop, name='actor_housekeeping',
+                                                daemon=True)
+                self._thread.start()
+
+    def detach(self, node: 'ActorPlannerNode') -> None:
+        """Stop serving ``node``; the thread ends with the last node."""
+        with self._lock:
+            self._nodes = [n for n in self._nodes if n is not node]
+            last = not self._nodes
+            thread = self._thread
+        if last and thread is not None:
+            self._stop.set()
+            if thread is not threading.current_thread():
+                thread.join(timeout=5.0)
+
+    def _loop(self) -> None:
+        next_diagnostics = time.monotonic() + 1.0
+        while not self._stop.wait(0.2):
+            diagnostics = time.monotonic() >= next_diagnostics
+            if diagnostics:
+                next_diagnostics += 1.0
+            for node in self._nodes:
+                node.housekeeping(diagnostics)
 
 
 def real_time(priority: int) -> bool:
@@ -568,14 +688,17 @@ class StreamTicker:
                                             throttle_duration_sec=2.0)
 
 
-class TickerPool:
-    """The stream tickers of one process, one per (publish period, priority)."""
+class SharedThreads:
+    """The threads the actors of one process share: a stream ticker per (publish period,
+    priority), and one housekeeper. Planning threads belong to the planning workers."""
 
     def __init__(self):
         self._tickers = {}
         self._lock = threading.Lock()
+        self.housekeeper = Housekeeper()
 
     def ticker(self, period: float, priority: int, warn=None) -> StreamTicker:
+        """The ticker for ``period`` s at ``priority`` (created on first use)."""
         with self._lock:
             key = (float(period), int(priority))
             if key not in self._tickers:
@@ -586,7 +709,7 @@ class TickerPool:
 class ActorPlannerNode(Node):
     """Stream the digital actor's whole-body motion as JointState, directed by cmd_vel."""
 
-    def __init__(self, node_name: str = 'actor_planner', tickers: Optional[TickerPool] = None,
+    def __init__(self, node_name: str = 'actor_planner', threads: Optional[SharedThreads] = None,
                  planners: Optional[PlanningPool] = None, **kwargs):
         super().__init__(node_name, **kwargs)
         self.config = self._declare_and_read()
@@ -620,18 +743,30 @@ class ActorPlannerNode(Node):
         self._pending_start = None
         self._pending_lock = threading.Lock()
         self._stop = threading.Event()
-        self._wake = threading.Event()
         # The planning lead in force (s); the stream wakes the planner when less is buffered.
         self._lead = self.planning_lead
+        # The block last planned repeats while the command stays this one (a hold at rest, or
+        # stuck): no more blocks are planned and the stream holds the last frame.
+        self._holding_for = None
+        self._retry_at = 0.0
+        self._clock_zero = None
+        # Seconds from each recent block falling due to its commit: its wait for the shared
+        # planning thread plus its planning (the planning lead must cover both).
+        self._responses = collections.deque(maxlen=RECENT_BLOCKS)
+        self._due_since = None
 
+        threads = threads or SharedThreads()
+        self._scheduler = self.planner.scheduler
+        self._housekeeper = threads.housekeeper
         self._make_interfaces()
         self.add_on_set_parameters_callback(self._on_set_parameters)
-        self._planner_thread = threading.Thread(target=self._planning_loop,
-                                                name='actor_planning', daemon=True)
-        self._planner_thread.start()
-        self._clock_zero = None
-        self._ticker = (tickers or TickerPool()).ticker(
-            self.period, self.config.stream_priority, self.get_logger().info)
+        # The planning thread below the stream's priority: it holds the GIL only briefly, and
+        # below that priority it cannot be preempted by other programs while holding it.
+        self._scheduler.attach(self, self.config.stream_priority - 1
+                               if self.config.stream_priority > 1 else 0)
+        self._housekeeper.attach(self)
+        self._ticker = threads.ticker(self.period, self.config.stream_priority,
+                                      self.get_logger().info)
         self._ticker.attach(self)
         self.get_logger().info(
             f'streaming {len(self.skeleton.joint_names)} joints at {self.config.publish_rate:g} '
@@ -663,26 +798,39 @@ class ActorPlannerNode(Node):
         self.joint_state_msg.header.frame_id = self.config.frame_id
         self.joint_state_msg.name = list(self.skeleton.joint_names)
         # Half a second of history, so a reliable subscriber that is briefly busy loses nothing.
-        self.joint_state_pub = self.create_publisher(JointState, 'joint_states', 50)
-        self.diagnostics_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
-        self.markers_pub = self.create_publisher(MarkerArray, '~/markers', latched)
-        self.environment_pub = self.create_publisher(MarkerArray, '~/environment', latched)
-        self.path_pub = self.create_publisher(Path, '~/path', latched)
+        # No QoS event handlers (rclpy adds two per publisher and subscription by default, for
+        # its "incompatible QoS" warnings): the SingleThreadedExecutor matches every node's
+        # handlers against every other's on each wake-up, so with 20 actors in one process the
+        # cmd_vel traffic alone kept most of a core busy. The warnings could not fire anyway:
+        # the latched publishers offer the strongest QoS, joint_states and diagnostics clash only
+        # with a transient-local subscriber, and a best-effort cmd_vel subscription accepts every
+        # publisher (a lost command is replaced by the next one, or by cmd_timeout).
+        quiet = {'event_callbacks': PublisherEventCallbacks(use_default_callbacks=False)}
+        self.joint_state_pub = self.create_publisher(JointState, 'joint_states', 50, **quiet)
+        self.diagnostics_pub = self.create_publisher(DiagnosticArray, '/diagnostics', 10,
+                                                     **quiet)
+        self.markers_pub = self.create_publisher(MarkerArray, '~/markers', latched, **quiet)
+        self.environment_pub = self.create_publisher(MarkerArray, '~/environment', latched,
+                                                     **quiet)
+        self.path_pub = self.create_publisher(Path, '~/path', latched, **quiet)
         if self.config.publish_robot_description:
-            self.description_pub = self.create_publisher(String, 'robot_description', latched)
+            self.description_pub = self.create_publisher(String, 'robot_description', latched,
+                                                         **quiet)
             with open(self.skeleton.urdf_path) as urdf:
                 self.description_pub.publish(String(data=urdf.read()))
+        commands = QoSProfile(depth=10, reliability=ReliabilityPolicy.BEST_EFFORT)
+        quiet_sub = SubscriptionEventCallbacks(use_default_callbacks=False)
         if self.config.cmd_vel_stamped:
             self.create_subscription(TwistStamped, 'cmd_vel',
-                                     lambda msg: self._on_cmd_vel(msg.twist), 10)
+                                     lambda msg: self._on_cmd_vel(msg.twist), commands,
+                                     event_callbacks=quiet_sub)
         else:
-            self.create_subscription(Twist, 'cmd_vel', self._on_cmd_vel, 10)
-        # Diagnostics (1 Hz) and markers (5 Hz) come from a plain thread, not executor timers:
-        # with a dozen actors in one process, rclpy's executor spent most of a core waking up
-        # for their timers, at the stream's priority, starving the planning processes.
-        self._housekeeping_thread = threading.Thread(target=self._housekeeping_loop,
-                                                     name='actor_housekeeping', daemon=True)
-        self._housekeeping_thread.start()
+            self.create_subscription(Twist, 'cmd_vel', self._on_cmd_vel, commands,
+                                     event_callbacks=quiet_sub)
+        # Diagnostics (1 Hz) and markers (5 Hz) come from the process's Housekeeper thread,
+        # not executor timers: with a dozen actors in one process, rclpy's executor spent most
+        # of a core waking up for their timers, at the stream's priority, starving the planning
+        # processes.
         self._publish_environment()
 
     def _on_set_parameters(self, parameters) -> SetParametersResult:
@@ -704,62 +852,74 @@ class ActorPlannerNode(Node):
                 with self._pending_lock:
                     self._pending_start = configuration
                 self.meshes, self.scene_path, self.scene_error = meshes, str(parameter.value), ''
-                self._wake.set()
+                self._scheduler.wake.set()
                 self._publish_environment()
                 self.get_logger().info(f'scene reloaded: {self.scene_path}')
         return SetParametersResult(successful=True)
 
-    # -- threads ------------------------------------------------------------------------------
-    def _planning_loop(self) -> None:
-        logger = self.get_logger()
-        if self.config.stream_priority > 1:
-            # This thread and the executor hold the GIL only briefly; below the stream's
-            # priority they cannot be preempted by other programs while holding it.
-            real_time(self.config.stream_priority - 1)
-        while not self._stop.is_set():
-            with self._pending_lock:
-                pending, self._pending_start = self._pending_start, None
-            if pending is not None:
-                # A new scene: the new actor's clock starts at 0 from its start pose.
-                self.actor_offset = self.playback_time + self.period
-                self.buffer.restart(pending, self.actor_offset)
-                self.committed_footsteps.clear()
-            ahead = self.buffer.end_time - self.playback_time
-            lead = self._lead = self._effective_lead()
-            if ahead > lead:
-                # Woken by the stream when the buffer runs down to the lead (or a new scene).
-                self._wake.wait(min(ahead - lead, 0.25))
-                self._wake.clear()
-                continue
-            linear_x, angular_z = self.command.current(time.monotonic(), self.cmd_timeout)
-            try:
-                warning, block, profile = self.planner.plan(linear_x, angular_z)
-            except PlanningFailed as error:
-                if self._stop.is_set():
-                    return  # shutting down: the planning process was told to finish
-                self.stats.record('stuck', f'planner error: {error}', float('nan'))
-                logger.error(f'planning failed: {error}', throttle_duration_sec=2.0)
-                self._stop.wait(0.1)
-                continue
-            if warning:
-                logger.warning(warning, throttle_duration_sec=2.0)
-            if self._pending_start is not None:
-                continue  # planned on the old scene while the new one loaded
-            self.buffer.append(np.asarray(block.times) + self.actor_offset, block.frames,
-                               block.velocities, self.playback_time)
-            self.stats.record(block.status, block.reason, block.planning_time)
-            if block.status == 'walking' and len(block.footsteps):
-                self.committed_footsteps.append(np.asarray(block.footsteps[0], dtype=float))
-            self._latest_block = (block, profile)
+    # -- planning (called by the worker's PlanningScheduler thread) -------------------------
+    def planning_slack(self) -> Optional[float]:
+        """Seconds until this actor's next block is due (<= 0: due now); None: nothing to plan.
+
+        Nothing is planned while the last block would only repeat: a hold at rest or a stuck
+        hold, with the command unchanged since. A new scene restarts the buffer here.
+        """
+        if self._stop.is_set():
+            return None
+        now = time.monotonic()
+        if now < self._retry_at:
+            return self._retry_at - now
+        with self._pending_lock:
+            pending, self._pending_start = self._pending_start, None
+        if pending is not None:
+            # A new scene: the new actor's clock starts at 0 from its start pose.
+            self.actor_offset = self.playback_time + self.period
+            self.buffer.restart(pending, self.actor_offset)
+            self.committed_footsteps.clear()
+            self._holding_for = None
+        if self._holding_for is not None:
+            if self.command.current(now, self.cmd_timeout) == self._holding_for:
+                return None
+            self._holding_for = None
+        lead = self._lead = self._effective_lead()
+        return self.buffer.end_time - self.playback_time - lead
+
+    def plan_once(self) -> None:
+        """Plan this actor's next block and commit it to the buffer."""
+        started = time.monotonic()
+        command = self.command.current(started, self.cmd_timeout)
+        try:
+            warning, block, profile = self.planner.plan(*command)
+        except PlanningFailed as error:
+            if self._stop.is_set():
+                return  # shutting down: the planning process was told to finish
+            self.stats.record('stuck', f'planner error: {error}', float('nan'))
+            self.get_logger().error(f'planning failed: {error}', throttle_duration_sec=2.0)
+            self._retry_at = time.monotonic() + RETRY_AFTER
+            return
+        if warning:
+            self.get_logger().warning(warning, throttle_duration_sec=2.0)
+        if self._pending_start is not None:
+            return  # planned on the old scene while the new one loaded
+        self.buffer.append(np.asarray(block.times) + self.actor_offset, block.frames,
+                           block.velocities, self.playback_time)
+        self.stats.record(block.status, block.reason, block.planning_time)
+        due, self._due_since = self._due_since, None
+        self._responses.append(time.monotonic() - min(started, due or started))
+        if block.status == 'walking' and len(block.footsteps):
+            self.committed_footsteps.append(np.asarray(block.footsteps[0], dtype=float))
+        if (block.status, block.reason) == ('idle', '') or block.status == 'stuck':
+            self._holding_for = command
+        self._latest_block = (block, profile)
 
     def _effective_lead(self) -> float:
         """Buffered time (s) below which the next block is planned.
 
-        At least ``planning_lead``, and more when recent blocks took long to plan (a loaded
+        At least ``planning_lead``, and more when recent blocks took long to plan or waited
+        long for their turn in a shared planning process (a loaded
         machine), so that playback does not run dry while the next block is planned.
         """
-        recent = list(self.stats.planning_times)[-RECENT_BLOCKS:]
-        slowest = max((t for t in recent if math.isfinite(t)), default=0.0)
+        slowest = max(self._responses, default=0.0)
         return min(MAX_LEAD, max(self.planning_lead, LEAD_SAFETY * slowest))
 
     def publish_frame(self, now: float, late_ticks: int = 0) -> None:
@@ -775,13 +935,16 @@ class ActorPlannerNode(Node):
         play = now - self._clock_zero
         end = self.buffer.end_time
         if play > end:
-            if play - end > self.period:
+            # Holding the last frame on purpose (at rest, or stuck) is not running dry.
+            if play - end > self.period and self._holding_for is None:
                 self.underruns += 1
             self._clock_zero = now - end
             play = end
         self.playback_time = play
-        if end - play <= self._lead:
-            self._wake.set()
+        if end - play <= self._lead and self._holding_for is None:
+            if self._due_since is None:
+                self._due_since = now
+            self._scheduler.wake.set()
         q, v = self.buffer.sample(play)
         msg = self.joint_state_msg
         msg.header.stamp = self.get_clock().now().to_msg()
@@ -795,31 +958,31 @@ class ActorPlannerNode(Node):
             raise
         self.tick_times.append(now)
 
-    def _housekeeping_loop(self) -> None:
-        next_diagnostics = time.monotonic() + 1.0
-        while not self._stop.wait(0.2):
-            try:
-                self._publish_markers()
-                if time.monotonic() >= next_diagnostics:
-                    next_diagnostics += 1.0
-                    self._publish_diagnostics()
-            except Exception as error:  # noqa: B902 -- the context is shutting down
-                if self._stop.is_set() or not rclpy.ok(context=self.context):
-                    return
-                self.get_logger().error(f'diagnostics/markers not published: {error!r}',
-                                        throttle_duration_sec=2.0)
+    def housekeeping(self, diagnostics: bool) -> None:
+        """Publish new markers, and diagnostics when ``diagnostics`` (the Housekeeper's call)."""
+        if self._stop.is_set():
+            return
+        try:
+            self._publish_markers()
+            if diagnostics:
+                self._publish_diagnostics()
+        except Exception as error:  # noqa: B902 -- the context is shutting down
+            if self._stop.is_set() or not rclpy.ok(context=self.context):
+                return
+            self.get_logger().error(f'diagnostics/markers not published: {error!r}',
+                                    throttle_duration_sec=2.0)
 
     def request_stop(self) -> None:
         """Tell the threads to finish (without waiting for them)."""
         self._stop.set()
-        self._wake.set()
+        self._scheduler.wake.set()
 
     def stop(self) -> None:
         """Stop streaming and planning, and end the planning process."""
         self.request_stop()
         self._ticker.detach(self)
-        self._planner_thread.join(timeout=5.0)
-        self._housekeeping_thread.join(timeout=5.0)
+        self._housekeeper.detach(self)
+        self._scheduler.detach(self)
         self.planner.close()
 
     # -- executor callbacks -----------------------------------------------------------------
@@ -831,6 +994,8 @@ class ActorPlannerNode(Node):
                 throttle_duration_sec=2.0)
             return
         self.command.update(float(linear_x), float(angular_z), time.monotonic())
+        if self._holding_for is not None and (linear_x, angular_z) != self._holding_for:
+            self._scheduler.wake.set()
 
     def publish_rate_measured(self) -> float:
         """Return the joint_states rate (Hz) over the last second of ticks (NaN when unknown)."""
@@ -860,6 +1025,7 @@ class ActorPlannerNode(Node):
             'state': stats.state,
             'reason': stats.reason,
             'steps': str(stats.steps),
+            'blocks_planned': str(stats.blocks),
             'planning_time_last_ms': f'{1e3 * stats.last_planning_time:.3f}',
             'planning_time_p50_ms': f'{1e3 * p50:.3f}',
             'planning_time_p99_ms': f'{1e3 * p99:.3f}',
@@ -1007,10 +1173,10 @@ def main(args=None) -> int:
     try:
         namespaces, processes = _command_line(remove_ros_args(
             sys.argv if args is None else args)[1:])
-        tickers = TickerPool()
+        threads = SharedThreads()
         planners = PlanningPool(processes)
         for ns in namespaces:
-            nodes.append(ActorPlannerNode(tickers=tickers, planners=planners,
+            nodes.append(ActorPlannerNode(threads=threads, planners=planners,
                                           **({'namespace': ns} if ns else {})))
     except ConfigurationError as error:
         logger.fatal(f'invalid configuration: {error}')
@@ -1023,7 +1189,7 @@ def main(args=None) -> int:
         return 2
     priority = nodes[0].config.stream_priority
     if priority > 2:
-        real_time(priority - 1)  # the executor thread, see _planning_loop
+        real_time(priority - 1)  # the executor thread, as the planning threads
         # The DDS threads too: publish() takes locks they hold, so they must not wait behind
         # the planning processes (which stay at normal priority).
         tasks = '/proc/self/task'
