@@ -7,7 +7,8 @@ first CPU; this monitor runs on the last one. It only sends cmd_vel (0.5 m/s, 10
 actor and reads ``/diagnostics``, so it cannot drop joint_states itself, unlike a probe that
 subscribes to 100 Hz streams of many actors in one Python thread. Per actor it takes the node's
 counts between the first and last diagnostics of the window: publish rate, missed frames,
-buffer underruns, steps planned.
+buffer underruns, steps planned. It also reads the CPU time the node process and its planning
+processes used (``/proc``), standing idle for a few seconds before the commands, then walking.
 """
 import argparse
 import collections
@@ -22,6 +23,30 @@ from geometry_msgs.msg import TwistStamped  # noqa: E402
 import rclpy  # noqa: E402
 from ros_harness import NodeProcess, ros_env  # noqa: E402
 from test_node_helpers import node_command, scene  # noqa: E402
+
+
+IDLE_SECONDS = 5.0
+
+
+def cpu_seconds(pid: int) -> tuple:
+    """CPU time (s) used so far by process ``pid`` and by its child processes, from /proc."""
+    tick = os.sysconf('SC_CLK_TCK')
+
+    def used(stat_path):
+        with open(stat_path) as stat:
+            fields = stat.read().rsplit(')', 1)[1].split()
+        return int(fields[1]), (int(fields[11]) + int(fields[12])) / tick
+
+    own, children = used(f'/proc/{pid}/stat')[1], 0.0
+    for entry in os.listdir('/proc'):
+        if entry.isdigit():
+            try:
+                parent, seconds = used(f'/proc/{entry}/stat')
+            except (OSError, IndexError, ValueError):
+                continue
+            if parent == pid:
+                children += seconds
+    return own, children
 
 
 def run(count: int, duration: float, course: str, domain: int, log: str) -> str:
@@ -57,15 +82,23 @@ def run(count: int, duration: float, course: str, domain: int, log: str) -> str:
                 return f'{count} actors: not all reported ({len(seen)})'
             executor.spin_once(timeout_sec=0.1)
         ready = time.monotonic() - started
+        idle_from, idle_cpu = time.monotonic(), cpu_seconds(process.pid)
+        while time.monotonic() < idle_from + IDLE_SECONDS:
+            executor.spin_once(timeout_sec=0.1)
+        idle_to, idle_cpu_end = time.monotonic(), cpu_seconds(process.pid)
         command_msg = TwistStamped()
         command_msg.twist.linear.x = 0.5
         began, last = time.monotonic(), 0.0
+        walk_cpu = cpu_seconds(process.pid)
         while time.monotonic() < began + duration:
             if time.monotonic() - last >= 0.1:
                 for publisher in publishers:
                     publisher.publish(command_msg)
                 last = time.monotonic()
             executor.spin_once(timeout_sec=0.02)
+        walk_to, walk_cpu_end = time.monotonic(), cpu_seconds(process.pid)
+        idle_share = [(b - a) / (idle_to - idle_from) for a, b in zip(idle_cpu, idle_cpu_end)]
+        walk_share = [(b - a) / (walk_to - began) for a, b in zip(walk_cpu, walk_cpu_end)]
         rates, missed, underruns, steps, silent = [], 0, 0, 0, 0
         for samples in seen.values():
             window = [v for t, v in samples if began + 3.0 <= t <= began + duration]
@@ -80,7 +113,9 @@ def run(count: int, duration: float, course: str, domain: int, log: str) -> str:
         return (f'{count} actors: all reporting after {ready:.1f} s; node-measured rate min '
                 f'{rate} Hz, missed frames {missed}, buffer underruns {underruns}, steps '
                 f'{steps} in {duration - 3.0:g} s; {silent} actors sent fewer than 2 '
-                f'diagnostics in the window')
+                f'diagnostics in the window; CPU (share of one core) node / planning '
+                f'processes: idle {idle_share[0]:.0%} / {idle_share[1]:.0%}, walking '
+                f'{walk_share[0]:.0%} / {walk_share[1]:.0%}')
     finally:
         executor.shutdown()
         node.destroy_node()
