@@ -16,6 +16,7 @@ Planning never stalls the stream:
 from __future__ import annotations
 
 import argparse
+import array
 import collections
 from dataclasses import dataclass
 import math
@@ -86,16 +87,17 @@ class FrameBuffer:
     """
 
     def __init__(self, configuration: np.ndarray, start_time: float = 0.0):
+        # Writers (append, restart) take the lock and publish a new (times, frames, velocities)
+        # tuple with one assignment; the stream reads the tuple without locking.
         self._lock = threading.Lock()
         q = np.asarray(configuration, dtype=float).reshape(1, -1)
-        self._times = np.array([float(start_time)])
-        self._frames = q
-        self._velocities = np.zeros_like(q)
+        self._data = (np.array([float(start_time)]), q, np.zeros_like(q))
+        self._still = np.zeros(q.shape[1])
 
     @property
     def end_time(self) -> float:
         """Time (s) of the last committed frame."""
-        return float(self._times[-1])
+        return float(self._data[0][-1])
 
     def append(self, times: np.ndarray, frames: np.ndarray, velocities: np.ndarray,
                now: float) -> None:
@@ -114,40 +116,40 @@ class FrameBuffer:
         times = np.asarray(times, dtype=float)
         if times.size == 0:
             return
-        if not times[0] > self._times[-1]:
-            raise ValueError(f'block starts at {times[0]:.4f} s, not after the buffer end '
-                             f'{self._times[-1]:.4f} s')
         with self._lock:
-            keep = max(0, int(np.searchsorted(self._times, now - BUFFER_HISTORY)) - 1)
-            self._times = np.concatenate([self._times[keep:], times])
-            self._frames = np.concatenate([self._frames[keep:], frames])
-            self._velocities = np.concatenate([self._velocities[keep:], velocities])
+            old_times, old_frames, old_velocities = self._data
+            if not times[0] > old_times[-1]:
+                raise ValueError(f'block starts at {times[0]:.4f} s, not after the buffer end '
+                                 f'{old_times[-1]:.4f} s')
+            keep = max(0, int(np.searchsorted(old_times, now - BUFFER_HISTORY)) - 1)
+            self._data = (np.concatenate([old_times[keep:], times]),
+                          np.concatenate([old_frames[keep:], frames]),
+                          np.concatenate([old_velocities[keep:], velocities]))
 
     def restart(self, configuration: np.ndarray, start_time: float) -> None:
         """Drop every frame after ``start_time`` and continue from ``configuration`` there."""
         with self._lock:
-            keep = int(np.searchsorted(self._times, start_time, side='left'))
-            self._times = np.append(self._times[:keep], start_time)
-            self._frames = np.vstack([self._frames[:keep], configuration])
-            self._velocities = np.vstack([self._velocities[:keep],
-                                          np.zeros_like(configuration)])
+            old_times, old_frames, old_velocities = self._data
+            keep = int(np.searchsorted(old_times, start_time, side='left'))
+            self._data = (np.append(old_times[:keep], start_time),
+                          np.vstack([old_frames[:keep], configuration]),
+                          np.vstack([old_velocities[:keep], np.zeros_like(configuration)]))
 
     def sample(self, t: float) -> Tuple[np.ndarray, np.ndarray]:
         """Return the configuration (22,) and velocity (22,) at time ``t`` s, interpolated.
 
         Beyond the last frame the last configuration is held with zero velocity.
         """
-        with self._lock:
-            times, frames, velocities = self._times, self._frames, self._velocities
-        if t >= times[-1]:
-            return frames[-1].copy(), np.zeros(frames.shape[1])
-        i = int(np.searchsorted(times, t, side='right'))
+        times, frames, velocities = self._data
+        i = int(times.searchsorted(t, side='right'))
+        if i == len(times):
+            return frames[-1].copy(), self._still.copy()
         if i == 0:
             return frames[0].copy(), velocities[0].copy()
-        span = times[i] - times[i - 1]
-        a = (t - times[i - 1]) / span if span > 0.0 else 1.0
-        return ((1.0 - a) * frames[i - 1] + a * frames[i],
-                (1.0 - a) * velocities[i - 1] + a * velocities[i])
+        before, after = float(times[i - 1]), float(times[i])
+        a = (t - before) / (after - before)
+        q0, v0 = frames[i - 1], velocities[i - 1]
+        return q0 + a * (frames[i] - q0), v0 + a * (velocities[i] - v0)
 
 
 class CommandState:
@@ -947,9 +949,15 @@ class ActorPlannerNode(Node):
             self._scheduler.wake.set()
         q, v = self.buffer.sample(play)
         msg = self.joint_state_msg
-        msg.header.stamp = self.get_clock().now().to_msg()
-        msg.position = q.tolist()
-        msg.velocity = v.tolist()
+        clock = self.get_clock()
+        if clock.ros_time_is_active:  # use_sim_time: the stamp comes from /clock
+            msg.header.stamp = clock.now().to_msg()
+        else:  # ROS time is system time; this is about 10 us cheaper per frame
+            nanoseconds = time.time_ns()
+            msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(nanoseconds, 1_000_000_000)
+        # array('d') is taken by the message setters without a per-element type check.
+        msg.position = array.array('d', q.tobytes())
+        msg.velocity = array.array('d', v.tobytes())
         try:
             self.joint_state_pub.publish(msg)
         except Exception:  # noqa: B902 -- the context is shutting down
