@@ -7,12 +7,15 @@ first CPU; this monitor runs on the last one. It only sends cmd_vel (0.5 m/s, 10
 actor and reads ``/diagnostics``, so it cannot drop joint_states itself, unlike a probe that
 subscribes to 100 Hz streams of many actors in one Python thread. Per actor it takes the node's
 counts between the first and last diagnostics of the window: publish rate, missed frames,
-buffer underruns, steps planned. It also reads the CPU time the node process and its planning
-processes used (``/proc``), standing idle for a few seconds before the commands, then walking.
+buffer underruns, steps planned; at the end it sends SIGTERM and times the exit. It also reads
+the CPU time the node process and its planning processes used (``/proc``), standing idle for a
+few seconds before the commands, then walking.
 """
 import argparse
 import collections
 import os
+import signal
+import subprocess
 import sys
 import time
 
@@ -26,6 +29,7 @@ from test_node_helpers import node_command, scene  # noqa: E402
 
 
 IDLE_SECONDS = 5.0
+STOP_WAIT = 30.0
 
 
 def cpu_seconds(pid: int) -> tuple:
@@ -110,7 +114,17 @@ def run(count: int, duration: float, course: str, domain: int, log: str) -> str:
             underruns += int(window[-1]['buffer_underruns']) - int(window[0]['buffer_underruns'])
             steps += int(window[-1]['steps']) - int(window[0]['steps'])
         rate = f'{min(rates):.2f}' if rates else 'n/a'
-        return (f'{count} actors: all reporting after {ready:.1f} s; node-measured rate min '
+        # Stopped as docker stop or systemd would, while the actors still walk.
+        stopping = time.monotonic()
+        process.proc.send_signal(signal.SIGTERM)
+        try:
+            process.proc.wait(timeout=STOP_WAIT)
+            stopped = f'SIGTERM while walking: exit {process.proc.returncode} after ' \
+                f'{time.monotonic() - stopping:.1f} s'
+        except subprocess.TimeoutExpired:
+            stopped = f'SIGTERM while walking: still running after {STOP_WAIT:g} s'
+        return (f'{stopped}; {count} actors: all reporting after {ready:.1f} s; node-measured '
+                f'rate min '
                 f'{rate} Hz, missed frames {missed}, buffer underruns {underruns}, steps '
                 f'{steps} in {duration - 3.0:g} s; {silent} actors sent fewer than 2 '
                 f'diagnostics in the window; CPU (share of one core) node / planning '

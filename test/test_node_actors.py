@@ -7,7 +7,9 @@ processes (one per core by default, ``--planning-processes K``). A bad ``--actor
 """
 import math
 import os
+import signal
 import subprocess
+import time
 
 import pytest
 from ros_harness import fresh_domain_id, NodeProcess, ros_env
@@ -86,6 +88,32 @@ def test_hosted_actors_share_planning_processes(crowd):
     process, _ = crowd
     planning = [c for c in _children(process.pid) if 'spawn_main' in c]
     assert len(planning) == min(len(NAMESPACES), len(os.sched_getaffinity(0))), planning
+
+
+def test_sigterm_ends_the_walking_actors_and_their_planning_processes(crowd):
+    """As docker stop, systemd or ros2 launch (after SIGINT) would end the node."""
+    process, probes = crowd
+    planning = [int(child) for task in os.listdir(f'/proc/{process.pid}/task')
+                for child in open(f'/proc/{process.pid}/task/{task}/children').read().split()
+                if b'spawn_main' in open(f'/proc/{child}/cmdline', 'rb').read()]
+    assert planning
+    for probe in probes:
+        probe.command = (0.5, 0.0)
+    for _ in range(20):
+        for probe in probes:
+            probe.spin(0.05)
+    process.proc.send_signal(signal.SIGTERM)
+    try:
+        code = process.proc.wait(timeout=15.0)
+    except subprocess.TimeoutExpired:
+        pytest.fail('the node was still running 15 s after SIGTERM')
+    finally:
+        for probe in probes:
+            probe.command = None
+    assert code == 0, process.output()
+    time.sleep(1.0)  # an orphan would be adopted and reaped by init by now, if it had ended
+    assert not [pid for pid in planning if os.path.exists(f'/proc/{pid}')], \
+        'planning processes outlived the node'
 
 
 @pytest.mark.parametrize('actors, named', [(('a', 'a'), 'repeated'), (('9lives',), '9lives'),
