@@ -499,9 +499,11 @@ class Actor:
         leg = self.skeleton.leg
         offsets = np.where(window.sides == LEFT, leg.hip_half_width, -leg.hip_half_width)
         poses = path.poses(window.arc_lengths)
-        xy = np.stack([path.offset_points(np.array([s]), o)[0]
-                       for s, o in zip(window.arc_lengths, offsets)])
-        return np.column_stack([xy, window.heights, poses[:, 2]])
+        out = np.empty((window.arc_lengths.size, 4))
+        out[:, :2] = path.offset_points(window.arc_lengths, offsets)
+        out[:, 2] = window.heights
+        out[:, 3] = poses[:, 2]
+        return out
 
     def _path_points(self, path, s_end: float) -> np.ndarray:
         s = np.linspace(0.0, max(s_end, 0.1), 24)
