@@ -281,6 +281,8 @@ class Skeleton:
         self.link_names: Tuple[str, ...] = (self.root_link,) + tuple(j.child for j in order)
         self.link_index = {name: i for i, name in enumerate(self.link_names)}
         self._partial_plans = {}
+        # Link index and origin of each shape, per tuple of shape indices (None: all shapes).
+        self._shape_layouts = {}
         self._chain_plan = tuple(
             (self.link_index[j.parent], self.link_index[j.child], j.origin,
              self.index.get(j.name, -1), j.kind, j.axis) for j in order)
@@ -419,14 +421,16 @@ class Skeleton:
         out[:, 0] = np.eye(4)
         chain = self._chain_compiled if links is None else self._plan_for(links)
         parents, children, basis, revolute, revolute_q, prismatic, prismatic_q = chain
-        # Local transforms A + w1 B + w2 C (see _compile_plan), all joints and frames at once.
-        weights = np.zeros((k, len(parents), 1, 3))
-        weights[..., 0] = 1.0
+        # Local transforms A + w1 B + w2 C (see _compile_plan), all joints and frames at once;
+        # written out elementwise, which is several times faster than a stacked (1, 3) @ (3, 16)
+        # matmul per joint and frame.
+        w1 = np.zeros((k, len(parents), 1))
+        w2 = np.zeros((k, len(parents), 1))
         angles = qs[:, revolute_q]
-        weights[:, revolute, 0, 1] = np.cos(angles)
-        weights[:, revolute, 0, 2] = np.sin(angles)
-        weights[:, prismatic, 0, 1] = qs[:, prismatic_q]
-        local = (weights @ basis).reshape(k, len(parents), 4, 4)
+        w1[:, revolute, 0] = np.cos(angles)
+        w2[:, revolute, 0] = np.sin(angles)
+        w1[:, prismatic, 0] = qs[:, prismatic_q]
+        local = (basis[:, 0] + w1 * basis[:, 1] + w2 * basis[:, 2]).reshape(k, len(parents), 4, 4)
         for j, (parent, child) in enumerate(zip(parents, children)):
             np.matmul(out[:, parent], local[:, j], out=out[:, child])
         return out[0] if single else out
@@ -451,8 +455,13 @@ class Skeleton:
             (S, 4, 4) or (k, S, 4, 4).
 
         """
-        chosen = (self.collision_shapes if shapes is None
-                  else [self.collision_shapes[i] for i in shapes])
-        idx = [self.link_index[s.link] for s in chosen]
-        origins = np.stack([s.origin for s in chosen])
-        return link_transforms[..., idx, :, :] @ origins
+        key = None if shapes is None else tuple(int(i) for i in shapes)
+        layout = self._shape_layouts.get(key)
+        if layout is None:
+            chosen = (self.collision_shapes if shapes is None
+                      else [self.collision_shapes[i] for i in shapes])
+            layout = (np.array([self.link_index[s.link] for s in chosen], dtype=int),
+                      np.stack([s.origin for s in chosen]))
+            self._shape_layouts[key] = layout
+        links, origins = layout
+        return link_transforms[..., links, :, :] @ origins
