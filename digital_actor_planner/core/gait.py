@@ -451,7 +451,9 @@ class WalkGenerator:
         -------
         tuple
             (samples (s,) frame indices, along (9,) sole offsets heel..toe in m,
-            tops (s, 9, 2) obstacle heights under the sole, m, NaN over empty space).
+            tops (s, 9, 2) obstacle heights under the sole, m, -inf over empty space,
+            bezier: the swing-height terms that do not depend on the pitch, see
+            :meth:`_bezier_terms`).
 
         """
         along, across = self._sole_along, self._sole_across
@@ -468,7 +470,20 @@ class WalkGenerator:
                   + across[None, None, :, None] * n[:, None, None])
         z_ref = max(lift_foot.z, landing.z) + self.config.max_swing_lift
         tops = swing_profile(points.reshape(-1, 2), z_ref).reshape(len(samples), along.size, -1)
-        return samples, along, tops
+        tops[np.isnan(tops)] = -np.inf
+        return samples, along, tops, self._bezier_terms(tau, samples)
+
+    def _bezier_terms(self, tau, samples):
+        """Per-frame Bernstein weights of the swing Bezier and the clearance terms at the
+        sampled frames (the parts of :meth:`_swing_heights` fixed during one step)."""
+        b = tau[samples]
+        ramp = np.minimum(1.0, 10.0 * np.minimum(b, 1.0 - b))
+        # Near lift-off and touchdown the sole is by definition at its foothold: the
+        # conservative map may read a few mm high there (the 3D check is exact).
+        slack = 0.015 * (1.0 - ramp)
+        sampled = ((1 - b) ** 3, 3 * b * (1 - b) ** 2, 3 * b * b * (1 - b), b ** 3)
+        frames = ((1 - tau) ** 3, 3 * tau * (1 - tau) ** 2, 3 * tau * tau * (1 - tau), tau ** 3)
+        return b, ramp, slack, sampled, frames
 
     def _swing_heights(self, tau, lift_foot: FootPose, landing: FootPose, swing_pitch,
                        footprint):
@@ -482,24 +497,17 @@ class WalkGenerator:
         """
         cfg, leg = self.config, self.leg
         z0, z1 = lift_foot.z, landing.z
-        samples, along, tops = footprint
+        samples, along, tops, (b, ramp, slack, sampled, frames) = footprint
         # Ground relative to a sole pitched like the foot: what the ankle must stay above.
         tops = tops - along[None, :, None] * np.sin(swing_pitch[samples])[:, None, None]
-        ground = np.max(np.where(np.isnan(tops), -np.inf, tops).reshape(len(samples), -1),
-                        axis=1)
-        b = tau[samples]
-        ramp = np.minimum(1.0, 10.0 * np.minimum(b, 1.0 - b))
+        ground = np.max(tops.reshape(len(samples), -1), axis=1)
         need = (ground + leg.ankle_height * np.cos(swing_pitch[samples])
                 + cfg.swing_clearance * ramp)
-        basis_1 = 3 * b * (1 - b) ** 2
-        basis_2 = 3 * b * b * (1 - b)
+        basis_0, basis_1, basis_2, basis_3 = sampled
         # Off a heel-off the toe is on the ground: lift more briskly so it does not scuff.
         h1 = cfg.swing_lift * (2.0 if lift_foot.pitch < -0.05 else 1.0) + max(0.0, z1 - z0)
         h2 = cfg.swing_lift + 0.5 * max(0.0, z0 - z1)
-        start, end = (1 - b) ** 3 * z0, b ** 3 * z1
-        # Near lift-off and touchdown the sole is by definition at its foothold: the
-        # conservative map may read a few mm high there (the 3D check is exact).
-        slack = 0.015 * (1.0 - ramp)
+        start, end = basis_0 * z0, basis_3 * z1
         for _ in range(12):
             curve = start + basis_1 * (z0 + h1) + basis_2 * (z1 + h2) + end
             short = need - curve - slack
@@ -518,8 +526,7 @@ class WalkGenerator:
                 raise GaitError('swing foot cannot clear the terrain')
         else:
             raise GaitError('swing foot cannot clear the terrain')
-        z = ((1 - tau) ** 3 * z0 + 3 * tau * (1 - tau) ** 2 * (z0 + h1)
-             + 3 * tau * tau * (1 - tau) * (z1 + h2) + tau ** 3 * z1)
+        z = frames[0] * z0 + frames[1] * (z0 + h1) + frames[2] * (z1 + h2) + frames[3] * z1
         return z, float(max(h1, h2))
 
 
