@@ -257,7 +257,7 @@ class FootstepPlanner:
         span = np.arange(int(width.max()) if count else 0)
         index = i0[:, None] + span
         mask = span < width[:, None]
-        index = np.clip(index, 0, profile.samples - 1)
+        index = np.minimum(np.maximum(index, 0), profile.samples - 1)
         high = profile.height[side, index]
         low = profile.low[side, index]
         room = np.where(mask, profile.headroom[side, index], np.inf)
@@ -284,8 +284,8 @@ class FootstepPlanner:
         ankle = np.argmin(np.where(mask, np.abs(x), np.inf), axis=1)
         # The ankle's sample and its neighbours must be supported; past either end of the sole
         # there is nothing to ask (a True border column on each side).
-        border = np.ones((count, 1), dtype=bool)
-        padded = np.hstack([border, supported | ~mask, border])
+        padded = np.ones((count, span.size + 2), dtype=bool)
+        padded[:, 1:-1] = supported | ~mask
         around = np.all(padded[np.arange(count)[:, None], ankle[:, None] + _AROUND], axis=1)
         fraction = np.sum(supported, axis=1) / width
         edge = usable & steady & ~flat & around & (fraction >= cfg.min_support_fraction)
@@ -635,7 +635,8 @@ def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: f
         high = np.max(height, axis=1)
         low = np.min(height, axis=1)
         room = np.min(np.where(np.isnan(clearance), 0.0, clearance), axis=1)
-        tops = np.where(np.all(np.isnan(obstacle), axis=1), np.nan,
-                        np.nanmax(np.where(np.isnan(obstacle), -np.inf, obstacle), axis=1))
+        # NaN (nothing to hit) read as -inf, so a plain max is the NaN-ignoring one.
+        tops = np.max(np.where(np.isnan(obstacle), -np.inf, obstacle), axis=1)
+        tops[tops == -np.inf] = np.nan
     return GroundProfile(s0=float(s_start), ds=float(ds), height=high, low=low, headroom=room,
                          obstacle=tops)
