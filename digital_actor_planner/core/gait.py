@@ -350,16 +350,20 @@ class WalkGenerator:
         # posture on the swing height: two passes make the clearance test use the real pitch.
         footprint = self._swing_footprint(bezier, foot_w, landing, swing_xy, plane_yaw,
                                           swing_profile)
+        # The swing leg's IK of the last pass, when its inputs are final (the pass converged).
+        swing_solution = None
         for _ in range(5):
             swing_z, lift = self._swing_heights(bezier, foot_w, landing, swing_pitch, footprint)
             swing_bound = swing_z + np.sqrt(np.maximum(r * r - forward * forward, 0.0))
             z = np.minimum(wanted_z, np.minimum(stance_bound, swing_bound))
             hip = _points(swing_hip_xy, z)
             ankle = _points(swing_xy, swing_z)
-            joints, _, _ = leg_inverse_kinematics(leg, hip, ankle, plane_yaw, yaw, swing_pitch)
+            solution = leg_inverse_kinematics(leg, hip, ankle, plane_yaw, yaw, swing_pitch)
+            joints = solution[0]
             correction = (np.minimum(np.maximum(joints[:, 3], ankle_low), ankle_high)
                           - joints[:, 3]) * fade
             if np.max(np.abs(correction)) < 0.005:
+                swing_solution = (hip, solution)
                 break
             swing_pitch = swing_pitch + correction
 
@@ -375,9 +379,14 @@ class WalkGenerator:
                 (stance_side, stance_hip_xy, np.broadcast_to(foot_s.xy, (k, 2)),
                  np.full(k, foot_s.z), np.full(k, foot_s.yaw), np.full(k, foot_s.pitch)),
                 (swing_side, swing_hip_xy, swing_xy, swing_z, plane_yaw, swing_pitch)):
-            hip = _points(hip_xy, z)
-            ankle = _points(ankle_xy, ankle_z)
-            joints, lateral, reach = leg_inverse_kinematics(leg, hip, ankle, plane, yaw, pitch)
+            if side == swing_side and swing_solution is not None:
+                # The same hip, ankle, plane and pitch as the converged pass: same answer.
+                hip, (joints, lateral, reach) = swing_solution
+            else:
+                hip = _points(hip_xy, z)
+                ankle = _points(ankle_xy, ankle_z)
+                joints, lateral, reach = leg_inverse_kinematics(leg, hip, ankle, plane, yaw,
+                                                                pitch)
             if side == stance_side and np.any(joints[:, 3] > self._leg_upper[side][3] - 0.03):
                 # Heel-off: the stance foot rolls about its toe instead of over-flexing the ankle.
                 joints, foot_s_end = self._heel_off(leg, hip, foot_s, yaw, joints,
