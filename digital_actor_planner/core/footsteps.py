@@ -206,6 +206,7 @@ class FootstepPlanner:
             np.concatenate([(i + 1) * config.step_length_min
                             + config.step_increment * np.arange(counts[i]) for i in range(n)]),
             [int(b) for b in np.cumsum([0] + counts)])
+        self._lengths = config.lengths()
         # Weights and ranges of the effort terms (see _step_effort), as plain floats.
         self._effort_terms = (
             float(config.weight_length), float(config.weight_height),
@@ -258,9 +259,11 @@ class FootstepPlanner:
         index = i0[:, None] + span
         mask = span < width[:, None]
         index = np.minimum(np.maximum(index, 0), profile.samples - 1)
-        high = profile.height[side, index]
-        low = profile.low[side, index]
-        room = np.where(mask, profile.headroom[side, index], np.inf)
+        # One flat index into the (2, K) tracks for all three gathers.
+        flat = side * profile.samples + index
+        high = np.take(profile.height, flat)
+        low = np.take(profile.low, flat)
+        room = np.where(mask, np.take(profile.headroom, flat), np.inf)
         usable = inside & ~np.any(mask & np.isnan(high), axis=1)
         usable &= np.min(room, axis=1) >= cfg.min_headroom
         high = np.where(mask & ~np.isnan(high), high, 0.0)
@@ -345,7 +348,7 @@ class FootstepPlanner:
         """
         cfg = self.config
         n, m = cfg.window_steps, cfg.step_intervals
-        lengths = cfg.lengths()
+        lengths = self._lengths
         init_index = int(np.clip(round((s_init - cfg.step_length_min) / cfg.step_increment), 0, m))
         q = tuple(start) if start is not None else (init_index,) * n
         if len(q) != n or any(not 0 <= j <= m for j in q):
@@ -422,7 +425,7 @@ class FootstepPlanner:
         """The optimum over every configuration of the window (for benchmarks only)."""
         cfg = self.config
         n, m = cfg.window_steps, cfg.step_intervals
-        lengths = cfg.lengths()
+        lengths = self._lengths
         sides = np.array([(1 - stance_side) if i % 2 == 0 else stance_side for i in range(n)])
         memo = self._search_tables(profile, sides, stance_s)
         length_list, side_list = lengths.tolist(), sides.tolist()

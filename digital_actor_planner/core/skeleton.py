@@ -157,6 +157,9 @@ def axis_rotation(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     return rot
 
 
+_IDENTITY = np.eye(4)
+
+
 def _compile_plan(plan) -> tuple:
     """Constant matrices of a kinematic chain plan for :meth:`Skeleton.forward_kinematics`.
 
@@ -418,7 +421,7 @@ class Skeleton:
         k = qs.shape[0]
         out = np.empty((k, len(self.link_names), 4, 4)) if links is None else np.zeros(
             (k, len(self.link_names), 4, 4))
-        out[:, 0] = np.eye(4)
+        out[:, 0] = _IDENTITY
         chain = self._chain_compiled if links is None else self._plan_for(links)
         parents, children, basis, revolute, revolute_q, prismatic, prismatic_q = chain
         # Local transforms A + w1 B + w2 C (see _compile_plan), all joints and frames at once;
