@@ -349,11 +349,17 @@ class BodyCollision:
         # A shape that has not moved since the frame before, where it was tested or found
         # unmoved in turn (a stance foot), needs no other exact test. The 1e-9 m per frame
         # that counts as unmoved adds up to well under a micrometre over a step.
-        poses = transforms[..., :3, :]
-        unmoved = np.zeros_like(suspect)
-        unmoved[1:] = suspect[:-1] & (np.max(np.abs(poses[1:] - poses[:-1]), axis=(-2, -1))
-                                      <= 1e-9)
-        pairs = np.argwhere(suspect & ~unmoved)
+        # Only suspects are compared with the frame before (far fewer than all shapes).
+        pairs = np.argwhere(suspect)
+        after = pairs[pairs[:, 0] > 0]
+        frame, column = after[:, 0], after[:, 1]
+        moved = transforms[frame, column, :3, :] - transforms[frame - 1, column, :3, :]
+        unmoved = suspect[frame - 1, column] & (np.max(np.abs(moved).reshape(-1, 12), axis=1)
+                                                <= 1e-9)
+        if np.any(unmoved):
+            keep = np.ones(pairs.shape[0], dtype=bool)
+            keep[pairs.shape[0] - after.shape[0]:] = ~unmoved
+            pairs = pairs[keep]
         hit_frame, hits = -1, []
         if pairs.shape[0]:
             # Which meshes each tested shape may touch, for all of them at once.
