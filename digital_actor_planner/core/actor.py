@@ -214,8 +214,8 @@ class Actor:
         if not (np.isfinite(linear) and np.isfinite(angular)):
             raise ValueError(f'command must be finite, got linear={linear}, angular={angular}')
         cfg = self.config
-        v = float(np.clip(linear, 0.0, cfg.max_linear_speed))
-        w = float(np.clip(angular, -cfg.max_angular_speed, cfg.max_angular_speed))
+        v = float(min(max(linear, 0.0), cfg.max_linear_speed))
+        w = float(min(max(angular, -cfg.max_angular_speed), cfg.max_angular_speed))
         self._command = (v, w)
         if v != linear or w != angular:
             return (f'command ({linear:g}, {angular:g}) clamped to ({v:g}, {w:g}): limits are '

@@ -349,7 +349,8 @@ class FootstepPlanner:
         cfg = self.config
         n, m = cfg.window_steps, cfg.step_intervals
         lengths = self._lengths
-        init_index = int(np.clip(round((s_init - cfg.step_length_min) / cfg.step_increment), 0, m))
+        init_index = int(min(max(round((s_init - cfg.step_length_min) / cfg.step_increment), 0),
+                             m))
         q = tuple(start) if start is not None else (init_index,) * n
         if len(q) != n or any(not 0 <= j <= m for j in q):
             raise ValueError(f'start configuration {q} is not {n} indices in [0, {m}]')
