@@ -122,3 +122,65 @@ def test_collision_queries_are_fast_enough_for_planning_loops(skeleton, body, st
         body.collides(q, ['left_foot', 'left_shank', 'left_thigh'])
     per_call = (time.perf_counter() - start) / len(configurations)
     assert per_call < 0.005  # generous; bench/bench_environment.py measures it
+
+
+def _reference_half_extents(body, shape, rotation):
+    """World axis-aligned half extents of one shape from its own corners or its axis."""
+    kind, half = body._half_extent[shape]
+    if kind == 'box':
+        corners = np.array(np.meshgrid(*[[-h, h] for h in half])).reshape(3, -1)
+        return np.max(np.abs(rotation @ corners), axis=1)
+    if kind == 'cylinder':
+        axis = rotation[:, 2]
+        return half[0] * np.sqrt(np.clip(1.0 - axis * axis, 0.0, 1.0)) + half[1] * np.abs(axis)
+    return np.full(3, half[0])
+
+
+def test_batched_half_extents_match_each_shape_alone(skeleton, body):
+    rng = np.random.default_rng(5)
+    shapes = list(range(len(body.shapes)))
+    rng.shuffle(shapes)
+    assert {body._half_extent[s][0] for s in shapes} == {'box', 'cylinder', 'sphere'}
+    q = rng.uniform(np.maximum(skeleton.lower, -3), np.minimum(skeleton.upper, 3), (6, 22))
+    rotations = skeleton.shape_transforms(skeleton.forward_kinematics(q),
+                                          shapes=shapes)[..., :3, :3]
+    extents = body._aabb_half_extents(shapes, rotations)
+    for k in range(q.shape[0]):
+        for column, shape in enumerate(shapes):
+            np.testing.assert_allclose(
+                extents[k, column], _reference_half_extents(body, shape, rotations[k, column]),
+                atol=1e-12)
+
+
+def test_first_collision_is_the_first_frame_any_link_touches(skeleton):
+    """The batched check with its broad phase answers what testing every frame answers."""
+    world = Environment([box((-3, -3, -0.2), (3, 3, 0.0)), box((0.25, -3, 0.0), (3, 3, 0.12)),
+                         box((-3, 0.3, 0.0), (3, 3, 0.6))])
+    body = BodyCollision(skeleton, world)
+    legs = ['pelvis', 'left_hip', 'left_thigh', 'left_shank', 'left_foot', 'right_hip',
+            'right_thigh', 'right_shank', 'right_foot']
+    start = start_configuration(world, (0.0, 0.0, 0.0), skeleton)
+    rng = np.random.default_rng(3)
+    outcomes = set()
+    for trial in range(40):
+        goal = start.copy()
+        goal[skeleton.index['root_x']] += rng.uniform(-0.2, 0.4)
+        goal[skeleton.index['root_y']] += rng.uniform(-0.1, 0.25)
+        goal[skeleton.index['root_z']] += rng.uniform(-0.08, 0.05)
+        goal[skeleton.index['root_yaw']] += rng.uniform(-0.5, 0.5)
+        for name in ('left_hip_pitch', 'right_hip_pitch', 'left_knee', 'right_knee',
+                     'left_ankle', 'right_ankle', 'left_hip_yaw'):
+            goal[skeleton.index[name]] += rng.uniform(-0.3, 0.3)
+        frames = start + np.linspace(0.0, 1.0, 30)[:, None] * (goal - start)
+        if trial % 4 == 0:
+            frames[10:] = frames[10]  # a still tail: the unmoved shortcut must not hide a hit
+        expected_frame, expected_links = -1, []
+        for j, q in enumerate(frames):
+            touching = body.links_in_collision(q, legs)
+            if touching:
+                expected_frame, expected_links = j, sorted(touching)
+                break
+        frame, links = body.first_collision(frames, legs)
+        assert (frame, links) == (expected_frame, expected_links), trial
+        outcomes.add(frame >= 0)
+    assert outcomes == {True, False}

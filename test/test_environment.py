@@ -295,3 +295,18 @@ def test_a_closed_mesh_wound_inside_out_is_still_a_solid():
     assert height[1] == pytest.approx(0.0, abs=1e-9) and np.isinf(clearance[1])
     height, _ = env.ground_height(np.array([[0.75, 0.0]]), 1.0)
     assert height[0] == pytest.approx(0.3, abs=1e-9)
+
+
+def test_one_reference_height_for_all_points_matches_one_per_point(world):
+    """A scalar z_ref answers what the same height repeated per point answers, on and off the
+    grid, for NaN points and for non-finite heights."""
+    rng = np.random.default_rng(4)
+    low, high = world.bounds[0, :2] - 0.5, world.bounds[1, :2] + 0.5
+    xy = rng.uniform(low, high, (400, 2))
+    xy[:5] = np.nan
+    for z in (-0.5, 0.05, 0.3, 0.9, 2.0, np.inf, np.nan):
+        scalar = world.ground_height(xy, z)
+        repeated = world.ground_height(xy, np.full(len(xy), z))
+        for a, b in zip(scalar, repeated):
+            np.testing.assert_array_equal(a, b)
+    assert np.all(np.isnan(world.ground_height(xy[:5], 0.3)[0]))

@@ -200,3 +200,29 @@ def test_batched_footholds_agree_with_the_single_foothold(leg):
                 assert np.isnan(height[k])
                 kinds.add('refused')
     assert kinds == {'flat', 'edge or level', 'refused'}
+
+
+def test_search_swing_test_agrees_with_swing_clear(leg):
+    """The search's list-based swing test answers what :meth:`swing_clear` answers."""
+    rng = np.random.default_rng(11)
+    planner = FootstepPlanner(FootstepConfig(), leg)
+    count = 150
+    s0 = -0.3
+    obstacle = (rng.choice([0.0, 0.1, 0.25, 0.5], size=(2, count))
+                + rng.normal(0, 0.01, (2, count)))
+    obstacle[rng.random(obstacle.shape) < 0.2] = np.nan
+    obstacle[1, 40:90] = np.nan
+    profile = GroundProfile(s0=s0, ds=DS, height=obstacle.copy(), low=obstacle.copy(),
+                            headroom=np.full_like(obstacle, np.inf), obstacle=obstacle)
+    memo = planner._search_tables(profile, np.array([LEFT, RIGHT, LEFT]), 0.0)
+    answers = set()
+    for _ in range(2000):
+        side = int(rng.integers(2))
+        s_from = rng.uniform(s0 - 0.5, s0 + DS * count + 0.5)
+        s_to = s_from + rng.uniform(-0.2, 1.6)
+        h_from, h_to = rng.uniform(-0.2, 0.4, 2)
+        expected = planner.swing_clear(profile, side, s_from, h_from, s_to, h_to)
+        assert planner._swing_clear_in(profile, memo, side, s_from, h_from, s_to,
+                                       h_to) == expected
+        answers.add(expected)
+    assert answers == {True, False}

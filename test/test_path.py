@@ -47,3 +47,24 @@ def test_offset_tracks_and_projection():
 def test_bad_input_is_named(args, word):
     with pytest.raises(ValueError, match=word):
         predict_path(*args)
+
+
+@pytest.mark.parametrize('angular', [0.0, 0.7, -1.3])
+def test_offset_points_for_many_tracks_at_once_match_one_track_at_a_time(angular):
+    path = predict_path(0.3, -0.2, 0.4, 0.6, angular, 4.0)
+    rng = np.random.default_rng(3)
+    s = rng.uniform(-0.5, 4.5, 17)
+    laterals = rng.uniform(-0.2, 0.2, 5)
+    tracks = path.offset_points(s, laterals[:, None])
+    assert tracks.shape == (5, 17, 2)
+    poses = path.poses(s)
+    for lateral, points in zip(laterals, tracks):
+        expected = poses[:, :2] + lateral * np.column_stack([-np.sin(poses[:, 2]),
+                                                             np.cos(poses[:, 2])])
+        np.testing.assert_allclose(points, expected, atol=1e-12)
+        np.testing.assert_allclose(path.offset_points(s, lateral), points, atol=1e-15)
+    # One offset per point.
+    per_point = path.offset_points(s[:5], laterals)
+    for i in range(5):
+        np.testing.assert_allclose(per_point[i], path.offset_points(s[i:i + 1], laterals[i])[0],
+                                   atol=1e-15)

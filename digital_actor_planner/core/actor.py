@@ -214,8 +214,8 @@ class Actor:
         if not (np.isfinite(linear) and np.isfinite(angular)):
             raise ValueError(f'command must be finite, got linear={linear}, angular={angular}')
         cfg = self.config
-        v = float(np.clip(linear, 0.0, cfg.max_linear_speed))
-        w = float(np.clip(angular, -cfg.max_angular_speed, cfg.max_angular_speed))
+        v = float(min(max(linear, 0.0), cfg.max_linear_speed))
+        w = float(min(max(angular, -cfg.max_angular_speed), cfg.max_angular_speed))
         self._command = (v, w)
         if v != linear or w != angular:
             return (f'command ({linear:g}, {angular:g}) clamped to ({v:g}, {w:g}): limits are '
@@ -357,10 +357,10 @@ class Actor:
                                         leg.hip_half_width, leg.foot_width, stance_foot.sole,
                                         fcfg.max_step_up, fcfg.window_steps)
         path_points = self._path_points(path, s_end)
-        s_init = float(np.clip(v * cfg.nominal_step_time, fcfg.step_length_min,
-                               fcfg.step_length_max))
-        init_index = int(np.clip(round((s_init - fcfg.step_length_min) / fcfg.step_increment),
-                                 0, fcfg.step_intervals))
+        s_init = float(min(max(v * cfg.nominal_step_time, fcfg.step_length_min),
+                           fcfg.step_length_max))
+        init_index = int(min(max(round((s_init - fcfg.step_length_min) / fcfg.step_increment),
+                                 0), fcfg.step_intervals))
         start = None
         if self._window is not None and self._window_command == (v, w):
             # §4.2: slide the window by one step; the new last step starts at s_init.
@@ -417,16 +417,18 @@ class Actor:
         s1 = float(window.arc_lengths[0])
         side = int(window.sides[0])
         offset = leg.hip_half_width if side == LEFT else -leg.hip_half_width
-        landing_xy = path.offset_points(np.array([s1]), offset)[0]
-        landing_yaw = float(path.poses(np.array([s1]))[0, 2])
         stance_s = s1 - float(window.lengths[0])
-        middle = path.poses(np.array([0.5 * (stance_s + s1)]))[0]
+        # The landing heading and the middle of the step, from one call.
+        poses = path.poses(np.array([s1, 0.5 * (stance_s + s1)]))
+        landing_yaw = float(poses[0, 2])
+        landing_xy = path.offset_points(np.array([s1]), offset)[0]
+        middle = poses[1]
         # The hip yaw range bounds how far the feet may point apart (a turn reversed mid-walk):
         # the new foot turns at most that far from the stance foot; the path catches up.
         stance_yaw = stance.feet[stance.stance_side].yaw
         limit = 1.5 * float(self.skeleton.upper[self.skeleton.index['left_hip_yaw']])
-        turn = float(np.clip((landing_yaw - stance_yaw + np.pi) % (2 * np.pi) - np.pi,
-                             -limit, limit))
+        turn = float(min(max((landing_yaw - stance_yaw + np.pi) % (2 * np.pi) - np.pi,
+                             -limit), limit))
         landing_yaw = stance_yaw + turn
         middle[2] = stance_yaw + 0.5 * turn
         rise = float(window.heights[0]) - stance.feet[stance.stance_side].sole
@@ -499,9 +501,11 @@ class Actor:
         leg = self.skeleton.leg
         offsets = np.where(window.sides == LEFT, leg.hip_half_width, -leg.hip_half_width)
         poses = path.poses(window.arc_lengths)
-        xy = np.stack([path.offset_points(np.array([s]), o)[0]
-                       for s, o in zip(window.arc_lengths, offsets)])
-        return np.column_stack([xy, window.heights, poses[:, 2]])
+        out = np.empty((window.arc_lengths.size, 4))
+        out[:, :2] = path.offset_points(window.arc_lengths, offsets)
+        out[:, 2] = window.heights
+        out[:, 3] = poses[:, 2]
+        return out
 
     def _path_points(self, path, s_end: float) -> np.ndarray:
         s = np.linspace(0.0, max(s_end, 0.1), 24)

@@ -18,6 +18,10 @@ _MAX_CONTACTS = 64
 
 _IDENTITY = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
 
+# Where the broad phase reads the ground map under a shape: its centre and the four corners of
+# its axis-aligned footprint, as multiples of the half extents.
+_FOOTPRINT_CORNERS = np.array([[0, 0], [1, 1], [1, -1], [-1, 1], [-1, -1]], dtype=float)
+
 
 def _matmul(a: Sequence[float], b: Sequence[float]) -> Tuple[float, ...]:
     """Product of two row-major 3x3 matrices held as 9 floats."""
@@ -110,6 +114,13 @@ class BodyCollision:
                        for h in self._half_extent]
         self._mesh_boxes = [(i, tuple(float(v) for v in m.bounds.ravel()))
                             for i, m in enumerate(environment.meshes)]
+        self._mesh_low = np.array([m.bounds[0] for m in environment.meshes], dtype=float)
+        self._mesh_high = np.array([m.bounds[1] for m in environment.meshes], dtype=float)
+        self._reach_array = np.array(self._reach, dtype=float)
+        # first_collision's shapes and links per ``links`` argument, and the shapes of each
+        # kind per tuple of shapes (for the axis-aligned extents).
+        self._broad_phase_sets: Dict[Optional[tuple], tuple] = {}
+        self._extent_groups: Dict[tuple, dict] = {}
         self.link_shapes: Dict[str, Tuple[int, ...]] = {}
         for i, shape in enumerate(self.shapes):
             self.link_shapes[shape.link] = self.link_shapes.get(shape.link, ()) + (i,)
@@ -309,16 +320,21 @@ class BodyCollision:
         if frames.shape[1:] != (len(self.skeleton.joint_names),):
             raise ValueError(f'frames must have shape (k, {len(self.skeleton.joint_names)}), '
                              f'got {frames.shape}')
-        chosen = [s for _, shapes in self._shapes_of(links) for s in shapes]
+        key = None if links is None else tuple(links)
+        chosen_names = self._broad_phase_sets.get(key)
+        if chosen_names is None:
+            chosen = tuple(s for _, shapes in self._shapes_of(links) for s in shapes)
+            chosen_names = (chosen, frozenset(self.shapes[s].link for s in chosen))
+            self._broad_phase_sets[key] = chosen_names
+        chosen, names = chosen_names
         if not chosen or frames.shape[0] == 0:
             return -1, []
-        names = {self.shapes[s].link for s in chosen}
         transforms = self.skeleton.shape_transforms(
             self.skeleton.forward_kinematics(frames, links=names), shapes=chosen)
         centres = transforms[..., :3, 3]
         extent = self._aabb_half_extents(chosen, transforms[..., :3, :3])
-        offsets = np.array([[0, 0], [1, 1], [1, -1], [-1, 1], [-1, -1]], dtype=float)
-        points = centres[:, :, None, :2] + offsets[None, None] * extent[:, :, None, :2]
+        offsets = _FOOTPRINT_CORNERS
+        points = centres[:, :, None, :2] + offsets * extent[:, :, None, :2]
         top = centres[..., 2] + extent[..., 2]
         bottom = centres[..., 2] - extent[..., 2]
         ground, room = self.environment.ground_height(
@@ -326,29 +342,45 @@ class BodyCollision:
         ground = ground.reshape(points.shape[:3])
         room = room.reshape(points.shape[:3])
         with np.errstate(invalid='ignore'):
-            bottom_clear = np.all(bottom[..., None] - ground > margin, axis=-1)
-            ceiling_clear = np.all(ground + room > top[..., None] + margin, axis=-1)
+            # NaN ground (no surface, or inside a solid) leaves a shape suspect.
+            bottom_clear = np.min(bottom[..., None] - ground, axis=-1) > margin
+            ceiling_clear = np.min(ground + room, axis=-1) > top + margin
         suspect = ~(bottom_clear & ceiling_clear)
         # A shape that has not moved since the frame before, where it was tested or found
         # unmoved in turn (a stance foot), needs no other exact test. The 1e-9 m per frame
         # that counts as unmoved adds up to well under a micrometre over a step.
-        poses = transforms[..., :3, :]
-        unmoved = np.zeros_like(suspect)
-        unmoved[1:] = suspect[:-1] & np.all(
-            np.abs(poses[1:] - poses[:-1]) <= 1e-9, axis=(-2, -1))
-        targets = self.environment.objects
+        # Only suspects are compared with the frame before (far fewer than all shapes).
+        pairs = np.argwhere(suspect)
+        after = pairs[pairs[:, 0] > 0]
+        frame, column = after[:, 0], after[:, 1]
+        moved = transforms[frame, column, :3, :] - transforms[frame - 1, column, :3, :]
+        unmoved = suspect[frame - 1, column] & (np.max(np.abs(moved).reshape(-1, 12), axis=1)
+                                                <= 1e-9)
+        if np.any(unmoved):
+            keep = np.ones(pairs.shape[0], dtype=bool)
+            keep[pairs.shape[0] - after.shape[0]:] = ~unmoved
+            pairs = pairs[keep]
         hit_frame, hits = -1, []
-        for j, column in np.argwhere(suspect & ~unmoved).tolist():
-            if hit_frame >= 0 and j != hit_frame:
-                break
-            shape = chosen[column]
-            obj = self._objects[shape]
-            centre = transforms[j, column, :3, 3]
-            obj.setTransform(fcl.Transform(transforms[j, column, :3, :3], centre))
-            if any(fcl.collide(obj, targets[m], self._request, fcl.CollisionResult())
-                   for m in self._candidates_near(centre.tolist(), self._reach[shape])):
-                hit_frame = int(j)
-                hits.append(self.shapes[shape].link)
+        if pairs.shape[0]:
+            # Which meshes each tested shape may touch, for all of them at once.
+            columns = pairs[:, 1]
+            reach = self._reach_array[np.asarray(chosen)[columns]]
+            centre = centres[pairs[:, 0], columns]
+            low, high = centre - reach[:, None], centre + reach[:, None]
+            near = np.all((self._mesh_low <= high[:, None]) & (low[:, None] <= self._mesh_high),
+                          axis=-1).tolist()
+            targets = self.environment.objects
+            for (j, column), meshes in zip(pairs.tolist(), near):
+                if hit_frame >= 0 and j != hit_frame:
+                    break
+                shape = chosen[column]
+                obj = self._objects[shape]
+                obj.setRotation(transforms[j, column, :3, :3])
+                obj.setTranslation(transforms[j, column, :3, 3])
+                if any(fcl.collide(obj, targets[m], self._request, fcl.CollisionResult())
+                       for m, is_near in enumerate(meshes) if is_near):
+                    hit_frame = int(j)
+                    hits.append(self.shapes[shape].link)
         # The objects were moved outside the single-configuration cache: forget it.
         self._cache_values = None
         self._placed = {}
@@ -356,18 +388,32 @@ class BodyCollision:
 
     def _aabb_half_extents(self, shapes: Sequence[int], rotations: np.ndarray) -> np.ndarray:
         """World axis-aligned half extents of shapes: rotations (k, S, 3, 3) -> (k, S, 3), m."""
+        key = tuple(shapes)
+        groups = self._extent_groups.get(key)
+        if groups is None:
+            groups = {}
+            for column, shape in enumerate(shapes):
+                kind, half = self._half_extent[shape]
+                columns, halves = groups.setdefault(kind, ([], []))
+                columns.append(column)
+                halves.append(half)
+            groups = {kind: (np.array(columns, dtype=int), np.array(halves, dtype=float))
+                      for kind, (columns, halves) in groups.items()}
+            self._extent_groups[key] = groups
         out = np.empty(rotations.shape[:-1])
-        for column, shape in enumerate(shapes):
-            kind, half = self._half_extent[shape]
-            rotation = rotations[:, column]
-            if kind == 'box':
-                out[:, column] = np.abs(rotation) @ half
-            elif kind == 'cylinder':
-                axis = np.abs(rotation[..., 2])
-                out[:, column] = (half[0] * np.sqrt(np.clip(1.0 - axis * axis, 0.0, 1.0))
-                                  + half[1] * axis)
-            else:
-                out[:, column] = half[0]
+        # Each kind for all its shapes at once (the per-shape loop was mostly call overhead).
+        if 'box' in groups:
+            columns, halves = groups['box']
+            out[:, columns] = (np.abs(rotations[:, columns]) @ halves[:, :, None])[..., 0]
+        if 'cylinder' in groups:
+            columns, halves = groups['cylinder']
+            axis = np.abs(rotations[:, columns][..., 2])
+            out[:, columns] = (halves[:, 0, None] * np.sqrt(
+                np.minimum(np.maximum(1.0 - axis * axis, 0.0), 1.0))
+                + halves[:, 1, None] * axis)
+        if 'sphere' in groups:
+            columns, halves = groups['sphere']
+            out[:, columns] = halves[:, 0, None]
         return out
 
     def links_in_collision(self, q, links: Optional[Iterable[str]] = None) -> List[str]:

@@ -609,10 +609,10 @@ class Environment:
         fx = (xy[:, 0] - self._origin[0]) * self._inverse_resolution
         fy = (xy[:, 1] - self._origin[1]) * self._inverse_resolution
         valid = (fx >= 0) & (fx <= nx - 1) & (fy >= 0) & (fy <= ny - 1)
-        fx[~valid] = 0.0
-        fy[~valid] = 0.0
-        cell = (np.minimum(fy.astype(np.int64), ny - 2) * (nx - 1)
-                + np.minimum(fx.astype(np.int64), nx - 2))
+        # Off the grid (or NaN) the index is clamped into range; those points are not valid.
+        column = np.fmin(np.fmax(fx, 0.0), nx - 2).astype(np.int64)
+        row = np.fmin(np.fmax(fy, 0.0), ny - 2).astype(np.int64)
+        cell = row * (nx - 1) + column
         return cell, valid
 
     def lowest_ground(self, xy) -> np.ndarray:
@@ -670,19 +670,25 @@ class Environment:
         if xy.ndim != 2 or xy.shape[1] != 2:
             raise ValueError(f'xy must have shape (N, 2), got {xy.shape}')
         z = np.asarray(z_ref, dtype=float)
+        cell, valid = self._cells(xy)
         if z.ndim == 0:
-            z = np.full(len(xy), float(z))
+            # One height for all points: kept a scalar (broadcast), not a filled array.
+            z = float(z)
+            if not abs(z) < np.inf:
+                valid[:] = False
+            z_column = z
         elif z.shape != (len(xy),):
             raise ValueError(f'z_ref must be a scalar or shape ({len(xy)},), got {z.shape}')
-        cell, valid = self._cells(xy)
-        valid &= np.abs(z) < np.inf
+        else:
+            valid &= np.abs(z) < np.inf
+            z_column = z[:, None]
         layers = self._layers
         if layers == 1:
             height = self._ground_flat[cell]
             ceiling = self._ceiling_flat[cell]
             bad = ~(height <= z + _Z_TOLERANCE)
         else:
-            level = np.count_nonzero(self._ground[cell] <= (z + _Z_TOLERANCE)[:, None],
+            level = np.count_nonzero(self._ground[cell] <= z_column + _Z_TOLERANCE,
                                      axis=1) - 1
             bad = level < 0
             flat = cell * layers + level

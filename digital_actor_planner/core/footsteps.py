@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass, field
+import math
 from typing import Dict, List, Optional, Tuple
 
 import numpy as np
@@ -168,11 +169,14 @@ class _Search:
 
     ``ok[i][c]``, ``height[i][c]``, ``pitch[i][c]``: the foothold of footstep i when the
     interval indices of footsteps 1..i+1 sum to c (its arc length depends only on that sum).
+    ``obstacle[side]``: the profile's swing obstacle heights as a list, -inf over empty space
+    (so a range maximum over a slice is the swing test's).
     """
 
     ok: List[list]
     height: List[list]
     pitch: List[list]
+    obstacle: Tuple[list, list] = ((), ())
     swings: Dict[tuple, bool] = field(default_factory=dict)
     feasible: Dict[Tuple[int, ...], Optional[float]] = field(default_factory=dict)
 
@@ -202,6 +206,13 @@ class FootstepPlanner:
             np.concatenate([(i + 1) * config.step_length_min
                             + config.step_increment * np.arange(counts[i]) for i in range(n)]),
             [int(b) for b in np.cumsum([0] + counts)])
+        self._lengths = config.lengths()
+        # Weights and ranges of the effort terms (see _step_effort), as plain floats.
+        self._effort_terms = (
+            float(config.weight_length), float(config.weight_height),
+            float(config.weight_pitch), float(config.weight_smooth),
+            float(config.step_length_max - config.step_length_min),
+            float(max(config.max_step_up, 1e-6)), float(max(config.max_foot_pitch, 1e-6)))
 
     # -- the ground under a sole -----------------------------------------------------------
     def foothold(self, profile: GroundProfile, side: int, s: float) -> Foothold:
@@ -247,10 +258,12 @@ class FootstepPlanner:
         span = np.arange(int(width.max()) if count else 0)
         index = i0[:, None] + span
         mask = span < width[:, None]
-        index = np.clip(index, 0, profile.samples - 1)
-        high = profile.height[side, index]
-        low = profile.low[side, index]
-        room = np.where(mask, profile.headroom[side, index], np.inf)
+        index = np.minimum(np.maximum(index, 0), profile.samples - 1)
+        # One flat index into the (2, K) tracks for all three gathers.
+        flat = side * profile.samples + index
+        high = np.take(profile.height, flat)
+        low = np.take(profile.low, flat)
+        room = np.where(mask, np.take(profile.headroom, flat), np.inf)
         usable = inside & ~np.any(mask & np.isnan(high), axis=1)
         usable &= np.min(room, axis=1) >= cfg.min_headroom
         high = np.where(mask & ~np.isnan(high), high, 0.0)
@@ -274,8 +287,8 @@ class FootstepPlanner:
         ankle = np.argmin(np.where(mask, np.abs(x), np.inf), axis=1)
         # The ankle's sample and its neighbours must be supported; past either end of the sole
         # there is nothing to ask (a True border column on each side).
-        border = np.ones((count, 1), dtype=bool)
-        padded = np.hstack([border, supported | ~mask, border])
+        padded = np.ones((count, span.size + 2), dtype=bool)
+        padded[:, 1:-1] = supported | ~mask
         around = np.all(padded[np.arange(count)[:, None], ankle[:, None] + _AROUND], axis=1)
         fraction = np.sum(supported, axis=1) / width
         edge = usable & steady & ~flat & around & (fraction >= cfg.min_support_fraction)
@@ -335,13 +348,15 @@ class FootstepPlanner:
         """
         cfg = self.config
         n, m = cfg.window_steps, cfg.step_intervals
-        lengths = cfg.lengths()
-        init_index = int(np.clip(round((s_init - cfg.step_length_min) / cfg.step_increment), 0, m))
+        lengths = self._lengths
+        init_index = int(min(max(round((s_init - cfg.step_length_min) / cfg.step_increment), 0),
+                             m))
         q = tuple(start) if start is not None else (init_index,) * n
         if len(q) != n or any(not 0 <= j <= m for j in q):
             raise ValueError(f'start configuration {q} is not {n} indices in [0, {m}]')
         sides = np.array([(1 - stance_side) if i % 2 == 0 else stance_side for i in range(n)])
         memo = self._search_tables(profile, sides, stance_s)
+        length_list, side_list = lengths.tolist(), sides.tolist()
         banned = set(int(b) for b in banned_first)
         banned_lengths = set(int(j) for j in np.flatnonzero(lengths > max_length + 1e-9))
 
@@ -352,8 +367,9 @@ class FootstepPlanner:
             if banned_lengths.intersection(config):
                 memo.feasible[config] = None
                 return None
-            result = self._effort(profile, config, lengths, sides, stance_s, stance_height,
-                                  swing_s, swing_height, s_init, previous_length, memo, banned)
+            result = self._effort(profile, config, length_list, side_list, stance_s,
+                                  stance_height, swing_s, swing_height, s_init, previous_length,
+                                  memo, banned)
             memo.feasible[config] = result
             return result
 
@@ -395,7 +411,7 @@ class FootstepPlanner:
             # A second hill-climb from a configuration built footstep by footstep: on stairs and
             # blocks the feasible configurations fall apart into basins (a foothold on every
             # tread or on every other one) and the first climb cannot leave its basin.
-            seed = self._greedy_seed(memo, lengths, stance_height, s_init, previous_length,
+            seed = self._greedy_seed(memo, length_list, stance_height, s_init, previous_length,
                                      banned, banned_lengths)
             if seed is not None and seed != current and evaluate(seed) is not None:
                 other, other_effort = climb(seed)
@@ -410,13 +426,15 @@ class FootstepPlanner:
         """The optimum over every configuration of the window (for benchmarks only)."""
         cfg = self.config
         n, m = cfg.window_steps, cfg.step_intervals
-        lengths = cfg.lengths()
+        lengths = self._lengths
         sides = np.array([(1 - stance_side) if i % 2 == 0 else stance_side for i in range(n)])
         memo = self._search_tables(profile, sides, stance_s)
+        length_list, side_list = lengths.tolist(), sides.tolist()
         best, best_effort = None, np.inf
         for config in np.ndindex(*([m + 1] * n)):
-            value = self._effort(profile, tuple(config), lengths, sides, stance_s, stance_height,
-                                 swing_s, swing_height, s_init, previous_length, memo, set())
+            value = self._effort(profile, tuple(config), length_list, side_list, stance_s,
+                                 stance_height, swing_s, swing_height, s_init, previous_length,
+                                 memo, set())
             if value is not None and value < best_effort:
                 best, best_effort = tuple(config), value
         if best is None:
@@ -430,8 +448,22 @@ class FootstepPlanner:
         ok, height, pitch = self.footholds(profile, sides[step], stance_s + offsets)
         ok, height, pitch = ok.tolist(), height.tolist(), pitch.tolist()
         rows = list(zip(bounds[:-1], bounds[1:]))
+        obstacle = np.where(np.isnan(profile.obstacle), -np.inf, profile.obstacle).tolist()
         return _Search(ok=[ok[a:b] for a, b in rows], height=[height[a:b] for a, b in rows],
-                       pitch=[pitch[a:b] for a, b in rows])
+                       pitch=[pitch[a:b] for a, b in rows],
+                       obstacle=(obstacle[0], obstacle[1]))
+
+    def _swing_clear_in(self, profile, memo: _Search, side: int, s_from: float, h_from: float,
+                        s_to: float, h_to: float) -> bool:
+        """:meth:`swing_clear` on the search's lists (the same test without NumPy calls)."""
+        i0 = max(math.floor((s_from + self.leg.toe - profile.s0) / profile.ds), 0)
+        i1 = min(math.ceil((s_to - self.leg.heel - profile.s0) / profile.ds),
+                 profile.samples - 1)
+        if i1 < i0:
+            return True
+        # -inf (empty space) passes: there is nothing to hit.
+        return max(memo.obstacle[side][i0:i1 + 1]) <= (max(h_from, h_to)
+                                                       + self.config.max_swing_height)
 
     def _greedy_seed(self, memo, lengths, stance_height, s_init, previous_length, banned_first,
                      banned_lengths) -> Optional[Tuple[int, ...]]:
@@ -494,12 +526,12 @@ class FootstepPlanner:
         placed = {-2: (swing_s, swing_height), -1: (stance_s, stance_height)}
         s, height_before, effort, length_before = stance_s, stance_height, 0.0, previous_length
         cumulative = 0
-        previous_key = {int(sides[0]): -2, int(1 - sides[0]): -1}
+        previous_key = {sides[0]: -2, 1 - sides[0]: -1}
         for i, j in enumerate(config):
             length = lengths[j]
             s += length
             cumulative += j
-            side = int(sides[i])
+            side = sides[i]
             key = (i, cumulative)
             if not memo.ok[i][cumulative]:
                 return None
@@ -512,7 +544,8 @@ class FootstepPlanner:
             clear = memo.swings.get(swing_key)
             if clear is None:
                 s_from, h_from = placed[origin]
-                clear = self.swing_clear(profile, side, s_from, h_from, s, hold_height)
+                clear = self._swing_clear_in(profile, memo, side, s_from, h_from, s,
+                                             hold_height)
                 memo.swings[swing_key] = clear
             if not clear:
                 return None
@@ -526,12 +559,11 @@ class FootstepPlanner:
     def _step_effort(self, length, rise, pitch, length_before, s_init) -> float:
         """One footstep's share of the effort: length off the neutral one, height change, sole
         pitch and change of length, each normalised by its range."""
-        cfg = self.config
-        span = cfg.step_length_max - cfg.step_length_min
-        return (cfg.weight_length * ((length - s_init) / span) ** 2
-                + cfg.weight_height * (rise / max(cfg.max_step_up, 1e-6)) ** 2
-                + cfg.weight_pitch * (pitch / max(cfg.max_foot_pitch, 1e-6)) ** 2
-                + cfg.weight_smooth * ((length - length_before) / span) ** 2)
+        w_length, w_height, w_pitch, w_smooth, span, up, pitch_range = self._effort_terms
+        return (w_length * ((length - s_init) / span) ** 2
+                + w_height * (rise / up) ** 2
+                + w_pitch * (pitch / pitch_range) ** 2
+                + w_smooth * ((length - length_before) / span) ** 2)
 
     def _window(self, profile, config, lengths, sides, stance_s, effort, evaluated, memo):
         ls = lengths[list(config)]
@@ -581,8 +613,9 @@ def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: f
     count = int(np.ceil((s_end - s_start) / ds)) + 1
     s = s_start + ds * np.arange(count)
     across = np.array([-0.4, 0.0, 0.4]) * foot_width
-    points = np.stack([path.offset_points(s, side_offset + a)
-                       for side_offset in (hip_half_width, -hip_half_width) for a in across])
+    # Left track first, then right; three lines across each sole.
+    tracks = np.concatenate([hip_half_width + across, -hip_half_width + across])
+    points = path.offset_points(s, tracks[:, None])
     xy = points.reshape(-1, 2)
     height, clearance = environment.ground_height(xy, base_height + max_step_up + 0.02)
     for level in range(1, max(levels, 1)):
@@ -606,7 +639,8 @@ def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: f
         high = np.max(height, axis=1)
         low = np.min(height, axis=1)
         room = np.min(np.where(np.isnan(clearance), 0.0, clearance), axis=1)
-        tops = np.where(np.all(np.isnan(obstacle), axis=1), np.nan,
-                        np.nanmax(np.where(np.isnan(obstacle), -np.inf, obstacle), axis=1))
+        # NaN (nothing to hit) read as -inf, so a plain max is the NaN-ignoring one.
+        tops = np.max(np.where(np.isnan(obstacle), -np.inf, obstacle), axis=1)
+        tops[tops == -np.inf] = np.nan
     return GroundProfile(s0=float(s_start), ds=float(ds), height=high, low=low, headroom=room,
                          obstacle=tops)

@@ -100,7 +100,8 @@ class StepMotion:
 
 def smoothstep(t: np.ndarray) -> np.ndarray:
     """Cubic ease 3t^2 - 2t^3 on [0, 1] (also the horizontal part of the swing Bezier)."""
-    t = np.clip(t, 0.0, 1.0)
+    # minimum/maximum rather than clip: the same values for a fraction of the call overhead.
+    t = np.minimum(np.maximum(t, 0.0), 1.0)
     return t * t * (3.0 - 2.0 * t)
 
 
@@ -110,7 +111,19 @@ def _wrap(angle):
 
 def _lateral(yaw, offset):
     """World xy of a point ``offset`` m to the left of a heading ``yaw``: (..., 2)."""
-    return np.stack([-np.sin(yaw) * offset, np.cos(yaw) * offset], axis=-1)
+    yaw = np.asarray(yaw, dtype=float)
+    out = np.empty(yaw.shape + (2,))
+    out[..., 0] = -np.sin(yaw) * offset
+    out[..., 1] = np.cos(yaw) * offset
+    return out
+
+
+def _points(xy: np.ndarray, z) -> np.ndarray:
+    """(k, 3) points from (k, 2) xy and heights z (scalar or (k,)), m."""
+    out = np.empty((xy.shape[0], 3))
+    out[:, :2] = xy
+    out[:, 2] = z
+    return out
 
 
 def foot_pose_on(xy, yaw, sole, pitch, leg: LegGeometry) -> FootPose:
@@ -157,22 +170,27 @@ def leg_inverse_kinematics(leg: LegGeometry, hip: np.ndarray, ankle: np.ndarray,
         distance of the ankle, m; reach (k,) hip-ankle distance over the maximum).
 
     """
+    # Few frames per call and many calls: minimum/maximum instead of clip and no stacking
+    # keep the NumPy call overhead down (the values are the same).
     v = ankle - hip
-    direction = np.stack([np.cos(plane_yaw), np.sin(plane_yaw)], axis=-1)
-    forward = np.sum(v[:, :2] * direction, axis=-1)
-    lateral = v[:, 0] * -direction[:, 1] + v[:, 1] * direction[:, 0]
+    cos_yaw, sin_yaw = np.cos(plane_yaw), np.sin(plane_yaw)
+    forward = v[:, 0] * cos_yaw + v[:, 1] * sin_yaw
+    lateral = v[:, 0] * -sin_yaw + v[:, 1] * cos_yaw
     down = -v[:, 2]
     distance = np.hypot(forward, down)
     l1, l2 = leg.thigh, leg.shank
     reach = distance / (l1 + l2)
-    d = np.clip(distance, 1e-6, l1 + l2)
-    cos_knee = np.clip((l1 * l1 + l2 * l2 - d * d) / (2 * l1 * l2), -1.0, 1.0)
+    d = np.minimum(np.maximum(distance, 1e-6), l1 + l2)
+    cos_knee = np.minimum(np.maximum((l1 * l1 + l2 * l2 - d * d) / (2 * l1 * l2), -1.0), 1.0)
+    joints = np.empty((v.shape[0], 4))
     knee = np.pi - np.arccos(cos_knee)
-    cos_beta = np.clip((l1 * l1 + d * d - l2 * l2) / (2 * l1 * d), -1.0, 1.0)
+    cos_beta = np.minimum(np.maximum((l1 * l1 + d * d - l2 * l2) / (2 * l1 * d), -1.0), 1.0)
     hip_pitch = np.arctan2(forward, down) + np.arccos(cos_beta)
-    ankle_angle = foot_pitch - (hip_pitch - knee)
-    hip_yaw = _wrap(plane_yaw - pelvis_yaw)
-    return np.stack([hip_yaw, hip_pitch, knee, ankle_angle], axis=-1), lateral, reach
+    joints[:, 0] = _wrap(plane_yaw - pelvis_yaw)
+    joints[:, 1] = hip_pitch
+    joints[:, 2] = knee
+    joints[:, 3] = foot_pitch - (hip_pitch - knee)
+    return joints, lateral, reach
 
 
 def _ease(tau: np.ndarray, from_rest: bool, to_rest: bool) -> np.ndarray:
@@ -212,12 +230,15 @@ class WalkGenerator:
         self._leg_lower = {s: skeleton.lower[i] for s, i in self._leg_index.items()}
         self._leg_upper = {s: skeleton.upper[i] for s, i in self._leg_index.items()}
         self._root = skeleton.branch('root')
+        # Where the swing clearance looks under the sole: 9 points heel..toe, 2 across, m.
+        self._sole_along = np.linspace(-self.leg.heel, self.leg.toe, 9)
+        self._sole_across = np.array([-0.5, 0.5]) * self.leg.foot_width
 
     def step_duration(self, length: float, speed: float, rise: float) -> float:
         """Duration of a step of ``length`` m at ``speed`` m/s changing height by ``rise`` m."""
         cfg = self.config
         base = length / max(speed, cfg.min_turn_speed, 1e-3)
-        duration = float(np.clip(base, cfg.min_step_time, cfg.max_step_time))
+        duration = float(min(max(base, cfg.min_step_time), cfg.max_step_time))
         duration += cfg.time_per_rise * abs(rise)
         return np.ceil(duration * cfg.frame_rate - 1e-9) / cfg.frame_rate
 
@@ -299,7 +320,9 @@ class WalkGenerator:
         plane_yaw = foot_w.yaw + _wrap(landing.yaw - foot_w.yaw) * smoothstep((bezier - 0.2)
                                                                               / 0.55)
         wanted_xy = foot_w.xy + p[:, None] * (landing.xy - foot_w.xy)
-        direction = np.stack([np.cos(plane_yaw), np.sin(plane_yaw)], axis=-1)
+        direction = np.empty((k, 2))
+        direction[:, 0] = np.cos(plane_yaw)
+        direction[:, 1] = np.sin(plane_yaw)
         forward = np.sum((wanted_xy - swing_hip_xy) * direction, axis=-1)
         swing_xy = swing_hip_xy + forward[:, None] * direction
         # The sole levels out early in the swing (after a heel-off) and takes the landing
@@ -327,29 +350,43 @@ class WalkGenerator:
         # posture on the swing height: two passes make the clearance test use the real pitch.
         footprint = self._swing_footprint(bezier, foot_w, landing, swing_xy, plane_yaw,
                                           swing_profile)
+        # The swing leg's IK of the last pass, when its inputs are final (the pass converged).
+        swing_solution = None
         for _ in range(5):
             swing_z, lift = self._swing_heights(bezier, foot_w, landing, swing_pitch, footprint)
             swing_bound = swing_z + np.sqrt(np.maximum(r * r - forward * forward, 0.0))
             z = np.minimum(wanted_z, np.minimum(stance_bound, swing_bound))
-            hip = np.column_stack([swing_hip_xy, z])
-            ankle = np.column_stack([swing_xy, swing_z])
-            joints, _, _ = leg_inverse_kinematics(leg, hip, ankle, plane_yaw, yaw, swing_pitch)
-            correction = (np.clip(joints[:, 3], ankle_low, ankle_high) - joints[:, 3]) * fade
+            hip = _points(swing_hip_xy, z)
+            ankle = _points(swing_xy, swing_z)
+            solution = leg_inverse_kinematics(leg, hip, ankle, plane_yaw, yaw, swing_pitch)
+            joints = solution[0]
+            correction = (np.minimum(np.maximum(joints[:, 3], ankle_low), ankle_high)
+                          - joints[:, 3]) * fade
             if np.max(np.abs(correction)) < 0.005:
+                swing_solution = (hip, solution)
                 break
             swing_pitch = swing_pitch + correction
 
         foot_end = [None, None]
         foot_end[stance_side] = foot_s
         frames = np.zeros((k, len(self.skeleton.joint_names)))
-        frames[:, self._root] = np.stack([pelvis_xy[:, 0], pelvis_xy[:, 1], z, yaw], axis=-1)
+        pelvis = np.empty((k, 4))
+        pelvis[:, :2] = pelvis_xy
+        pelvis[:, 2] = z
+        pelvis[:, 3] = yaw
+        frames[:, self._root] = pelvis
         for side, hip_xy, ankle_xy, ankle_z, plane, pitch in (
                 (stance_side, stance_hip_xy, np.broadcast_to(foot_s.xy, (k, 2)),
                  np.full(k, foot_s.z), np.full(k, foot_s.yaw), np.full(k, foot_s.pitch)),
                 (swing_side, swing_hip_xy, swing_xy, swing_z, plane_yaw, swing_pitch)):
-            hip = np.column_stack([hip_xy, z])
-            ankle = np.column_stack([ankle_xy, ankle_z])
-            joints, lateral, reach = leg_inverse_kinematics(leg, hip, ankle, plane, yaw, pitch)
+            if side == swing_side and swing_solution is not None:
+                # The same hip, ankle, plane and pitch as the converged pass: same answer.
+                hip, (joints, lateral, reach) = swing_solution
+            else:
+                hip = _points(hip_xy, z)
+                ankle = _points(ankle_xy, ankle_z)
+                joints, lateral, reach = leg_inverse_kinematics(leg, hip, ankle, plane, yaw,
+                                                                pitch)
             if side == stance_side and np.any(joints[:, 3] > self._leg_upper[side][3] - 0.03):
                 # Heel-off: the stance foot rolls about its toe instead of over-flexing the ankle.
                 joints, foot_s_end = self._heel_off(leg, hip, foot_s, yaw, joints,
@@ -360,8 +397,8 @@ class WalkGenerator:
                 # free, so the ankle stays inside its range; contact frames are unchanged.
                 # It rolls on from a heel-off at lift-off; the correction fades out towards
                 # touchdown, where the sole must meet its foothold flat.
-                wanted = np.clip(joints[:, 3], self._leg_lower[side][3] + 0.02,
-                                 self._leg_upper[side][3] - 0.02)
+                wanted = np.minimum(np.maximum(joints[:, 3], self._leg_lower[side][3] + 0.02),
+                                    self._leg_upper[side][3] - 0.02)
                 joints[:, 3] += (wanted - joints[:, 3]) * np.minimum(1.0, 6.0 * (1 - tau))
             if np.max(reach) > 1.0 + 1e-9:
                 raise GaitError(f'{"left" if side == LEFT else "right"} leg out of reach')
@@ -423,21 +460,39 @@ class WalkGenerator:
         -------
         tuple
             (samples (s,) frame indices, along (9,) sole offsets heel..toe in m,
-            tops (s, 9, 2) obstacle heights under the sole, m, NaN over empty space).
+            tops (s, 9, 2) obstacle heights under the sole, m, -inf over empty space,
+            bezier: the swing-height terms that do not depend on the pitch, see
+            :meth:`_bezier_terms`).
 
         """
-        leg = self.leg
-        along = np.linspace(-leg.heel, leg.toe, 9)
-        across = np.array([-0.5, 0.5]) * leg.foot_width
-        samples = np.unique(np.append(np.arange(0, tau.size, max(1, tau.size // 24)),
-                                      tau.size - 1))
-        d = np.stack([np.cos(plane_yaw[samples]), np.sin(plane_yaw[samples])], axis=-1)
-        n = np.stack([-d[:, 1], d[:, 0]], axis=-1)
+        along, across = self._sole_along, self._sole_across
+        samples = np.arange(0, tau.size, max(1, tau.size // 24))
+        if samples[-1] != tau.size - 1:
+            samples = np.append(samples, tau.size - 1)
+        d = np.empty((samples.size, 2))
+        d[:, 0] = np.cos(plane_yaw[samples])
+        d[:, 1] = np.sin(plane_yaw[samples])
+        n = np.empty_like(d)
+        n[:, 0] = -d[:, 1]
+        n[:, 1] = d[:, 0]
         points = (swing_xy[samples, None, None, :] + along[None, :, None, None] * d[:, None, None]
                   + across[None, None, :, None] * n[:, None, None])
         z_ref = max(lift_foot.z, landing.z) + self.config.max_swing_lift
         tops = swing_profile(points.reshape(-1, 2), z_ref).reshape(len(samples), along.size, -1)
-        return samples, along, tops
+        tops[np.isnan(tops)] = -np.inf
+        return samples, along, tops, self._bezier_terms(tau, samples)
+
+    def _bezier_terms(self, tau, samples):
+        """Per-frame Bernstein weights of the swing Bezier and the clearance terms at the
+        sampled frames (the parts of :meth:`_swing_heights` fixed during one step)."""
+        b = tau[samples]
+        ramp = np.minimum(1.0, 10.0 * np.minimum(b, 1.0 - b))
+        # Near lift-off and touchdown the sole is by definition at its foothold: the
+        # conservative map may read a few mm high there (the 3D check is exact).
+        slack = 0.015 * (1.0 - ramp)
+        sampled = ((1 - b) ** 3, 3 * b * (1 - b) ** 2, 3 * b * b * (1 - b), b ** 3)
+        frames = ((1 - tau) ** 3, 3 * tau * (1 - tau) ** 2, 3 * tau * tau * (1 - tau), tau ** 3)
+        return b, ramp, slack, sampled, frames
 
     def _swing_heights(self, tau, lift_foot: FootPose, landing: FootPose, swing_pitch,
                        footprint):
@@ -451,28 +506,23 @@ class WalkGenerator:
         """
         cfg, leg = self.config, self.leg
         z0, z1 = lift_foot.z, landing.z
-        samples, along, tops = footprint
+        samples, along, tops, (b, ramp, slack, sampled, frames) = footprint
         # Ground relative to a sole pitched like the foot: what the ankle must stay above.
         tops = tops - along[None, :, None] * np.sin(swing_pitch[samples])[:, None, None]
-        ground = np.max(np.where(np.isnan(tops), -np.inf, tops).reshape(len(samples), -1),
-                        axis=1)
-        b = tau[samples]
-        ramp = np.minimum(1.0, 10.0 * np.minimum(b, 1.0 - b))
+        ground = np.max(tops.reshape(len(samples), -1), axis=1)
         need = (ground + leg.ankle_height * np.cos(swing_pitch[samples])
                 + cfg.swing_clearance * ramp)
-        basis_1 = 3 * b * (1 - b) ** 2
-        basis_2 = 3 * b * b * (1 - b)
+        basis_0, basis_1, basis_2, basis_3 = sampled
         # Off a heel-off the toe is on the ground: lift more briskly so it does not scuff.
         h1 = cfg.swing_lift * (2.0 if lift_foot.pitch < -0.05 else 1.0) + max(0.0, z1 - z0)
         h2 = cfg.swing_lift + 0.5 * max(0.0, z0 - z1)
+        start, end = basis_0 * z0, basis_3 * z1
         for _ in range(12):
-            curve = (1 - b) ** 3 * z0 + basis_1 * (z0 + h1) + basis_2 * (z1 + h2) + b ** 3 * z1
-            # Near lift-off and touchdown the sole is by definition at its foothold: the
-            # conservative map may read a few mm high there (the 3D check is exact).
-            short = need - curve - 0.015 * (1.0 - ramp)
-            if np.all(short <= 1e-4):
-                break
+            curve = start + basis_1 * (z0 + h1) + basis_2 * (z1 + h2) + end
+            short = need - curve - slack
             worst = int(np.argmax(short))
+            if short[worst] <= 1e-4:
+                break
             weight = basis_1[worst] + basis_2[worst]
             raise_by = min(short[worst] / max(weight, 0.05), 0.15) + 0.005
             if b[worst] < 0.5:
@@ -485,8 +535,7 @@ class WalkGenerator:
                 raise GaitError('swing foot cannot clear the terrain')
         else:
             raise GaitError('swing foot cannot clear the terrain')
-        z = ((1 - tau) ** 3 * z0 + 3 * tau * (1 - tau) ** 2 * (z0 + h1)
-             + 3 * tau * tau * (1 - tau) * (z1 + h2) + tau ** 3 * z1)
+        z = frames[0] * z0 + frames[1] * (z0 + h1) + frames[2] * (z1 + h2) + frames[3] * z1
         return z, float(max(h1, h2))
 
 

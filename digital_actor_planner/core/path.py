@@ -7,6 +7,7 @@ next n steps can be further derived." A constant command (v, w) traces a circula
 from __future__ import annotations
 
 from dataclasses import dataclass
+import math
 
 import numpy as np
 
@@ -47,20 +48,49 @@ class PredictedPath:
 
         """
         s = np.asarray(s, dtype=float)
-        heading = self.heading + self.curvature * s
-        if abs(self.curvature) < 1e-9:
-            x = self.x + s * np.cos(self.heading)
-            y = self.y + s * np.sin(self.heading)
-        else:
-            x = self.x + (np.sin(heading) - np.sin(self.heading)) / self.curvature
-            y = self.y - (np.cos(heading) - np.cos(self.heading)) / self.curvature
-        return np.stack([x, y, heading], axis=-1)
+        x, y, heading, _, _ = self._points(s)
+        out = np.empty(s.shape + (3,))
+        out[..., 0] = x
+        out[..., 1] = y
+        out[..., 2] = heading
+        return out
 
-    def offset_points(self, s: np.ndarray, lateral: float) -> np.ndarray:
-        """Points on the parallel track ``lateral`` m to the left of the path: (N, 2), m."""
-        poses = self.poses(s)
-        normal = np.stack([-np.sin(poses[:, 2]), np.cos(poses[:, 2])], axis=-1)
-        return poses[:, :2] + lateral * normal
+    def offset_points(self, s: np.ndarray, lateral) -> np.ndarray:
+        """Points on the parallel tracks ``lateral`` m to the left of the path.
+
+        Parameters
+        ----------
+        s
+            (N,) arc lengths, m (any shape that broadcasts with ``lateral``).
+        lateral
+            Scalar, or an array that broadcasts with ``s`` (e.g. (T, 1) for T tracks), m.
+
+        Returns
+        -------
+        numpy.ndarray
+            (N, 2) points, m; (T, N, 2) for (T, 1) offsets: the broadcast shape then x, y.
+
+        """
+        s = np.asarray(s, dtype=float)
+        lateral = np.asarray(lateral, dtype=float)
+        x, y, _, sin, cos = self._points(s)
+        out = np.empty(np.broadcast_shapes(s.shape, lateral.shape) + (2,))
+        # The track's normal (left of the heading) is (-sin, cos).
+        out[..., 0] = x - lateral * sin
+        out[..., 1] = y + lateral * cos
+        return out
+
+    def _points(self, s: np.ndarray):
+        """Centre-line x, y (m), heading (rad) and its sine and cosine at arc lengths ``s``."""
+        heading = self.heading + self.curvature * s
+        sin, cos = np.sin(heading), np.cos(heading)
+        if abs(self.curvature) < 1e-9:
+            x = self.x + s * math.cos(self.heading)
+            y = self.y + s * math.sin(self.heading)
+        else:
+            x = self.x + (sin - math.sin(self.heading)) / self.curvature
+            y = self.y - (cos - math.cos(self.heading)) / self.curvature
+        return x, y, heading, sin, cos
 
     def project(self, xy: np.ndarray) -> float:
         """Arc length of the path point closest to ``xy`` ((2,) m), near the start."""

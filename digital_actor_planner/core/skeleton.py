@@ -157,6 +157,9 @@ def axis_rotation(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     return rot
 
 
+_IDENTITY = np.eye(4)
+
+
 def _compile_plan(plan) -> tuple:
     """Constant matrices of a kinematic chain plan for :meth:`Skeleton.forward_kinematics`.
 
@@ -281,6 +284,8 @@ class Skeleton:
         self.link_names: Tuple[str, ...] = (self.root_link,) + tuple(j.child for j in order)
         self.link_index = {name: i for i, name in enumerate(self.link_names)}
         self._partial_plans = {}
+        # Link index and origin of each shape, per tuple of shape indices (None: all shapes).
+        self._shape_layouts = {}
         self._chain_plan = tuple(
             (self.link_index[j.parent], self.link_index[j.child], j.origin,
              self.index.get(j.name, -1), j.kind, j.axis) for j in order)
@@ -414,21 +419,26 @@ class Skeleton:
             raise ValueError(f'configuration has {qs.shape[-1]} values, expected '
                              f'{len(self.joint_names)}')
         k = qs.shape[0]
-        out = np.empty((k, len(self.link_names), 4, 4)) if links is None else np.zeros(
-            (k, len(self.link_names), 4, 4))
-        out[:, 0] = np.eye(4)
+        # Link-major (L, k, 4, 4) so each joint composes contiguous (k, 4, 4) blocks; the
+        # result is returned as a (k, L, 4, 4) view.
+        shape = (len(self.link_names), k, 4, 4)
+        out = np.empty(shape) if links is None else np.zeros(shape)
+        out[0] = _IDENTITY
         chain = self._chain_compiled if links is None else self._plan_for(links)
         parents, children, basis, revolute, revolute_q, prismatic, prismatic_q = chain
-        # Local transforms A + w1 B + w2 C (see _compile_plan), all joints and frames at once.
-        weights = np.zeros((k, len(parents), 1, 3))
-        weights[..., 0] = 1.0
-        angles = qs[:, revolute_q]
-        weights[:, revolute, 0, 1] = np.cos(angles)
-        weights[:, revolute, 0, 2] = np.sin(angles)
-        weights[:, prismatic, 0, 1] = qs[:, prismatic_q]
-        local = (weights @ basis).reshape(k, len(parents), 4, 4)
+        # Local transforms A + w1 B + w2 C (see _compile_plan) for all joints and frames as one
+        # batched (k, 3) @ (3, 16) product per joint (far cheaper than one (1, 3) @ (3, 16)
+        # product per joint and frame).
+        weights = np.zeros((len(parents), k, 3))
+        weights[:, :, 0] = 1.0
+        angles = qs[:, revolute_q].T
+        weights[revolute, :, 1] = np.cos(angles)
+        weights[revolute, :, 2] = np.sin(angles)
+        weights[prismatic, :, 1] = qs[:, prismatic_q].T
+        local = (weights @ basis).reshape(len(parents), k, 4, 4)
         for j, (parent, child) in enumerate(zip(parents, children)):
-            np.matmul(out[:, parent], local[:, j], out=out[:, child])
+            np.matmul(out[parent], local[j], out=out[child])
+        out = out.transpose(1, 0, 2, 3)
         return out[0] if single else out
 
     def link_transform(self, q: np.ndarray, link: str) -> np.ndarray:
@@ -451,8 +461,13 @@ class Skeleton:
             (S, 4, 4) or (k, S, 4, 4).
 
         """
-        chosen = (self.collision_shapes if shapes is None
-                  else [self.collision_shapes[i] for i in shapes])
-        idx = [self.link_index[s.link] for s in chosen]
-        origins = np.stack([s.origin for s in chosen])
-        return link_transforms[..., idx, :, :] @ origins
+        key = None if shapes is None else tuple(int(i) for i in shapes)
+        layout = self._shape_layouts.get(key)
+        if layout is None:
+            chosen = (self.collision_shapes if shapes is None
+                      else [self.collision_shapes[i] for i in shapes])
+            layout = (np.array([self.link_index[s.link] for s in chosen], dtype=int),
+                      np.stack([s.origin for s in chosen]))
+            self._shape_layouts[key] = layout
+        links, origins = layout
+        return link_transforms[..., links, :, :] @ origins
