@@ -133,26 +133,26 @@ class BodyKinematics:
         steps = self.steps if steps is None else steps
         # All joint rotations at once: few large NumPy calls instead of many small ones.
         revolute = [st for st in steps if st.joint >= 0 and st.kind != 'prismatic']
-        local = {}
+        local = {id(st): n for n, st in enumerate(revolute)}
         if revolute:
             angle = q[:, [st.joint for st in revolute]] * np.array(
                 [st.axis_sign if st.axis_coordinate >= 0 else 1.0 for st in revolute])
             cos, sin = np.cos(angle), np.sin(angle)
             mats = np.zeros((k, len(revolute), 3, 3))
-            for n, st in enumerate(revolute):
-                coordinate = st.axis_coordinate
-                if coordinate < 0:
-                    mats[:, n] = axis_rotation(st.axis, q[:, st.joint])
-                    continue
-                a, b = (coordinate + 1) % 3, (coordinate + 2) % 3
-                mats[:, n, coordinate, coordinate] = 1.0
+            # Rotations about coordinate axes: five scattered writes for all joints at once.
+            n = np.array([i for i, st in enumerate(revolute) if st.axis_coordinate >= 0],
+                         dtype=int)
+            if len(n):
+                c = np.array([revolute[i].axis_coordinate for i in n])
+                a, b = (c + 1) % 3, (c + 2) % 3
+                mats[:, n, c, c] = 1.0
                 mats[:, n, a, a] = cos[:, n]
                 mats[:, n, b, b] = cos[:, n]
                 mats[:, n, b, a] = sin[:, n]
                 mats[:, n, a, b] = -sin[:, n]
-                local[id(st)] = n
-            for n, st in enumerate(revolute):
-                local[id(st)] = n
+            for i, st in enumerate(revolute):
+                if st.axis_coordinate < 0:
+                    mats[:, i] = axis_rotation(st.axis, q[:, st.joint])
         for step in steps:
             parent_rotation = rotations[:, step.parent]
             if step.has_offset:
@@ -394,8 +394,8 @@ class TimedBody:
         self._shape_poses()
 
 
-def _boxes_overlap(lower_a: np.ndarray, upper_a: np.ndarray, lower_b: np.ndarray,
-                   upper_b: np.ndarray) -> np.ndarray:
+def boxes_overlap(lower_a: np.ndarray, upper_a: np.ndarray, lower_b: np.ndarray,
+                  upper_b: np.ndarray) -> np.ndarray:
     """Whether axis-aligned boxes overlap: corners (..., 3) broadcast together, -> (...) bool.
 
     One comparison per axis: much faster than ``np.all(..., axis=-1)`` over a last axis of 3.
@@ -526,8 +526,8 @@ class CTSpace:
             return np.zeros(0, dtype=int)
         lower = low.reshape(-1, 3).min(axis=0)
         upper = high.reshape(-1, 3).max(axis=0)
-        return np.flatnonzero(_boxes_overlap(lower, upper, self._triangle_lower,
-                                             self._triangle_upper))
+        return np.flatnonzero(boxes_overlap(lower, upper, self._triangle_lower,
+                                            self._triangle_upper))
 
     # -- OMPL-shaped space ---------------------------------------------------------------
     @property
@@ -725,7 +725,7 @@ class CTSpace:
         near = self._triangles_near(low, high)
         if len(near):
             # (m, n, T') overlap of shape boxes with the boxes of the triangles near any.
-            rows, columns, triangles = np.nonzero(_boxes_overlap(
+            rows, columns, triangles = np.nonzero(boxes_overlap(
                 low[:, :, None], high[:, :, None], self._triangle_lower[near][None, None],
                 self._triangle_upper[near][None, None]))
             # One suspect per (row, shape, mesh), in that order.
@@ -738,12 +738,12 @@ class CTSpace:
                 suspects.setdefault(row, []).append((column, -1 - owner))
         if len(self.pairs):
             # Only pairs whose boxes meet when swept over all rows and the whole step can meet.
-            active = np.flatnonzero(_boxes_overlap(
+            active = np.flatnonzero(boxes_overlap(
                 low.min(axis=0)[self._pair_column], high.max(axis=0)[self._pair_column],
                 self._pair_swept_lower, self._pair_swept_upper))
             if len(active):
                 columns = self._pair_column[active]
-                rows, which = np.nonzero(_boxes_overlap(
+                rows, which = np.nonzero(boxes_overlap(
                     low[:, columns], high[:, columns],
                     self._pair_lower[frames[:, None], active], self._pair_upper[frames[:, None],
                                                                                 active]))
