@@ -151,6 +151,9 @@ class OmplBranchPlanner:
         began = time.perf_counter()
         body = TimedBody(planner.kinematics, planner.shapes, planner.environment, frames)
         out = frames.copy()
+        if planner._pattern_is_legal(times, body):
+            # The same check of the whole pattern as the CT-roadmap's plan starts with.
+            return True, 0.0, time.perf_counter() - began
         for name in BRANCH_ORDER:
             indices = planner.indices[name]
             start = frames[0, indices].copy()
