@@ -605,7 +605,8 @@ class CTSpace:
                            goals: Sequence[Tuple[np.ndarray, int]]) -> Tuple[int, List[int]]:
         """Check motions from ``a`` to each goal in order; stop at the first legal one.
 
-        The broad phase of all motions runs in one batch; the narrow phase runs goal by goal.
+        The first goal (the best one, usually legal) is checked alone; the broad phase of all
+        the others then runs in one batch and their narrow phase goal by goal.
 
         Returns
         -------
@@ -615,33 +616,34 @@ class CTSpace:
 
         """
         qa, ia = a
-        rows, frames, segments, early = [], [], [], []
+        motions = []
         for qb, ib in goals:
             if ib <= ia:
-                segments.append((segments[-1][1] if segments else 0,) * 2)
-                early.append(ia)
+                motions.append((np.zeros((0, self.dimension)), ia))
                 continue
             path = self.motion_frames((qa, ia), (qb, ib))
             speed = np.abs(np.diff(path, axis=0)) / np.diff(self.times[ia:ib + 1])[:, None]
             too_fast = np.flatnonzero(np.any(speed > self.speed_limit * (1 + SPEED_TOLERANCE),
                                              axis=1))
-            end = ib if not len(too_fast) else ia + 1 + int(too_fast[0])
-            begin = segments[-1][1] if segments else 0
-            rows.append(path[1:end - ia + 1] if not len(too_fast) else path[1:end - ia])
-            frames.append(np.arange(ia + 1, ia + 1 + len(rows[-1])))
-            segments.append((begin, begin + len(rows[-1])))
-            early.append(-1 if not len(too_fast) else end)
-        if rows:
-            q = np.concatenate(rows)
-            frame_index = np.concatenate(frames)
-        else:
-            q, frame_index = np.zeros((0, self.dimension)), np.zeros(0, dtype=int)
+            if len(too_fast):
+                end = ia + 1 + int(too_fast[0])
+                motions.append((path[1:end - ia], end))
+            else:
+                motions.append((path[1:], -1))
         failures = []
-        for i, bad in enumerate(self._check_segments(q, frame_index, segments, early,
-                                                     stop_at_legal=True)):
-            failures.append(bad)
-            if bad < 0:
-                return i, failures
+        for batch in (motions[:1], motions[1:]):
+            if not batch:
+                continue
+            lengths = np.array([len(rows) for rows, _ in batch])
+            ends = np.cumsum(lengths)
+            segments = list(zip((ends - lengths).tolist(), ends.tolist()))
+            q = np.concatenate([rows for rows, _ in batch])
+            frame_index = np.concatenate([np.arange(ia + 1, ia + 1 + n) for n in lengths])
+            for bad in self._check_segments(q, frame_index, segments,
+                                            [late for _, late in batch], stop_at_legal=True):
+                failures.append(bad)
+                if bad < 0:
+                    return len(failures) - 1, failures
         return -1, failures
 
     def first_invalid(self, q: np.ndarray, frames: np.ndarray) -> int:
