@@ -6,7 +6,10 @@ must turn). The actor walks along +x at 0.9 m/s. A reference CT-roadmap plan ove
 gives the start state of every step window (61 frames = 0.6 s at 100 Hz, one every
 ``--stride`` frames), so every per-step problem is feasible and both planners get the same
 problems: the same branch CT-spaces, time grid and validity checker (``CTSpace``), waist, then
-left arm, then right arm, with the earlier branches fixed.
+left arm, then right arm, with the earlier branches fixed, after the same check of the whole
+motion pattern. The CT-roadmap keeps its roadmap from window to window (§5.2); it is run
+``--repeat`` times per window for the per-course table, and its first run of each window is the
+one compared with the peers, which see each problem once.
 
 The OMPL peers (RRTConnect and PRM) plan each branch that is not free along its motion pattern
 over (branch joints x time) with a motion validator that allows only forward time and joint
@@ -151,6 +154,9 @@ class OmplBranchPlanner:
         began = time.perf_counter()
         body = TimedBody(planner.kinematics, planner.shapes, planner.environment, frames)
         out = frames.copy()
+        if planner._pattern_is_legal(times, body):
+            # The same check of the whole pattern as the CT-roadmap's plan starts with.
+            return True, 0.0, time.perf_counter() - began
         for name in BRANCH_ORDER:
             indices = planner.indices[name]
             start = frames[0, indices].copy()
@@ -216,12 +222,15 @@ def main(argv=None):
             window = slice(begin, begin + WINDOW)
             step_times, step_frames = times[window], frames[window].copy()
             step_frames[0] = reference.frames[begin]
-            for _ in range(args.repeat):
+            for repeat in range(args.repeat):
                 cpu = time.process_time()
                 plan = planner.plan(step_times, step_frames)
                 cpu = time.process_time() - cpu
-                rows.setdefault('CT-roadmap', []).append(
-                    (plan.ok, plan.deviation, plan.planning_time, course, begin, cpu))
+                if repeat == 0:
+                    # The peers see each problem once; a repeat would find the roadmap grown on
+                    # this very problem, so only first runs enter the peer comparison.
+                    rows.setdefault('CT-roadmap', []).append(
+                        (plan.ok, plan.deviation, plan.planning_time, course, begin, cpu))
                 course_times.append((plan.planning_time, cpu))
             for name, peer in peers.items():
                 cpu = time.process_time()

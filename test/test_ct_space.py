@@ -1,6 +1,8 @@
 """Configuration-time space of a branch (paper §5.2): kinematics, validity, forward-only motion."""
+import fcl
 import numpy as np
 import pytest
+import trimesh
 
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.ct_space import (
@@ -125,3 +127,72 @@ def test_bad_inputs_raise(skeleton, beam_world):
         BodyShapes(skeleton, padding=-0.01)
     with pytest.raises(ValueError, match='objective shape'):
         CTSpace('waist', space.body, space.times[:10], frames[:, :2], TRUNK, LEGS)
+
+
+def _every_pair_collides(space, obstacle_links, q, frame):
+    """Straightforward check of one configuration: FCL on every shape pair, no broad phase."""
+    body = space.body
+    full = body.frames[frame].copy()
+    full[space.indices] = q
+    rotations, positions = body.kinematics.poses(full[None])
+    shapes = body.shapes
+    rotation, centre = shapes.poses(rotations, positions, space.checked)
+    column = {int(shape): n for n, shape in enumerate(space.checked)}
+    for n, shape in enumerate(space.checked):
+        for target in body.environment.objects:
+            if shapes.collides(int(shape), rotation[0, n], centre[0, n], target):
+                return True
+    every = np.arange(len(shapes.kind))
+    other_rotation, other_centre = shapes.poses(body.rotations[frame:frame + 1],
+                                                body.positions[frame:frame + 1], every)
+    obstacle = shapes.shapes_of(obstacle_links)
+    for a, b in shapes.pairs(space.checked, obstacle):
+        target = shapes.objects[int(b)]
+        target.setTransform(fcl.Transform(other_rotation[0, b], other_centre[0, b]))
+        if shapes.collides(int(a), rotation[0, column[int(a)]], centre[0, column[int(a)]],
+                           target):
+            return True
+    return False
+
+
+@pytest.mark.parametrize('branch', ['waist', 'left_arm'])
+def test_batched_checks_agree_with_every_pair_checked_frame_by_frame(skeleton, branch):
+    # Many small triangles (a bumpy table top in reach of the arm and of a bent trunk) and a
+    # beam: broad-phase culling matters, and contacts graze a few small triangles.
+    rng = np.random.default_rng(3)
+    top = trimesh.creation.box(extents=[1.2, 1.6, 0.1])
+    for _ in range(4):
+        top = top.subdivide()
+    top.vertices += [0.4, 0.6, 0.85]
+    top.vertices[:, 2] += rng.uniform(0.0, 0.03, len(top.vertices))
+    environment = Environment([box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0]), top,
+                               box([0.3, -1.0, 1.45], [0.5, 1.0, 1.65])], resolution=0.05)
+    k = 120
+    times = np.arange(k) / 100.0
+    q = np.tile(skeleton.neutral(), (k, 1))
+    q[:, skeleton.index['root_x']] = -0.6 + 0.9 * times
+    q[:, skeleton.index['root_z']] = 0.92
+    frames = motion_patterns(skeleton, q)
+    body = TimedBody(BodyKinematics(skeleton), BodyShapes(skeleton, 0.01),
+                     EnvironmentIndex(environment.meshes, environment.objects), frames)
+    checked = TRUNK if branch == 'waist' else ('left_shoulder_roll_link', 'left_upper_arm',
+                                               'left_forearm')
+    obstacles = LEGS if branch == 'waist' else LEGS + TRUNK
+    indices = skeleton.branch(branch)
+    space = CTSpace(branch, body, times, frames[:, indices], checked, obstacles)
+    rows = space.lower + rng.random((300, len(indices))) * (space.upper - space.lower)
+    rows[:100] = frames[:100, indices] + rng.normal(0.0, 0.4, (100, len(indices)))
+    rows = np.clip(rows, space.lower, space.upper)
+    # Chunks of 30 rows at increasing, distinct frames (as motions are).
+    at = np.concatenate([np.sort(rng.choice(k, 30, replace=False)) for _ in range(10)])
+    expected = np.array([not _every_pair_collides(space, obstacles, row, frame)
+                         for row, frame in zip(rows, at)])
+    assert 0.1 < expected.mean() < 0.9  # both outcomes occur
+    assert np.array_equal(space.valid_rows(rows, at), expected)
+    assert np.array_equal([space.is_valid(row, frame) for row, frame in zip(rows, at)],
+                          expected)
+    for begin in range(0, len(rows), 30):
+        chunk = slice(begin, begin + 30)
+        bad = space.first_invalid(rows[chunk], at[chunk])
+        want = np.flatnonzero(~expected[chunk])
+        assert bad == (int(want[0]) if len(want) else -1)

@@ -209,3 +209,34 @@ def test_times_must_increase(skeleton):
     times[5] = times[4]
     with pytest.raises(ValueError, match='times'):
         planner.plan(times, frames)
+
+
+def test_one_batch_pattern_check_agrees_with_the_branch_fast_paths(skeleton):
+    # Offset postures held over 0.6 s windows walking past a low beam and a table: the one-batch
+    # check of the whole pattern must say legal exactly when every branch's own check does.
+    from digital_actor_planner.core.ct_space import CTSpace, TimedBody
+    from digital_actor_planner.core.upper_body import BRANCH_ORDER
+    planner, _ = planner_for(skeleton, box([0.6, -1.0, 1.55], [0.8, 1.0, 1.75]),
+                             box([1.3, 0.2, 0.0], [2.0, 1.0, 0.8]))
+    times, frames = walk(skeleton, 320)
+    rng = np.random.default_rng(5)
+    upper = upper_columns(skeleton)
+    outcomes = []
+    for trial in range(60):
+        begin = int(rng.integers(0, 320 - 61))
+        window = frames[begin:begin + 61].copy()
+        offset = rng.normal(0.0, 0.25, len(upper)) * (trial % 3 > 0)
+        window[:, upper] = np.clip(window[:, upper] + offset, skeleton.lower[upper],
+                                   skeleton.upper[upper])
+        body = TimedBody(planner.kinematics, planner.shapes, planner.environment, window)
+        expected = True
+        for name in BRANCH_ORDER:
+            indices = planner.indices[name]
+            space = CTSpace(name, body, times[:61], window[:, indices], planner._checked[name],
+                            planner._obstacles[name])
+            start = window[0, indices]
+            expected &= space.is_valid(start, 0) and planner._objective_is_legal(space, start)
+        got = planner._pattern_is_legal(times[:61], body)
+        assert got == expected, (trial, begin, offset)
+        outcomes.append(got)
+    assert 0 < np.mean(outcomes) < 1  # both outcomes occur

@@ -133,26 +133,26 @@ class BodyKinematics:
         steps = self.steps if steps is None else steps
         # All joint rotations at once: few large NumPy calls instead of many small ones.
         revolute = [st for st in steps if st.joint >= 0 and st.kind != 'prismatic']
-        local = {}
+        local = {id(st): n for n, st in enumerate(revolute)}
         if revolute:
             angle = q[:, [st.joint for st in revolute]] * np.array(
                 [st.axis_sign if st.axis_coordinate >= 0 else 1.0 for st in revolute])
             cos, sin = np.cos(angle), np.sin(angle)
             mats = np.zeros((k, len(revolute), 3, 3))
-            for n, st in enumerate(revolute):
-                coordinate = st.axis_coordinate
-                if coordinate < 0:
-                    mats[:, n] = axis_rotation(st.axis, q[:, st.joint])
-                    continue
-                a, b = (coordinate + 1) % 3, (coordinate + 2) % 3
-                mats[:, n, coordinate, coordinate] = 1.0
+            # Rotations about coordinate axes: five scattered writes for all joints at once.
+            n = np.array([i for i, st in enumerate(revolute) if st.axis_coordinate >= 0],
+                         dtype=int)
+            if len(n):
+                c = np.array([revolute[i].axis_coordinate for i in n])
+                a, b = (c + 1) % 3, (c + 2) % 3
+                mats[:, n, c, c] = 1.0
                 mats[:, n, a, a] = cos[:, n]
                 mats[:, n, b, b] = cos[:, n]
                 mats[:, n, b, a] = sin[:, n]
                 mats[:, n, a, b] = -sin[:, n]
-                local[id(st)] = n
-            for n, st in enumerate(revolute):
-                local[id(st)] = n
+            for i, st in enumerate(revolute):
+                if st.axis_coordinate < 0:
+                    mats[:, i] = axis_rotation(st.axis, q[:, st.joint])
         for step in steps:
             parent_rotation = rotations[:, step.parent]
             if step.has_offset:
@@ -394,6 +394,19 @@ class TimedBody:
         self._shape_poses()
 
 
+def boxes_overlap(lower_a: np.ndarray, upper_a: np.ndarray, lower_b: np.ndarray,
+                  upper_b: np.ndarray) -> np.ndarray:
+    """Whether axis-aligned boxes overlap: corners (..., 3) broadcast together, -> (...) bool.
+
+    One comparison per axis: much faster than ``np.all(..., axis=-1)`` over a last axis of 3.
+    """
+    out = (upper_a[..., 0] >= lower_b[..., 0]) & (lower_a[..., 0] <= upper_b[..., 0])
+    for axis in (1, 2):
+        out &= upper_a[..., axis] >= lower_b[..., axis]
+        out &= lower_a[..., axis] <= upper_b[..., axis]
+    return out
+
+
 class CTSpace:
     """Configuration-time space of one branch, with OMPL-shaped queries (paper §5.2).
 
@@ -465,6 +478,8 @@ class CTSpace:
         self._pair_lower = body.shape_lower[:, other]
         self._pair_upper = body.shape_upper[:, other]
         self._pair_column = np.searchsorted(self.checked, self.pairs[:, 0])
+        self._pair_swept_lower = self._pair_lower.min(axis=0)
+        self._pair_swept_upper = self._pair_upper.max(axis=0)
         self._prepare_environment()
         self.checks = 0
 
@@ -499,6 +514,20 @@ class CTSpace:
         self._triangle_lower = env.lower[near]
         self._triangle_upper = env.upper[near]
         self._triangle_owner = env.owner[near]
+        self._mesh_count = int(self._triangle_owner.max()) + 1 if len(near) else 1
+
+    def _triangles_near(self, low: np.ndarray, high: np.ndarray) -> np.ndarray:
+        """Indices of the kept triangles whose boxes meet the box around all boxes (m, n, 3).
+
+        A cheap first cut: one (T, 3) test instead of an (m, n, T, 3) one, and most triangles
+        (the ground, obstacles behind the actor) are far from every shape of a motion.
+        """
+        if not len(self._triangle_lower) or not low.size:
+            return np.zeros(0, dtype=int)
+        lower = low.reshape(-1, 3).min(axis=0)
+        upper = high.reshape(-1, 3).max(axis=0)
+        return np.flatnonzero(boxes_overlap(lower, upper, self._triangle_lower,
+                                            self._triangle_upper))
 
     # -- OMPL-shaped space ---------------------------------------------------------------
     @property
@@ -576,7 +605,8 @@ class CTSpace:
                            goals: Sequence[Tuple[np.ndarray, int]]) -> Tuple[int, List[int]]:
         """Check motions from ``a`` to each goal in order; stop at the first legal one.
 
-        The broad phase of all motions runs in one batch; the narrow phase runs goal by goal.
+        The first goal (the best one, usually legal) is checked alone; the broad phase of all
+        the others then runs in one batch and their narrow phase goal by goal.
 
         Returns
         -------
@@ -586,33 +616,34 @@ class CTSpace:
 
         """
         qa, ia = a
-        rows, frames, segments, early = [], [], [], []
+        motions = []
         for qb, ib in goals:
             if ib <= ia:
-                segments.append((segments[-1][1] if segments else 0,) * 2)
-                early.append(ia)
+                motions.append((np.zeros((0, self.dimension)), ia))
                 continue
             path = self.motion_frames((qa, ia), (qb, ib))
             speed = np.abs(np.diff(path, axis=0)) / np.diff(self.times[ia:ib + 1])[:, None]
             too_fast = np.flatnonzero(np.any(speed > self.speed_limit * (1 + SPEED_TOLERANCE),
                                              axis=1))
-            end = ib if not len(too_fast) else ia + 1 + int(too_fast[0])
-            begin = segments[-1][1] if segments else 0
-            rows.append(path[1:end - ia + 1] if not len(too_fast) else path[1:end - ia])
-            frames.append(np.arange(ia + 1, ia + 1 + len(rows[-1])))
-            segments.append((begin, begin + len(rows[-1])))
-            early.append(-1 if not len(too_fast) else end)
-        if rows:
-            q = np.concatenate(rows)
-            frame_index = np.concatenate(frames)
-        else:
-            q, frame_index = np.zeros((0, self.dimension)), np.zeros(0, dtype=int)
+            if len(too_fast):
+                end = ia + 1 + int(too_fast[0])
+                motions.append((path[1:end - ia], end))
+            else:
+                motions.append((path[1:], -1))
         failures = []
-        for i, bad in enumerate(self._check_segments(q, frame_index, segments, early,
-                                                     stop_at_legal=True)):
-            failures.append(bad)
-            if bad < 0:
-                return i, failures
+        for batch in (motions[:1], motions[1:]):
+            if not batch:
+                continue
+            lengths = np.array([len(rows) for rows, _ in batch])
+            ends = np.cumsum(lengths)
+            segments = list(zip((ends - lengths).tolist(), ends.tolist()))
+            q = np.concatenate([rows for rows, _ in batch])
+            frame_index = np.concatenate([np.arange(ia + 1, ia + 1 + n) for n in lengths])
+            for bad in self._check_segments(q, frame_index, segments,
+                                            [late for _, late in batch], stop_at_legal=True):
+                failures.append(bad)
+                if bad < 0:
+                    return len(failures) - 1, failures
         return -1, failures
 
     def first_invalid(self, q: np.ndarray, frames: np.ndarray) -> int:
@@ -693,22 +724,33 @@ class CTSpace:
         rotation, centre = shapes.poses(rotations, positions, self.checked)
         low, high = shapes.bounds(rotation, centre, self.checked)
         suspects: Dict[int, list] = {}
-        if len(self._triangle_lower):
-            # (m, n, T) overlap of shape boxes with triangle boxes.
-            overlap = np.all((high[:, :, None] >= self._triangle_lower[None, None])
-                             & (low[:, :, None] <= self._triangle_upper[None, None]), axis=-1)
-            rows, columns, triangles = np.nonzero(overlap)
-            owners = self._triangle_owner[triangles]
-            for row, column, owner in sorted(set(zip(rows.tolist(), columns.tolist(),
-                                                     owners.tolist()))):
+        near = self._triangles_near(low, high)
+        if len(near):
+            # (m, n, T') overlap of shape boxes with the boxes of the triangles near any.
+            rows, columns, triangles = np.nonzero(boxes_overlap(
+                low[:, :, None], high[:, :, None], self._triangle_lower[near][None, None],
+                self._triangle_upper[near][None, None]))
+            # One suspect per (row, shape, mesh), in that order.
+            meshes = self._mesh_count
+            key = np.unique((rows * low.shape[1] + columns) * meshes
+                            + self._triangle_owner[near][triangles])
+            shape_key, owners = np.divmod(key, meshes)
+            rows, columns = np.divmod(shape_key, low.shape[1])
+            for row, column, owner in zip(rows.tolist(), columns.tolist(), owners.tolist()):
                 suspects.setdefault(row, []).append((column, -1 - owner))
         if len(self.pairs):
-            pair_overlap = np.all((high[:, self._pair_column] >= self._pair_lower[frames])
-                                  & (low[:, self._pair_column] <= self._pair_upper[frames]),
-                                  axis=-1)
-            for row, pair in zip(*np.nonzero(pair_overlap)):
-                suspects.setdefault(int(row), []).append((int(self._pair_column[pair]),
-                                                          int(pair)))
+            # Only pairs whose boxes meet when swept over all rows and the whole step can meet.
+            active = np.flatnonzero(boxes_overlap(
+                low.min(axis=0)[self._pair_column], high.max(axis=0)[self._pair_column],
+                self._pair_swept_lower, self._pair_swept_upper))
+            if len(active):
+                columns = self._pair_column[active]
+                rows, which = np.nonzero(boxes_overlap(
+                    low[:, columns], high[:, columns],
+                    self._pair_lower[frames[:, None], active], self._pair_upper[frames[:, None],
+                                                                                active]))
+                for row, pair in zip(rows.tolist(), active[which].tolist()):
+                    suspects.setdefault(row, []).append((int(self._pair_column[pair]), pair))
         return suspects, rotation, centre
 
     def _narrow_phase(self, row: int, frame: int, broad: tuple) -> bool:

@@ -11,11 +11,12 @@ from dataclasses import dataclass
 import time
 from typing import Dict, Optional, Tuple
 
+import fcl
 import numpy as np
 
 from digital_actor_planner.core.ct_roadmap import CTRoadmap
 from digital_actor_planner.core.ct_space import (
-    BodyKinematics, BodyShapes, CTSpace, EnvironmentIndex, TimedBody)
+    BodyKinematics, BodyShapes, boxes_overlap, CTSpace, EnvironmentIndex, TimedBody)
 from digital_actor_planner.core.skeleton import Skeleton
 
 #: Shoulder roll that keeps a hanging arm clear of the torso and the thigh, rad.
@@ -311,7 +312,7 @@ class UpperBodyPlanner:
         body = TimedBody(self.kinematics, self.shapes, self.environment, frames)
         out = frames.copy()
         per_branch: Dict[str, dict] = {}
-        if self._nothing_to_plan(times, body):
+        if self._pattern_is_legal(times, body):
             for name in BRANCH_ORDER:
                 per_branch[name] = dict(ok=True, fast=True, nodes=0, backtracks=0, grown=0,
                                         deviation=0.0, checks=0, time=0.0)
@@ -379,26 +380,55 @@ class UpperBodyPlanner:
             return False
         return space.first_invalid(path[1:], np.arange(1, len(path))) < 0
 
-    def _nothing_to_plan(self, times: np.ndarray, body: TimedBody) -> bool:
-        """Broad-phase cull (§5): the whole step's upper body is far from everything.
+    def _pattern_is_legal(self, times: np.ndarray, body: TimedBody) -> bool:
+        """Whether the input upper-body motion is legal as it is, in one batch over the step (§5).
 
-        True when the input upper-body motion is within the speed limits, no environment
-        triangle comes near the box around the upper body over the whole step, and no box of an
-        upper-body shape meets the box of a body shape it must not touch.
+        The input is the start at frame 0, then the objective: the motion every branch's fast
+        path would take. True when it is within the speed limits and no upper-body shape touches
+        the environment or a body shape it must not touch at any frame. The poses and boxes of
+        every shape at every frame are already in ``body``; FCL runs only where boxes meet.
+        This checks a superset of the shapes, triangles and pairs each branch checks, with the
+        same narrow phase, so it is True only when all three fast paths would succeed.
         """
         upper = self.upper_indices
         speed = np.abs(np.diff(body.frames[:, upper], axis=0)) / np.diff(times)[:, None]
         if np.any(speed > self.skeleton.velocity_limit[upper] * (1 + 1e-6)):
             return False
-        shapes = self._upper_shapes
-        lower = body.shape_lower[:, shapes].min(axis=(0, 1))
-        upper_corner = body.shape_upper[:, shapes].max(axis=(0, 1))
-        if len(self.environment.triangles_near(lower, upper_corner)):
-            return False
+        shapes = self.shapes
+        upper_shapes = self._upper_shapes
+        low, high = body.shape_lower[:, upper_shapes], body.shape_upper[:, upper_shapes]
+        environment = self.environment
+        near = environment.triangles_near(low.min(axis=(0, 1)), high.max(axis=(0, 1)))
+        if len(near):
+            frames, columns, triangles = np.nonzero(boxes_overlap(
+                low[:, :, None], high[:, :, None], environment.lower[near][None, None],
+                environment.upper[near][None, None]))
+            meshes = int(environment.owner[near].max()) + 1
+            key = np.unique((frames * len(upper_shapes) + columns) * meshes
+                            + environment.owner[near][triangles])
+            shape_key, owners = np.divmod(key, meshes)
+            frames, columns = np.divmod(shape_key, len(upper_shapes))
+            for frame, shape, owner in zip(frames.tolist(), upper_shapes[columns].tolist(),
+                                           owners.tolist()):
+                if shapes.collides(shape, body.shape_rotation[frame, shape],
+                                   body.shape_centre[frame, shape],
+                                   environment.object_of(owner)):
+                    return False
         a, b = self._upper_pairs[:, 0], self._upper_pairs[:, 1]
-        overlap = np.all((body.shape_upper[:, a] >= body.shape_lower[:, b])
-                         & (body.shape_lower[:, a] <= body.shape_upper[:, b]), axis=-1)
-        return not overlap.any()
+        # Only pairs whose boxes swept over the step meet can meet at some frame.
+        swept_lower, swept_upper = body.shape_lower.min(axis=0), body.shape_upper.max(axis=0)
+        active = boxes_overlap(swept_lower[a], swept_upper[a], swept_lower[b], swept_upper[b])
+        a, b = a[active], b[active]
+        frames, pairs = np.nonzero(boxes_overlap(body.shape_lower[:, a], body.shape_upper[:, a],
+                                                 body.shape_lower[:, b], body.shape_upper[:, b]))
+        for frame, shape, other in zip(frames.tolist(), a[pairs].tolist(), b[pairs].tolist()):
+            target = shapes.objects[other]
+            target.setTransform(fcl.Transform(body.shape_rotation[frame, other],
+                                              body.shape_centre[frame, other]))
+            if shapes.collides(shape, body.shape_rotation[frame, shape],
+                               body.shape_centre[frame, shape], target):
+                return False
+        return True
 
     def _links_in_collision(self, q: np.ndarray, branch: str) -> list:
         """Names of the branch's links touching the environment at ``q`` (for the reason)."""
