@@ -92,12 +92,14 @@ def run(count: int, duration: float, course: str, domain: int, log: str) -> str:
         idle_to, idle_cpu_end = time.monotonic(), cpu_seconds(process.pid)
         command_msg = TwistStamped()
         command_msg.twist.linear.x = 0.5
-        began, last = time.monotonic(), 0.0
+        began, last, command_gap = time.monotonic(), 0.0, 0.0
         walk_cpu = cpu_seconds(process.pid)
         while time.monotonic() < began + duration:
             if time.monotonic() - last >= 0.1:
                 for publisher in publishers:
                     publisher.publish(command_msg)
+                if last:
+                    command_gap = max(command_gap, time.monotonic() - last)
                 last = time.monotonic()
             executor.spin_once(timeout_sec=0.02)
         walk_to, walk_cpu_end = time.monotonic(), cpu_seconds(process.pid)
@@ -129,7 +131,8 @@ def run(count: int, duration: float, course: str, domain: int, log: str) -> str:
                 f'{steps} in {duration - 3.0:g} s; {silent} actors sent fewer than 2 '
                 f'diagnostics in the window; CPU (share of one core) node / planning '
                 f'processes: idle {idle_share[0]:.0%} / {idle_share[1]:.0%}, walking '
-                f'{walk_share[0]:.0%} / {walk_share[1]:.0%}')
+                f'{walk_share[0]:.0%} / {walk_share[1]:.0%}; longest gap between the '
+                f"monitor's command rounds {command_gap:.2f} s")
     finally:
         executor.shutdown()
         node.destroy_node()

@@ -796,6 +796,9 @@ class ActorPlannerNode(Node):
         # The block last planned repeats while the command stays this one (a hold at rest, or
         # stuck): no more blocks are planned and the stream holds the last frame.
         self._holding_for = None
+        # The last block committed holds the actor still (at rest or stuck): the stream running
+        # past it is not a buffer underrun, also while the first step after it is planned.
+        self._at_rest = False
         self._retry_at = 0.0
         self._clock_zero = None
         # Seconds from each recent block falling due to its commit: its wait for the shared
@@ -960,7 +963,8 @@ class ActorPlannerNode(Node):
         self._responses.append(time.monotonic() - min(started, due or started))
         if block.status == 'walking' and len(block.footsteps):
             self.committed_footsteps.append(np.asarray(block.footsteps[0], dtype=float))
-        if (block.status, block.reason) == ('idle', '') or block.status == 'stuck':
+        self._at_rest = (block.status, block.reason) == ('idle', '') or block.status == 'stuck'
+        if self._at_rest:
             self._holding_for = command
         self._latest_block = (block, profile)
 
@@ -988,7 +992,7 @@ class ActorPlannerNode(Node):
         end = self.buffer.end_time
         if play > end:
             # Holding the last frame on purpose (at rest, or stuck) is not running dry.
-            if play - end > self.period and self._holding_for is None:
+            if play - end > self.period and not self._at_rest:
                 self.underruns += 1
             self._clock_zero = now - end
             play = end
