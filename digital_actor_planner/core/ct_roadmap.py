@@ -257,10 +257,13 @@ class CTRoadmap:
         frames.append(min(here + hold_frames, last))
         targets = np.array(targets)
         frames = np.array(frames)
-        # Endpoints in collision cannot start a legal motion: filter them in one batch.
-        legal = space.valid_rows(space.objective[frames] + targets, frames)
         closeness = self.closeness(targets)
         order = np.lexsort((frames if not on_objective else -frames, np.round(closeness, 6)))
+        # Endpoints in collision cannot start a legal motion: filter them, best first, until
+        # enough are legal (holding the current posture is kept whatever its rank).
+        holds = np.flatnonzero(~np.any(targets != state.deviation, axis=1))
+        legal = space.best_valid_rows(space.objective[frames] + targets, frames, order,
+                                      self.max_candidates, also=holds.tolist())
         ranked = [(float(closeness[i]), int(frames[i]), targets[i]) for i in order if legal[i]]
         # The neighbours closest to the objective, plus holding the current posture.
         hold = [c for c in ranked[self.max_candidates:]

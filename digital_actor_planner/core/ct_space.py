@@ -711,6 +711,51 @@ class CTSpace:
             np.asarray(q, dtype=float), frames, segments, [-1] * len(frames), False)],
             dtype=bool)
 
+    def best_valid_rows(self, q: np.ndarray, frames: np.ndarray, order: np.ndarray,
+                        count: int, also: Sequence[int] = ()) -> np.ndarray:
+        """Legality of the first ``count`` legal rows of a batch in a given order: (m,) bool.
+
+        The broad phase runs over all rows at once, the narrow phase row by row in ``order``
+        until ``count`` rows are legal; the rows in ``also`` are always checked. Rows left
+        unchecked are reported illegal. This is what a search that keeps only its ``count``
+        best neighbours needs, without the narrow phase of the others.
+
+        Parameters
+        ----------
+        q
+            (m, d) branch configurations, rad.
+        frames
+            (m,) frame index of each row, any order.
+        order
+            Row indices, best first.
+        count
+            Legal rows wanted.
+        also
+            Rows checked whatever their rank.
+
+        """
+        frames = np.asarray(frames)
+        q = np.asarray(q, dtype=float)
+        m = len(frames)
+        legal = np.zeros(m, dtype=bool)
+        self.checks += m
+        if not m:
+            return legal
+        inside = self.within_bounds(q)
+        suspects = self._broad_phase(q, frames)
+        checked = set()
+        found = 0
+        for row in list(order):
+            if found >= count:
+                break
+            checked.add(row)
+            legal[row] = inside[row] and not self._narrow_phase(row, frames[row], suspects)
+            found += int(legal[row])
+        for row in also:
+            if row not in checked:
+                legal[row] = inside[row] and not self._narrow_phase(row, frames[row], suspects)
+        return legal
+
     def _check_segments(self, q: np.ndarray, frames: np.ndarray,
                         segments: Sequence[Tuple[int, int]], early: Sequence[int],
                         stop_at_legal: bool):
