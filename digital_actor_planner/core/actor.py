@@ -41,7 +41,7 @@ class ActorConfig:
     verify_collisions: bool = True
     plan_upper_body: bool = True
     upper_body_preview: float = 0.5
-    upper_body_check_budget: int = 8000
+    upper_body_check_budget: int = 15000
     upper_body_attempts: int = 6
     footsteps: FootstepConfig = field(default_factory=FootstepConfig)
     gait: GaitConfig = field(default_factory=GaitConfig)

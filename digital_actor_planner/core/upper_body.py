@@ -128,7 +128,7 @@ class UpperBodyConfig:
 
     roadmap_radius: float = 0.3
     node_budget: int = 300
-    check_budget: int = 8000
+    check_budget: int = 15000
     time_budget: Optional[float] = None
     max_backtracks: int = 40
     max_roadmap_nodes: int = 64
