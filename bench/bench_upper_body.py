@@ -209,7 +209,7 @@ def main(argv=None):
         environment = Environment([ground, *obstacles], resolution=0.05)
         collision = BodyCollision(skeleton, environment)
         reference_planner = UpperBodyPlanner(skeleton, collision,
-                                             UpperBodyConfig(time_budget=60.0),
+                                             UpperBodyConfig(check_budget=1_000_000),
                                              rng=np.random.default_rng(0))
         reference = reference_planner.plan(times, frames)
         if not reference.ok:

@@ -4,6 +4,7 @@ import pytest
 
 from course_runs import scene, skeleton
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands, validate
+from digital_actor_planner.core.upper_body import UpperBodyPlan
 
 
 @pytest.fixture
@@ -71,7 +72,41 @@ def test_speed_follows_the_command(actor):
 @pytest.mark.parametrize('field, value', [
     ('window_steps', 0), ('step_intervals', 0), ('max_linear_speed', 0.0),
     ('frame_rate', 5.0), ('step_length_min', 0.9), ('hold_time', float('nan')),
+    ('upper_body_check_budget', 0),
 ])
 def test_bad_configuration_names_the_field(field, value):
     with pytest.raises(ValueError, match=field if field != 'step_length_min' else 'step_length'):
         validate(ActorConfig(**{field: value}))
+
+
+class BlockedUpperBody:
+    """An upper-body planner that is always blocked at a chosen frame; it counts its calls."""
+
+    def __init__(self, blocked_at_end):
+        self.blocked_at_end = blocked_at_end
+        self.calls = []
+
+    def plan(self, times, frames):
+        self.calls.append(len(times))
+        frame = len(times) - 1 if self.blocked_at_end else 5
+        return UpperBodyPlan(frames=frames, ok=False, reason=f'waist blocked at frame {frame}',
+                             deviation=0.0, planning_time=0.0, per_branch={},
+                             blocked_frame=frame)
+
+
+@pytest.mark.parametrize('blocked_at_end', [False, True])
+def test_plan_without_preview_only_when_the_preview_blocked(blocked_at_end):
+    sc = scene('flat')
+    upper = BlockedUpperBody(blocked_at_end)
+    actor = Actor(skeleton(), sc.environment, ActorConfig(upper_body_attempts=2),
+                  start=sc.start, upper_body_planner=upper)
+    actor.set_command(0.6, 0.0)
+    block = actor.plan_next()
+    assert block.status == 'stuck' and 'upper body blocked' in block.reason
+    if blocked_at_end:
+        # Blocked in the preview only: the step alone may still pass, so it is planned too.
+        assert len(upper.calls) == 4
+        assert upper.calls[0] > upper.calls[1] and upper.calls[2] > upper.calls[3]
+    else:
+        # Blocked within the step's own frames: without the preview it meets the same block.
+        assert len(upper.calls) == 2, 'one plan per footstep tried'

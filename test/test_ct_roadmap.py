@@ -109,3 +109,18 @@ def test_roadmap_rejects_bad_parameters():
                   rng=np.random.default_rng())
     with pytest.raises(ValueError, match='joints'):
         CTRoadmap(PATTERNS, np.ones(3), radius=0.3, max_nodes=10, rng=np.random.default_rng())
+
+
+def test_check_budget_stops_the_search_the_same_way_every_time(beam_space):
+    # A work budget, unlike a wall-clock one, does not depend on the machine's load.
+    results, spent = [], []
+    for _ in range(2):
+        before = beam_space.checks
+        results.append(roadmap(seed=7).solve(beam_space, np.zeros(2), check_budget=50))
+        spent.append(beam_space.checks - before)
+    first, second = results
+    assert not first.ok and first.blocked_frame > 0
+    assert spent[0] == spent[1] and spent[0] < 50 + beam_space.frame_count + 40
+    assert np.array_equal(first.path, second.path) and first.nodes == second.nodes
+    full = roadmap(seed=7).solve(beam_space, np.zeros(2), check_budget=1_000_000)
+    assert full.ok

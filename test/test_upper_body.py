@@ -33,8 +33,9 @@ def walk(skeleton, k, x0=-1.0, speed=0.9):
 def planner_for(skeleton, *obstacles, seed=3, config=None):
     environment = Environment([ground(), *obstacles], resolution=0.05)
     collision = BodyCollision(skeleton, environment)
-    # Generous time budget: these tests judge behaviour, not speed, on a shared machine.
-    planner = UpperBodyPlanner(skeleton, collision, config or UpperBodyConfig(time_budget=30.0),
+    # Generous work budget: these tests judge behaviour, not speed.
+    planner = UpperBodyPlanner(skeleton, collision,
+                               config or UpperBodyConfig(check_budget=1_000_000),
                                rng=np.random.default_rng(seed))
     return planner, collision
 
@@ -186,7 +187,7 @@ def test_successive_steps_join_continuously_and_are_deterministic(skeleton):
     ('roadmap_radius', 0.0), ('node_budget', 0), ('max_backtracks', -1),
     ('speed_fraction', 1.5), ('hold_frames', 2.5), ('arm_weights', (1.0, 1.0, 1.0)),
     ('waist_weights', (1.0, -1.0)), ('time_weight', float('nan')), ('max_roadmap_nodes', 3),
-    ('time_budget', -1.0)])
+    ('time_budget', -1.0), ('check_budget', 0), ('check_budget', 2.5)])
 def test_bad_config_names_the_field(skeleton, field, value):
     config = UpperBodyConfig(**{field: value})
     with pytest.raises(ValueError, match=field):

@@ -41,7 +41,7 @@ class ActorConfig:
     verify_collisions: bool = True
     plan_upper_body: bool = True
     upper_body_preview: float = 0.5
-    upper_body_time_budget: float = 0.5
+    upper_body_check_budget: int = 15000
     upper_body_attempts: int = 6
     footsteps: FootstepConfig = field(default_factory=FootstepConfig)
     gait: GaitConfig = field(default_factory=GaitConfig)
@@ -74,6 +74,9 @@ def validate(config: ActorConfig) -> None:
         raise ValueError(f'hold_time must be in (0, 1] s, got {config.hold_time}')
     if config.max_attempts < 1:
         raise ValueError(f'max_attempts must be >= 1, got {config.max_attempts}')
+    if config.upper_body_check_budget < 1:
+        raise ValueError(f'upper_body_check_budget must be >= 1, got '
+                         f'{config.upper_body_check_budget}')
     validate_footstep_config(config.footstep_config())
     validate_gait_config(config.gait_config())
 
@@ -156,7 +159,7 @@ class Actor:
             from .upper_body import UpperBodyConfig
             upper_body_planner = UpperBodyPlanner(
                 skeleton, self._collision,
-                UpperBodyConfig(time_budget=config.upper_body_time_budget),
+                UpperBodyConfig(check_budget=int(config.upper_body_check_budget)),
                 rng=np.random.default_rng(0))
         self._upper = upper_body_planner
         q = start_configuration(environment, start, skeleton)
@@ -309,7 +312,10 @@ class Actor:
         plan = None
         if preview is not None:
             plan = self._upper.plan(*preview)
-        if plan is None or not plan.ok:
+        # Blocked within the step's own frames, the plan without the preview meets the same
+        # obstacle there: only a block in the preview leaves it a chance.
+        blocked = -1 if plan is None else getattr(plan, 'blocked_frame', -1)
+        if plan is None or (not plan.ok and not 0 <= blocked < k):
             plan = self._upper.plan(full_times, full)
         if not plan.ok:
             return frames, False, plan.reason

@@ -144,7 +144,8 @@ class CTRoadmap:
     def solve(self, space: CTSpace, start: np.ndarray, hold_frames: int = 5,
               speed_fraction: float = 0.8, growth_attempts: int = 4,
               node_budget: int = 400, max_backtracks: int = 60,
-              deadline: Optional[float] = None) -> SearchResult:
+              deadline: Optional[float] = None,
+              check_budget: Optional[int] = None) -> SearchResult:
         """Search forward in time from ``start`` at frame 0 to any legal state at frame k-1.
 
         Parameters
@@ -163,6 +164,10 @@ class CTRoadmap:
             Search limits; exceeding either fails the search.
         deadline
             ``time.perf_counter()`` value after which the search gives up (None: no limit).
+            A wall-clock limit makes the result depend on the load of the machine.
+        check_budget
+            Configurations the search may check in ``space`` (None: no limit). A work budget:
+            the same inputs give the same result however loaded the machine is.
 
         Returns
         -------
@@ -177,6 +182,7 @@ class CTRoadmap:
         jumps = set()
         nodes = backtracks = grown = 0
         deepest_blocked = 0
+        checks_limit = None if check_budget is None else space.checks + check_budget
         while stack:
             state = stack[-1]
             if state.relay:
@@ -188,7 +194,10 @@ class CTRoadmap:
                                     grown)
             nodes += 1
             if nodes > node_budget or backtracks > max_backtracks or (
+                    checks_limit is not None and space.checks > checks_limit) or (
                     deadline is not None and time.perf_counter() > deadline):
+                # Out of budget: the search got no further than the latest state it reached.
+                deepest_blocked = max(deepest_blocked, max(s.frame for s in stack))
                 break
             child = self._advance(space, state, visited, hold_frames, speed_fraction)
             if child is None and not state.grew:
@@ -248,10 +257,13 @@ class CTRoadmap:
         frames.append(min(here + hold_frames, last))
         targets = np.array(targets)
         frames = np.array(frames)
-        # Endpoints in collision cannot start a legal motion: filter them in one batch.
-        legal = space.valid_rows(space.objective[frames] + targets, frames)
         closeness = self.closeness(targets)
         order = np.lexsort((frames if not on_objective else -frames, np.round(closeness, 6)))
+        # Endpoints in collision cannot start a legal motion: filter them, best first, until
+        # enough are legal (holding the current posture is kept whatever its rank).
+        holds = np.flatnonzero(~np.any(targets != state.deviation, axis=1))
+        legal = space.best_valid_rows(space.objective[frames] + targets, frames, order,
+                                      self.max_candidates, also=holds.tolist())
         ranked = [(float(closeness[i]), int(frames[i]), targets[i]) for i in order if legal[i]]
         # The neighbours closest to the objective, plus holding the current posture.
         hold = [c for c in ranked[self.max_candidates:]

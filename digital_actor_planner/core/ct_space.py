@@ -88,6 +88,26 @@ class BodyKinematics:
                 has_offset=bool(np.any(joint.origin[:3, 3] != 0.0))))
         self.steps: Tuple[_Step, ...] = tuple(steps)
         self.link_count = len(skeleton.link_names)
+        # Per set of steps, the index arrays of its joint rotations (built once, used per call).
+        self._layouts: Dict[Tuple[int, ...], tuple] = {}
+
+    def _layout(self, steps: Sequence[_Step]) -> tuple:
+        """Joint columns, signs and scatter indices of the revolute joints among ``steps``."""
+        key = tuple(step.child for step in steps)
+        layout = self._layouts.get(key)
+        if layout is None:
+            revolute = [st for st in steps if st.joint >= 0 and st.kind != 'prismatic']
+            local = {st.child: n for n, st in enumerate(revolute)}
+            joints = np.array([st.joint for st in revolute], dtype=int)
+            signs = np.array([st.axis_sign if st.axis_coordinate >= 0 else 1.0
+                              for st in revolute])
+            n = np.array([i for i, st in enumerate(revolute) if st.axis_coordinate >= 0],
+                         dtype=int)
+            c = np.array([revolute[i].axis_coordinate for i in n], dtype=int)
+            general = [(i, st) for i, st in enumerate(revolute) if st.axis_coordinate < 0]
+            layout = (revolute, local, joints, signs, n, c, (c + 1) % 3, (c + 2) % 3, general)
+            self._layouts[key] = layout
+        return layout
 
     def subtree_steps(self, joint_names: Sequence[str]) -> Tuple[_Step, ...]:
         """Return the steps that move when any of the named joints moves, in evaluation order."""
@@ -132,27 +152,20 @@ class BodyKinematics:
             positions[:, 0] = 0.0
         steps = self.steps if steps is None else steps
         # All joint rotations at once: few large NumPy calls instead of many small ones.
-        revolute = [st for st in steps if st.joint >= 0 and st.kind != 'prismatic']
-        local = {id(st): n for n, st in enumerate(revolute)}
+        revolute, local, joints, signs, n, c, a, b, general = self._layout(steps)
         if revolute:
-            angle = q[:, [st.joint for st in revolute]] * np.array(
-                [st.axis_sign if st.axis_coordinate >= 0 else 1.0 for st in revolute])
+            angle = q[:, joints] * signs
             cos, sin = np.cos(angle), np.sin(angle)
             mats = np.zeros((k, len(revolute), 3, 3))
             # Rotations about coordinate axes: five scattered writes for all joints at once.
-            n = np.array([i for i, st in enumerate(revolute) if st.axis_coordinate >= 0],
-                         dtype=int)
             if len(n):
-                c = np.array([revolute[i].axis_coordinate for i in n])
-                a, b = (c + 1) % 3, (c + 2) % 3
                 mats[:, n, c, c] = 1.0
                 mats[:, n, a, a] = cos[:, n]
                 mats[:, n, b, b] = cos[:, n]
                 mats[:, n, b, a] = sin[:, n]
                 mats[:, n, a, b] = -sin[:, n]
-            for i, st in enumerate(revolute):
-                if st.axis_coordinate < 0:
-                    mats[:, i] = axis_rotation(st.axis, q[:, st.joint])
+            for i, st in general:
+                mats[:, i] = axis_rotation(st.axis, q[:, st.joint])
         for step in steps:
             parent_rotation = rotations[:, step.parent]
             if step.has_offset:
@@ -168,7 +181,7 @@ class BodyKinematics:
                 rotations[:, step.child] = base
                 positions[:, step.child] += (base @ step.axis) * q[:, step.joint, None]
             else:
-                np.matmul(base, mats[:, local[id(step)]], out=rotations[:, step.child])
+                np.matmul(base, mats[:, local[step.child]], out=rotations[:, step.child])
         return rotations, positions
 
 
@@ -217,6 +230,8 @@ class BodyShapes:
         self.is_cylinder = np.array([k == 'cylinder' for k in self.kind])
         self.is_sphere = np.array([k == 'sphere' for k in self.kind])
         self._tree_distance = self._link_tree_distances()
+        # Per set of shapes, the columns and sizes used by :meth:`bounds` (built once).
+        self._layouts: Dict[bytes, tuple] = {}
 
     def _link_tree_distances(self) -> np.ndarray:
         names = self.skeleton.link_names
@@ -265,21 +280,32 @@ class BodyShapes:
     def bounds(self, rotation: np.ndarray, centre: np.ndarray,
                shapes: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
         """Axis-aligned boxes around shapes posed at (k, n): lower and upper corners (k, n, 3)."""
-        half = self.half[shapes]
+        box, box_half, cylinder, radius, half_length, sphere, sphere_radius = (
+            self._bounds_layout(shapes))
         extent = np.empty(centre.shape)
-        box = self.is_box[shapes]
-        if box.any():
-            extent[:, box] = (np.abs(rotation[:, box]) @ half[box][:, :, None])[..., 0]
-        cylinder = self.is_cylinder[shapes]
-        if cylinder.any():
-            axis = np.abs(rotation[:, cylinder][..., 2])
-            radius, half_length = half[cylinder, 0, None], half[cylinder, 1, None]
+        if len(box):
+            extent[:, box] = (np.abs(rotation[:, box]) @ box_half)[..., 0]
+        if len(cylinder):
+            axis = np.abs(rotation[..., 2][:, cylinder])
             extent[:, cylinder] = (radius * np.sqrt(np.clip(1.0 - axis * axis, 0.0, 1.0))
                                    + half_length * axis)
-        sphere = self.is_sphere[shapes]
-        if sphere.any():
-            extent[:, sphere] = half[sphere, 0, None]
+        if len(sphere):
+            extent[:, sphere] = sphere_radius
         return centre - extent, centre + extent
+
+    def _bounds_layout(self, shapes: np.ndarray) -> tuple:
+        """Columns and padded sizes of the boxes, cylinders and spheres among ``shapes``."""
+        key = shapes.tobytes()
+        layout = self._layouts.get(key)
+        if layout is None:
+            half = self.half[shapes]
+            box = np.flatnonzero(self.is_box[shapes])
+            cylinder = np.flatnonzero(self.is_cylinder[shapes])
+            sphere = np.flatnonzero(self.is_sphere[shapes])
+            layout = (box, half[box][:, :, None], cylinder, half[cylinder, 0, None],
+                      half[cylinder, 1, None], sphere, half[sphere, 0, None])
+            self._layouts[key] = layout
+        return layout
 
     def collides(self, shape: int, rotation: np.ndarray, centre: np.ndarray,
                  other) -> bool:
@@ -685,6 +711,51 @@ class CTSpace:
             np.asarray(q, dtype=float), frames, segments, [-1] * len(frames), False)],
             dtype=bool)
 
+    def best_valid_rows(self, q: np.ndarray, frames: np.ndarray, order: np.ndarray,
+                        count: int, also: Sequence[int] = ()) -> np.ndarray:
+        """Legality of the first ``count`` legal rows of a batch in a given order: (m,) bool.
+
+        The broad phase runs over all rows at once, the narrow phase row by row in ``order``
+        until ``count`` rows are legal; the rows in ``also`` are always checked. Rows left
+        unchecked are reported illegal. This is what a search that keeps only its ``count``
+        best neighbours needs, without the narrow phase of the others.
+
+        Parameters
+        ----------
+        q
+            (m, d) branch configurations, rad.
+        frames
+            (m,) frame index of each row, any order.
+        order
+            Row indices, best first.
+        count
+            Legal rows wanted.
+        also
+            Rows checked whatever their rank.
+
+        """
+        frames = np.asarray(frames)
+        q = np.asarray(q, dtype=float)
+        m = len(frames)
+        legal = np.zeros(m, dtype=bool)
+        self.checks += m
+        if not m:
+            return legal
+        inside = self.within_bounds(q)
+        suspects = self._broad_phase(q, frames)
+        checked = set()
+        found = 0
+        for row in list(order):
+            if found >= count:
+                break
+            checked.add(row)
+            legal[row] = inside[row] and not self._narrow_phase(row, frames[row], suspects)
+            found += int(legal[row])
+        for row in also:
+            if row not in checked:
+                legal[row] = inside[row] and not self._narrow_phase(row, frames[row], suspects)
+        return legal
+
     def _check_segments(self, q: np.ndarray, frames: np.ndarray,
                         segments: Sequence[Tuple[int, int]], early: Sequence[int],
                         stop_at_legal: bool):
@@ -730,12 +801,10 @@ class CTSpace:
             rows, columns, triangles = np.nonzero(boxes_overlap(
                 low[:, :, None], high[:, :, None], self._triangle_lower[near][None, None],
                 self._triangle_upper[near][None, None]))
-            # One suspect per (row, shape, mesh), in that order.
-            meshes = self._mesh_count
-            key = np.unique((rows * low.shape[1] + columns) * meshes
-                            + self._triangle_owner[near][triangles])
-            shape_key, owners = np.divmod(key, meshes)
-            rows, columns = np.divmod(shape_key, low.shape[1])
+            # One suspect per (row, shape, mesh), in that order (a scatter, not a sort).
+            hit = np.zeros(low.shape[:2] + (self._mesh_count,), dtype=bool)
+            hit[rows, columns, self._triangle_owner[near][triangles]] = True
+            rows, columns, owners = np.nonzero(hit)
             for row, column, owner in zip(rows.tolist(), columns.tolist(), owners.tolist()):
                 suspects.setdefault(row, []).append((column, -1 - owner))
         if len(self.pairs):

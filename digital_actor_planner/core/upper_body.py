@@ -102,8 +102,12 @@ class UpperBodyConfig:
         Distance r of a node grown when the search is stuck, rad (weighted norm).
     node_budget
         States a branch search may expand per plan.
+    check_budget
+        Configurations a branch search may check per plan: a work budget, so the same step
+        gives the same plan however loaded the machine is.
     time_budget
-        Wall time a branch search may take per plan, s.
+        Wall time a branch search may take per plan, s, or None (no wall-clock limit; a limit
+        makes plans depend on the machine's load).
     max_backtracks
         Backtracking steps a branch search may take per plan.
     max_roadmap_nodes
@@ -124,7 +128,8 @@ class UpperBodyConfig:
 
     roadmap_radius: float = 0.3
     node_budget: int = 300
-    time_budget: float = 0.5
+    check_budget: int = 15000
+    time_budget: Optional[float] = None
     max_backtracks: int = 40
     max_roadmap_nodes: int = 64
     hold_frames: int = 5
@@ -145,8 +150,10 @@ def validate_upper_body_config(config: UpperBodyConfig) -> UpperBodyConfig:
             raise ValueError(f'{name} must be {kind} > 0, got {value!r}')
 
     positive('roadmap_radius', config.roadmap_radius)
-    positive('time_budget', config.time_budget)
-    for name in ('node_budget', 'max_roadmap_nodes', 'hold_frames', 'growth_attempts'):
+    if config.time_budget is not None:
+        positive('time_budget', config.time_budget)
+    for name in ('node_budget', 'check_budget', 'max_roadmap_nodes', 'hold_frames',
+                 'growth_attempts'):
         positive(name, getattr(config, name), integer=True)
     if not (isinstance(config.max_backtracks, (int, np.integer))
             and not isinstance(config.max_backtracks, bool) and config.max_backtracks >= 0):
@@ -187,6 +194,9 @@ class UpperBodyPlan:
         Wall time of the plan, s.
     per_branch
         Branch name -> dict(time s, ok, fast bool, nodes, backtracks, grown, deviation rad).
+    blocked_frame
+        When not ok, the index of the frame the blocked branch could not get past (0 when its
+        start is in collision); -1 when ok.
 
     """
 
@@ -196,6 +206,7 @@ class UpperBodyPlan:
     deviation: float
     planning_time: float
     per_branch: Dict[str, dict]
+    blocked_frame: int = -1
 
 
 def _waist_patterns() -> np.ndarray:
@@ -319,7 +330,7 @@ class UpperBodyPlanner:
             return UpperBodyPlan(frames=out, ok=True, reason='', deviation=0.0,
                                  planning_time=time.perf_counter() - began,
                                  per_branch=per_branch)
-        ok, reason = True, ''
+        ok, reason, blocked_frame = True, '', -1
         last = len(times) - 1
         for name in BRANCH_ORDER:
             tic = time.perf_counter()
@@ -335,7 +346,7 @@ class UpperBodyPlanner:
             record = dict(ok=True, fast=False, nodes=0, backtracks=0, grown=0)
             path = None
             if not space.is_valid(start, 0):
-                ok, record['ok'] = False, False
+                ok, record['ok'], blocked_frame = False, False, 0
                 links = self._links_in_collision(frames[0], name)
                 reason = (f'{name} start in collision at t={times[0]:.2f} s'
                           + (f' ({", ".join(links)})' if links else ''))
@@ -349,13 +360,15 @@ class UpperBodyPlanner:
                     speed_fraction=config.speed_fraction,
                     growth_attempts=config.growth_attempts,
                     node_budget=config.node_budget, max_backtracks=config.max_backtracks,
-                    deadline=time.perf_counter() + config.time_budget)
+                    check_budget=config.check_budget,
+                    deadline=None if config.time_budget is None
+                    else time.perf_counter() + config.time_budget)
                 record.update(nodes=result.nodes, backtracks=result.backtracks,
                               grown=result.grown, ok=result.ok)
                 path = result.path
                 if not result.ok:
-                    ok = False
-                    reason = f'{name} blocked at t={times[result.blocked_frame]:.2f} s'
+                    ok, blocked_frame = False, result.blocked_frame
+                    reason = f'{name} blocked at t={times[blocked_frame]:.2f} s'
             if path is not None and record['ok']:
                 path[0] = start
                 out[:, indices] = path
@@ -369,7 +382,8 @@ class UpperBodyPlanner:
         upper = self.upper_indices
         deviation = float(np.max(np.abs(out[1:, upper] - frames[1:, upper])))
         return UpperBodyPlan(frames=out, ok=ok, reason=reason, deviation=deviation,
-                             planning_time=time.perf_counter() - began, per_branch=per_branch)
+                             planning_time=time.perf_counter() - began, per_branch=per_branch,
+                             blocked_frame=blocked_frame)
 
     @staticmethod
     def _objective_is_legal(space: CTSpace, start: np.ndarray) -> bool:
