@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import array
 import collections
+import gc
 from dataclasses import dataclass
 import math
 import multiprocessing
@@ -1277,6 +1278,11 @@ def main(args=None) -> int:
     executor = SingleThreadedExecutor()
     for node in nodes:
         executor.add_node(node)
+    # Everything built so far (scene meshes for the markers, messages, modules) is moved out of
+    # the garbage collector's reach, so its full collections, which run in whatever thread
+    # allocates and hold the GIL, no longer delay a tick by milliseconds (100 s on stairs_up:
+    # jitter p99 2.6 ms -> 0.6-1.3 ms).
+    gc.freeze()
     try:
         # Bounded waits, so that the SIGTERM handler (Python code, run by the main thread)
         # gets its turn even when no message arrives.
