@@ -291,7 +291,10 @@ def test_servo_dropping_off_the_bus_is_named_and_the_rest_keep_going(rig):
     r.feedback.clear()
     assert r.wait(lambda: (r.stream({'left_elbow': 0.9}, 0.05) or True)
                   and r.goal('left_elbow') == expected_ticks('left_elbow', 0.9)
-                  and r.feedback and len(r.feedback[-1].name) == 17)
+                  and r.feedback and len(r.feedback[-1].name) == 17), (
+        f"left_elbow goal {r.goal('left_elbow')} (want {expected_ticks('left_elbow', 0.9)}), "
+        f'{len(r.feedback)} feedback messages, last with '
+        f'{len(r.feedback[-1].name) if r.feedback else 0} names\n{r.bridge.output()}')
     assert 'right_elbow' not in r.feedback[-1].name
     # plugged back in: it is found again, switched on and driven (backoff max is 0.4 s)
     servo.table[emu.TORQUE_ENABLE] = 0

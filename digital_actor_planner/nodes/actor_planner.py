@@ -521,7 +521,48 @@ class PlanningProcess:
             pass
 
 
-class PlanningScheduler:
+class NodesThread:
+    """A thread that serves the actor nodes attached to it: it starts with the first node and
+    ends when the last one is detached. Subclasses write ``_loop`` (run with ``attach``'s
+    extra arguments of the first node) and may wake it up for the end in ``_wake_up``."""
+
+    name = 'actor_thread'
+
+    def __init__(self):
+        self._nodes = []
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread = None
+
+    def attach(self, node: 'ActorPlannerNode', *args) -> None:
+        """Serve ``node`` (the thread starts with the first node)."""
+        with self._lock:
+            self._nodes = self._nodes + [node]
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._loop, args=args, name=self.name,
+                                                daemon=True)
+                self._thread.start()
+
+    def detach(self, node: 'ActorPlannerNode') -> None:
+        """Stop serving ``node``; the thread ends with the last node."""
+        with self._lock:
+            self._nodes = [n for n in self._nodes if n is not node]
+            last = not self._nodes
+            thread = self._thread
+        if last and thread is not None:
+            self._stop.set()
+            self._wake_up()
+            if thread is not threading.current_thread():
+                thread.join(timeout=5.0)
+
+    def _wake_up(self) -> None:
+        pass
+
+    def _loop(self, *args) -> None:
+        raise NotImplementedError
+
+
+class PlanningScheduler(NodesThread):
     """One thread that plans for every actor sharing a planning worker, most urgent first.
 
     An actor is due when its buffered motion ahead of playback is down to its planning lead;
@@ -530,34 +571,19 @@ class PlanningScheduler:
     needs (with one thread per actor, 20 idle actors kept a core half busy).
     """
 
+    name = 'actor_planning'
+
     def __init__(self):
+        super().__init__()
         self.wake = threading.Event()
-        self._nodes = []
-        self._lock = threading.Lock()
-        self._stop = threading.Event()
-        self._thread = None
 
     def attach(self, node: 'ActorPlannerNode', priority: int) -> None:
         """Plan for ``node`` (the thread starts with the first node, at ``priority`` if > 0)."""
-        with self._lock:
-            self._nodes = self._nodes + [node]
-            if self._thread is None:
-                self._thread = threading.Thread(target=self._loop, args=(priority,),
-                                                name='actor_planning', daemon=True)
-                self._thread.start()
+        super().attach(node, priority)
         self.wake.set()
 
-    def detach(self, node: 'ActorPlannerNode') -> None:
-        """Stop planning for ``node``; the thread ends with the last node."""
-        with self._lock:
-            self._nodes = [n for n in self._nodes if n is not node]
-            last = not self._nodes
-            thread = self._thread
-        if last and thread is not None:
-            self._stop.set()
-            self.wake.set()
-            if thread is not threading.current_thread():
-                thread.join(timeout=5.0)
+    def _wake_up(self) -> None:
+        self.wake.set()
 
     def _loop(self, priority: int) -> None:
         if priority > 0:
@@ -580,35 +606,11 @@ class PlanningScheduler:
             most_urgent.plan_once()
 
 
-class Housekeeper:
+class Housekeeper(NodesThread):
     """One thread that publishes the markers (5 Hz) and diagnostics (1 Hz) of every actor of a
     process; plain thread, not executor timers (see ``ActorPlannerNode._make_interfaces``)."""
 
-    def __init__(self):
-        self._nodes = []
-        self._lock = threading.Lock()
-        self._stop = threading.Event()
-        self._thread = None
-
-    def attach(self, node: 'ActorPlannerNode') -> None:
-        """Serve ``node`` (the thread starts with the first node)."""
-        with self._lock:
-            self._nodes = self._nodes + [node]
-            if self._thread is None:
-                self._thread = threading.Thread(target=self._loop, name='actor_housekeeping',
-                                                daemon=True)
-                self._thread.start()
-
-    def detach(self, node: 'ActorPlannerNode') -> None:
-        """Stop serving ``node``; the thread ends with the last node."""
-        with self._lock:
-            self._nodes = [n for n in self._nodes if n is not node]
-            last = not self._nodes
-            thread = self._thread
-        if last and thread is not None:
-            self._stop.set()
-            if thread is not threading.current_thread():
-                thread.join(timeout=5.0)
+    name = 'actor_housekeeping'
 
     def _loop(self) -> None:
         next_diagnostics = time.monotonic() + 1.0
@@ -633,7 +635,7 @@ def real_time(priority: int) -> bool:
     return True
 
 
-class StreamTicker:
+class StreamTicker(NodesThread):
     """One thread that publishes the joint_states of every actor attached to it.
 
     Ticks on a monotonic schedule at ``1 / period``; a late tick is published late and the
@@ -641,34 +643,13 @@ class StreamTicker:
     Actors hosted in one process share a ticker: one real-time thread instead of one per actor.
     """
 
+    name = 'joint_state_stream'
+
     def __init__(self, period: float, priority: int, warn=None):
+        super().__init__()
         self.period = float(period)
         self.priority = int(priority)
         self._warn = warn
-        self._nodes = []
-        self._lock = threading.Lock()
-        self._stop = threading.Event()
-        self._thread = None
-
-    def attach(self, node: 'ActorPlannerNode') -> None:
-        """Start ticking ``node`` (and start the thread with the first node)."""
-        with self._lock:
-            self._nodes = self._nodes + [node]
-            if self._thread is None:
-                self._thread = threading.Thread(target=self._loop, name='joint_state_stream',
-                                                daemon=True)
-                self._thread.start()
-
-    def detach(self, node: 'ActorPlannerNode') -> None:
-        """Stop ticking ``node``; the thread ends with the last node."""
-        with self._lock:
-            self._nodes = [n for n in self._nodes if n is not node]
-            last = not self._nodes
-            thread = self._thread
-        if last and thread is not None:
-            self._stop.set()
-            if thread is not threading.current_thread():
-                thread.join(timeout=5.0)
 
     def _loop(self) -> None:
         if self.priority > 0 and not real_time(self.priority) and self._warn is not None:
