@@ -3,11 +3,9 @@ import numpy as np
 import pytest
 
 from digital_actor_planner.core.ct_roadmap import CTRoadmap
-from digital_actor_planner.core.ct_space import (
-    BodyKinematics, BodyShapes, CTSpace, EnvironmentIndex, TimedBody)
+from digital_actor_planner.core.ct_space import CTSpace
 from digital_actor_planner.core.environment import Environment
-from digital_actor_planner.core.upper_body import motion_patterns
-from scene_helpers import box
+from scene_helpers import box, timed_body, walk
 
 TRUNK = ('waist', 'torso', 'head', 'left_shoulder', 'right_shoulder')
 LEGS = ('pelvis', 'left_hip', 'right_hip', 'left_thigh', 'right_thigh', 'left_shank',
@@ -20,14 +18,8 @@ def waist_space(skeleton, beam_bottom):
     if beam_bottom is not None:
         meshes.append(box([0.3, -1.0, beam_bottom], [0.5, 1.0, beam_bottom + 0.2]))
     environment = Environment(meshes, resolution=0.05)
-    k = 220
-    times = np.arange(k) / 100.0
-    q = np.tile(skeleton.neutral(), (k, 1))
-    q[:, skeleton.index['root_x']] = -1.0 + 0.9 * times
-    q[:, skeleton.index['root_z']] = 0.92
-    frames = motion_patterns(skeleton, q)
-    body = TimedBody(BodyKinematics(skeleton), BodyShapes(skeleton),
-                     EnvironmentIndex(environment.meshes, environment.objects), frames)
+    times, frames = walk(skeleton, 220, swing_legs=False)
+    body = timed_body(skeleton, environment, frames)
     return CTSpace('waist', body, times, frames[:, skeleton.branch('waist')], TRUNK, LEGS)
 
 

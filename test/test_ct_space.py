@@ -8,8 +8,7 @@ from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.ct_space import (
     BodyKinematics, BodyShapes, CTSpace, EnvironmentIndex, TimedBody)
 from digital_actor_planner.core.environment import Environment
-from digital_actor_planner.core.upper_body import motion_patterns
-from scene_helpers import box
+from scene_helpers import box, timed_body, walk
 
 TRUNK = ('waist', 'torso', 'head', 'left_shoulder', 'right_shoulder')
 LEGS = ('pelvis', 'left_hip', 'right_hip', 'left_thigh', 'right_thigh', 'left_shank',
@@ -21,16 +20,8 @@ def beam_world(skeleton):
     environment = Environment([box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0]),
                                box([0.3, -1.0, 1.60], [0.5, 1.0, 1.80])], resolution=0.05)
     collision = BodyCollision(skeleton, environment)
-    k = 200
-    times = np.arange(k) / 100.0
-    q = np.tile(skeleton.neutral(), (k, 1))
-    q[:, skeleton.index['root_x']] = -1.0 + 0.9 * times
-    q[:, skeleton.index['root_z']] = 0.92
-    q[:, skeleton.index['left_hip_pitch']] = 0.3 * np.sin(2 * np.pi * times / 1.2)
-    q[:, skeleton.index['right_hip_pitch']] = -q[:, skeleton.index['left_hip_pitch']]
-    frames = motion_patterns(skeleton, q)
-    body = TimedBody(BodyKinematics(skeleton), BodyShapes(skeleton),
-                     EnvironmentIndex(environment.meshes, environment.objects), frames)
+    times, frames = walk(skeleton, 200)
+    body = timed_body(skeleton, environment, frames)
     space = CTSpace('waist', body, times, frames[:, skeleton.branch('waist')], TRUNK, LEGS)
     return space, collision, frames
 
@@ -168,13 +159,8 @@ def test_batched_checks_agree_with_every_pair_checked_frame_by_frame(skeleton, b
     environment = Environment([box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0]), top,
                                box([0.3, -1.0, 1.45], [0.5, 1.0, 1.65])], resolution=0.05)
     k = 120
-    times = np.arange(k) / 100.0
-    q = np.tile(skeleton.neutral(), (k, 1))
-    q[:, skeleton.index['root_x']] = -0.6 + 0.9 * times
-    q[:, skeleton.index['root_z']] = 0.92
-    frames = motion_patterns(skeleton, q)
-    body = TimedBody(BodyKinematics(skeleton), BodyShapes(skeleton, 0.01),
-                     EnvironmentIndex(environment.meshes, environment.objects), frames)
+    times, frames = walk(skeleton, k, x0=-0.6, swing_legs=False)
+    body = timed_body(skeleton, environment, frames, padding=0.01)
     checked = TRUNK if branch == 'waist' else ('left_shoulder_roll_link', 'left_upper_arm',
                                                'left_forearm')
     obstacles = LEGS if branch == 'waist' else LEGS + TRUNK

@@ -6,9 +6,8 @@ from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.upper_body import (
     motion_patterns, UpperBodyConfig, UpperBodyPlanner, validate_upper_body_config)
-from scene_helpers import box
+from scene_helpers import box, walk
 
-RATE = 100.0
 UPPER_LINKS = ['waist', 'torso', 'head', 'left_shoulder', 'right_shoulder',
                'left_shoulder_roll_link', 'left_upper_arm', 'left_forearm',
                'right_shoulder_roll_link', 'right_upper_arm', 'right_forearm']
@@ -16,18 +15,6 @@ UPPER_LINKS = ['waist', 'torso', 'head', 'left_shoulder', 'right_shoulder',
 
 def ground():
     return box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0])
-
-
-def walk(skeleton, k, x0=-1.0, speed=0.9):
-    """Pelvis along +x at 0.9 m/s, root_z 0.92, legs swinging; upper body = motion patterns."""
-    times = np.arange(k) / RATE
-    q = np.tile(skeleton.neutral(), (k, 1))
-    q[:, skeleton.index['root_x']] = x0 + speed * times
-    q[:, skeleton.index['root_z']] = 0.92
-    phase = 2 * np.pi * times / 1.2
-    q[:, skeleton.index['left_hip_pitch']] = 0.3 * np.sin(phase)
-    q[:, skeleton.index['right_hip_pitch']] = -0.3 * np.sin(phase)
-    return times, motion_patterns(skeleton, q)
 
 
 def planner_for(skeleton, *obstacles, seed=3, config=None):
