@@ -314,8 +314,7 @@ class Actor:
             plan = self._upper.plan(*preview)
         # Blocked within the step's own frames, the plan without the preview meets the same
         # obstacle there: only a block in the preview leaves it a chance.
-        blocked = -1 if plan is None else getattr(plan, 'blocked_frame', -1)
-        if plan is None or (not plan.ok and not 0 <= blocked < k):
+        if plan is None or (not plan.ok and not 0 <= plan.blocked_frame < k):
             plan = self._upper.plan(full_times, full)
         if not plan.ok:
             return frames, False, plan.reason

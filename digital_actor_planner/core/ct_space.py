@@ -433,6 +433,34 @@ def boxes_overlap(lower_a: np.ndarray, upper_a: np.ndarray, lower_b: np.ndarray,
     return out
 
 
+def mesh_contacts(low: np.ndarray, high: np.ndarray, triangle_lower: np.ndarray,
+                  triangle_upper: np.ndarray, triangle_owner: np.ndarray,
+                  mesh_count: int) -> tuple:
+    """Which shape boxes meet a triangle box of which mesh, once per (row, shape, mesh).
+
+    Parameters
+    ----------
+    low, high
+        (m, n, 3) box corners of n shapes in m rows (frames or configurations), m.
+    triangle_lower, triangle_upper
+        (T, 3) triangle box corners, m.
+    triangle_owner
+        (T,) mesh index of each triangle (< ``mesh_count``).
+
+    Returns
+    -------
+    rows, columns, meshes
+        Index arrays in row, shape, mesh order (a scatter, not a sort).
+
+    """
+    rows, columns, triangles = np.nonzero(boxes_overlap(
+        low[:, :, None], high[:, :, None], triangle_lower[None, None],
+        triangle_upper[None, None]))
+    hit = np.zeros(low.shape[:2] + (mesh_count,), dtype=bool)
+    hit[rows, columns, triangle_owner[triangles]] = True
+    return np.nonzero(hit)
+
+
 class CTSpace:
     """Configuration-time space of one branch, with OMPL-shaped queries (paper §5.2).
 
@@ -797,14 +825,9 @@ class CTSpace:
         suspects: Dict[int, list] = {}
         near = self._triangles_near(low, high)
         if len(near):
-            # (m, n, T') overlap of shape boxes with the boxes of the triangles near any.
-            rows, columns, triangles = np.nonzero(boxes_overlap(
-                low[:, :, None], high[:, :, None], self._triangle_lower[near][None, None],
-                self._triangle_upper[near][None, None]))
-            # One suspect per (row, shape, mesh), in that order (a scatter, not a sort).
-            hit = np.zeros(low.shape[:2] + (self._mesh_count,), dtype=bool)
-            hit[rows, columns, self._triangle_owner[near][triangles]] = True
-            rows, columns, owners = np.nonzero(hit)
+            rows, columns, owners = mesh_contacts(
+                low, high, self._triangle_lower[near], self._triangle_upper[near],
+                self._triangle_owner[near], self._mesh_count)
             for row, column, owner in zip(rows.tolist(), columns.tolist(), owners.tolist()):
                 suspects.setdefault(row, []).append((column, -1 - owner))
         if len(self.pairs):

@@ -16,7 +16,8 @@ import numpy as np
 
 from digital_actor_planner.core.ct_roadmap import CTRoadmap
 from digital_actor_planner.core.ct_space import (
-    BodyKinematics, BodyShapes, boxes_overlap, CTSpace, EnvironmentIndex, TimedBody)
+    BodyKinematics, BodyShapes, boxes_overlap, CTSpace, EnvironmentIndex, mesh_contacts,
+    TimedBody)
 from digital_actor_planner.core.skeleton import Skeleton
 
 #: Shoulder roll that keeps a hanging arm clear of the torso and the thigh, rad.
@@ -414,14 +415,10 @@ class UpperBodyPlanner:
         environment = self.environment
         near = environment.triangles_near(low.min(axis=(0, 1)), high.max(axis=(0, 1)))
         if len(near):
-            frames, columns, triangles = np.nonzero(boxes_overlap(
-                low[:, :, None], high[:, :, None], environment.lower[near][None, None],
-                environment.upper[near][None, None]))
-            meshes = int(environment.owner[near].max()) + 1
-            key = np.unique((frames * len(upper_shapes) + columns) * meshes
-                            + environment.owner[near][triangles])
-            shape_key, owners = np.divmod(key, meshes)
-            frames, columns = np.divmod(shape_key, len(upper_shapes))
+            owner = environment.owner[near]
+            frames, columns, owners = mesh_contacts(
+                low, high, environment.lower[near], environment.upper[near], owner,
+                int(owner.max()) + 1)
             for frame, shape, owner in zip(frames.tolist(), upper_shapes[columns].tolist(),
                                            owners.tolist()):
                 if shapes.collides(shape, body.shape_rotation[frame, shape],
