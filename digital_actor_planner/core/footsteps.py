@@ -297,20 +297,6 @@ class FootstepPlanner:
         pitch = np.where(edge, 0.0, np.where(usable, pitch, 0.0))
         return ok, height, pitch
 
-    def swing_clear(self, profile: GroundProfile, side: int, s_from: float, h_from: float,
-                    s_to: float, h_to: float) -> bool:
-        """Whether a foot can swing from one foothold to the next over the ground profile."""
-        i0 = int(np.floor((s_from + self.leg.toe - profile.s0) / profile.ds))
-        i1 = int(np.ceil((s_to - self.leg.heel - profile.s0) / profile.ds))
-        i0, i1 = max(i0, 0), min(i1, profile.samples - 1)
-        if i1 < i0:
-            return True
-        tops = profile.obstacle[side, i0:i1 + 1]
-        tops = tops[~np.isnan(tops)]
-        if tops.size == 0:
-            return True
-        return float(np.max(tops)) <= max(h_from, h_to) + self.config.max_swing_height
-
     # -- §4.2 search -------------------------------------------------------------------
     def plan(self, profile: GroundProfile, stance_side: int, stance_s: float,
              stance_height: float, swing_s: float, swing_height: float, s_init: float,
@@ -455,7 +441,11 @@ class FootstepPlanner:
 
     def _swing_clear_in(self, profile, memo: _Search, side: int, s_from: float, h_from: float,
                         s_to: float, h_to: float) -> bool:
-        """:meth:`swing_clear` on the search's lists (the same test without NumPy calls)."""
+        """Whether a foot can swing from one foothold to the next over the ground profile.
+
+        Reads the search's per-side obstacle lists (``memo``), not NumPy arrays: it runs for
+        every configuration the search visits.
+        """
         i0 = max(math.floor((s_from + self.leg.toe - profile.s0) / profile.ds), 0)
         i1 = min(math.ceil((s_to - self.leg.heel - profile.s0) / profile.ds),
                  profile.samples - 1)
