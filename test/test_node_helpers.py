@@ -50,7 +50,9 @@ class Probe:
         from rclpy.qos import DurabilityPolicy, QoSProfile
         from diagnostic_msgs.msg import DiagnosticArray
         from geometry_msgs.msg import Twist, TwistStamped
+        from nav_msgs.msg import Path
         from sensor_msgs.msg import JointState
+        from visualization_msgs.msg import MarkerArray
         from std_msgs.msg import String
 
         os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
@@ -76,6 +78,13 @@ class Probe:
                                       latched)
         self.cmd_pub = self.node.create_publisher(TwistStamped if stamped else Twist,
                                                   'cmd_vel', 10)
+        # The RViz topics of the node named actor_planner in this namespace: latest of each.
+        self.rviz = {}
+        for topic, kind in (('environment', MarkerArray), ('markers', MarkerArray),
+                            ('path', Path)):
+            self.node.create_subscription(
+                kind, f'actor_planner/{topic}',
+                lambda msg, topic=topic: self.rviz.__setitem__(topic, msg), latched)
         self.command = None
         self.node.create_timer(0.05, self._send_command)
         self._lock = threading.Lock()
@@ -174,6 +183,25 @@ class Probe:
                     values['_name'] = status.name
                     return values
         return {}
+
+    def set_scene(self, path: str, node: str = '/actor_planner', timeout: float = 30.0):
+        """Set ``node``'s ``scene`` parameter; return the SetParametersResult.
+
+        Raises AssertionError when the service does not appear or answer within ``timeout`` s.
+        """
+        from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+        from rcl_interfaces.srv import SetParameters
+        client = self.node.create_client(SetParameters, f'{node}/set_parameters')
+        try:
+            assert client.wait_for_service(timeout_sec=timeout), f'{node}/set_parameters'
+            request = SetParameters.Request(parameters=[Parameter(
+                name='scene', value=ParameterValue(type=ParameterType.PARAMETER_STRING,
+                                                   string_value=path))])
+            future = client.call_async(request)
+            assert self.spin_until(future.done, timeout), f'{node}/set_parameters timed out'
+            return future.result().results[0]
+        finally:
+            self.node.destroy_client(client)
 
     def close(self) -> None:
         """Destroy the probe node and its context."""
@@ -278,6 +306,44 @@ class _ScheduledActor:
     def plan_once(self):
         self.log.append((self.name, time.monotonic()))
         self.due[self.name] = None
+
+
+def test_environment_markers_are_built_once_per_scene_and_sent_serialized(monkeypatch):
+    """The environment is drawn as TRIANGLE_LISTs of exactly the scene's triangles (up to the
+    budget), serialized once for every actor on the same scene content."""
+    from rclpy.serialization import deserialize_message
+    from visualization_msgs.msg import Marker, MarkerArray
+    from digital_actor_planner.nodes import actor_planner
+    rng = np.random.default_rng(3)
+    ground = (rng.normal(size=(10, 3)), rng.integers(0, 10, size=(12, 3)))
+    box = (rng.normal(size=(8, 3)), rng.integers(0, 8, size=(6, 3)))
+    array = deserialize_message(actor_planner.environment_markers([ground, box], 'map'),
+                                MarkerArray)
+    assert array.markers[0].action == Marker.DELETEALL
+    drawn = [m for m in array.markers if m.type == Marker.TRIANGLE_LIST]
+    assert [m.id for m in drawn] == [0, 1]
+    assert {m.header.frame_id for m in array.markers} == {'map'}
+    for marker, (vertices, faces) in zip(drawn, (ground, box)):
+        points = np.array([[p.x, p.y, p.z] for p in marker.points])
+        assert np.array_equal(points, vertices[faces].reshape(-1, 3))
+    # Points written into a serialized template: the same message as rclpy's own conversion.
+    monkeypatch.setattr(actor_planner, '_spliced', lambda *args: None)
+    assert deserialize_message(actor_planner.environment_markers([ground, box], 'map'),
+                               MarkerArray) == array
+    monkeypatch.undo()
+
+    monkeypatch.setattr(actor_planner, 'MAX_MARKER_TRIANGLES', 15)
+    array = deserialize_message(actor_planner.environment_markers([ground, box], 'map'),
+                                MarkerArray)
+    assert [len(m.points) for m in array.markers[1:]] == [36, 9]
+
+    housekeeper = actor_planner.Housekeeper()
+    first = housekeeper.environment([ground, box], 'world')
+    again = housekeeper.environment([(ground[0].copy(), ground[1].copy()), box], 'world')
+    assert again is first  # another actor on the same scene: not built again
+    moved = (ground[0] + [0.0, 0.0, 0.1], ground[1])
+    assert housekeeper.environment([moved, box], 'world') != first
+    assert housekeeper.environment([ground, box], 'map') != first
 
 
 def test_planning_scheduler_plans_the_most_urgent_actor_first_and_skips_resting_ones():

@@ -87,28 +87,46 @@ def test_forward_command_walks_the_stairs_at_a_steady_100_hz(actor):
     assert values['state'] in ('walking', 'stuck'), values
 
 
-def _set_scene(probe, path):
-    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
-    from rcl_interfaces.srv import SetParameters
-    client = probe.node.create_client(SetParameters, '/actor_planner/set_parameters')
-    try:
-        assert client.wait_for_service(timeout_sec=10.0)
-        request = SetParameters.Request(parameters=[Parameter(
-            name='scene', value=ParameterValue(type=ParameterType.PARAMETER_STRING,
-                                               string_value=path))])
-        future = client.call_async(request)
-        assert probe.spin_until(future.done, 30.0)
-        return future.result().results[0]
-    finally:
-        probe.node.destroy_client(client)
+def _triangles(environment) -> np.ndarray:
+    """(t, 3, 3) triangles drawn by an environment MarkerArray, m."""
+    from visualization_msgs.msg import Marker
+    points = [[p.x, p.y, p.z] for m in environment.markers if m.type == Marker.TRIANGLE_LIST
+              for p in m.points]
+    return np.array(points, dtype=float).reshape(-1, 3, 3)
+
+
+def _scene_triangles(path) -> np.ndarray:
+    from digital_actor_planner.core.environment import load_scene
+    meshes = load_scene(path).environment.meshes
+    return np.concatenate([np.asarray(m.vertices)[np.asarray(m.faces)] for m in meshes])
+
+
+def test_rviz_sees_the_scene_the_footstep_window_and_the_path(actor):
+    _, probe = actor
+    assert probe.spin_until(lambda: 'environment' in probe.rviz, 10.0), 'no environment markers'
+    environment = probe.rviz['environment']
+    assert environment.markers[0].action == environment.markers[0].DELETEALL
+    assert {m.header.frame_id for m in environment.markers} == {'world'}
+    assert np.allclose(_triangles(environment), _scene_triangles(COURSE))
+    probe.drive(0.5, 0.0, 2.0)  # the planner's window and path as it walks
+    assert probe.spin_until(lambda: 'path' in probe.rviz and 'markers' in probe.rviz, 5.0)
+    window = [m for m in probe.rviz['markers'].markers if m.ns == 'footsteps_window']
+    assert len(window) >= 2, [m.ns for m in probe.rviz['markers'].markers]
+    assert len(probe.rviz['path'].poses) >= 2
+    x = probe.latest()[ROOT_X]
+    assert max(m.pose.position.x for m in window) > x, 'the window is not ahead of the actor'
 
 
 def test_scene_reload_at_run_time_keeps_the_old_scene_when_broken(actor, tmp_path):
     _, probe = actor
     flat = scene('flat')
-    result = _set_scene(probe, flat)
+    result = probe.set_scene(flat)
     assert result.successful, result.reason
     assert probe.spin_until(lambda: probe.diagnostic_values().get('scene') == flat, 5.0)
+    # RViz is sent the new environment.
+    assert probe.spin_until(lambda: len(_triangles(probe.rviz['environment'])) ==
+                            len(_scene_triangles(flat)), 10.0)
+    assert np.allclose(_triangles(probe.rviz['environment']), _scene_triangles(flat))
     # The actor stands at the new course's start and still walks.
     probe.drive(0.5, 0.0, 3.0)
     assert probe.latest()[ROOT_X] > 0.5
@@ -116,7 +134,7 @@ def test_scene_reload_at_run_time_keeps_the_old_scene_when_broken(actor, tmp_pat
     broken = tmp_path / 'broken.yaml'
     broken.write_text('meshes: [{file: missing_mesh.stl}]\nstart: [0, 0, 0]\n')
     count = len(probe.joint_states)
-    result = _set_scene(probe, str(broken))
+    result = probe.set_scene(str(broken))
     assert not result.successful
     assert 'missing_mesh.stl' in result.reason or 'broken.yaml' in result.reason, result.reason
     assert probe.spin_until(lambda: probe.diagnostic_values().get('scene_error'), 5.0)
@@ -177,7 +195,7 @@ def test_nan_and_inf_commands_are_ignored_and_the_stream_goes_on(actor):
 
 def test_speeds_beyond_the_limits_are_clamped_with_a_warning(actor):
     process, probe = actor
-    assert _set_scene(probe, scene('flat')).successful  # back to the start of open ground
+    assert probe.set_scene(scene('flat')).successful  # back to the start of open ground
     _stop(probe)
     began = probe.drive(9.0, 0.0, 4.0)
     times, frames = probe.positions_since(began + 2.0)
@@ -195,9 +213,13 @@ def test_diagnostics_report_state_planning_time_and_stream_health(actor):
     assert probe.spin_until(lambda: probe.diagnostic_values(), 5.0)
     values = probe.diagnostic_values()
     for key in ('state', 'reason', 'planning_time_last_ms', 'planning_time_p50_ms',
-                'planning_time_p99_ms', 'publish_rate_hz', 'missed_frames', 'scene'):
+                'planning_time_p99_ms', 'publish_rate_hz', 'missed_frames', 'scene',
+                'stream_jitter_p99_ms', 'stream_longest_interval_ms'):
         assert key in values, key
     assert float(values['planning_time_p99_ms']) > 0.0
+    # The node's own account of its publishing instants over the last 2 s, in ms.
+    assert 0.0 <= float(values['stream_jitter_p99_ms']) < 10.0, values
+    assert 9.0 < float(values['stream_longest_interval_ms']) < 100.0, values
     # One second of a loaded machine; the +-5 % check over 10 s is in the walking test.
     assert abs(float(values['publish_rate_hz']) - 100.0) < 20.0
     assert values['scene'] == scene('flat')  # reloaded by the scene test above

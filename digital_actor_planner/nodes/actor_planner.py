@@ -19,6 +19,7 @@ import argparse
 import array
 import collections
 import gc
+import hashlib
 from dataclasses import dataclass
 import math
 import multiprocessing
@@ -44,6 +45,7 @@ from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.serialization import serialize_message
 from rclpy.utilities import remove_ros_args
 from rclpy.validate_namespace import validate_namespace
 from sensor_msgs.msg import JointState
@@ -222,6 +224,102 @@ def _yaw_quaternion(yaw: float) -> Quaternion:
 
 def _points(xyz: np.ndarray):
     return [Point(x=float(x), y=float(y), z=float(z)) for x, y, z in xyz]
+
+
+def environment_markers(meshes, frame_id: str) -> bytes:
+    """The serialized MarkerArray that draws the environment in RViz.
+
+    Parameters
+    ----------
+    meshes
+        (vertices (v, 3) float64 m, faces (f, 3) int) per mesh, world frame.
+    frame_id
+        Frame of the markers.
+
+    Returns
+    -------
+    bytes
+        A DELETEALL marker, then one TRIANGLE_LIST per mesh (MAX_MARKER_TRIANGLES in all at
+        most), stamped zero (static: RViz uses the latest transform), serialized. The points
+        are written straight into the serialized message: a point object each took ~0.5 s
+        and 120k fresh objects for the garbage collector for a 40k-triangle terrain (the
+        stream thread missed frames behind it); now a few ms.
+
+    """
+    drawn, budget = [], MAX_MARKER_TRIANGLES
+    for index, (vertices, faces) in enumerate(meshes):
+        faces = np.asarray(faces)[:budget]
+        budget -= len(faces)
+        if len(faces):
+            drawn.append((index, np.asarray(vertices, dtype=float)[faces].reshape(-1, 3)))
+    raw = _spliced(drawn, frame_id)
+    if raw is None:
+        raw = serialize_message(_environment_array(
+            drawn, frame_id, lambda number: _points(drawn[number][1])))
+    return raw
+
+
+def _placeholder_point(marker: int, point: int) -> Point:
+    # Values no real scene has, to find each marker's points in the serialized template.
+    return Point(x=-7.25e301 - marker * 1e290, y=3.5e-301 * (point + 1), z=-1.125e299)
+
+
+def _environment_array(drawn, frame_id: str, points_of) -> MarkerArray:
+    array = MarkerArray(markers=[Marker(action=Marker.DELETEALL)])
+    for number, (index, _) in enumerate(drawn):
+        marker = Marker(ns='environment', id=index, type=Marker.TRIANGLE_LIST,
+                        action=Marker.ADD)
+        marker.pose.orientation.w = 1.0
+        marker.scale.x = marker.scale.y = marker.scale.z = 1.0
+        marker.color = _color(0.62, 0.64, 0.66)
+        marker.points = points_of(number)
+        array.markers.append(marker)
+    for marker in array.markers:
+        marker.header.frame_id = frame_id
+    return array
+
+
+def _spliced(drawn, frame_id: str) -> Optional[bytes]:
+    """Serialize the environment by writing each TRIANGLE_LIST's points into a serialized
+    template; None when the template's layout is not the expected one.
+
+    The RMW serializes a template with one placeholder point per marker, and again with two.
+    A point sequence is a count, then 24 bytes (three float64) per point: the count is the
+    word before the placeholder that reads 1 in the first template and 2 in the second, and a
+    sequence of any length fits in its place without moving the alignment of what follows.
+    """
+    one, two = (serialize_message(_environment_array(
+        drawn, frame_id, lambda m, k=k: [_placeholder_point(m, i) for i in range(k)]))
+        for k in (1, 2))
+    if one[:2] != b'\x00\x01':  # CDR little endian, as on every ROS 2 platform
+        return None
+    pieces, read = [], 0
+    for number, (_, points) in enumerate(drawn):
+        placeholder = _placeholder_point(number, 0)
+        data = one.find(np.array([placeholder.x, placeholder.y, placeholder.z],
+                                 dtype='<f8').tobytes(), read)
+        # In the two-point template each earlier marker's extra point moves it by 24 bytes.
+        shift = 24 * number
+        count = next((c for c in (data - 4, data - 8) if data >= 0 and c >= read and
+                      one[c:c + 4] == (1).to_bytes(4, 'little') and
+                      two[c + shift:c + shift + 4] == (2).to_bytes(4, 'little')), None)
+        if count is None:
+            return None
+        pieces += [one[read:count], len(points).to_bytes(4, 'little'), one[count + 4:data],
+                   np.ascontiguousarray(points, dtype='<f8').tobytes()]
+        read = data + 24
+    pieces.append(one[read:])
+    return b''.join(pieces)
+
+
+def _meshes_digest(meshes) -> bytes:
+    digest = hashlib.blake2b(digest_size=16)
+    for vertices, faces in meshes:
+        for values in (np.ascontiguousarray(vertices, dtype=float),
+                       np.ascontiguousarray(faces, dtype=np.int64)):
+            digest.update(str(values.shape).encode())
+            digest.update(values.tobytes())
+    return digest.digest()
 
 
 def build_actor(skeleton: Skeleton, actor_config: ActorConfig, scene_path: str,
@@ -611,6 +709,23 @@ class Housekeeper(NodesThread):
     process; plain thread, not executor timers (see ``ActorPlannerNode._make_interfaces``)."""
 
     name = 'actor_housekeeping'
+    #: Serialized environments kept for actors on the same scene.
+    ENVIRONMENTS_KEPT = 4
+
+    def __init__(self):
+        super().__init__()
+        self._environments = collections.OrderedDict()
+
+    def environment(self, meshes, frame_id: str) -> bytes:
+        """The serialized environment markers of ``meshes`` (built once per content)."""
+        key = (frame_id, _meshes_digest(meshes))
+        if key in self._environments:
+            self._environments.move_to_end(key)
+        else:
+            self._environments[key] = environment_markers(meshes, frame_id)
+            while len(self._environments) > self.ENVIRONMENTS_KEPT:
+                self._environments.popitem(last=False)
+        return self._environments[key]
 
     def _loop(self) -> None:
         next_diagnostics = time.monotonic() + 1.0
@@ -619,7 +734,7 @@ class Housekeeper(NodesThread):
             if diagnostics:
                 next_diagnostics += 1.0
             for node in self._nodes:
-                node.housekeeping(diagnostics)
+                node.housekeeping(diagnostics, self)
 
 
 def real_time(priority: int) -> bool:
@@ -868,7 +983,7 @@ class ActorPlannerNode(Node):
         # not executor timers: with a dozen actors in one process, rclpy's executor spent most
         # of a core waking up for their timers, at the stream's priority, starving the planning
         # processes.
-        self._publish_environment()
+        self._environment_due = self.meshes  # published by the Housekeeper
 
     def _on_set_parameters(self, parameters) -> SetParametersResult:
         for parameter in parameters:
@@ -890,7 +1005,7 @@ class ActorPlannerNode(Node):
                     self._pending_start = configuration
                 self.meshes, self.scene_path, self.scene_error = meshes, str(parameter.value), ''
                 self._scheduler.wake.set()
-                self._publish_environment()
+                self._environment_due = meshes
                 self.get_logger().info(f'scene reloaded: {self.scene_path}')
         return SetParametersResult(successful=True)
 
@@ -1002,11 +1117,19 @@ class ActorPlannerNode(Node):
             raise
         self.tick_times.append(now)
 
-    def housekeeping(self, diagnostics: bool) -> None:
-        """Publish new markers, and diagnostics when ``diagnostics`` (the Housekeeper's call)."""
+    def housekeeping(self, diagnostics: bool, housekeeper: 'Housekeeper') -> None:
+        """Publish a new environment and new markers, and diagnostics when ``diagnostics``
+        (the Housekeeper's call)."""
         if self._stop.is_set():
             return
         try:
+            meshes = self._environment_due
+            if meshes is not None:
+                # Built in this thread, not in the executor's: a large terrain takes ~0.5 s,
+                # which would hold up commands and the reply to the scene change.
+                self._environment_due = None
+                self.environment_pub.publish(housekeeper.environment(meshes,
+                                                                     self.config.frame_id))
             self._publish_markers()
             if diagnostics:
                 self._publish_diagnostics()
@@ -1041,6 +1164,16 @@ class ActorPlannerNode(Node):
         if self._holding_for is not None and (linear_x, angular_z) != self._holding_for:
             self._scheduler.wake.set()
 
+    def stream_timing(self) -> Tuple[float, float]:
+        """Return the jitter p99 and the longest interval (ms) of the recent ticks (NaN when
+        unknown): the deviation of each interval between published frames from the period."""
+        ticks = np.array(self.tick_times)
+        if len(ticks) < 3:
+            return float('nan'), float('nan')
+        intervals = np.diff(ticks)
+        jitter = np.abs(intervals - 1.0 / self.config.publish_rate)
+        return 1e3 * float(np.percentile(jitter, 99)), 1e3 * float(intervals.max())
+
     def publish_rate_measured(self) -> float:
         """Return the joint_states rate (Hz) over the last second of ticks (NaN when unknown)."""
         ticks = list(self.tick_times)
@@ -1055,6 +1188,7 @@ class ActorPlannerNode(Node):
         stats = self.stats
         p50, p99 = stats.percentiles()
         rate = self.publish_rate_measured()
+        jitter_p99, longest = self.stream_timing()
         rate_ok = math.isfinite(rate) and abs(rate - self.config.publish_rate) <= \
             0.05 * self.config.publish_rate
         level = DiagnosticStatus.OK
@@ -1075,6 +1209,8 @@ class ActorPlannerNode(Node):
             'planning_time_p99_ms': f'{1e3 * p99:.3f}',
             'publish_rate_hz': f'{rate:.2f}',
             'publish_rate_target_hz': f'{self.config.publish_rate:g}',
+            'stream_jitter_p99_ms': f'{jitter_p99:.3f}',
+            'stream_longest_interval_ms': f'{longest:.2f}',
             'missed_frames': str(self.missed_frames),
             'buffer_underruns': str(self.underruns),
             'buffered_ahead_s': f'{self.buffer.end_time - self.playback_time:.3f}',
@@ -1094,23 +1230,6 @@ class ActorPlannerNode(Node):
         marker.header.frame_id = self.config.frame_id
         marker.header.stamp = self.get_clock().now().to_msg()
         return marker
-
-    def _publish_environment(self) -> None:
-        array = MarkerArray(markers=[self._header(Marker(action=Marker.DELETEALL))])
-        budget = MAX_MARKER_TRIANGLES
-        for index, (vertices, faces) in enumerate(self.meshes):
-            faces = faces[:budget]
-            budget -= len(faces)
-            if len(faces) == 0:
-                continue
-            marker = self._header(Marker(ns='environment', id=index, type=Marker.TRIANGLE_LIST,
-                                         action=Marker.ADD))
-            marker.pose.orientation.w = 1.0
-            marker.scale.x = marker.scale.y = marker.scale.z = 1.0
-            marker.color = _color(0.62, 0.64, 0.66)
-            marker.points = _points(vertices[faces].reshape(-1, 3))
-            array.markers.append(marker)
-        self.environment_pub.publish(array)
 
     def _publish_markers(self) -> None:
         latest = self._latest_block
