@@ -1,14 +1,16 @@
 """Benchmark the actor_planner stream: jitter, missed frames, command latency, actors per core.
 
-    .venv/bin/python bench/bench_stream.py [--duration 60] [--course stairs_up]
-        [--actors 1,5,10,20] [--actors-duration 20] [--skip-latency]
+    .venv/bin/python bench/bench_stream.py [--duration 60] [--courses stairs_up,...]
+        [--course stairs_up] [--actors 1,5,10,20] [--actors-duration 20] [--skip-latency]
 
 Prints numbers; asserts nothing. Every node runs as its own process (the venv's console
 script), with localhost discovery in ROS_DOMAIN_ID 40-59 by default.
 
-* Stream health: one actor walks the course while a probe records joint_states. Jitter is the
-  deviation of the header-stamp interval from the period (the node's publish instants), missed
-  frames are the periods without a message.
+* Stream health: one actor walks the obstacle courses in turn (each with its command file; the
+  scene parameter is reloaded between them) while a probe records every joint_states message.
+  Jitter is the deviation of the header-stamp interval from the period (the node's publish
+  instants); missed frames are the periods the stream carried no frame for (a late frame is
+  jitter). Reported with and without the second after each reload.
 * Command latency: from publishing a forward command to the first frame whose root moved, and from
   publishing a zero command to the first frame of a still actor; beside a bare rclpy
   publish -> echo -> receive round trip measured in the same run.
@@ -53,17 +55,26 @@ def stamps_of(messages) -> np.ndarray:
     return np.array([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m in messages])
 
 
-def stream_health(stamps: np.ndarray) -> dict:
-    """Jitter (ms) and missed frames of a stream from its header stamps."""
-    if len(stamps) < 3:
-        return {'frames': len(stamps), 'rate_hz': 0.0, 'jitter_p50_ms': math.nan,
-                'jitter_p99_ms': math.nan, 'jitter_max_ms': math.nan, 'missed': 0,
-                'longest_gap_ms': math.nan}
-    gaps = np.diff(np.sort(stamps))
+def stream_health(*segments: np.ndarray) -> dict:
+    """Jitter (ms) and missed frames of a stream from its header stamps (s).
+
+    Each segment is a run of stamps without a deliberate pause between them. Jitter is the
+    deviation of each stamp interval from the period. A frame is missed when the stream carried
+    fewer frames than its span holds periods: a late frame is jitter, not a missed frame (the
+    node counts the same way, as ticks it skipped).
+    """
+    segments = [np.sort(s) for s in segments if len(s) >= 2]
+    if not segments or sum(len(s) for s in segments) < 3:
+        return {'frames': sum(len(s) for s in segments), 'rate_hz': 0.0,
+                'jitter_p50_ms': math.nan, 'jitter_p99_ms': math.nan,
+                'jitter_max_ms': math.nan, 'missed': 0, 'longest_gap_ms': math.nan}
+    gaps = np.concatenate([np.diff(s) for s in segments])
     jitter = np.abs(gaps - PERIOD) * 1e3
-    missed = int(np.sum(np.maximum(0, np.round(gaps / PERIOD) - 1)))
-    span = stamps.max() - stamps.min()
-    return {'frames': len(stamps), 'rate_hz': (len(stamps) - 1) / span if span > 0 else 0.0,
+    missed = sum(max(0, int(round((s[-1] - s[0]) / PERIOD)) + 1 - len(s)) for s in segments)
+    frames = sum(len(s) for s in segments)
+    span = sum(s[-1] - s[0] for s in segments)
+    return {'frames': frames,
+            'rate_hz': (frames - len(segments)) / span if span > 0 else 0.0,
             'jitter_p50_ms': float(np.percentile(jitter, 50)),
             'jitter_p99_ms': float(np.percentile(jitter, 99)),
             'jitter_max_ms': float(jitter.max()), 'missed': missed,
@@ -77,23 +88,90 @@ def health_line(name: str, h: dict) -> str:
             f'{h["longest_gap_ms"]:.1f} ms')
 
 
-def bench_stream(domain: int, course: str, duration: float, folder: str) -> None:
-    process = NodeProcess(node_command('-p', f'scene:={scene(course)}'), ros_env(domain),
+#: The courses the stream-health run walks in turn (the issue: "walking the obstacle courses").
+OBSTACLE_COURSES = ('stairs_up', 'stairs_down', 'blocks', 'rough', 'gap', 'low_beam', 'table',
+                    'pillars', 'uneven_beam')
+
+
+def course_commands(course: str) -> list:
+    """(time, linear_x, angular_z) rows of a shipped course's command file."""
+    rows = []
+    with open(scene(course)[:-len('.yaml')] + '.csv') as stream:
+        for line in stream.read().splitlines()[1:]:
+            if line.strip():
+                rows.append(tuple(float(v) for v in line.split(',')))
+    return rows
+
+
+def walk_course(probe: Probe, course: str, until: float, settle: float = 1.0) -> None:
+    """Play ``course``'s command file (each row until the next; the last for ``settle`` s)."""
+    rows = course_commands(course)
+    began = time.monotonic()
+    for i, (at, linear_x, angular_z) in enumerate(rows):
+        end = began + (rows[i + 1][0] if i + 1 < len(rows) else at + settle)
+        probe.command = (linear_x, angular_z)
+        probe.spin(max(0.0, min(end, until) - time.monotonic()))
+        if time.monotonic() >= until:
+            return
+
+
+def bench_stream(domain: int, courses, duration: float, folder: str) -> None:
+    process = NodeProcess(node_command('-p', f'scene:={scene(courses[0])}'), ros_env(domain),
                           log_path=os.path.join(folder, 'stream.log'))
     probe = Probe(domain)
+    probe.joint_states = collections.deque()  # every frame of the run, however long
     try:
         if not probe.wait_for_stream(process, 120.0):
             print('node did not start:\n' + process.output())
             return
-        started = probe.drive(0.5, 0.0, duration)
-        messages = [m for t, m in list(probe.joint_states) if t >= started + 1.0]
-        print(health_line(f'stream walking {course} for {duration:.0f} s',
-                          stream_health(stamps_of(messages))))
-        values = probe.diagnostic_values()
-        print(f'  node diagnostics: state {values.get("state")}, planning p50 '
-              f'{values.get("planning_time_p50_ms")} ms p99 {values.get("planning_time_p99_ms")}'
-              f' ms, missed {values.get("missed_frames")}, underruns '
-              f'{values.get("buffer_underruns")}, lead {values.get("planning_lead_s")} s')
+        began = time.monotonic()
+        probe.spin_until(lambda: probe.diagnostic_values(), 5.0)
+        first = probe.diagnostic_values()
+        visits, reloads, failed = 0, [], []
+        while time.monotonic() < began + duration:
+            course = courses[visits % len(courses)]
+            if visits > 0:
+                reloads.append(time.monotonic())
+                result = probe.set_scene(scene(course))
+                if not result.successful:
+                    failed.append(f'{course}: {result.reason}')
+            walk_course(probe, course, began + duration)
+            visits += 1
+        probe.command = (0.0, 0.0)
+        probe.spin(1.5)
+        last = probe.diagnostic_values()
+        received = [(t, m) for t, m in list(probe.joint_states) if t >= began]
+        messages = [m for _, m in received]
+        frames = np.array([m.position for m in messages])
+        moving = np.any(np.abs(np.diff(frames[:, [ROOT_X, ROOT_Y, ROOT_YAW]], axis=0)) > 1e-6,
+                        axis=1)
+        span = received[-1][0] - received[0][0]
+        print(f'stream walking {visits} course visits ({", ".join(courses)}) for '
+              f'{span:.0f} s: root moving in {100 * moving.mean():.0f} % of frames, '
+              f'{len(reloads)} scene reloads' + (f', FAILED: {failed}' if failed else ''))
+        print('  ' + health_line('all frames', stream_health(stamps_of(messages))))
+        # The same without the second after each scene reload (reloading builds and sends the
+        # new environment's markers): the stream while the actor walks.
+        stamps = stamps_of(messages)
+        times = np.array([t for t, _ in received])
+        cuts = [0]
+        for at in reloads:
+            cuts += [int(np.searchsorted(times, at)), int(np.searchsorted(times, at + 1.0))]
+        cuts.append(len(times))
+        quiet = [stamps[a:b] for a, b in zip(cuts[::2], cuts[1::2])]
+        print('  ' + health_line('without reloads', stream_health(*quiet)))
+        np.savez(os.path.join(folder, 'stream.npz'), received=times, stamps=stamps,
+                 reloads=np.array(reloads))
+
+        def delta(key):
+            try:
+                return int(last[key]) - int(first[key])
+            except (KeyError, ValueError):
+                return 'n/a'
+        print(f'  node diagnostics: state {last.get("state")}, steps {delta("steps")}, '
+              f'planning p50 {last.get("planning_time_p50_ms")} ms p99 '
+              f'{last.get("planning_time_p99_ms")} ms, missed {delta("missed_frames")}, '
+              f'underruns {delta("buffer_underruns")}, lead {last.get("planning_lead_s")} s')
     finally:
         probe.close()
         process.stop()
@@ -239,7 +317,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     parser.add_argument('--duration', type=float, default=60.0,
                         help='seconds of walking for the stream health run')
-    parser.add_argument('--course', default='stairs_up')
+    parser.add_argument('--course', default='stairs_up',
+                        help='course of the actors-per-core run')
+    parser.add_argument('--courses', default=','.join(OBSTACLE_COURSES),
+                        help='courses the stream health run walks in turn')
     parser.add_argument('--actors', default='1,5,10,20')
     parser.add_argument('--actors-duration', type=float, default=20.0)
     parser.add_argument('--one-process-per-actor', action='store_true',
@@ -252,7 +333,7 @@ def main() -> None:
     print(f'machine: {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.2f}')
     folder = tempfile.mkdtemp(prefix='bench_stream_')
     if not args.skip_stream:
-        bench_stream(args.domain, args.course, args.duration, folder)
+        bench_stream(args.domain, args.courses.split(','), args.duration, folder)
     if not args.skip_latency:
         bench_latency(args.domain + 1, folder, args.trials)
     counts = [int(c) for c in args.actors.split(',') if c]
