@@ -87,6 +87,10 @@ class BodyCollision:
         :class:`environment.Environment`.
     padding
         Safety margin added to every shape (radius, half extents), m; >= 0.
+    top_bound
+        Let :meth:`first_collision` clear a shape without an exact test when it lies above the
+        environment's height bound (:meth:`environment.Environment.top_height`) over its
+        footprint; False: every broad-phase suspect gets an exact test (same answers).
 
     Notes
     -----
@@ -96,12 +100,13 @@ class BodyCollision:
 
     """
 
-    def __init__(self, skeleton, environment, padding: float = 0.0):
+    def __init__(self, skeleton, environment, padding: float = 0.0, top_bound: bool = True):
         if not (isinstance(padding, (int, float)) and math.isfinite(padding) and padding >= 0):
             raise ValueError(f'padding must be a finite number of metres >= 0, got {padding!r}')
         self.skeleton = skeleton
         self.environment = environment
         self.padding = float(padding)
+        self.top_bound = bool(top_bound)
         self.shapes = tuple(skeleton.collision_shapes)
         self._geometries, self._objects, self._half_extent = [], [], []
         for shape in self.shapes:
@@ -298,8 +303,9 @@ class BodyCollision:
 
         Batched: forward kinematics for all frames at once, then a broad phase that drops every
         shape whose bounding sphere is clear of the ground map by ``margin`` (nothing below it
-        within reach, no ceiling inside it, no wall beside it), then exact FCL tests of the rest
-        in time order.
+        within reach, no ceiling inside it, no wall beside it), a conservative height bound that
+        clears the suspects lying above everything under their footprint (``top_bound``), then
+        exact FCL tests of the rest in time order.
 
         Parameters
         ----------
@@ -360,6 +366,14 @@ class BodyCollision:
             keep = np.ones(pairs.shape[0], dtype=bool)
             keep[pairs.shape[0] - after.shape[0]:] = ~unmoved
             pairs = pairs[keep]
+        if pairs.shape[0] and self.top_bound:
+            # A shape entirely above the environment's height bound over its footprint cannot
+            # touch it (a foot resting on level ground): no exact test for it.
+            columns = pairs[:, 1]
+            centre = centres[pairs[:, 0], columns]
+            half = extent[pairs[:, 0], columns]
+            tops = self.environment.top_height_near(centre[:, :2], np.max(half[:, :2], axis=1))
+            pairs = pairs[~(centre[:, 2] - half[:, 2] > tops)]
         hit_frame, hits = -1, []
         if pairs.shape[0]:
             # Which meshes each tested shape may touch, for all of them at once.
