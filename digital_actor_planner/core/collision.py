@@ -339,19 +339,23 @@ class BodyCollision:
             self.skeleton.forward_kinematics(frames, links=names), shapes=chosen)
         centres = transforms[..., :3, 3]
         extent = self._aabb_half_extents(chosen, transforms[..., :3, :3])
-        offsets = _FOOTPRINT_CORNERS
-        points = centres[:, :, None, :2] + offsets * extent[:, :, None, :2]
-        top = centres[..., 2] + extent[..., 2]
         bottom = centres[..., 2] - extent[..., 2]
-        ground, room = self.environment.ground_height(
-            points.reshape(-1, 2), np.repeat(top.ravel(), offsets.shape[0]))
-        ground = ground.reshape(points.shape[:3])
-        room = room.reshape(points.shape[:3])
-        with np.errstate(invalid='ignore'):
-            # NaN ground (no surface, or inside a solid) leaves a shape suspect.
-            bottom_clear = np.min(bottom[..., None] - ground, axis=-1) > margin
-            ceiling_clear = np.min(ground + room, axis=-1) > top + margin
-        suspect = ~(bottom_clear & ceiling_clear)
+        if self.top_bound:
+            # A shape entirely above the environment's height bound over its footprint cannot
+            # touch it (most shapes, and a foot resting on level ground): one lookup each. Only
+            # the others go through the ground map and, if still suspect, to FCL.
+            tops = self.environment.top_height_near(centres[..., :2].reshape(-1, 2),
+                                                    np.max(extent[..., :2], axis=-1).ravel())
+            flat_bottom = bottom.ravel()
+            suspect = ~(flat_bottom > tops)
+            rest = np.flatnonzero(suspect)
+            if rest.size:
+                suspect[rest] = self._ground_map_suspects(
+                    centres.reshape(-1, 3)[rest], extent.reshape(-1, 3)[rest], flat_bottom[rest],
+                    margin)
+            suspect = suspect.reshape(bottom.shape)
+        else:
+            suspect = self._ground_map_suspects(centres, extent, bottom, margin)
         # A shape that has not moved since the frame before, where it was tested or found
         # unmoved in turn (a stance foot), needs no other exact test. The 1e-9 m per frame
         # that counts as unmoved adds up to well under a micrometre over a step.
@@ -366,14 +370,6 @@ class BodyCollision:
             keep = np.ones(pairs.shape[0], dtype=bool)
             keep[pairs.shape[0] - after.shape[0]:] = ~unmoved
             pairs = pairs[keep]
-        if pairs.shape[0] and self.top_bound:
-            # A shape entirely above the environment's height bound over its footprint cannot
-            # touch it (a foot resting on level ground): no exact test for it.
-            columns = pairs[:, 1]
-            centre = centres[pairs[:, 0], columns]
-            half = extent[pairs[:, 0], columns]
-            tops = self.environment.top_height_near(centre[:, :2], np.max(half[:, :2], axis=1))
-            pairs = pairs[~(centre[:, 2] - half[:, 2] > tops)]
         hit_frame, hits = -1, []
         if pairs.shape[0]:
             # Which meshes each tested shape may touch, for all of them at once.
@@ -399,6 +395,27 @@ class BodyCollision:
         self._cache_values = None
         self._placed = {}
         return hit_frame, sorted(set(hits))
+
+    def _ground_map_suspects(self, centres: np.ndarray, extent: np.ndarray, bottom: np.ndarray,
+                             margin: float) -> np.ndarray:
+        """Broad phase against the ground map: which shapes are not clear by ``margin``.
+
+        ``centres``, ``extent``: (..., 3) box centres and half extents, ``bottom`` (...,), m.
+        A shape is clear when the ground under the centre and the corners of its footprint is
+        ``margin`` below it and the ceiling there ``margin`` above it.
+        """
+        offsets = _FOOTPRINT_CORNERS
+        points = centres[..., None, :2] + offsets * extent[..., None, :2]
+        top = centres[..., 2] + extent[..., 2]
+        ground, room = self.environment.ground_height(
+            points.reshape(-1, 2), np.repeat(top.ravel(), offsets.shape[0]))
+        ground = ground.reshape(points.shape[:-1])
+        room = room.reshape(points.shape[:-1])
+        with np.errstate(invalid='ignore'):
+            # NaN ground (no surface, or inside a solid) leaves a shape suspect.
+            bottom_clear = np.min(bottom[..., None] - ground, axis=-1) > margin
+            ceiling_clear = np.min(ground + room, axis=-1) > top + margin
+        return ~(bottom_clear & ceiling_clear)
 
     def _aabb_half_extents(self, shapes: Sequence[int], rotations: np.ndarray) -> np.ndarray:
         """World axis-aligned half extents of shapes: rotations (k, S, 3, 3) -> (k, S, 3), m."""
