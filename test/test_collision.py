@@ -189,6 +189,38 @@ def test_first_collision_is_the_first_frame_any_link_touches(skeleton):
     assert outcomes == {True, False}
 
 
+def test_motions_that_start_where_a_free_one_ended_are_checked_alike(skeleton):
+    """Chained motions (each starts at the last frame of the one before, as steps do): the
+    shapes not moved since the last free motion's end are not tested again, and the answers
+    stay those of testing every frame."""
+    world = Environment([box((-3, -3, -0.2), (3, 3, 0.0)), box((0.2, -3, 0.0), (3, 3, 0.1))])
+    body = BodyCollision(skeleton, world)
+    plain = BodyCollision(skeleton, world, top_bound=False)
+    legs = ['left_thigh', 'left_shank', 'left_foot', 'right_thigh', 'right_shank', 'right_foot']
+    start = start_configuration(world, (0.0, 0.0, 0.0), skeleton)
+    rng = np.random.default_rng(9)
+    previous, outcomes = start, set()
+    for trial in range(120):
+        goal = start.copy()
+        goal[skeleton.index['root_x']] += rng.uniform(-0.1, 0.1)
+        goal[skeleton.index['root_z']] += rng.uniform(-0.006, 0.02)
+        for name in ('left_hip_pitch', 'left_knee', 'left_ankle', 'right_ankle'):
+            goal[skeleton.index[name]] += rng.uniform(-0.3, 0.3)
+        frames = previous + np.linspace(0.0, 1.0, 12)[:, None] * (goal - previous)
+        frames[:, skeleton.branch('right_leg')] = previous[skeleton.branch('right_leg')]
+        expected = (-1, [])
+        for j, q in enumerate(frames):
+            touching = body.links_in_collision(q, legs)
+            if touching:
+                expected = (j, sorted(touching))
+                break
+        assert body.first_collision(frames, legs) == expected, trial
+        assert plain.first_collision(frames, legs) == expected, trial
+        outcomes.add(expected[0] >= 0)
+        previous = frames[-1] if expected[0] < 0 else start
+    assert outcomes == {True, False}
+
+
 def test_the_height_bound_never_clears_a_shape_that_touches(skeleton):
     """Random leg poses over stairs, a slope and a ledge: every shape the height bound calls
     clear is free by FCL, and the bound does clear a foot resting on level ground."""

@@ -90,7 +90,9 @@ class BodyCollision:
     top_bound
         Let :meth:`first_collision` clear a shape without an exact test when it lies above the
         environment's height bound (:meth:`environment.Environment.top_height`) over its
-        footprint; False: every broad-phase suspect gets an exact test (same answers).
+        footprint, and a shape at the first frame of a motion without an exact test when it
+        has not moved from the last frame of the previous motion found free; False: every
+        broad-phase suspect gets an exact test (same answers).
 
     Notes
     -----
@@ -137,6 +139,9 @@ class BodyCollision:
         self._request = fcl.CollisionRequest()
         self._contact_request = fcl.CollisionRequest(num_max_contacts=_MAX_CONTACTS,
                                                      enable_contact=True)
+        # first_collision's last frame when it found the motion free: (shapes, (S, 3, 4)
+        # transforms). The next motion usually starts there (the feet of the next step).
+        self._free_end: Optional[tuple] = None
 
     # -- construction --------------------------------------------------------------------
     @staticmethod
@@ -370,6 +375,18 @@ class BodyCollision:
             keep = np.ones(pairs.shape[0], dtype=bool)
             keep[pairs.shape[0] - after.shape[0]:] = ~unmoved
             pairs = pairs[keep]
+        if self.top_bound and self._free_end is not None and self._free_end[0] == chosen:
+            # The same for a shape at the first frame that has not moved from where the last
+            # motion found free left it (both feet at the start of a step).
+            first = np.flatnonzero(pairs[:, 0] == 0)
+            if first.size:
+                columns = pairs[first, 1]
+                moved = transforms[0, columns, :3, :] - self._free_end[1][columns]
+                unmoved = np.max(np.abs(moved).reshape(-1, 12), axis=1) <= 1e-9
+                if np.any(unmoved):
+                    keep = np.ones(pairs.shape[0], dtype=bool)
+                    keep[first[unmoved]] = False
+                    pairs = pairs[keep]
         hit_frame, hits = -1, []
         if pairs.shape[0]:
             # Which meshes each tested shape may touch, for all of them at once.
@@ -394,6 +411,8 @@ class BodyCollision:
         # The objects were moved outside the single-configuration cache: forget it.
         self._cache_values = None
         self._placed = {}
+        if hit_frame < 0:
+            self._free_end = (chosen, transforms[-1, :, :3, :].copy())
         return hit_frame, sorted(set(hits))
 
     def _ground_map_suspects(self, centres: np.ndarray, extent: np.ndarray, bottom: np.ndarray,
