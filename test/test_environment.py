@@ -323,7 +323,7 @@ def test_top_height_bounds_every_mesh_and_is_exact_over_level_faces(world):
     request = fcl.CollisionRequest()
     for c, h, top in zip(centre, half, tops):
         if not np.isfinite(top):
-            assert not np.any((c + h > world.bounds[0, :2]) & (c - h < world.bounds[1, :2]))
+            assert not np.all((c + h > world.bounds[0, :2]) & (c - h < world.bounds[1, :2]))
             continue
         probe = fcl.CollisionObject(fcl.Box(2 * h[0], 2 * h[1], 0.01),
                                     fcl.Transform(np.array([c[0], c[1], top + 0.005 + 1e-7])))
@@ -339,5 +339,8 @@ def test_top_height_bounds_every_mesh_and_is_exact_over_level_faces(world):
     assert np.all(near >= tops)
     assert np.all(np.isinf(world.top_height_near(centre[:3], np.full(3, 0.02 * 33))))
     assert world.top_height_near(np.array([[3.2, 0.5]]), np.array([0.15]))[0] == 0.0
+    beside = world.top_height(np.array([[20.0, 0.0], [0.0, -9.0]]),
+                              np.array([[21.0, 1.0], [1.0, -8.0]]))
+    assert np.all(beside == -np.inf)
     with pytest.raises(ValueError, match='same shape'):
         world.top_height(np.zeros((2, 2)), np.zeros((3, 2)))

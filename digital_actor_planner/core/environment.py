@@ -753,6 +753,8 @@ class Environment:
         # NaN or off-grid extents: clamp (off the grid there is no mesh), NaN reads everything.
         bad = ~np.all(np.isfinite(first) & np.isfinite(last), axis=1)
         limit = np.array([nx - 1, ny - 1])
+        # Wholly off the grid: no mesh there.
+        off = ~bad & np.any((last < 0) | (first > limit), axis=1)
         first = np.where(bad[:, None], 0, np.clip(first, 0, limit)).astype(np.int64)
         last = np.where(bad[:, None], limit, np.clip(last, 0, limit)).astype(np.int64)
         size = last - first + 1
@@ -773,6 +775,7 @@ class Environment:
         for index in np.flatnonzero(~small):
             (i0, j0), (i1, j1) = first[index], last[index]
             out[index] = np.max(tops[j0:j1 + 1, i0:i1 + 1])
+        out[off] = -np.inf
         return out
 
     def _cells(self, xy):
