@@ -153,10 +153,12 @@ def test_batched_half_extents_match_each_shape_alone(skeleton, body):
 
 
 def test_first_collision_is_the_first_frame_any_link_touches(skeleton):
-    """The batched check with its broad phase answers what testing every frame answers."""
+    """The batched check with its broad phase and height bound answers what testing every
+    frame answers, and what it answers without the height bound."""
     world = Environment([box((-3, -3, -0.2), (3, 3, 0.0)), box((0.25, -3, 0.0), (3, 3, 0.12)),
                          box((-3, 0.3, 0.0), (3, 3, 0.6))])
     body = BodyCollision(skeleton, world)
+    plain = BodyCollision(skeleton, world, top_bound=False)
     legs = ['pelvis', 'left_hip', 'left_thigh', 'left_shank', 'left_foot', 'right_hip',
             'right_thigh', 'right_shank', 'right_foot']
     start = start_configuration(world, (0.0, 0.0, 0.0), skeleton)
@@ -182,5 +184,78 @@ def test_first_collision_is_the_first_frame_any_link_touches(skeleton):
                 break
         frame, links = body.first_collision(frames, legs)
         assert (frame, links) == (expected_frame, expected_links), trial
+        assert plain.first_collision(frames, legs) == (frame, links), trial
         outcomes.add(frame >= 0)
     assert outcomes == {True, False}
+
+
+def test_motions_that_start_where_a_free_one_ended_are_checked_alike(skeleton):
+    """Chained motions (each starts at the last frame of the one before, as steps do): the
+    shapes not moved since the last free motion's end are not tested again, and the answers
+    stay those of testing every frame."""
+    world = Environment([box((-3, -3, -0.2), (3, 3, 0.0)), box((0.2, -3, 0.0), (3, 3, 0.1))])
+    body = BodyCollision(skeleton, world)
+    plain = BodyCollision(skeleton, world, top_bound=False)
+    legs = ['left_thigh', 'left_shank', 'left_foot', 'right_thigh', 'right_shank', 'right_foot']
+    start = start_configuration(world, (0.0, 0.0, 0.0), skeleton)
+    rng = np.random.default_rng(9)
+    previous, outcomes = start, set()
+    for trial in range(120):
+        goal = start.copy()
+        goal[skeleton.index['root_x']] += rng.uniform(-0.1, 0.1)
+        goal[skeleton.index['root_z']] += rng.uniform(-0.006, 0.02)
+        for name in ('left_hip_pitch', 'left_knee', 'left_ankle', 'right_ankle'):
+            goal[skeleton.index[name]] += rng.uniform(-0.3, 0.3)
+        frames = previous + np.linspace(0.0, 1.0, 12)[:, None] * (goal - previous)
+        frames[:, skeleton.branch('right_leg')] = previous[skeleton.branch('right_leg')]
+        expected = (-1, [])
+        for j, q in enumerate(frames):
+            touching = body.links_in_collision(q, legs)
+            if touching:
+                expected = (j, sorted(touching))
+                break
+        assert body.first_collision(frames, legs) == expected, trial
+        assert plain.first_collision(frames, legs) == expected, trial
+        outcomes.add(expected[0] >= 0)
+        previous = frames[-1] if expected[0] < 0 else start
+    assert outcomes == {True, False}
+
+
+def test_the_height_bound_never_clears_a_shape_that_touches(skeleton):
+    """Random leg poses over stairs, a slope and a ledge: every shape the height bound calls
+    clear is free by FCL, and the bound does clear a foot resting on level ground."""
+    slope = box((-0.5, -3, -0.6), (0.5, 3, 0.0))
+    slope.apply_transform(np.array([[np.cos(0.25), 0, -np.sin(0.25), 1.5],
+                                    [0, 1, 0, 0], [np.sin(0.25), 0, np.cos(0.25), 0.0],
+                                    [0, 0, 0, 1]]))
+    world = Environment([box((-3, -3, -0.2), (3, 3, 0.0)), box((0.25, -3, 0.0), (0.55, 3, 0.12)),
+                         box((0.55, -3, 0.0), (0.85, 3, 0.24)), slope,
+                         box((-3, 0.3, 0.0), (-1, 3, 0.6))])
+    body = BodyCollision(skeleton, world)
+    start = start_configuration(world, (0.0, 0.0, 0.0), skeleton)
+    rng = np.random.default_rng(11)
+    cleared = touching = 0
+    for trial in range(300):
+        q = start.copy()
+        q[skeleton.index['root_x']] += rng.uniform(-1.5, 2.0)
+        q[skeleton.index['root_y']] += rng.uniform(-0.6, 0.6)
+        q[skeleton.index['root_z']] += rng.uniform(-0.1, 0.3)
+        q[skeleton.index['root_yaw']] += rng.uniform(-np.pi, np.pi)
+        for name in ('left_hip_pitch', 'right_hip_pitch', 'left_knee', 'right_knee',
+                     'left_ankle', 'right_ankle', 'left_hip_yaw', 'right_hip_yaw'):
+            q[skeleton.index[name]] += rng.uniform(-0.4, 0.4)
+        if trial % 3 == 0:
+            q = start.copy()  # feet resting 2 mm above the floor
+        transforms = skeleton.shape_transforms(skeleton.forward_kinematics(q[None, :]))[0]
+        shapes = list(range(len(body.shapes)))
+        extent = body._aabb_half_extents(shapes, transforms[None, :, :3, :3])[0]
+        centre = transforms[:, :3, 3]
+        tops = world.top_height_near(centre[:, :2], np.max(extent[:, :2], axis=1))
+        clear = centre[:, 2] - extent[:, 2] > tops
+        body.collides(q)  # place every shape at q
+        for shape in shapes:
+            hit = body._shape_collides(shape)
+            touching += hit
+            assert not (clear[shape] and hit), (trial, body.shapes[shape].link)
+            cleared += bool(clear[shape] and body.shapes[shape].link.endswith('_foot'))
+    assert touching > 50 and cleared > 100

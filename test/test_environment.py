@@ -310,3 +310,37 @@ def test_one_reference_height_for_all_points_matches_one_per_point(world):
         for a, b in zip(scalar, repeated):
             np.testing.assert_array_equal(a, b)
     assert np.all(np.isnan(world.ground_height(xy[:5], 0.3)[0]))
+
+
+def test_top_height_bounds_every_mesh_and_is_exact_over_level_faces(world):
+    """A box just above the bound over any rectangle is free; over level tops the bound is the
+    top itself."""
+    import fcl
+    rng = np.random.default_rng(5)
+    centre = rng.uniform((-1.5, -2.5), (9.5, 2.5), (400, 2))
+    half = rng.uniform(0.005, 0.3, (400, 2))
+    tops = world.top_height(centre - half, centre + half)
+    request = fcl.CollisionRequest()
+    for c, h, top in zip(centre, half, tops):
+        if not np.isfinite(top):
+            assert not np.all((c + h > world.bounds[0, :2]) & (c - h < world.bounds[1, :2]))
+            continue
+        probe = fcl.CollisionObject(fcl.Box(2 * h[0], 2 * h[1], 0.01),
+                                    fcl.Transform(np.array([c[0], c[1], top + 0.005 + 1e-7])))
+        assert not any(fcl.collide(probe, o, request, fcl.CollisionResult())
+                       for o in world.objects), (c, h, top)
+    # Open floor, a stair tread, the wall's top (away from edges by more than a cell).
+    level = world.top_height(np.array([[3.0, 0.5], [2.05, -0.5], [5.05, 0.0]]),
+                             np.array([[3.5, 0.7], [2.25, -0.3], [5.15, 0.1]]))
+    np.testing.assert_allclose(level, [0.0, 0.15, 1.0], atol=1e-9)
+    # The one-lookup bound over squares is never below the rectangle's, and still exact on an
+    # open floor.
+    near = world.top_height_near(centre, np.max(half, axis=1))
+    assert np.all(near >= tops)
+    assert np.all(np.isinf(world.top_height_near(centre[:3], np.full(3, 0.02 * 33))))
+    assert world.top_height_near(np.array([[3.2, 0.5]]), np.array([0.15]))[0] == 0.0
+    beside = world.top_height(np.array([[20.0, 0.0], [0.0, -9.0]]),
+                              np.array([[21.0, 1.0], [1.0, -8.0]]))
+    assert np.all(beside == -np.inf)
+    with pytest.raises(ValueError, match='same shape'):
+        world.top_height(np.zeros((2, 2)), np.zeros((3, 2)))

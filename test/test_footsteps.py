@@ -240,3 +240,32 @@ def test_search_swing_test_agrees_with_the_plain_one(leg):
                                        h_to) == expected
         answers.add(expected)
     assert answers == {True, False}
+
+
+def test_search_effort_from_prefixes_is_the_plain_effort(leg):
+    """Resuming a configuration from the evaluated prefixes of others gives the plain effort
+    to the last bit, feasible or not, whatever order the configurations come in."""
+    rng = np.random.default_rng(5)
+    planner = FootstepPlanner(FootstepConfig(), leg)
+    lengths = planner.config.lengths().tolist()
+    terrain = {'steps': lambda s: 0.15 * np.floor(max(s - 0.5, 0.0) / 0.35),
+               'hole': lambda s: np.nan if 0.7 < s < 1.1 else 0.0,
+               'bumps': lambda s: 0.3 if 1.2 < s < 1.25 else 0.02 * np.sin(7 * s)}
+    answers = set()
+    for name, height_of in terrain.items():
+        profile = profile_from(height_of)
+        sides = np.array([LEFT, RIGHT, LEFT])
+        plain = planner._search_tables(profile, sides, 0.0)
+        search = planner._search_tables(profile, sides, 0.0)
+        configs = [tuple(int(j) for j in c) for c in rng.integers(0, 14, (600, 3))]
+        configs += [c[:2] + (int(j),) for c in configs[:200] for j in rng.integers(0, 14, 2)]
+        for banned in (set(), {5}):
+            for config in configs:
+                arguments = (0.0, 0.0, -0.05, 0.0, 0.5, 0.45)
+                expected = planner._effort(profile, config, lengths, sides.tolist(),
+                                           *arguments, plain, banned)
+                got = planner._search_effort(profile, config, lengths, sides.tolist(),
+                                             *arguments, search, banned)
+                assert got == expected, (name, config)
+                answers.add(expected is None)
+    assert answers == {True, False}

@@ -127,3 +127,30 @@ def test_gait_config_validation_names_the_field():
         validate_gait_config(GaitConfig(frame_rate=5.0))
     with pytest.raises(ValueError, match='min_step_time'):
         validate_gait_config(GaitConfig(min_step_time=1.0, max_step_time=0.5))
+
+
+def test_time_shapes_shared_by_steps_of_one_length_match_the_formulas(skeleton):
+    """Steps of the same number of frames reuse one set of time shapes: they are the plain
+    formulas, read-only, and a step planned with them equals one planned on a fresh generator.
+    """
+    from digital_actor_planner.core.gait import _ease, smoothstep
+    warm = WalkGenerator(skeleton)
+    for height in (0.0, 0.1, -0.1, 0.0):  # level, uphill, downhill, level again (cached)
+        _, first = level_step(skeleton, warm, height=height)
+        _, fresh = level_step(skeleton, WalkGenerator(skeleton), height=height)
+        np.testing.assert_array_equal(first.frames, fresh.frames)
+        assert first.category == fresh.category
+    k = 57
+    timing = warm._timing(k)
+    assert warm._timing(k) is timing
+    tau = np.arange(1, k + 1) / k
+    bezier = 0.5 * (tau + smoothstep(tau))
+    np.testing.assert_array_equal(timing.tau, tau)
+    np.testing.assert_array_equal(timing.bezier, bezier)
+    np.testing.assert_array_equal(timing.ease[(True, False)], _ease(tau, True, False))
+    np.testing.assert_array_equal(timing.lift[0.12], smoothstep((bezier - 0.12) / (0.88 - 0.12)))
+    np.testing.assert_array_equal(timing.weight['downhill'], smoothstep((tau - 0.3) / 0.65))
+    np.testing.assert_array_equal(timing.fade, np.minimum(1.0, 6.0 * (1 - tau)))
+    assert timing.samples[-1] == k - 1 and np.all(np.diff(timing.samples) > 0)
+    with pytest.raises(ValueError):
+        timing.bezier[0] = 1.0

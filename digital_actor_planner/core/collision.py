@@ -87,6 +87,12 @@ class BodyCollision:
         :class:`environment.Environment`.
     padding
         Safety margin added to every shape (radius, half extents), m; >= 0.
+    top_bound
+        Let :meth:`first_collision` clear a shape without an exact test when it lies above the
+        environment's height bound (:meth:`environment.Environment.top_height`) over its
+        footprint, and a shape at the first frame of a motion without an exact test when it
+        has not moved from the last frame of the previous motion found free; False: every
+        broad-phase suspect gets an exact test (same answers).
 
     Notes
     -----
@@ -96,12 +102,13 @@ class BodyCollision:
 
     """
 
-    def __init__(self, skeleton, environment, padding: float = 0.0):
+    def __init__(self, skeleton, environment, padding: float = 0.0, top_bound: bool = True):
         if not (isinstance(padding, (int, float)) and math.isfinite(padding) and padding >= 0):
             raise ValueError(f'padding must be a finite number of metres >= 0, got {padding!r}')
         self.skeleton = skeleton
         self.environment = environment
         self.padding = float(padding)
+        self.top_bound = bool(top_bound)
         self.shapes = tuple(skeleton.collision_shapes)
         self._geometries, self._objects, self._half_extent = [], [], []
         for shape in self.shapes:
@@ -132,6 +139,9 @@ class BodyCollision:
         self._request = fcl.CollisionRequest()
         self._contact_request = fcl.CollisionRequest(num_max_contacts=_MAX_CONTACTS,
                                                      enable_contact=True)
+        # first_collision's last frame when it found the motion free: (shapes, (S, 3, 4)
+        # transforms). The next motion usually starts there (the feet of the next step).
+        self._free_end: Optional[tuple] = None
 
     # -- construction --------------------------------------------------------------------
     @staticmethod
@@ -298,8 +308,9 @@ class BodyCollision:
 
         Batched: forward kinematics for all frames at once, then a broad phase that drops every
         shape whose bounding sphere is clear of the ground map by ``margin`` (nothing below it
-        within reach, no ceiling inside it, no wall beside it), then exact FCL tests of the rest
-        in time order.
+        within reach, no ceiling inside it, no wall beside it), a conservative height bound that
+        clears the suspects lying above everything under their footprint (``top_bound``), then
+        exact FCL tests of the rest in time order.
 
         Parameters
         ----------
@@ -333,19 +344,23 @@ class BodyCollision:
             self.skeleton.forward_kinematics(frames, links=names), shapes=chosen)
         centres = transforms[..., :3, 3]
         extent = self._aabb_half_extents(chosen, transforms[..., :3, :3])
-        offsets = _FOOTPRINT_CORNERS
-        points = centres[:, :, None, :2] + offsets * extent[:, :, None, :2]
-        top = centres[..., 2] + extent[..., 2]
         bottom = centres[..., 2] - extent[..., 2]
-        ground, room = self.environment.ground_height(
-            points.reshape(-1, 2), np.repeat(top.ravel(), offsets.shape[0]))
-        ground = ground.reshape(points.shape[:3])
-        room = room.reshape(points.shape[:3])
-        with np.errstate(invalid='ignore'):
-            # NaN ground (no surface, or inside a solid) leaves a shape suspect.
-            bottom_clear = np.min(bottom[..., None] - ground, axis=-1) > margin
-            ceiling_clear = np.min(ground + room, axis=-1) > top + margin
-        suspect = ~(bottom_clear & ceiling_clear)
+        if self.top_bound:
+            # A shape entirely above the environment's height bound over its footprint cannot
+            # touch it (most shapes, and a foot resting on level ground): one lookup each. Only
+            # the others go through the ground map and, if still suspect, to FCL.
+            tops = self.environment.top_height_near(centres[..., :2].reshape(-1, 2),
+                                                    np.max(extent[..., :2], axis=-1).ravel())
+            flat_bottom = bottom.ravel()
+            suspect = ~(flat_bottom > tops)
+            rest = np.flatnonzero(suspect)
+            if rest.size:
+                suspect[rest] = self._ground_map_suspects(
+                    centres.reshape(-1, 3)[rest], extent.reshape(-1, 3)[rest], flat_bottom[rest],
+                    margin)
+            suspect = suspect.reshape(bottom.shape)
+        else:
+            suspect = self._ground_map_suspects(centres, extent, bottom, margin)
         # A shape that has not moved since the frame before, where it was tested or found
         # unmoved in turn (a stance foot), needs no other exact test. The 1e-9 m per frame
         # that counts as unmoved adds up to well under a micrometre over a step.
@@ -360,6 +375,18 @@ class BodyCollision:
             keep = np.ones(pairs.shape[0], dtype=bool)
             keep[pairs.shape[0] - after.shape[0]:] = ~unmoved
             pairs = pairs[keep]
+        if self.top_bound and self._free_end is not None and self._free_end[0] == chosen:
+            # The same for a shape at the first frame that has not moved from where the last
+            # motion found free left it (both feet at the start of a step).
+            first = np.flatnonzero(pairs[:, 0] == 0)
+            if first.size:
+                columns = pairs[first, 1]
+                moved = transforms[0, columns, :3, :] - self._free_end[1][columns]
+                unmoved = np.max(np.abs(moved).reshape(-1, 12), axis=1) <= 1e-9
+                if np.any(unmoved):
+                    keep = np.ones(pairs.shape[0], dtype=bool)
+                    keep[first[unmoved]] = False
+                    pairs = pairs[keep]
         hit_frame, hits = -1, []
         if pairs.shape[0]:
             # Which meshes each tested shape may touch, for all of them at once.
@@ -384,7 +411,30 @@ class BodyCollision:
         # The objects were moved outside the single-configuration cache: forget it.
         self._cache_values = None
         self._placed = {}
+        if hit_frame < 0:
+            self._free_end = (chosen, transforms[-1, :, :3, :].copy())
         return hit_frame, sorted(set(hits))
+
+    def _ground_map_suspects(self, centres: np.ndarray, extent: np.ndarray, bottom: np.ndarray,
+                             margin: float) -> np.ndarray:
+        """Broad phase against the ground map: which shapes are not clear by ``margin``.
+
+        ``centres``, ``extent``: (..., 3) box centres and half extents, ``bottom`` (...,), m.
+        A shape is clear when the ground under the centre and the corners of its footprint is
+        ``margin`` below it and the ceiling there ``margin`` above it.
+        """
+        offsets = _FOOTPRINT_CORNERS
+        points = centres[..., None, :2] + offsets * extent[..., None, :2]
+        top = centres[..., 2] + extent[..., 2]
+        ground, room = self.environment.ground_height(
+            points.reshape(-1, 2), np.repeat(top.ravel(), offsets.shape[0]))
+        ground = ground.reshape(points.shape[:-1])
+        room = room.reshape(points.shape[:-1])
+        with np.errstate(invalid='ignore'):
+            # NaN ground (no surface, or inside a solid) leaves a shape suspect.
+            bottom_clear = np.min(bottom[..., None] - ground, axis=-1) > margin
+            ceiling_clear = np.min(ground + room, axis=-1) > top + margin
+        return ~(bottom_clear & ceiling_clear)
 
     def _aabb_half_extents(self, shapes: Sequence[int], rotations: np.ndarray) -> np.ndarray:
         """World axis-aligned half extents of shapes: rotations (k, S, 3, 3) -> (k, S, 3), m."""

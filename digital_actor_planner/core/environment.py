@@ -33,6 +33,9 @@ _SAME_SURFACE = 1e-7
 _Z_TOLERANCE = 1e-6
 # Candidate (node, triangle) pairs rasterised at once; bounds the memory of construction.
 _RASTER_CHUNK = 2_000_000
+# Dilations of the top map, cells (see Environment.top_height_near).
+_TOP_RADII = (1, 2, 4, 8, 16, 32)
+_TOP_RADII_ARRAY = np.array(_TOP_RADII, dtype=float)
 
 
 def _compact(grounds: np.ndarray, ceilings: np.ndarray):
@@ -399,6 +402,8 @@ class Environment:
         self._vertices = [np.asarray(m.vertices, dtype=float) for m in meshes]
         self._faces = [np.asarray(m.faces, dtype=np.int64) for m in meshes]
         self._build_ground_map()
+        self._tops = self._build_top_map()
+        self._build_top_pyramid()
 
     def mesh_of(self, geometry) -> int:
         """Index of the mesh whose FCL geometry is ``geometry`` (from a contact), or -1."""
@@ -599,6 +604,179 @@ class Environment:
         if not out_nodes:
             return np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int8)
         return np.concatenate(out_nodes), np.concatenate(out_z), np.concatenate(out_sign)
+
+    def _build_top_map(self) -> np.ndarray:
+        """Upper bound of every triangle's height over each ground-map cell, (ny - 1, nx - 1) m.
+
+        A cell gets, from each triangle whose xy bounding box touches it, the lower of the
+        triangle's highest vertex and the highest point of the triangle's plane over the cell
+        (a plane's maximum over a rectangle is at a corner). Every point of every mesh, and of
+        the solid below a surface, therefore lies at or below its cell's value; -inf where no
+        triangle reaches.
+        """
+        res, (x0, y0) = self.resolution, self._origin
+        ny, nx = self._shape[0] - 1, self._shape[1] - 1
+        tops = np.full(nx * ny, -np.inf)
+        triangles = np.concatenate([v[f] for v, f in zip(self._vertices, self._faces)])
+        low = triangles[:, :, :2].min(axis=1)
+        high = triangles[:, :, :2].max(axis=1)
+        z_max = triangles[:, :, 2].max(axis=1)
+        normal = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+        # Gradient of the triangle's plane; steep (near-vertical) ones only bound by z_max.
+        tilted = np.abs(normal[:, 2]) > 1e-6 * np.linalg.norm(normal, axis=1)
+        with np.errstate(divide='ignore', invalid='ignore'):
+            slope_x = np.where(tilted, -normal[:, 0] / normal[:, 2], 0.0)
+            slope_y = np.where(tilted, -normal[:, 1] / normal[:, 2], 0.0)
+        ix0 = np.clip(np.floor((low[:, 0] - x0) / res - 1e-9), 0, nx - 1).astype(np.int64)
+        ix1 = np.clip(np.floor((high[:, 0] - x0) / res + 1e-9), 0, nx - 1).astype(np.int64)
+        iy0 = np.clip(np.floor((low[:, 1] - y0) / res - 1e-9), 0, ny - 1).astype(np.int64)
+        iy1 = np.clip(np.floor((high[:, 1] - y0) / res + 1e-9), 0, ny - 1).astype(np.int64)
+        columns, rows = ix1 - ix0 + 1, iy1 - iy0 + 1
+        # Relative to each triangle's first cell: the plane's maximum over cell (i, j) is
+        # base + step_x * i + step_y * j (a little above it for the rounding of the sums).
+        base = (triangles[:, 0, 2] + slope_x * (x0 + ix0 * res - triangles[:, 0, 0])
+                + slope_y * (y0 + iy0 * res - triangles[:, 0, 1])
+                + res * (np.maximum(slope_x, 0.0) + np.maximum(slope_y, 0.0)) + 1e-6)
+        step_x, step_y = slope_x * res, slope_y * res
+        base = np.where(tilted, base, z_max)
+        step_x = np.where(tilted, step_x, 0.0)
+        step_y = np.where(tilted, step_y, 0.0)
+        tops2d = tops.reshape(ny, nx)
+        # Large triangles (a floor, a wall) one by one as blocks of cells; small ones (rough
+        # terrain) all together, one (triangle, cell) pair each.
+        large = columns * rows > 64
+        for t in np.flatnonzero(large):
+            block = np.minimum(base[t] + step_y[t] * np.arange(rows[t])[:, None]
+                               + step_x[t] * np.arange(columns[t]), z_max[t])
+            view = tops2d[iy0[t]:iy1[t] + 1, ix0[t]:ix1[t] + 1]
+            np.maximum(view, block, out=view)
+        sel = np.flatnonzero(~large)
+        if len(sel):
+            count = columns[sel] * rows[sel]
+            tri = np.repeat(sel, count)
+            k = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+            di, dj = k % columns[tri], k // columns[tri]
+            value = np.minimum(base[tri] + step_x[tri] * di + step_y[tri] * dj, z_max[tri])
+            np.maximum.at(tops, (iy0[tri] + dj) * nx + ix0[tri] + di, value)
+        return tops.reshape(ny, nx)
+
+    def _build_top_pyramid(self) -> None:
+        """The top map dilated by 1, 2, 4, ... cells (each cell: the largest value within that
+        many cells in x and y), for :meth:`top_height_near`."""
+        levels, previous = [], self._tops
+        ny, nx = self._tops.shape
+        for radius in _TOP_RADII:
+            # Dilating by r twice dilates by 2 r: the max of the last level shifted by -r, 0, r.
+            shift = max(radius // 2, 1)
+            grown = previous.copy()
+            if shift < nx:
+                np.maximum(grown[:, shift:], previous[:, :-shift], out=grown[:, shift:])
+                np.maximum(grown[:, :-shift], previous[:, shift:], out=grown[:, :-shift])
+            else:
+                grown[:] = np.max(previous, axis=1, keepdims=True)
+            previous = grown.copy()
+            if shift < ny:
+                np.maximum(previous[shift:], grown[:-shift], out=previous[shift:])
+                np.maximum(previous[:-shift], grown[shift:], out=previous[:-shift])
+            else:
+                previous[:] = np.max(grown, axis=0, keepdims=True)
+            levels.append(previous)
+        self._top_pyramid = np.stack(levels).ravel()
+        self._top_cells = nx * ny
+
+    def top_height_near(self, xy, half_extent) -> np.ndarray:
+        """A cheap, looser :meth:`top_height`: a bound over squares around points.
+
+        One lookup per point in a precomputed dilation of the top map, so it bounds at least the
+        rectangle of ``half_extent`` around each point (at most twice as wide, rounded to
+        cells), and is still conservative.
+
+        Parameters
+        ----------
+        xy
+            (N, 2) centres, m.
+        half_extent
+            (N,) half width of the squares, m (at most ``resolution`` x 2**5).
+
+        Returns
+        -------
+        numpy.ndarray
+            (N,) m, never below :meth:`top_height` of the rectangle; +inf for a square wider
+            than the largest dilation or a NaN centre.
+
+        """
+        ny, nx = self._tops.shape
+        cells = np.asarray(half_extent, dtype=float) * self._inverse_resolution + 1e-6
+        level = np.searchsorted(_TOP_RADII_ARRAY, np.ceil(cells))
+        fx = (xy[:, 0] - self._origin[0]) * self._inverse_resolution
+        fy = (xy[:, 1] - self._origin[1]) * self._inverse_resolution
+        column = np.fmin(np.fmax(np.floor(fx), 0.0), nx - 1)
+        row = np.fmin(np.fmax(np.floor(fy), 0.0), ny - 1)
+        # Level past the last: read anywhere, answer +inf below (NaN centres too).
+        usable = (level < len(_TOP_RADII)) & (fx == fx) & (fy == fy)
+        flat = np.where(usable, np.minimum(level, len(_TOP_RADII) - 1) * self._top_cells
+                        + row * nx + column, 0).astype(np.int64)
+        return np.where(usable, self._top_pyramid[flat], np.inf)
+
+    def top_height(self, low_xy, high_xy) -> np.ndarray:
+        """Upper bound of the environment's height over axis-aligned rectangles.
+
+        Conservative: no point of any mesh (or of the solid under a surface) within a rectangle
+        lies higher, so a body whose lowest point is above the bound cannot touch the
+        environment. It is exact over horizontal faces and never below the truth elsewhere
+        (over a sloped face it is the face's highest point in the ``resolution`` cells the
+        rectangle touches; under an overhang it is the overhang's top).
+
+        Parameters
+        ----------
+        low_xy, high_xy
+            (N, 2) lower and upper xy corners of the rectangles, m.
+
+        Returns
+        -------
+        numpy.ndarray
+            (N,) m; -inf where no mesh reaches into the rectangle.
+
+        """
+        low_xy = np.asarray(low_xy, dtype=float)
+        high_xy = np.asarray(high_xy, dtype=float)
+        if low_xy.ndim != 2 or low_xy.shape[1] != 2 or high_xy.shape != low_xy.shape:
+            raise ValueError(f'low_xy and high_xy must have the same shape (N, 2), got '
+                             f'{low_xy.shape} and {high_xy.shape}')
+        tops = self._tops
+        ny, nx = tops.shape
+        res, origin = self.resolution, self._origin
+        if not len(low_xy):
+            return np.zeros(0)
+        first = np.floor((low_xy - origin) / res - 1e-9)
+        last = np.floor((high_xy - origin) / res + 1e-9)
+        # NaN or off-grid extents: clamp (off the grid there is no mesh), NaN reads everything.
+        bad = ~np.all(np.isfinite(first) & np.isfinite(last), axis=1)
+        limit = np.array([nx - 1, ny - 1])
+        # Wholly off the grid: no mesh there.
+        off = ~bad & np.any((last < 0) | (first > limit), axis=1)
+        first = np.where(bad[:, None], 0, np.clip(first, 0, limit)).astype(np.int64)
+        last = np.where(bad[:, None], limit, np.clip(last, 0, limit)).astype(np.int64)
+        size = last - first + 1
+        out = np.full(len(low_xy), -np.inf)
+        # Every rectangle read over a window of the largest size, the cells past its own
+        # size masked; the rare large ones (NaN, far off) one by one.
+        small = np.all(size <= 32, axis=1)
+        if np.any(small):
+            width, height = np.max(size[small], axis=0)
+            di, dj = np.meshgrid(np.arange(width), np.arange(height), indexing='xy')
+            di, dj = di.ravel(), dj.ravel()
+            f, s = first[small], size[small]
+            i = f[:, 0, None] + di
+            j = f[:, 1, None] + dj
+            inside = (di < s[:, 0, None]) & (dj < s[:, 1, None])
+            values = tops[np.minimum(j, ny - 1), np.minimum(i, nx - 1)]
+            out[small] = np.max(np.where(inside, values, -np.inf), axis=1)
+        for index in np.flatnonzero(~small):
+            (i0, j0), (i1, j1) = first[index], last[index]
+            out[index] = np.max(tops[j0:j1 + 1, i0:i1 + 1])
+        out[off] = -np.inf
+        return out
 
     def _cells(self, xy):
         """Grid cell index of each (N, 2) point, and whether it lies on the grid."""

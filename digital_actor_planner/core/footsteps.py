@@ -171,6 +171,8 @@ class _Search:
     interval indices of footsteps 1..i+1 sum to c (its arc length depends only on that sum).
     ``obstacle[side]``: the profile's swing obstacle heights as a list, -inf over empty space
     (so a range maximum over a slice is the swing test's).
+    ``prefixes``: state after the first footsteps of a configuration (see
+    :meth:`FootstepPlanner._search_effort`), None where they are already infeasible.
     """
 
     ok: List[list]
@@ -179,6 +181,7 @@ class _Search:
     obstacle: Tuple[list, list] = ((), ())
     swings: Dict[tuple, bool] = field(default_factory=dict)
     feasible: Dict[Tuple[int, ...], Optional[float]] = field(default_factory=dict)
+    prefixes: Dict[Tuple[int, ...], Optional[tuple]] = field(default_factory=dict)
 
 
 class FootstepPlanner:
@@ -353,9 +356,9 @@ class FootstepPlanner:
             if banned_lengths.intersection(config):
                 memo.feasible[config] = None
                 return None
-            result = self._effort(profile, config, length_list, side_list, stance_s,
-                                  stance_height, swing_s, swing_height, s_init, previous_length,
-                                  memo, banned)
+            result = self._search_effort(profile, config, length_list, side_list, stance_s,
+                                         stance_height, swing_s, swing_height, s_init,
+                                         previous_length, memo, banned)
             memo.feasible[config] = result
             return result
 
@@ -364,14 +367,21 @@ class FootstepPlanner:
             return None
 
         def nearest_free(seed: Tuple[int, ...]) -> Optional[Tuple[int, ...]]:
-            """Breadth-first search from ``seed`` to the nearest collision-free configuration."""
+            """Breadth-first search from ``seed`` to the nearest collision-free configuration.
+
+            Each configuration is tested when it is queued: the first one found free is the
+            first the queue would hand out (it is first in, first out), so the result and the
+            configurations tested are those of testing on the way out, without expanding the
+            rest of the last level.
+            """
+            if evaluate(seed) is not None:
+                return seed
             queue, seen = deque([seed]), {seed}
             while queue:
-                current = queue.popleft()
-                if evaluate(current) is not None:
-                    return current
-                for neighbour in self._neighbours(current, m, paired=False):
+                for neighbour in self._neighbours(queue.popleft(), m, paired=False):
                     if neighbour not in seen:
+                        if evaluate(neighbour) is not None:
+                            return neighbour
                         seen.add(neighbour)
                         queue.append(neighbour)
             return None
@@ -543,6 +553,70 @@ class FootstepPlanner:
                                         s_init)
             placed[key] = (s, hold_height)
             previous_key[side] = key
+            height_before, length_before = hold_height, length
+        return effort
+
+    def _search_effort(self, profile, config, lengths, sides, stance_s, stance_height, swing_s,
+                       swing_height, s_init, previous_length, memo,
+                       banned) -> Optional[float]:
+        """:meth:`_effort` for the search: it resumes from the longest prefix of ``config``
+        already evaluated in this search (``memo.prefixes``).
+
+        Neighbouring configurations share their first footsteps (hill-climbing changes one or
+        two lengths), and the footsteps before a change are evaluated as they were: the same
+        sums in the same order, so the same effort to the last bit.
+        """
+        if config[0] in banned:
+            return None
+        cfg = self.config
+        up, down = cfg.max_step_up, cfg.max_step_down
+        prefixes = memo.prefixes
+        start = len(config) - 1
+        while start > 0 and config[:start] not in prefixes:
+            start -= 1
+        # State after footsteps 0..i-1: (effort, arc length, sole height, length, cumulative
+        # interval index); the empty prefix is the stance foot.
+        if start:
+            state = prefixes[config[:start]]
+        else:
+            state = (0.0, stance_s, stance_height, previous_length, 0)
+        if state is None:
+            return None
+        effort, s, height_before, length_before, cumulative = state
+        for i in range(start, len(config)):
+            j = config[i]
+            length = lengths[j]
+            s += length
+            cumulative += j
+            key = config[:i + 1]
+            if not memo.ok[i][cumulative]:
+                prefixes[key] = None
+                return None
+            hold_height = memo.height[i][cumulative]
+            rise = hold_height - height_before
+            if rise > up or -rise > down:
+                prefixes[key] = None
+                return None
+            # The foot swings from where it was two footsteps before (the same side).
+            if i >= 2:
+                before = prefixes[config[:i - 1]]
+                origin, s_from, h_from = (i - 2, before[4]), before[1], before[2]
+            elif i == 1:
+                origin, s_from, h_from = -1, stance_s, stance_height
+            else:
+                origin, s_from, h_from = -2, swing_s, swing_height
+            swing_key = (origin, (i, cumulative))
+            clear = memo.swings.get(swing_key)
+            if clear is None:
+                clear = self._swing_clear_in(profile, memo, sides[i], s_from, h_from, s,
+                                             hold_height)
+                memo.swings[swing_key] = clear
+            if not clear:
+                prefixes[key] = None
+                return None
+            effort += self._step_effort(length, rise, memo.pitch[i][cumulative], length_before,
+                                        s_init)
+            prefixes[key] = (effort, s, hold_height, length, cumulative)
             height_before, length_before = hold_height, length
         return effort
 

@@ -204,6 +204,66 @@ def _ease(tau: np.ndarray, from_rest: bool, to_rest: bool) -> np.ndarray:
     return tau
 
 
+@dataclass(frozen=True)
+class _StepTiming:
+    """The time shapes of a step of k frames: everything in a step that depends only on k.
+
+    Steps of the same number of frames share them (the step's own geometry scales them), so
+    :class:`WalkGenerator` builds them once per k. All arrays are (k,) and read-only.
+
+    Attributes
+    ----------
+    tau
+        Normalised time of each frame, (1..k) / k.
+    ease
+        Pelvis progress per (from_rest, to_rest), see :func:`_ease`.
+    turn
+        Pelvis yaw progress (it turns once the swing foot is off the ground).
+    bezier
+        Parameter of the swing curve per frame.
+    lift
+        Horizontal progress of the swing foot per lift-off delay (0.0 and 0.12).
+    plane_turn
+        Heading progress of the swing foot.
+    pitch_release, pitch_take
+        Weights of the lift-off pitch and of the landing pitch of the swinging sole.
+    weight
+        Pelvis height progress per step category ('level', 'uphill', 'downhill').
+    fade
+        Weight of the swing ankle's range correction (none at touchdown).
+    samples, bezier_terms
+        Frames the swing clearance is tested at and their Bezier terms (see
+        :meth:`WalkGenerator._bezier_terms`).
+
+    """
+
+    tau: np.ndarray
+    ease: dict
+    turn: np.ndarray
+    bezier: np.ndarray
+    lift: dict
+    plane_turn: np.ndarray
+    pitch_release: np.ndarray
+    pitch_take: np.ndarray
+    weight: dict
+    fade: np.ndarray
+    samples: np.ndarray
+    bezier_terms: tuple
+
+
+def _read_only(value):
+    """Mark every array in a (nested) tuple or dict read-only; returns the value."""
+    if isinstance(value, np.ndarray):
+        value.flags.writeable = False
+    elif isinstance(value, dict):
+        for item in value.values():
+            _read_only(item)
+    elif isinstance(value, tuple):
+        for item in value:
+            _read_only(item)
+    return value
+
+
 class WalkGenerator:
     """Generates the lower-body motion of single steps (§4.1, Figure 3).
 
@@ -233,6 +293,39 @@ class WalkGenerator:
         # Where the swing clearance looks under the sole: 9 points heel..toe, 2 across, m.
         self._sole_along = np.linspace(-self.leg.heel, self.leg.toe, 9)
         self._sole_across = np.array([-0.5, 0.5]) * self.leg.foot_width
+        # _StepTiming per number of frames (a handful of step durations recur).
+        self._timings = {}
+
+    def _timing(self, k: int) -> _StepTiming:
+        """The time shapes of a k-frame step (built once per k)."""
+        timing = self._timings.get(k)
+        if timing is not None:
+            return timing
+        tau = np.arange(1, k + 1) / k
+        bezier = 0.5 * (tau + smoothstep(tau))
+        samples = np.arange(0, tau.size, max(1, tau.size // 24))
+        if samples[-1] != tau.size - 1:
+            samples = np.append(samples, tau.size - 1)
+        timing = _StepTiming(
+            tau=tau,
+            ease={(a, b): _ease(tau, a, b) for a in (False, True) for b in (False, True)},
+            turn=smoothstep((tau - 0.2) / 0.8),
+            bezier=bezier,
+            lift={delay: smoothstep((bezier - delay) / (0.88 - delay)) for delay in (0.0, 0.12)},
+            plane_turn=smoothstep((bezier - 0.2) / 0.55),
+            pitch_release=1.0 - smoothstep((bezier - 0.15) / 0.35),
+            pitch_take=smoothstep((bezier - 0.65) / 0.35),
+            weight={'uphill': smoothstep((tau - 0.35) / 0.65),
+                    'downhill': smoothstep((tau - 0.3) / 0.65), 'level': smoothstep(tau)},
+            fade=np.minimum(1.0, 6.0 * (1 - tau)),
+            samples=samples,
+            bezier_terms=self._bezier_terms(bezier, samples))
+        # Shared by every step of k frames: nothing may change them in place.
+        _read_only((timing.tau, timing.ease, timing.turn, timing.bezier, timing.lift,
+                    timing.plane_turn, timing.pitch_release, timing.pitch_take, timing.weight,
+                    timing.fade, timing.samples, timing.bezier_terms))
+        self._timings[k] = timing
+        return timing
 
     def step_duration(self, length: float, speed: float, rise: float) -> float:
         """Duration of a step of ``length`` m at ``speed`` m/s changing height by ``rise`` m."""
@@ -276,7 +369,8 @@ class WalkGenerator:
         k = int(round(duration * rate))
         if k < 2:
             raise GaitError(f'step duration {duration} s is too short')
-        tau = np.arange(1, k + 1) / k
+        timing = self._timing(k)
+        tau = timing.tau
         stance_side = stance.stance_side
         swing_side = 1 - stance_side
         foot_s, foot_w = stance.feet[stance_side], stance.feet[swing_side]
@@ -293,10 +387,10 @@ class WalkGenerator:
         lam0 = float(np.dot(hip0 - foot_s.xy, d_s))
         hip1 = pelvis_target[:2] + _lateral(yaw1, w_s)
         lam1 = float(np.dot(hip1 - foot_s.xy, d_s))
-        progress = _ease(tau, stance.at_rest, to_rest)
+        progress = timing.ease[(bool(stance.at_rest), bool(to_rest))]
         # The pelvis turns once the swing foot is off the ground: turning it moves the swing
         # hip's plane sideways, which would drag a foot still on the ground.
-        yaw = yaw0 + (yaw1 - yaw0) * smoothstep((tau - 0.2) / 0.8)
+        yaw = yaw0 + (yaw1 - yaw0) * timing.turn
         lam = lam0 + (lam1 - lam0) * progress
         stance_hip_xy = foot_s.xy + lam[:, None] * d_s
         pelvis_xy = stance_hip_xy - _lateral(yaw, w_s)
@@ -311,14 +405,13 @@ class WalkGenerator:
 
         # Swing foot: straight horizontal line with Bezier timing, lifted to clear the ground.
         # The curve parameter is eased in time so the foot leaves and meets the ground at rest.
-        bezier = 0.5 * (tau + smoothstep(tau))
+        bezier = timing.bezier
         # The foot rises before it moves forward and is over its foothold before it descends.
         # A foot lifting from a heel-off is already rolling forward on its toe: no pause.
         delay = 0.0 if foot_w.pitch < -0.05 else 0.12
-        p = smoothstep((bezier - delay) / (0.88 - delay))
+        p = timing.lift[delay]
         # The foot turns to its new heading only once it is off the ground (§4: hip yaw).
-        plane_yaw = foot_w.yaw + _wrap(landing.yaw - foot_w.yaw) * smoothstep((bezier - 0.2)
-                                                                              / 0.55)
+        plane_yaw = foot_w.yaw + _wrap(landing.yaw - foot_w.yaw) * timing.plane_turn
         wanted_xy = foot_w.xy + p[:, None] * (landing.xy - foot_w.xy)
         direction = np.empty((k, 2))
         direction[:, 0] = np.cos(plane_yaw)
@@ -327,28 +420,27 @@ class WalkGenerator:
         swing_xy = swing_hip_xy + forward[:, None] * direction
         # The sole levels out early in the swing (after a heel-off) and takes the landing
         # pitch late, so it is flat while it travels over the ground.
-        swing_pitch = (foot_w.pitch * (1.0 - smoothstep((bezier - 0.15) / 0.35))
-                       + landing.pitch * smoothstep((bezier - 0.65) / 0.35))
+        swing_pitch = foot_w.pitch * timing.pitch_release + landing.pitch * timing.pitch_take
         # Pelvis height: key-frame shape by category, bounded by what both legs can reach.
         rise = landing.sole - foot_s.sole
         if rise > 0.03:
-            category, weight = 'uphill', smoothstep((tau - 0.35) / 0.65)
+            category = 'uphill'
         elif rise < -0.03:
-            category, weight = 'downhill', smoothstep((tau - 0.3) / 0.65)
+            category = 'downhill'
         else:
-            category, weight = 'level', smoothstep(tau)
+            category = 'level'
         nominal = 0.5 * (foot_s.z + landing.z) + leg.thigh + leg.shank - cfg.pelvis_height_drop
-        wanted_z = z0 + (nominal - z0) * weight
+        wanted_z = z0 + (nominal - z0) * timing.weight[category]
         r = cfg.reach_fraction * (leg.thigh + leg.shank)
         if np.any(np.abs(lam) > r) or np.any(np.abs(forward) > r):
             raise GaitError('footstep out of leg reach')
         stance_bound = foot_s.z + np.sqrt(np.maximum(r * r - lam * lam, 0.0))
-        fade = np.minimum(1.0, 6.0 * (1 - tau))
+        fade = timing.fade
         ankle_low = self._leg_lower[swing_side][3] + 0.02
         ankle_high = self._leg_upper[swing_side][3] - 0.02
         # The swing sole's real pitch depends on the leg posture (the ankle has limits), and the
         # posture on the swing height: two passes make the clearance test use the real pitch.
-        footprint = self._swing_footprint(bezier, foot_w, landing, swing_xy, plane_yaw,
+        footprint = self._swing_footprint(timing, foot_w, landing, swing_xy, plane_yaw,
                                           swing_profile)
         # The swing leg's IK of the last pass, when its inputs are final (the pass converged).
         swing_solution = None
@@ -399,7 +491,7 @@ class WalkGenerator:
                 # touchdown, where the sole must meet its foothold flat.
                 wanted = np.minimum(np.maximum(joints[:, 3], self._leg_lower[side][3] + 0.02),
                                     self._leg_upper[side][3] - 0.02)
-                joints[:, 3] += (wanted - joints[:, 3]) * np.minimum(1.0, 6.0 * (1 - tau))
+                joints[:, 3] += (wanted - joints[:, 3]) * fade
             if np.max(reach) > 1.0 + 1e-9:
                 raise GaitError(f'{"left" if side == LEFT else "right"} leg out of reach')
             low, high = self._leg_lower[side], self._leg_upper[side]
@@ -452,8 +544,8 @@ class WalkGenerator:
             end = foot
         return joints, end
 
-    def _swing_footprint(self, tau, lift_foot: FootPose, landing: FootPose, swing_xy,
-                         plane_yaw, swing_profile):
+    def _swing_footprint(self, timing: _StepTiming, lift_foot: FootPose, landing: FootPose,
+                         swing_xy, plane_yaw, swing_profile):
         """The ground under the swinging sole at sampled frames (independent of its pitch).
 
         Returns
@@ -466,9 +558,7 @@ class WalkGenerator:
 
         """
         along, across = self._sole_along, self._sole_across
-        samples = np.arange(0, tau.size, max(1, tau.size // 24))
-        if samples[-1] != tau.size - 1:
-            samples = np.append(samples, tau.size - 1)
+        samples = timing.samples
         d = np.empty((samples.size, 2))
         d[:, 0] = np.cos(plane_yaw[samples])
         d[:, 1] = np.sin(plane_yaw[samples])
@@ -480,7 +570,7 @@ class WalkGenerator:
         z_ref = max(lift_foot.z, landing.z) + self.config.max_swing_lift
         tops = swing_profile(points.reshape(-1, 2), z_ref).reshape(len(samples), along.size, -1)
         tops[np.isnan(tops)] = -np.inf
-        return samples, along, tops, self._bezier_terms(tau, samples)
+        return samples, along, tops, timing.bezier_terms
 
     def _bezier_terms(self, tau, samples):
         """Per-frame Bernstein weights of the swing Bezier and the clearance terms at the
