@@ -33,6 +33,9 @@ SPEED_TOLERANCE = 1e-6
 #: Links this many joints apart or closer are adjacent and never checked against each other.
 ADJACENT_JOINTS = 2
 UPPER_BODY_BRANCHES = ('waist', 'left_arm', 'right_arm')
+#: Room around the actor's shapes over a step for the triangles kept per step, m (about the
+#: reach of a bending trunk or a raised arm beyond its place in the motion pattern).
+NEAR_MARGIN = 0.6
 
 
 def _axis_code(axis: np.ndarray) -> Tuple[int, float]:
@@ -374,8 +377,7 @@ class EnvironmentIndex:
 
     def triangles_near(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
         """Indices of triangles whose boxes overlap the box [lower, upper] (3,) m."""
-        hit = np.all((self.upper >= lower) & (self.lower <= upper), axis=1)
-        return np.flatnonzero(hit)
+        return np.flatnonzero(boxes_overlap(lower, upper, self.lower, self.upper))
 
 
 class TimedBody:
@@ -402,6 +404,28 @@ class TimedBody:
         self.frames = np.array(frames, dtype=float)
         self.rotations, self.positions = kinematics.poses(self.frames)
         self._shape_poses()
+        # The environment's triangles near the actor over the step, and the box they were
+        # found for: one scan of the whole environment per step.
+        self._near = None
+        self._near_lower = self._near_upper = None
+
+    def triangles_near(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+        """Indices of the environment's triangles whose boxes meet the box [lower, upper] (3,) m.
+
+        The same indices, in the same order, as ``environment.triangles_near``, but searched
+        among the triangles near the actor during the step (found once per step, with room for
+        the branches' reach) instead of among all the environment's triangles.
+        """
+        lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+        environment = self.environment
+        if (self._near is None or np.any(lower < self._near_lower)
+                or np.any(upper > self._near_upper)):
+            box_lower = np.minimum(lower, self.shape_lower.min(axis=(0, 1)) - NEAR_MARGIN)
+            box_upper = np.maximum(upper, self.shape_upper.max(axis=(0, 1)) + NEAR_MARGIN)
+            self._near = environment.triangles_near(box_lower, box_upper)
+            self._near_lower, self._near_upper = box_lower, box_upper
+        near = self._near
+        return near[boxes_overlap(lower, upper, environment.lower[near], environment.upper[near])]
 
     def _shape_poses(self) -> None:
         shapes = self.shapes
@@ -519,12 +543,14 @@ class CTSpace:
         obstacle = shapes.shapes_of(obstacle_links)
         self.pairs = shapes.pairs(self.checked, obstacle)
         self._reach_centre, self._reach = self._reach_bound()
-        # Body shapes the branch can never reach during the step need no checks.
-        gap = np.maximum(np.maximum(body.shape_lower[:, self.pairs[:, 1]]
-                                    - self._reach_centre[:, None], 0.0),
-                         self._reach_centre[:, None] - body.shape_upper[:, self.pairs[:, 1]])
-        reachable = np.any(np.linalg.norm(gap, axis=-1) <= self._reach, axis=0)
-        self.pairs = self.pairs[reachable]
+        # Body shapes the branch can never reach during the step need no checks (each obstacle
+        # shape tested once, however many of the branch's shapes it pairs with).
+        obstacle, pair_obstacle = np.unique(self.pairs[:, 1], return_inverse=True)
+        centre = self._reach_centre[:, None]
+        gap = np.maximum(np.maximum(body.shape_lower[:, obstacle] - centre, 0.0),
+                         centre - body.shape_upper[:, obstacle])
+        reachable = np.any(np.sum(gap * gap, axis=-1) <= self._reach ** 2, axis=0)
+        self.pairs = self.pairs[reachable[pair_obstacle.ravel()]]
         # The obstacle shapes do not move while this branch is planned.
         other = self.pairs[:, 1]
         self._pair_rotation = body.shape_rotation[:, other]
@@ -564,7 +590,7 @@ class CTSpace:
         centre, reach = self._reach_centre, self._reach
         lower = centre.min(axis=0) - reach
         upper = centre.max(axis=0) + reach
-        near = env.triangles_near(lower, upper)
+        near = self.body.triangles_near(lower, upper)
         self._triangle_lower = env.lower[near]
         self._triangle_upper = env.upper[near]
         self._triangle_owner = env.owner[near]
@@ -685,20 +711,24 @@ class CTSpace:
             else:
                 motions.append((path[1:], -1))
         failures = []
-        for batch in (motions[:1], motions[1:]):
-            if not batch:
-                continue
-            lengths = np.array([len(rows) for rows, _ in batch])
-            ends = np.cumsum(lengths)
-            segments = list(zip((ends - lengths).tolist(), ends.tolist()))
-            q = np.concatenate([rows for rows, _ in batch])
-            frame_index = np.concatenate([np.arange(ia + 1, ia + 1 + n) for n in lengths])
-            for bad in self._check_segments(q, frame_index, segments,
-                                            [late for _, late in batch], stop_at_legal=True):
-                failures.append(bad)
-                if bad < 0:
-                    return len(failures) - 1, failures
-        return -1, failures
+        if not motions:
+            return -1, failures
+        # One broad phase for every goal; the work counted is as if the first goal were checked
+        # alone and the others only when it fails.
+        lengths = np.array([len(rows) for rows, _ in motions])
+        ends = np.cumsum(lengths)
+        segments = list(zip((ends - lengths).tolist(), ends.tolist()))
+        q = np.concatenate([rows for rows, _ in motions])
+        frame_index = np.concatenate([np.arange(ia + 1, ia + 1 + n) for n in lengths])
+        checks = self.checks
+        for bad in self._check_segments(q, frame_index, segments,
+                                        [late for _, late in motions], stop_at_legal=True):
+            failures.append(bad)
+            if bad < 0:
+                break
+        self.checks = checks + (int(ends[-1]) if failures[0] >= 0 else int(lengths[0]))
+        chosen = len(failures) - 1 if failures[-1] < 0 else -1
+        return chosen, failures
 
     def first_invalid(self, q: np.ndarray, frames: np.ndarray) -> int:
         """Row of the first illegal configuration in a batch, or -1 when all are legal.

@@ -413,7 +413,7 @@ class UpperBodyPlanner:
         upper_shapes = self._upper_shapes
         low, high = body.shape_lower[:, upper_shapes], body.shape_upper[:, upper_shapes]
         environment = self.environment
-        near = environment.triangles_near(low.min(axis=(0, 1)), high.max(axis=(0, 1)))
+        near = body.triangles_near(low.min(axis=(0, 1)), high.max(axis=(0, 1)))
         if len(near):
             owner = environment.owner[near]
             frames, columns, owners = mesh_contacts(
