@@ -67,6 +67,39 @@ class _State:
     relay: bool = False
 
 
+class _Horizon:
+    """Per search: where the objective is legal, and how far a posture is held from a frame.
+
+    Parameters
+    ----------
+    free
+        (k,) bool: whether the objective itself is legal at each frame.
+    hold_frames
+        Frames a posture is held for at least.
+
+    """
+
+    def __init__(self, free: np.ndarray, hold_frames: int):
+        self.hold_frames = int(hold_frames)
+        last = len(free) - 1
+        self.last = last
+        # next_free[i]: the first frame >= i where the objective is legal (last if none).
+        self.next_free = np.full(last + 2, last, dtype=int)
+        for i in range(last, -1, -1):
+            self.next_free[i] = i if free[i] else self.next_free[i + 1]
+        # run_start[i]: the first frame of the blocked stretch holding i (i itself if free).
+        self.run_start = np.arange(last + 1)
+        for i in range(1, last + 1):
+            if not free[i] and not free[i - 1]:
+                self.run_start[i] = self.run_start[i - 1]
+
+    def hold_end(self, here: int) -> int:
+        """Frame a posture held from ``here`` is held to: ``hold_frames`` on, then on to where
+        the objective is legal again if it is blocked there."""
+        end = min(here + self.hold_frames, self.last)
+        return int(self.next_free[end])
+
+
 class CTRoadmap:
     """A CT-roadmap for one branch, kept between successive plans.
 
@@ -176,13 +209,17 @@ class CTRoadmap:
 
         """
         last = space.frame_count - 1
+        # Where the objective itself is legal, in one batch over the step: it tells how long a
+        # posture must be held to get past an obstacle (one long advance instead of creeping
+        # hold_frames at a time). A fixed cost of k configurations, outside the search budget.
+        horizon = _Horizon(space.valid_rows(space.objective, np.arange(last + 1)), hold_frames)
+        checks_limit = None if check_budget is None else space.checks + check_budget
         start_state = _State(np.asarray(start, dtype=float) - space.objective[0], 0)
         stack = [start_state]
         visited = set()
         jumps = set()
         nodes = backtracks = grown = 0
         deepest_blocked = 0
-        checks_limit = None if check_budget is None else space.checks + check_budget
         while stack:
             state = stack[-1]
             if state.relay:
@@ -199,7 +236,7 @@ class CTRoadmap:
                 # Out of budget: the search got no further than the latest state it reached.
                 deepest_blocked = max(deepest_blocked, max(s.frame for s in stack))
                 break
-            child = self._advance(space, state, visited, hold_frames, speed_fraction)
+            child = self._advance(space, state, visited, horizon, speed_fraction)
             if child is None and not state.grew:
                 # §5.2: every advance failed; grow a node at distance r.
                 state.grew = True
@@ -215,7 +252,7 @@ class CTRoadmap:
             backtracks += 1
             if not self._passable(space, blocked):
                 break
-            jump = self._jump_back(space, stack, blocked, speed_fraction, jumps)
+            jump = self._jump_back(space, stack, blocked, speed_fraction, jumps, horizon)
             if jump is not None:
                 depth, child = jump
                 del stack[depth + 1:]
@@ -225,11 +262,12 @@ class CTRoadmap:
         path = self._path(space, stack) if stack else np.array(space.objective)
         return SearchResult(False, path, min(deepest_blocked, last), nodes, backtracks, grown)
 
-    def _candidates(self, space: CTSpace, state: _State, hold_frames: int,
+    def _candidates(self, space: CTSpace, state: _State, horizon: _Horizon,
                     speed_fraction: float) -> List[Tuple[float, int, np.ndarray]]:
         """Neighbouring states forward in time, ranked by closeness to the objective."""
         last = space.frame_count - 1
         here = state.frame
+        hold_frames = horizon.hold_frames
         on_objective = not np.any(state.deviation)
         targets, frames = [], []
         if on_objective:
@@ -253,28 +291,37 @@ class CTRoadmap:
                 arrival = last
             targets.append(node)
             frames.append(arrival)
+        # Holding the posture: first past the stretch where the objective is blocked (one long
+        # advance), else for hold_frames.
+        hold_end = horizon.hold_end(here)
+        if hold_end > min(here + hold_frames, last) and not on_objective:
+            targets.append(state.deviation.copy())
+            frames.append(hold_end)
         targets.append(state.deviation.copy())
         frames.append(min(here + hold_frames, last))
         targets = np.array(targets)
         frames = np.array(frames)
         closeness = self.closeness(targets)
-        order = np.lexsort((frames if not on_objective else -frames, np.round(closeness, 6)))
+        # Equally close: sooner arrival first, except holds and the objective, longest first.
+        holds = ~np.any(targets != state.deviation, axis=1)
+        order = np.lexsort((np.where(holds | on_objective, -frames, frames),
+                            np.round(closeness, 6)))
         # Endpoints in collision cannot start a legal motion: filter them, best first, until
         # enough are legal (holding the current posture is kept whatever its rank).
-        holds = np.flatnonzero(~np.any(targets != state.deviation, axis=1))
         legal = space.best_valid_rows(space.objective[frames] + targets, frames, order,
-                                      self.max_candidates, also=holds.tolist())
+                                      self.max_candidates,
+                                      also=np.flatnonzero(holds).tolist())
         ranked = [(float(closeness[i]), int(frames[i]), targets[i]) for i in order if legal[i]]
         # The neighbours closest to the objective, plus holding the current posture.
         hold = [c for c in ranked[self.max_candidates:]
                 if np.array_equal(c[2], state.deviation)]
         return ranked[:self.max_candidates] + hold
 
-    def _advance(self, space: CTSpace, state: _State, visited: set, hold_frames: int,
+    def _advance(self, space: CTSpace, state: _State, visited: set, horizon: _Horizon,
                  speed_fraction: float) -> Optional[_State]:
         """Try the ranked neighbours forward in time; return the first legal one."""
         if state.candidates is None:
-            state.candidates = self._candidates(space, state, hold_frames, speed_fraction)
+            state.candidates = self._candidates(space, state, horizon, speed_fraction)
             if state.candidates and not np.any(state.deviation):
                 # On the objective: follow it as far as it is legal (one motion check).
                 _, arrival, target = state.candidates.pop(0)
@@ -345,13 +392,14 @@ class CTRoadmap:
         return None
 
     def _jump_back(self, space: CTSpace, stack: List[_State], blocked: int,
-                   speed_fraction: float, jumps: set,
+                   speed_fraction: float, jumps: set, horizon: _Horizon,
                    targets: int = 4) -> Optional[Tuple[int, _State]]:
         """Backtrack to the latest earlier state that can reach a node legal at ``blocked``.
 
-        For the few nodes closest to the objective that are legal at the blocking frame, the
-        latest departure that still gets there in time is found by bisection over the states
-        on the stack. Returns (stack depth to keep, new state), or None.
+        For the few nodes closest to the objective that are legal at the blocking frame (those
+        that can be held through the whole blocked stretch first), the latest departure that
+        still gets there in time is found by bisection over the states on the stack. Returns
+        (stack depth to keep, new state), or None.
         """
         nodes = self.nodes
         legal = space.valid_rows(space.objective[blocked] + nodes,
@@ -359,7 +407,23 @@ class CTRoadmap:
         if not legal.any():
             return None
         nodes = nodes[legal]
-        nodes = nodes[np.argsort(self.closeness(nodes), kind='stable')]
+        # Prefer the nodes that can be held through the whole stretch where the objective is
+        # blocked (sampled every hold_frames): a node legal only at the blocking frame leads to
+        # the next dead end a few frames earlier or later.
+        end = horizon.hold_end(blocked)
+        if end > blocked + 1:
+            # From a little before the stretch: a bent posture meets an obstacle sooner.
+            begin = max(1, horizon.run_start[min(blocked, horizon.last)]
+                        - 2 * horizon.hold_frames)
+            later = np.unique(np.append(np.arange(begin, end, horizon.hold_frames), end))
+            rows = np.repeat(np.arange(len(nodes)), len(later))
+            frames = np.tile(later, len(nodes))
+            through = space.valid_rows(space.objective[frames] + nodes[rows], frames)
+            through = through.reshape(len(nodes), len(later)).all(axis=1)
+            ranks = np.lexsort((self.closeness(nodes), ~through))
+        else:
+            ranks = np.argsort(self.closeness(nodes), kind='stable')
+        nodes = nodes[ranks]
         # A sub-goal already tried for this blocking frame led to a dead end: skip it.
         fresh = [(blocked, tuple(np.round(node, 3))) not in jumps for node in nodes]
         nodes = nodes[np.array(fresh, dtype=bool)]
