@@ -221,3 +221,22 @@ def test_first_legal_motion_agrees_with_goals_checked_one_by_one(beam_world):
         # The work counted is that of the first goal alone, then of all the others if it fails.
         assert space.checks - before == (rows[0] if one_by_one[0] < 0 else sum(rows[:count]))
     assert min(one_by_one) < 0 < max(one_by_one), 'both legal and illegal goals are tried'
+
+
+def test_fixing_a_branch_moves_the_body_as_if_built_with_it(skeleton):
+    environment = Environment([box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0])], resolution=0.05)
+    times, frames = walk(skeleton, 40)
+    body = timed_body(skeleton, environment, frames)
+    for branch in ('waist', 'left_arm', 'right_arm'):
+        # A space built once per branch and one built again share the model-only data.
+        first = CTSpace(branch, body, times, frames[:, skeleton.branch(branch)], TRUNK, LEGS)
+        again = CTSpace(branch, body, times, frames[:, skeleton.branch(branch)], TRUNK, LEGS)
+        assert np.array_equal(first.pairs, again.pairs)
+        assert np.array_equal(first.checked, again.checked)
+        values = frames[:, skeleton.branch(branch)] + np.linspace(0.0, 0.3, 40)[:, None]
+        body.set_branch(skeleton.branch(branch), values, first.steps)
+        frames[:, skeleton.branch(branch)] = values
+        fresh = timed_body(skeleton, environment, frames)
+        for name in ('rotations', 'positions', 'shape_rotation', 'shape_centre', 'shape_lower',
+                     'shape_upper'):
+            assert np.allclose(getattr(body, name), getattr(fresh, name), atol=1e-12), name
