@@ -65,6 +65,10 @@ class _State:
     until: int = -1
     allowed: Optional[np.ndarray] = None
     relay: bool = False
+    # Reached by following the objective hold_frames at a time in one check (see _follow).
+    followed: bool = False
+    # States passed on the way to this one, pushed before it (as if reached one by one).
+    via: List['_State'] = field(default_factory=list)
 
 
 class _Horizon:
@@ -211,8 +215,9 @@ class CTRoadmap:
         last = space.frame_count - 1
         # Where the objective itself is legal, in one batch over the step: it tells how long a
         # posture must be held to get past an obstacle (one long advance instead of creeping
-        # hold_frames at a time). A fixed cost of k configurations, outside the search budget.
-        horizon = _Horizon(space.valid_rows(space.objective, np.arange(last + 1)), hold_frames)
+        # hold_frames at a time). A fixed cost of about k / hold_frames configurations, outside
+        # the search budget.
+        horizon = _Horizon(self._objective_free(space, hold_frames), hold_frames)
         checks_limit = None if check_budget is None else space.checks + check_budget
         start_state = _State(np.asarray(start, dtype=float) - space.objective[0], 0)
         stack = [start_state]
@@ -261,6 +266,22 @@ class CTRoadmap:
             stack.pop()
         path = self._path(space, stack) if stack else np.array(space.objective)
         return SearchResult(False, path, min(deepest_blocked, last), nodes, backtracks, grown)
+
+    @staticmethod
+    def _objective_free(space: CTSpace, spacing: int) -> np.ndarray:
+        """Whether the objective is legal at each frame, checked every ``spacing`` frames: (k,).
+
+        A frame between two checked frames counts as blocked when either of them is, so the
+        blocked stretches found cover the real ones up to ``spacing - 1`` frames either side.
+        """
+        last = space.frame_count - 1
+        grid = np.unique(np.append(np.arange(0, last + 1, spacing), last))
+        legal = space.valid_rows(space.objective[grid], grid)
+        free = np.ones(last + 1, dtype=bool)
+        for i in np.flatnonzero(~legal):
+            free[grid[max(i - 1, 0)] + 1:grid[min(i + 1, len(grid) - 1)]] = False
+            free[grid[i]] = False
+        return free
 
     def _candidates(self, space: CTSpace, state: _State, horizon: _Horizon,
                     speed_fraction: float) -> List[Tuple[float, int, np.ndarray]]:
@@ -320,9 +341,17 @@ class CTRoadmap:
     def _advance(self, space: CTSpace, state: _State, visited: set, horizon: _Horizon,
                  speed_fraction: float) -> Optional[_State]:
         """Try the ranked neighbours forward in time; return the first legal one."""
+        if state.candidates is None and not state.followed and not np.any(state.deviation):
+            child = self._follow(space, state, horizon.hold_frames)
+            if child is not None:
+                return child
         if state.candidates is None:
             state.candidates = self._candidates(space, state, horizon, speed_fraction)
-            if state.candidates and not np.any(state.deviation):
+            if state.followed:
+                # The search already went on from here along the objective.
+                state.candidates = [c for c in state.candidates
+                                    if np.any(c[2]) or c[1] > state.frame + horizon.hold_frames]
+            elif state.candidates and not np.any(state.deviation):
                 # On the objective: follow it as far as it is legal (one motion check).
                 _, arrival, target = state.candidates.pop(0)
                 child = self._try(space, state, target, arrival)
@@ -351,6 +380,33 @@ class CTRoadmap:
         child = _State(np.array(target), arrival)
         if arrival < state.until:
             child.until, child.allowed = state.until, state.allowed
+        return child
+
+    def _follow(self, space: CTSpace, state: _State, hold_frames: int) -> Optional[_State]:
+        """Follow the objective from a state on it, hold_frames at a time, in one motion check.
+
+        The states every hold_frames frames up to the last one before the objective is blocked
+        are the ones keeping the objective one hold at a time would reach, but only one motion
+        is checked and their neighbours are ranked only if the search comes back to them.
+        When the objective is legal at the last frame the best advance is following it as far
+        as it goes (``_try``), which the regular candidates do.
+        """
+        here, last = state.frame, space.frame_count - 1
+        zero = np.zeros_like(state.deviation)
+        if here + hold_frames >= last or space.is_valid(space.objective[last], last):
+            return None
+        bad = space.first_invalid_motion((space.objective[here], here),
+                                         (space.objective[last], last))
+        steps = (bad - 1 - here) // hold_frames if bad >= 0 else 0
+        if steps < 1:
+            return None
+        chain = [_State(zero.copy(), here + hold_frames * i, followed=True)
+                 for i in range(1, steps + 1)]
+        child = chain[-1]
+        child.via = chain[:-1]
+        for link in chain:
+            if link.frame < state.until:
+                link.until, link.allowed = state.until, state.allowed
         return child
 
     def _try(self, space: CTSpace, state: _State, deviation: np.ndarray,
@@ -463,6 +519,9 @@ class CTRoadmap:
         Deviations are interpolated linearly in time, so every piece of a checked motion is
         itself a legal motion: the relays are legal departure points for later backtracking.
         """
+        for state in child.via:
+            stack.append(state)
+        child.via = []
         parent = stack[-1]
         for frame in range(parent.frame + spacing, child.frame - spacing // 2, spacing):
             share = (space.times[frame] - space.times[parent.frame]) / (
