@@ -160,3 +160,13 @@ def test_following_the_objective_reaches_the_states_holding_it_would_in_one_chec
     # Open ground to the end: nothing to shortcut, the regular advance follows the objective.
     open_space = waist_space(skeleton, None, frame_count=150)
     assert roadmap()._follow(open_space, _State(np.zeros(2), 0), hold_frames=5) is None
+
+
+def test_a_long_hold_ends_in_time_to_be_back_on_the_objective_after_the_beam(beam_space):
+    space = beam_space
+    blocked = np.flatnonzero(~space.valid_rows(space.objective, np.arange(space.frame_count)))
+    result = roadmap().solve(space, np.zeros(2))
+    assert result.ok
+    off = np.flatnonzero(np.abs(result.path - space.objective).max(axis=1) > 1e-9)
+    # Held under the beam, but not past it: back on the pattern within one hold.
+    assert off[0] < blocked[0] and off[-1] < blocked[-1] + 5

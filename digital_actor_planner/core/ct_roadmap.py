@@ -316,8 +316,12 @@ class CTRoadmap:
         # advance), else for hold_frames.
         hold_end = horizon.hold_end(here)
         if hold_end > min(here + hold_frames, last) and not on_objective:
-            targets.append(state.deviation.copy())
-            frames.append(hold_end)
+            # End the hold where a return to the objective would arrive as it becomes legal.
+            back = self._travel_frames(space, here, state.deviation, speed_fraction)
+            hold_end = hold_end - back if hold_end < last else hold_end
+            if hold_end > here + hold_frames:
+                targets.append(state.deviation.copy())
+                frames.append(hold_end)
         targets.append(state.deviation.copy())
         frames.append(min(here + hold_frames, last))
         targets = np.array(targets)
