@@ -223,6 +223,7 @@ class CTRoadmap:
         stack = [start_state]
         visited = set()
         jumps = set()
+        known = {}
         nodes = backtracks = grown = 0
         deepest_blocked = 0
         while stack:
@@ -257,7 +258,8 @@ class CTRoadmap:
             backtracks += 1
             if not self._passable(space, blocked):
                 break
-            jump = self._jump_back(space, stack, blocked, speed_fraction, jumps, horizon)
+            jump = self._jump_back(space, stack, blocked, speed_fraction, jumps, horizon,
+                                   known)
             if jump is not None:
                 depth, child = jump
                 del stack[depth + 1:]
@@ -452,7 +454,7 @@ class CTRoadmap:
         return None
 
     def _jump_back(self, space: CTSpace, stack: List[_State], blocked: int,
-                   speed_fraction: float, jumps: set, horizon: _Horizon,
+                   speed_fraction: float, jumps: set, horizon: _Horizon, known: dict,
                    targets: int = 4) -> Optional[Tuple[int, _State]]:
         """Backtrack to the latest earlier state that can reach a node legal at ``blocked``.
 
@@ -462,27 +464,36 @@ class CTRoadmap:
         (stack depth to keep, new state), or None.
         """
         nodes = self.nodes
-        legal = space.valid_rows(space.objective[blocked] + nodes,
-                                 np.full(len(nodes), blocked))
+        # Per search, what is known of a node at a blocking frame: backtracking often meets the
+        # same blocking frame again, with the same roadmap nodes (plus any grown since).
+        keys = [(blocked, tuple(node)) for node in nodes.tolist()]
+        new = [i for i, key in enumerate(keys) if key not in known]
+        if new:
+            legal = space.valid_rows(space.objective[blocked] + nodes[new],
+                                     np.full(len(new), blocked))
+            through = np.zeros(len(new), dtype=bool)
+            # Prefer the nodes that can be held through the whole stretch where the objective
+            # is blocked (sampled every hold_frames): a node legal only at the blocking frame
+            # leads to the next dead end a few frames earlier or later.
+            end = horizon.hold_end(blocked)
+            if end > blocked + 1 and legal.any():
+                # From a little before the stretch: a bent posture meets an obstacle sooner.
+                begin = max(1, horizon.run_start[min(blocked, horizon.last)]
+                            - 2 * horizon.hold_frames)
+                later = np.unique(np.append(np.arange(begin, end, horizon.hold_frames), end))
+                candidates = np.array(new)[legal]
+                rows = np.repeat(candidates, len(later))
+                frames = np.tile(later, len(candidates))
+                held = space.valid_rows(space.objective[frames] + nodes[rows], frames)
+                through[legal] = held.reshape(len(candidates), len(later)).all(axis=1)
+            for i, is_legal, is_through in zip(new, legal.tolist(), through.tolist()):
+                known[keys[i]] = (is_legal, is_through)
+        legal = np.array([known[key][0] for key in keys], dtype=bool)
         if not legal.any():
             return None
+        through = np.array([known[key][1] for key in keys], dtype=bool)[legal]
         nodes = nodes[legal]
-        # Prefer the nodes that can be held through the whole stretch where the objective is
-        # blocked (sampled every hold_frames): a node legal only at the blocking frame leads to
-        # the next dead end a few frames earlier or later.
-        end = horizon.hold_end(blocked)
-        if end > blocked + 1:
-            # From a little before the stretch: a bent posture meets an obstacle sooner.
-            begin = max(1, horizon.run_start[min(blocked, horizon.last)]
-                        - 2 * horizon.hold_frames)
-            later = np.unique(np.append(np.arange(begin, end, horizon.hold_frames), end))
-            rows = np.repeat(np.arange(len(nodes)), len(later))
-            frames = np.tile(later, len(nodes))
-            through = space.valid_rows(space.objective[frames] + nodes[rows], frames)
-            through = through.reshape(len(nodes), len(later)).all(axis=1)
-            ranks = np.lexsort((self.closeness(nodes), ~through))
-        else:
-            ranks = np.argsort(self.closeness(nodes), kind='stable')
+        ranks = np.lexsort((self.closeness(nodes), ~through))
         nodes = nodes[ranks]
         # A sub-goal already tried for this blocking frame led to a dead end: skip it.
         fresh = [(blocked, tuple(np.round(node, 3))) not in jumps for node in nodes]
