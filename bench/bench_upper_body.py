@@ -166,9 +166,11 @@ class OmplBranchPlanner:
                                    planner.skeleton.upper[indices])
             space = CTSpace(name, body, times, objective, planner._checked[name],
                             planner._obstacles[name])
-            if not space.is_valid(start, 0):
+            # The same checks of the start and of the motion pattern as the CT-roadmap's plan.
+            start_legal, objective_legal = planner._start_and_objective(space, start)
+            if not start_legal:
                 return False, 0.0, time.perf_counter() - began
-            if planner._objective_is_legal(space, start):
+            if objective_legal:
                 path = objective.copy()
                 path[0] = start
             else:

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from digital_actor_planner.core.ct_roadmap import CTRoadmap
+from digital_actor_planner.core.ct_roadmap import _Horizon, _State, CTRoadmap
 from digital_actor_planner.core.ct_space import CTSpace
 from digital_actor_planner.core.environment import Environment
 from scene_helpers import box, timed_body, walk
@@ -13,12 +13,12 @@ LEGS = ('pelvis', 'left_hip', 'right_hip', 'left_thigh', 'right_thigh', 'left_sh
 PATTERNS = np.array([(0.0, 0.3), (0.0, 0.6), (0.0, 0.9), (0.4, 0.0), (-0.4, 0.0)])
 
 
-def waist_space(skeleton, beam_bottom):
+def waist_space(skeleton, beam_bottom, frame_count=220):
     meshes = [box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0])]
     if beam_bottom is not None:
         meshes.append(box([0.3, -1.0, beam_bottom], [0.5, 1.0, beam_bottom + 0.2]))
     environment = Environment(meshes, resolution=0.05)
-    times, frames = walk(skeleton, 220, swing_legs=False)
+    times, frames = walk(skeleton, frame_count, swing_legs=False)
     body = timed_body(skeleton, environment, frames)
     return CTSpace('waist', body, times, frames[:, skeleton.branch('waist')], TRUNK, LEGS)
 
@@ -112,7 +112,61 @@ def test_check_budget_stops_the_search_the_same_way_every_time(beam_space):
         spent.append(beam_space.checks - before)
     first, second = results
     assert not first.ok and first.blocked_frame > 0
-    assert spent[0] == spent[1] and spent[0] < 50 + beam_space.frame_count + 40
+    # Over the budget by at most one motion check and the one-off table of where the objective
+    # is legal (k configurations each).
+    assert spent[0] == spent[1] and spent[0] < 50 + 2 * beam_space.frame_count + 40
     assert np.array_equal(first.path, second.path) and first.nodes == second.nodes
     full = roadmap(seed=7).solve(beam_space, np.zeros(2), check_budget=1_000_000)
     assert full.ok
+
+
+def test_a_posture_is_held_past_the_blocked_stretch():
+    free = np.ones(40, dtype=bool)
+    free[12:25] = False
+    horizon = _Horizon(free, hold_frames=5)
+    assert horizon.hold_end(0) == 5, 'open ground ahead: held for hold_frames'
+    assert horizon.hold_end(8) == 25, 'the objective blocked at 13: held until it is free'
+    assert horizon.hold_end(20) == 25
+    assert horizon.hold_end(30) == 35 and horizon.hold_end(37) == 39
+    assert horizon.run_start[20] == 12 and horizon.run_start[30] == 30
+    free[30:] = False
+    assert _Horizon(free, hold_frames=5).hold_end(28) == 39, 'blocked to the end: to the end'
+
+
+def test_the_bend_is_held_under_the_beam_in_one_advance_not_hold_frames_at_a_time(beam_space):
+    space = beam_space
+    blocked = np.count_nonzero(~space.valid_rows(space.objective, np.arange(space.frame_count)))
+    assert blocked > 30
+    for hold_frames in (1, 5):
+        result = roadmap().solve(space, np.zeros(2), hold_frames=hold_frames)
+        assert result.ok
+        assert space.first_invalid(result.path[1:], np.arange(1, space.frame_count)) == -1
+        # Creeping one frame at a time would take a state per blocked frame.
+        assert result.nodes < blocked
+
+
+def test_following_the_objective_reaches_the_states_holding_it_would_in_one_check(skeleton):
+    # The step ends under the beam: the objective is blocked at the last frame.
+    space = waist_space(skeleton, 1.60, frame_count=150)
+    first_blocked = space.first_invalid(space.objective[1:], np.arange(1, space.frame_count)) + 1
+    assert first_blocked > 20
+    before = space.checks
+    child = roadmap()._follow(space, _State(np.zeros(2), 3), hold_frames=5)
+    assert space.checks - before <= space.frame_count, 'one motion check'
+    states = child.via + [child]
+    # Every hold_frames frames, on the objective, up to the last such frame before it is blocked.
+    assert [s.frame for s in states] == list(range(8, first_blocked, 5))
+    assert all(s.followed and not np.any(s.deviation) for s in states)
+    # Open ground to the end: nothing to shortcut, the regular advance follows the objective.
+    open_space = waist_space(skeleton, None, frame_count=150)
+    assert roadmap()._follow(open_space, _State(np.zeros(2), 0), hold_frames=5) is None
+
+
+def test_a_long_hold_ends_in_time_to_be_back_on_the_objective_after_the_beam(beam_space):
+    space = beam_space
+    blocked = np.flatnonzero(~space.valid_rows(space.objective, np.arange(space.frame_count)))
+    result = roadmap().solve(space, np.zeros(2))
+    assert result.ok
+    off = np.flatnonzero(np.abs(result.path - space.objective).max(axis=1) > 1e-9)
+    # Held under the beam, but not past it: back on the pattern within one hold.
+    assert off[0] < blocked[0] and off[-1] < blocked[-1] + 5

@@ -182,3 +182,61 @@ def test_batched_checks_agree_with_every_pair_checked_frame_by_frame(skeleton, b
         bad = space.first_invalid(rows[chunk], at[chunk])
         want = np.flatnonzero(~expected[chunk])
         assert bad == (int(want[0]) if len(want) else -1)
+
+
+def test_triangles_near_the_step_are_those_of_the_whole_environment(skeleton):
+    # The per-step list of nearby triangles is a shortcut: any box, near the actor or not,
+    # gives the same triangles as a scan of the whole environment.
+    environment = Environment([box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0]),
+                               box([0.3, -1.0, 1.60], [0.5, 1.0, 1.80]),
+                               box([2.6, 1.0, 0.0], [2.9, 1.4, 2.0])], resolution=0.05)
+    times, frames = walk(skeleton, 60)
+    body = timed_body(skeleton, environment, frames)
+    rng = np.random.default_rng(3)
+    for _ in range(30):
+        centre = rng.uniform([-1.5, -1.0, -0.2], [3.0, 1.5, 2.0])
+        half = rng.uniform(0.01, 1.5, size=3)
+        expected = body.environment.triangles_near(centre - half, centre + half)
+        assert np.array_equal(body.triangles_near(centre - half, centre + half), expected)
+
+
+def test_first_legal_motion_agrees_with_goals_checked_one_by_one(beam_world):
+    space, _, _ = beam_world
+    start = (np.array([0.0, 0.0]), 100)
+    goals = [(np.array([0.0, 0.0]), 170), (np.array([0.0, 1.3]), 120),
+             (np.array([0.0, 0.9]), 101), (np.array([0.0, 0.9]), 150),
+             (np.array([0.0, 0.2]), 125), (np.array([0.0, 0.0]), 130)]
+    one_by_one, rows = [], []
+    for goal in goals:
+        before = space.checks
+        one_by_one.append(space.first_invalid_motion(start, goal))
+        rows.append(space.checks - before)
+    for count in range(1, len(goals) + 1):
+        legal = [i for i, bad in enumerate(one_by_one[:count]) if bad < 0]
+        before = space.checks
+        chosen, failures = space.first_legal_motion(start, goals[:count])
+        assert chosen == (legal[0] if legal else -1)
+        assert failures == one_by_one[:len(failures)]
+        assert len(failures) == (chosen + 1 if legal else count)
+        # The work counted is that of the first goal alone, then of all the others if it fails.
+        assert space.checks - before == (rows[0] if one_by_one[0] < 0 else sum(rows[:count]))
+    assert min(one_by_one) < 0 < max(one_by_one), 'both legal and illegal goals are tried'
+
+
+def test_fixing_a_branch_moves_the_body_as_if_built_with_it(skeleton):
+    environment = Environment([box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0])], resolution=0.05)
+    times, frames = walk(skeleton, 40)
+    body = timed_body(skeleton, environment, frames)
+    for branch in ('waist', 'left_arm', 'right_arm'):
+        # A space built once per branch and one built again share the model-only data.
+        first = CTSpace(branch, body, times, frames[:, skeleton.branch(branch)], TRUNK, LEGS)
+        again = CTSpace(branch, body, times, frames[:, skeleton.branch(branch)], TRUNK, LEGS)
+        assert np.array_equal(first.pairs, again.pairs)
+        assert np.array_equal(first.checked, again.checked)
+        values = frames[:, skeleton.branch(branch)] + np.linspace(0.0, 0.3, 40)[:, None]
+        body.set_branch(skeleton.branch(branch), values, first.steps)
+        frames[:, skeleton.branch(branch)] = values
+        fresh = timed_body(skeleton, environment, frames)
+        for name in ('rotations', 'positions', 'shape_rotation', 'shape_centre', 'shape_lower',
+                     'shape_upper'):
+            assert np.allclose(getattr(body, name), getattr(fresh, name), atol=1e-12), name

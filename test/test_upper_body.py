@@ -223,7 +223,12 @@ def test_one_batch_pattern_check_agrees_with_the_branch_fast_paths(skeleton):
             space = CTSpace(name, body, times[:61], window[:, indices], planner._checked[name],
                             planner._obstacles[name])
             start = window[0, indices]
-            expected &= space.is_valid(start, 0) and planner._objective_is_legal(space, start)
+            start_legal = space.is_valid(start, 0)
+            objective_legal = planner._objective_is_legal(space, start)
+            # The plan's single batch check of both says the same.
+            assert planner._start_and_objective(space, start) == (
+                start_legal, start_legal and objective_legal)
+            expected &= start_legal and objective_legal
         got = planner._pattern_is_legal(times[:61], body)
         assert got == expected, (trial, begin, offset)
         outcomes.append(got)

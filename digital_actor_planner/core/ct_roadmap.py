@@ -65,6 +65,43 @@ class _State:
     until: int = -1
     allowed: Optional[np.ndarray] = None
     relay: bool = False
+    # Reached by following the objective hold_frames at a time in one check (see _follow).
+    followed: bool = False
+    # States passed on the way to this one, pushed before it (as if reached one by one).
+    via: List['_State'] = field(default_factory=list)
+
+
+class _Horizon:
+    """Per search: where the objective is legal, and how far a posture is held from a frame.
+
+    Parameters
+    ----------
+    free
+        (k,) bool: whether the objective itself is legal at each frame.
+    hold_frames
+        Frames a posture is held for at least.
+
+    """
+
+    def __init__(self, free: np.ndarray, hold_frames: int):
+        self.hold_frames = int(hold_frames)
+        last = len(free) - 1
+        self.last = last
+        # next_free[i]: the first frame >= i where the objective is legal (last if none).
+        self.next_free = np.full(last + 2, last, dtype=int)
+        for i in range(last, -1, -1):
+            self.next_free[i] = i if free[i] else self.next_free[i + 1]
+        # run_start[i]: the first frame of the blocked stretch holding i (i itself if free).
+        self.run_start = np.arange(last + 1)
+        for i in range(1, last + 1):
+            if not free[i] and not free[i - 1]:
+                self.run_start[i] = self.run_start[i - 1]
+
+    def hold_end(self, here: int) -> int:
+        """Frame a posture held from ``here`` is held to: ``hold_frames`` on, then on to where
+        the objective is legal again if it is blocked there."""
+        end = min(here + self.hold_frames, self.last)
+        return int(self.next_free[end])
 
 
 class CTRoadmap:
@@ -176,13 +213,19 @@ class CTRoadmap:
 
         """
         last = space.frame_count - 1
+        # Where the objective itself is legal, in one batch over the step: it tells how long a
+        # posture must be held to get past an obstacle (one long advance instead of creeping
+        # hold_frames at a time). A fixed cost of about k / hold_frames configurations, outside
+        # the search budget.
+        horizon = _Horizon(self._objective_free(space, hold_frames), hold_frames)
+        checks_limit = None if check_budget is None else space.checks + check_budget
         start_state = _State(np.asarray(start, dtype=float) - space.objective[0], 0)
         stack = [start_state]
         visited = set()
         jumps = set()
+        known = {}
         nodes = backtracks = grown = 0
         deepest_blocked = 0
-        checks_limit = None if check_budget is None else space.checks + check_budget
         while stack:
             state = stack[-1]
             if state.relay:
@@ -199,7 +242,7 @@ class CTRoadmap:
                 # Out of budget: the search got no further than the latest state it reached.
                 deepest_blocked = max(deepest_blocked, max(s.frame for s in stack))
                 break
-            child = self._advance(space, state, visited, hold_frames, speed_fraction)
+            child = self._advance(space, state, visited, horizon, speed_fraction)
             if child is None and not state.grew:
                 # §5.2: every advance failed; grow a node at distance r.
                 state.grew = True
@@ -215,7 +258,8 @@ class CTRoadmap:
             backtracks += 1
             if not self._passable(space, blocked):
                 break
-            jump = self._jump_back(space, stack, blocked, speed_fraction, jumps)
+            jump = self._jump_back(space, stack, blocked, speed_fraction, jumps, horizon,
+                                   known)
             if jump is not None:
                 depth, child = jump
                 del stack[depth + 1:]
@@ -225,11 +269,28 @@ class CTRoadmap:
         path = self._path(space, stack) if stack else np.array(space.objective)
         return SearchResult(False, path, min(deepest_blocked, last), nodes, backtracks, grown)
 
-    def _candidates(self, space: CTSpace, state: _State, hold_frames: int,
+    @staticmethod
+    def _objective_free(space: CTSpace, spacing: int) -> np.ndarray:
+        """Whether the objective is legal at each frame, checked every ``spacing`` frames: (k,).
+
+        A frame between two checked frames counts as blocked when either of them is, so the
+        blocked stretches found cover the real ones up to ``spacing - 1`` frames either side.
+        """
+        last = space.frame_count - 1
+        grid = np.unique(np.append(np.arange(0, last + 1, spacing), last))
+        legal = space.valid_rows(space.objective[grid], grid)
+        free = np.ones(last + 1, dtype=bool)
+        for i in np.flatnonzero(~legal):
+            free[grid[max(i - 1, 0)] + 1:grid[min(i + 1, len(grid) - 1)]] = False
+            free[grid[i]] = False
+        return free
+
+    def _candidates(self, space: CTSpace, state: _State, horizon: _Horizon,
                     speed_fraction: float) -> List[Tuple[float, int, np.ndarray]]:
         """Neighbouring states forward in time, ranked by closeness to the objective."""
         last = space.frame_count - 1
         here = state.frame
+        hold_frames = horizon.hold_frames
         on_objective = not np.any(state.deviation)
         targets, frames = [], []
         if on_objective:
@@ -253,29 +314,50 @@ class CTRoadmap:
                 arrival = last
             targets.append(node)
             frames.append(arrival)
+        # Holding the posture: first past the stretch where the objective is blocked (one long
+        # advance), else for hold_frames.
+        hold_end = horizon.hold_end(here)
+        if hold_end > min(here + hold_frames, last) and not on_objective:
+            # End the hold where a return to the objective would arrive as it becomes legal.
+            back = self._travel_frames(space, here, state.deviation, speed_fraction)
+            hold_end = hold_end - back if hold_end < last else hold_end
+            if hold_end > here + hold_frames:
+                targets.append(state.deviation.copy())
+                frames.append(hold_end)
         targets.append(state.deviation.copy())
         frames.append(min(here + hold_frames, last))
         targets = np.array(targets)
         frames = np.array(frames)
         closeness = self.closeness(targets)
-        order = np.lexsort((frames if not on_objective else -frames, np.round(closeness, 6)))
+        # Equally close: sooner arrival first, except holds and the objective, longest first.
+        holds = ~np.any(targets != state.deviation, axis=1)
+        order = np.lexsort((np.where(holds | on_objective, -frames, frames),
+                            np.round(closeness, 6)))
         # Endpoints in collision cannot start a legal motion: filter them, best first, until
         # enough are legal (holding the current posture is kept whatever its rank).
-        holds = np.flatnonzero(~np.any(targets != state.deviation, axis=1))
         legal = space.best_valid_rows(space.objective[frames] + targets, frames, order,
-                                      self.max_candidates, also=holds.tolist())
+                                      self.max_candidates,
+                                      also=np.flatnonzero(holds).tolist())
         ranked = [(float(closeness[i]), int(frames[i]), targets[i]) for i in order if legal[i]]
         # The neighbours closest to the objective, plus holding the current posture.
         hold = [c for c in ranked[self.max_candidates:]
                 if np.array_equal(c[2], state.deviation)]
         return ranked[:self.max_candidates] + hold
 
-    def _advance(self, space: CTSpace, state: _State, visited: set, hold_frames: int,
+    def _advance(self, space: CTSpace, state: _State, visited: set, horizon: _Horizon,
                  speed_fraction: float) -> Optional[_State]:
         """Try the ranked neighbours forward in time; return the first legal one."""
+        if state.candidates is None and not state.followed and not np.any(state.deviation):
+            child = self._follow(space, state, horizon.hold_frames)
+            if child is not None:
+                return child
         if state.candidates is None:
-            state.candidates = self._candidates(space, state, hold_frames, speed_fraction)
-            if state.candidates and not np.any(state.deviation):
+            state.candidates = self._candidates(space, state, horizon, speed_fraction)
+            if state.followed:
+                # The search already went on from here along the objective.
+                state.candidates = [c for c in state.candidates
+                                    if np.any(c[2]) or c[1] > state.frame + horizon.hold_frames]
+            elif state.candidates and not np.any(state.deviation):
                 # On the objective: follow it as far as it is legal (one motion check).
                 _, arrival, target = state.candidates.pop(0)
                 child = self._try(space, state, target, arrival)
@@ -304,6 +386,33 @@ class CTRoadmap:
         child = _State(np.array(target), arrival)
         if arrival < state.until:
             child.until, child.allowed = state.until, state.allowed
+        return child
+
+    def _follow(self, space: CTSpace, state: _State, hold_frames: int) -> Optional[_State]:
+        """Follow the objective from a state on it, hold_frames at a time, in one motion check.
+
+        The states every hold_frames frames up to the last one before the objective is blocked
+        are the ones keeping the objective one hold at a time would reach, but only one motion
+        is checked and their neighbours are ranked only if the search comes back to them.
+        When the objective is legal at the last frame the best advance is following it as far
+        as it goes (``_try``), which the regular candidates do.
+        """
+        here, last = state.frame, space.frame_count - 1
+        zero = np.zeros_like(state.deviation)
+        if here + hold_frames >= last or space.is_valid(space.objective[last], last):
+            return None
+        bad = space.first_invalid_motion((space.objective[here], here),
+                                         (space.objective[last], last))
+        steps = (bad - 1 - here) // hold_frames if bad >= 0 else 0
+        if steps < 1:
+            return None
+        chain = [_State(zero.copy(), here + hold_frames * i, followed=True)
+                 for i in range(1, steps + 1)]
+        child = chain[-1]
+        child.via = chain[:-1]
+        for link in chain:
+            if link.frame < state.until:
+                link.until, link.allowed = state.until, state.allowed
         return child
 
     def _try(self, space: CTSpace, state: _State, deviation: np.ndarray,
@@ -345,21 +454,47 @@ class CTRoadmap:
         return None
 
     def _jump_back(self, space: CTSpace, stack: List[_State], blocked: int,
-                   speed_fraction: float, jumps: set,
+                   speed_fraction: float, jumps: set, horizon: _Horizon, known: dict,
                    targets: int = 4) -> Optional[Tuple[int, _State]]:
         """Backtrack to the latest earlier state that can reach a node legal at ``blocked``.
 
-        For the few nodes closest to the objective that are legal at the blocking frame, the
-        latest departure that still gets there in time is found by bisection over the states
-        on the stack. Returns (stack depth to keep, new state), or None.
+        For the few nodes closest to the objective that are legal at the blocking frame (those
+        that can be held through the whole blocked stretch first), the latest departure that
+        still gets there in time is found by bisection over the states on the stack. Returns
+        (stack depth to keep, new state), or None.
         """
         nodes = self.nodes
-        legal = space.valid_rows(space.objective[blocked] + nodes,
-                                 np.full(len(nodes), blocked))
+        # Per search, what is known of a node at a blocking frame: backtracking often meets the
+        # same blocking frame again, with the same roadmap nodes (plus any grown since).
+        keys = [(blocked, tuple(node)) for node in nodes.tolist()]
+        new = [i for i, key in enumerate(keys) if key not in known]
+        if new:
+            legal = space.valid_rows(space.objective[blocked] + nodes[new],
+                                     np.full(len(new), blocked))
+            through = np.zeros(len(new), dtype=bool)
+            # Prefer the nodes that can be held through the whole stretch where the objective
+            # is blocked (sampled every hold_frames): a node legal only at the blocking frame
+            # leads to the next dead end a few frames earlier or later.
+            end = horizon.hold_end(blocked)
+            if end > blocked + 1 and legal.any():
+                # From a little before the stretch: a bent posture meets an obstacle sooner.
+                begin = max(1, horizon.run_start[min(blocked, horizon.last)]
+                            - 2 * horizon.hold_frames)
+                later = np.unique(np.append(np.arange(begin, end, horizon.hold_frames), end))
+                candidates = np.array(new)[legal]
+                rows = np.repeat(candidates, len(later))
+                frames = np.tile(later, len(candidates))
+                held = space.valid_rows(space.objective[frames] + nodes[rows], frames)
+                through[legal] = held.reshape(len(candidates), len(later)).all(axis=1)
+            for i, is_legal, is_through in zip(new, legal.tolist(), through.tolist()):
+                known[keys[i]] = (is_legal, is_through)
+        legal = np.array([known[key][0] for key in keys], dtype=bool)
         if not legal.any():
             return None
+        through = np.array([known[key][1] for key in keys], dtype=bool)[legal]
         nodes = nodes[legal]
-        nodes = nodes[np.argsort(self.closeness(nodes), kind='stable')]
+        ranks = np.lexsort((self.closeness(nodes), ~through))
+        nodes = nodes[ranks]
         # A sub-goal already tried for this blocking frame led to a dead end: skip it.
         fresh = [(blocked, tuple(np.round(node, 3))) not in jumps for node in nodes]
         nodes = nodes[np.array(fresh, dtype=bool)]
@@ -399,6 +534,9 @@ class CTRoadmap:
         Deviations are interpolated linearly in time, so every piece of a checked motion is
         itself a legal motion: the relays are legal departure points for later backtracking.
         """
+        for state in child.via:
+            stack.append(state)
+        child.via = []
         parent = stack[-1]
         for frame in range(parent.frame + spacing, child.frame - spacing // 2, spacing):
             share = (space.times[frame] - space.times[parent.frame]) / (

@@ -33,6 +33,9 @@ SPEED_TOLERANCE = 1e-6
 #: Links this many joints apart or closer are adjacent and never checked against each other.
 ADJACENT_JOINTS = 2
 UPPER_BODY_BRANCHES = ('waist', 'left_arm', 'right_arm')
+#: Room around the actor's shapes over a step for the triangles kept per step, m (about the
+#: reach of a bending trunk or a raised arm beyond its place in the motion pattern).
+NEAR_MARGIN = 0.6
 
 
 def _axis_code(axis: np.ndarray) -> Tuple[int, float]:
@@ -232,6 +235,8 @@ class BodyShapes:
         self._tree_distance = self._link_tree_distances()
         # Per set of shapes, the columns and sizes used by :meth:`bounds` (built once).
         self._layouts: Dict[bytes, tuple] = {}
+        #: Per branch CT-space, the data that depends on the model only (built once).
+        self.branch_layouts: Dict[tuple, tuple] = {}
 
     def _link_tree_distances(self) -> np.ndarray:
         names = self.skeleton.link_names
@@ -259,6 +264,10 @@ class BodyShapes:
         """Indices of the shapes attached to the named links: (n,) int."""
         links = [self.skeleton.link_index[name] for name in link_names]
         return np.flatnonzero(np.isin(self.link, links))
+
+    def shapes_of_links(self, links) -> np.ndarray:
+        """Indices of the shapes attached to links given by index: (n,) int."""
+        return np.flatnonzero(np.isin(self.link, list(links)))
 
     def pairs(self, shapes_a: np.ndarray, shapes_b: np.ndarray) -> np.ndarray:
         """Shape pairs (a, b) on links more than ``ADJACENT_JOINTS`` joints apart: (P, 2) int."""
@@ -374,8 +383,7 @@ class EnvironmentIndex:
 
     def triangles_near(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
         """Indices of triangles whose boxes overlap the box [lower, upper] (3,) m."""
-        hit = np.all((self.upper >= lower) & (self.lower <= upper), axis=1)
-        return np.flatnonzero(hit)
+        return np.flatnonzero(boxes_overlap(lower, upper, self.lower, self.upper))
 
 
 class TimedBody:
@@ -402,6 +410,28 @@ class TimedBody:
         self.frames = np.array(frames, dtype=float)
         self.rotations, self.positions = kinematics.poses(self.frames)
         self._shape_poses()
+        # The environment's triangles near the actor over the step, and the box they were
+        # found for: one scan of the whole environment per step.
+        self._near = None
+        self._near_lower = self._near_upper = None
+
+    def triangles_near(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+        """Indices of the environment's triangles whose boxes meet the box [lower, upper] (3,) m.
+
+        The same indices, in the same order, as ``environment.triangles_near``, but searched
+        among the triangles near the actor during the step (found once per step, with room for
+        the branches' reach) instead of among all the environment's triangles.
+        """
+        lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+        environment = self.environment
+        if (self._near is None or np.any(lower < self._near_lower)
+                or np.any(upper > self._near_upper)):
+            box_lower = np.minimum(lower, self.shape_lower.min(axis=(0, 1)) - NEAR_MARGIN)
+            box_upper = np.maximum(upper, self.shape_upper.max(axis=(0, 1)) + NEAR_MARGIN)
+            self._near = environment.triangles_near(box_lower, box_upper)
+            self._near_lower, self._near_upper = box_lower, box_upper
+        near = self._near
+        return near[boxes_overlap(lower, upper, environment.lower[near], environment.upper[near])]
 
     def _shape_poses(self) -> None:
         shapes = self.shapes
@@ -415,9 +445,17 @@ class TimedBody:
     def set_branch(self, indices: np.ndarray, values: np.ndarray,
                    steps: Sequence[_Step]) -> None:
         """Fix a planned branch: write its (k, d) values and update the poses of its subtree."""
+        if np.array_equal(self.frames[:, indices], values):
+            return  # the branch follows the motion already in place (its fast path)
         self.frames[:, indices] = values
         self.kinematics.poses(self.frames, self.rotations, self.positions, steps)
-        self._shape_poses()
+        # Only the shapes the branch carries have moved.
+        moved = self.shapes.shapes_of_links({step.child for step in steps})
+        rotation, centre = self.shapes.poses(self.rotations, self.positions, moved)
+        self.shape_rotation[:, moved] = rotation
+        self.shape_centre[:, moved] = centre
+        self.shape_lower[:, moved], self.shape_upper[:, moved] = self.shapes.bounds(
+            rotation, centre, moved)
 
 
 def boxes_overlap(lower_a: np.ndarray, upper_a: np.ndarray, lower_b: np.ndarray,
@@ -501,30 +539,23 @@ class CTSpace:
         self.upper = skeleton.upper[self.indices]
         self.speed_limit = skeleton.velocity_limit[self.indices]
         self.time_weight = float(time_weight)
-        steps = body.kinematics.subtree_steps(self.joint_names)
-        moving = {step.child for step in steps}
-        shapes = body.shapes
-        self.checked = shapes.shapes_of(checked_links)
-        self.checked = self.checked[np.isin(shapes.link[self.checked], list(moving))]
-        #: The steps to re-evaluate when the branch moves (all links it carries).
-        self.steps = steps
-        # Only the links on the way to the checked shapes matter for validity.
-        needed = set(shapes.link[self.checked].tolist())
-        parent_of = {step.child: step.parent for step in steps}
-        for link in list(needed):
-            while link in parent_of:
-                link = parent_of[link]
-                needed.add(link)
-        self._check_steps = tuple(step for step in steps if step.child in needed)
-        obstacle = shapes.shapes_of(obstacle_links)
-        self.pairs = shapes.pairs(self.checked, obstacle)
-        self._reach_centre, self._reach = self._reach_bound()
-        # Body shapes the branch can never reach during the step need no checks.
-        gap = np.maximum(np.maximum(body.shape_lower[:, self.pairs[:, 1]]
-                                    - self._reach_centre[:, None], 0.0),
-                         self._reach_centre[:, None] - body.shape_upper[:, self.pairs[:, 1]])
-        reachable = np.any(np.linalg.norm(gap, axis=-1) <= self._reach, axis=0)
-        self.pairs = self.pairs[reachable]
+        # What depends on the model only is worked out once per branch and reused every step.
+        key = (branch, tuple(checked_links), tuple(obstacle_links), id(body.kinematics))
+        layout = body.shapes.branch_layouts.get(key)
+        if layout is None:
+            layout = self._branch_layout(body, checked_links, obstacle_links)
+            body.shapes.branch_layouts[key] = layout
+        #: steps: the steps to re-evaluate when the branch moves (all links it carries).
+        self.steps, self.checked, self._check_steps, self.pairs, first, self._reach = layout
+        self._reach_centre = body.positions[:, first]
+        # Body shapes the branch can never reach during the step need no checks (each obstacle
+        # shape tested once, however many of the branch's shapes it pairs with).
+        obstacle, pair_obstacle = np.unique(self.pairs[:, 1], return_inverse=True)
+        centre = self._reach_centre[:, None]
+        gap = np.maximum(np.maximum(body.shape_lower[:, obstacle] - centre, 0.0),
+                         centre - body.shape_upper[:, obstacle])
+        reachable = np.any(np.sum(gap * gap, axis=-1) <= self._reach ** 2, axis=0)
+        self.pairs = self.pairs[reachable[pair_obstacle.ravel()]]
         # The obstacle shapes do not move while this branch is planned.
         other = self.pairs[:, 1]
         self._pair_rotation = body.shape_rotation[:, other]
@@ -537,26 +568,48 @@ class CTSpace:
         self._prepare_environment()
         self.checks = 0
 
-    def _reach_bound(self) -> Tuple[np.ndarray, float]:
-        """Centre (k, 3) and radius (m) of a ball holding the checked shapes at every frame.
+    def _branch_layout(self, body: TimedBody, checked_links: Sequence[str],
+                       obstacle_links: Sequence[str]) -> tuple:
+        """The branch's model-only data: (steps, checked shapes, steps needed for the checks,
+        shape pairs, link at the centre of its reach, reach radius m)."""
+        steps = body.kinematics.subtree_steps(self.joint_names)
+        moving = {step.child for step in steps}
+        shapes = body.shapes
+        checked = shapes.shapes_of(checked_links)
+        checked = checked[np.isin(shapes.link[checked], list(moving))]
+        # Only the links on the way to the checked shapes matter for validity.
+        needed = set(shapes.link[checked].tolist())
+        parent_of = {step.child: step.parent for step in steps}
+        for link in list(needed):
+            while link in parent_of:
+                link = parent_of[link]
+                needed.add(link)
+        check_steps = tuple(step for step in steps if step.child in needed)
+        pairs = shapes.pairs(checked, shapes.shapes_of(obstacle_links))
+        first, reach = self._reach_bound(shapes, steps, checked)
+        return steps, checked, check_steps, pairs, first, reach
+
+    @staticmethod
+    def _reach_bound(shapes: BodyShapes, steps: Sequence[_Step],
+                     checked: np.ndarray) -> Tuple[int, float]:
+        """Link at the centre and radius (m) of a ball holding the checked shapes at any pose.
 
         The centre is the branch's first joint, which the branch itself cannot move; the radius
         is the longest chain of joint offsets from it plus the shape's own extent.
         """
-        shapes = self.body.shapes
-        if not self.steps:
-            return self.body.positions[:, 0], 0.0
-        first = self.steps[0].child
+        if not steps:
+            return 0, 0.0
+        first = steps[0].child
         link_reach = {first: 0.0}
-        for step in self.steps[1:]:
+        for step in steps[1:]:
             link_reach[step.child] = (link_reach.get(step.parent, 0.0)
                                       + float(np.linalg.norm(step.origin_translation)))
         reach = 0.0
-        for shape in self.checked:
+        for shape in checked:
             radius = float(np.linalg.norm(shapes.half[shape]))
             offset = float(np.linalg.norm(shapes.origin_translation[shape]))
             reach = max(reach, link_reach.get(int(shapes.link[shape]), 0.0) + offset + radius)
-        return self.body.positions[:, first], reach
+        return first, reach
 
     def _prepare_environment(self) -> None:
         """Keep only triangles the branch could reach during the step (§5: broad phase)."""
@@ -564,7 +617,7 @@ class CTSpace:
         centre, reach = self._reach_centre, self._reach
         lower = centre.min(axis=0) - reach
         upper = centre.max(axis=0) + reach
-        near = env.triangles_near(lower, upper)
+        near = self.body.triangles_near(lower, upper)
         self._triangle_lower = env.lower[near]
         self._triangle_upper = env.upper[near]
         self._triangle_owner = env.owner[near]

@@ -346,12 +346,13 @@ class UpperBodyPlanner:
                             self._obstacles[name], config.time_weight)
             record = dict(ok=True, fast=False, nodes=0, backtracks=0, grown=0)
             path = None
-            if not space.is_valid(start, 0):
+            start_legal, objective_legal = self._start_and_objective(space, start)
+            if not start_legal:
                 ok, record['ok'], blocked_frame = False, False, 0
                 links = self._links_in_collision(frames[0], name)
                 reason = (f'{name} start in collision at t={times[0]:.2f} s'
                           + (f' ({", ".join(links)})' if links else ''))
-            elif self._objective_is_legal(space, start):
+            elif objective_legal:
                 # Fast path: the objective, joined from the start, is legal at every frame.
                 path = objective.copy()
                 record['fast'] = True
@@ -387,6 +388,17 @@ class UpperBodyPlanner:
                              blocked_frame=blocked_frame)
 
     @staticmethod
+    def _start_and_objective(space: CTSpace, start: np.ndarray) -> Tuple[bool, bool]:
+        """Whether the start is legal at frame 0, and whether the start, then the objective at
+        frames 1..k-1, is a legal motion (start included): one batch check for both."""
+        path = np.vstack([start[None], space.objective[1:]])
+        speed = np.abs(np.diff(path, axis=0)) / np.diff(space.times)[:, None]
+        if np.any(speed > space.speed_limit * (1 + 1e-6)):
+            return space.is_valid(start, 0), False
+        bad = space.first_invalid(path, np.arange(len(path)))
+        return bad != 0, bad < 0
+
+    @staticmethod
     def _objective_is_legal(space: CTSpace, start: np.ndarray) -> bool:
         """Whether start, then the objective at frames 1..k-1, is a legal motion."""
         path = np.vstack([start[None], space.objective[1:]])
@@ -413,7 +425,7 @@ class UpperBodyPlanner:
         upper_shapes = self._upper_shapes
         low, high = body.shape_lower[:, upper_shapes], body.shape_upper[:, upper_shapes]
         environment = self.environment
-        near = environment.triangles_near(low.min(axis=(0, 1)), high.max(axis=(0, 1)))
+        near = body.triangles_near(low.min(axis=(0, 1)), high.max(axis=(0, 1)))
         if len(near):
             owner = environment.owner[near]
             frames, columns, owners = mesh_contacts(
