@@ -233,3 +233,21 @@ def test_one_batch_pattern_check_agrees_with_the_branch_fast_paths(skeleton):
         assert got == expected, (trial, begin, offset)
         outcomes.append(got)
     assert 0 < np.mean(outcomes) < 1  # both outcomes occur
+
+
+def test_arm_roadmap_starts_with_the_arm_held_in_against_the_side(skeleton):
+    # Between two pillars with the waist turned, a flexed or abducted arm sticks out sideways;
+    # the roadmap starts with the arm held in, nearly straight, legal at any swing (§5.2).
+    planner, _ = planner_for(skeleton)
+    _, frames = walk(skeleton, 120)
+    for side in ('left', 'right'):
+        indices = skeleton.branch(f'{side}_arm')
+        roll = skeleton.index[f'{side}_shoulder_roll'] - indices[0]
+        elbow = skeleton.index[f'{side}_elbow'] - indices[0]
+        objective = frames[:, indices]
+        held_in = [node for node in planner.roadmaps[f'{side}_arm'].nodes
+                   if np.all(skeleton.lower[indices] <= objective + node)
+                   and np.all(objective + node <= skeleton.upper[indices])
+                   and np.all(objective[:, roll] + node[roll] == skeleton.lower[indices][roll])
+                   and np.all(objective[:, elbow] + node[elbow] < 0.2)]
+        assert held_in, f'no {side} arm node held in against the side'

@@ -219,11 +219,16 @@ def _waist_patterns() -> np.ndarray:
 
 
 def _arm_patterns() -> np.ndarray:
-    """Common arm postures as deviations (pitch, roll, yaw, elbow) from the swing, rad."""
+    """Common arm postures as deviations (pitch, roll, yaw, elbow) from the swing, rad.
+
+    Flexed, raised and abducted arms, and (last) the arm held in against the side, nearly
+    straight: the one posture that does not stick out sideways, for squeezing between two
+    obstacles with the waist turned (Figure 9b) rather than finding it by random growth.
+    """
     return np.array([(0.0, 0.0, 0.0, e) for e in (0.3, 0.6, 0.9, 1.2, 1.6)]
                     + [(0.3, 0.0, 0.0, 0.8), (0.6, 0.0, 0.0, 1.4), (-0.3, 0.0, 0.0, 0.6),
                        (0.0, 0.25, 0.0, 0.0), (0.0, 0.5, 0.0, 0.4), (0.0, 0.0, -0.5, 0.9),
-                       (0.0, 0.2, 0.0, 1.0)])
+                       (0.0, 0.2, 0.0, 1.0), (0.0, -ARM_CLEARANCE_ROLL, 0.0, -0.15)])
 
 
 class UpperBodyPlanner:
