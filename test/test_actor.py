@@ -85,9 +85,11 @@ class BlockedUpperBody:
     def __init__(self, blocked_at_end):
         self.blocked_at_end = blocked_at_end
         self.calls = []
+        self.previews = []
 
-    def plan(self, times, frames):
+    def plan(self, times, frames, preview_from=None):
         self.calls.append(len(times))
+        self.previews.append(preview_from)
         frame = len(times) - 1 if self.blocked_at_end else 5
         return UpperBodyPlan(frames=frames, ok=False, reason=f'waist blocked at frame {frame}',
                              deviation=0.0, planning_time=0.0, per_branch={},
@@ -107,6 +109,9 @@ def test_plan_without_preview_only_when_the_preview_blocked(blocked_at_end):
         # Blocked in the preview only: the step alone may still pass, so it is planned too.
         assert len(upper.calls) == 4
         assert upper.calls[0] > upper.calls[1] and upper.calls[2] > upper.calls[3]
+        # The preview plan is told where the step's own frames end: where the plan without
+        # the preview ends.
+        assert upper.previews == [upper.calls[1], None, upper.calls[3], None]
     else:
         # Blocked within the step's own frames: without the preview it meets the same block.
         assert len(upper.calls) == 2, 'one plan per footstep tried'

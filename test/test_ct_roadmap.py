@@ -170,3 +170,44 @@ def test_a_long_hold_ends_in_time_to_be_back_on_the_objective_after_the_beam(bea
     off = np.flatnonzero(np.abs(result.path - space.objective).max(axis=1) > 1e-9)
     # Held under the beam, but not past it: back on the pattern within one hold.
     assert off[0] < blocked[0] and off[-1] < blocked[-1] + 5
+
+
+def test_a_search_stuck_in_the_preview_gives_up_within_its_small_budget(beam_space):
+    # Only turns in the roadmap: getting under the beam (the head meets it after frame 100)
+    # takes many backtracks (see above). With the frames from 90 on a preview, backtracking
+    # from there has its own small budget.
+    space = beam_space
+    turns = np.array([(0.4, 0.0), (-0.4, 0.0)])
+    limits = dict(node_budget=600, max_backtracks=200)
+    before = space.checks
+    full = roadmap(seed=2, patterns=turns).solve(space, np.zeros(2), **limits)
+    full_checks, before = space.checks - before, space.checks
+    preview = roadmap(seed=2, patterns=turns).solve(space, np.zeros(2), preview_from=90,
+                                                    preview_backtracks=1, **limits)
+    preview_checks = space.checks - before
+    assert not full.gave_up_in_preview and full.backtracks > 2
+    assert not preview.ok and preview.gave_up_in_preview
+    assert preview.blocked_frame >= 90, 'reported as blocked in the preview'
+    assert preview.preview_backtracks == 2, 'gives up at the first backtrack over the budget'
+    assert preview.backtracks < full.backtracks and preview_checks < full_checks
+    again = roadmap(seed=2, patterns=turns).solve(space, np.zeros(2), preview_from=90,
+                                                  preview_backtracks=1, **limits)
+    assert np.array_equal(again.path, preview.path) and again.nodes == preview.nodes
+
+
+def test_a_preview_past_the_block_leaves_the_search_unchanged(beam_space):
+    # Blocks before the preview are the step's own: the preview budget does not apply to them.
+    plain = roadmap(seed=7).solve(beam_space, np.zeros(2))
+    late = roadmap(seed=7).solve(beam_space, np.zeros(2), preview_from=beam_space.frame_count - 1,
+                                 preview_backtracks=0)
+    assert plain.ok and late.ok and late.preview_backtracks == 0
+    assert np.array_equal(plain.path, late.path) and plain.nodes == late.nodes
+
+
+@pytest.mark.parametrize('preview_from, preview_backtracks, match', [
+    (0, 1, 'preview_from'), (500, 1, 'preview_from'), (100, -1, 'preview_backtracks')])
+def test_bad_preview_settings_name_the_value(beam_space, preview_from, preview_backtracks,
+                                             match):
+    with pytest.raises(ValueError, match=match):
+        roadmap().solve(beam_space, np.zeros(2), preview_from=preview_from,
+                        preview_backtracks=preview_backtracks)

@@ -174,7 +174,8 @@ def test_successive_steps_join_continuously_and_are_deterministic(skeleton):
     ('roadmap_radius', 0.0), ('node_budget', 0), ('max_backtracks', -1),
     ('speed_fraction', 1.5), ('hold_frames', 2.5), ('arm_weights', (1.0, 1.0, 1.0)),
     ('waist_weights', (1.0, -1.0)), ('time_weight', float('nan')), ('max_roadmap_nodes', 3),
-    ('time_budget', -1.0), ('check_budget', 0), ('check_budget', 2.5)])
+    ('time_budget', -1.0), ('check_budget', 0), ('check_budget', 2.5),
+    ('preview_backtracks', -1)])
 def test_bad_config_names_the_field(skeleton, field, value):
     config = UpperBodyConfig(**{field: value})
     with pytest.raises(ValueError, match=field):
@@ -233,3 +234,42 @@ def test_one_batch_pattern_check_agrees_with_the_branch_fast_paths(skeleton):
         assert got == expected, (trial, begin, offset)
         outcomes.append(got)
     assert 0 < np.mean(outcomes) < 1  # both outcomes occur
+
+
+def test_arm_roadmap_starts_with_the_arm_held_in_against_the_side(skeleton):
+    # Between two pillars with the waist turned, a flexed or abducted arm sticks out sideways;
+    # the roadmap starts with the arm held in, nearly straight, legal at any swing (§5.2).
+    planner, _ = planner_for(skeleton)
+    _, frames = walk(skeleton, 120)
+    for side in ('left', 'right'):
+        indices = skeleton.branch(f'{side}_arm')
+        roll = skeleton.index[f'{side}_shoulder_roll'] - indices[0]
+        elbow = skeleton.index[f'{side}_elbow'] - indices[0]
+        objective = frames[:, indices]
+        held_in = [node for node in planner.roadmaps[f'{side}_arm'].nodes
+                   if np.all(skeleton.lower[indices] <= objective + node)
+                   and np.all(objective + node <= skeleton.upper[indices])
+                   and np.all(objective[:, roll] + node[roll] == skeleton.lower[indices][roll])
+                   and np.all(objective[:, elbow] + node[elbow] < 0.2)]
+        assert held_in, f'no {side} arm node held in against the side'
+
+
+def test_a_branch_blocked_in_the_preview_is_reported_there(skeleton):
+    # The waist must start to bend before the beam (one backtrack from frame ~151). With no
+    # backtracking allowed in the preview, a preview from frame 100 gives up at once; a
+    # preview that starts after the block leaves the plan as it is without one.
+    beam = box([0.3, -1.0, 1.60], [0.5, 1.0, 1.80])
+    times, frames = walk(skeleton, 260)
+    config = UpperBodyConfig(check_budget=1_000_000, preview_backtracks=0)
+    plans = {}
+    for preview_from in (None, 100, 200):
+        planner, _ = planner_for(skeleton, beam, config=config)
+        plans[preview_from] = planner.plan(times, frames, preview_from=preview_from)
+    assert plans[None].ok and plans[200].ok
+    assert np.array_equal(plans[None].frames, plans[200].frames)
+    stuck = plans[100]
+    assert not stuck.ok and stuck.blocked_frame >= 100
+    assert stuck.reason.startswith('waist blocked at t=') and stuck.reason.endswith(
+        '(in the preview)')
+    with pytest.raises(ValueError, match='preview_from'):
+        planner.plan(times, frames, preview_from=len(times))

@@ -311,7 +311,7 @@ class Actor:
         preview = self._preview(full_times, full)
         plan = None
         if preview is not None:
-            plan = self._upper.plan(*preview)
+            plan = self._upper.plan(*preview, preview_from=k)
         # Blocked within the step's own frames, the plan without the preview meets the same
         # obstacle there: only a block in the preview leaves it a chance.
         if plan is None or (not plan.ok and not 0 <= plan.blocked_frame < k):

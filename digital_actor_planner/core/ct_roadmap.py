@@ -12,6 +12,11 @@ advance fails it grows a new node at distance r; when that does not bring the se
 in time either it backtracks to an earlier state: the latest one from which a node that is
 legal at the blocking frame can be reached in time, else the previous one. The goal is any
 legal configuration at the final frame k.
+
+A search may also be given a preview: frames past the step's own ones, planned so the posture
+can start to change before an obstacle is reached but not required of the step. Backtracking
+that is blocked inside the preview has its own small budget; when it is spent the search gives
+up and reports the block as one in the preview, so the caller can plan the step alone.
 """
 from __future__ import annotations
 
@@ -43,6 +48,10 @@ class SearchResult:
         Backtracking steps taken.
     grown
         Nodes added to the roadmap by this search.
+    preview_backtracks
+        Backtracking steps taken from a block inside the preview.
+    gave_up_in_preview
+        Whether the search stopped because its preview backtracking budget was spent.
 
     """
 
@@ -52,6 +61,8 @@ class SearchResult:
     nodes: int
     backtracks: int
     grown: int
+    preview_backtracks: int = 0
+    gave_up_in_preview: bool = False
 
 
 @dataclass
@@ -182,7 +193,9 @@ class CTRoadmap:
               speed_fraction: float = 0.8, growth_attempts: int = 4,
               node_budget: int = 400, max_backtracks: int = 60,
               deadline: Optional[float] = None,
-              check_budget: Optional[int] = None) -> SearchResult:
+              check_budget: Optional[int] = None,
+              preview_from: Optional[int] = None,
+              preview_backtracks: int = 2) -> SearchResult:
         """Search forward in time from ``start`` at frame 0 to any legal state at frame k-1.
 
         Parameters
@@ -205,6 +218,11 @@ class CTRoadmap:
         check_budget
             Configurations the search may check in ``space`` (None: no limit). A work budget:
             the same inputs give the same result however loaded the machine is.
+        preview_from
+            First frame of the preview (the step's own frame count), or None (no preview).
+        preview_backtracks
+            Backtracking steps the search may take from a block at a frame >= ``preview_from``
+            before it gives up; they also count towards ``max_backtracks``.
 
         Returns
         -------
@@ -224,8 +242,13 @@ class CTRoadmap:
         visited = set()
         jumps = set()
         known = {}
-        nodes = backtracks = grown = 0
+        nodes = backtracks = grown = in_preview = 0
         deepest_blocked = 0
+        gave_up_in_preview = False
+        if preview_from is not None and not 0 < preview_from <= last:
+            raise ValueError(f'preview_from must be in (0, {last}], got {preview_from}')
+        if preview_backtracks < 0:
+            raise ValueError(f'preview_backtracks must be >= 0, got {preview_backtracks}')
         while stack:
             state = stack[-1]
             if state.relay:
@@ -234,7 +257,7 @@ class CTRoadmap:
                 continue
             if state.frame >= last:
                 return SearchResult(True, self._path(space, stack), -1, nodes, backtracks,
-                                    grown)
+                                    grown, in_preview)
             nodes += 1
             if nodes > node_budget or backtracks > max_backtracks or (
                     checks_limit is not None and space.checks > checks_limit) or (
@@ -256,6 +279,13 @@ class CTRoadmap:
             deepest_blocked = max(deepest_blocked, blocked)
             # §5.2: the new node did not bring the search forward in time: backtrack.
             backtracks += 1
+            if preview_from is not None and blocked >= preview_from:
+                # The preview is an aid, not a goal of the step: a search stuck there gives up
+                # early rather than spend the step's budget proving the preview infeasible.
+                in_preview += 1
+                if in_preview > preview_backtracks:
+                    gave_up_in_preview = True
+                    break
             if not self._passable(space, blocked):
                 break
             jump = self._jump_back(space, stack, blocked, speed_fraction, jumps, horizon,
@@ -267,7 +297,8 @@ class CTRoadmap:
                 continue
             stack.pop()
         path = self._path(space, stack) if stack else np.array(space.objective)
-        return SearchResult(False, path, min(deepest_blocked, last), nodes, backtracks, grown)
+        return SearchResult(False, path, min(deepest_blocked, last), nodes, backtracks, grown,
+                            in_preview, gave_up_in_preview)
 
     @staticmethod
     def _objective_free(space: CTSpace, spacing: int) -> np.ndarray:

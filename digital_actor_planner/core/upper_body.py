@@ -111,6 +111,9 @@ class UpperBodyConfig:
         makes plans depend on the machine's load).
     max_backtracks
         Backtracking steps a branch search may take per plan.
+    preview_backtracks
+        Backtracking steps a branch search may take from a block inside the preview (frames
+        past the step's own, see :meth:`UpperBodyPlanner.plan`) before it gives up (>= 0).
     max_roadmap_nodes
         Largest CT-roadmap per branch (initial patterns plus grown nodes).
     hold_frames
@@ -132,6 +135,7 @@ class UpperBodyConfig:
     check_budget: int = 15000
     time_budget: Optional[float] = None
     max_backtracks: int = 40
+    preview_backtracks: int = 1
     max_roadmap_nodes: int = 64
     hold_frames: int = 5
     speed_fraction: float = 0.8
@@ -156,9 +160,11 @@ def validate_upper_body_config(config: UpperBodyConfig) -> UpperBodyConfig:
     for name in ('node_budget', 'check_budget', 'max_roadmap_nodes', 'hold_frames',
                  'growth_attempts'):
         positive(name, getattr(config, name), integer=True)
-    if not (isinstance(config.max_backtracks, (int, np.integer))
-            and not isinstance(config.max_backtracks, bool) and config.max_backtracks >= 0):
-        raise ValueError(f'max_backtracks must be an integer >= 0, got {config.max_backtracks!r}')
+    for name in ('max_backtracks', 'preview_backtracks'):
+        value = getattr(config, name)
+        if not (isinstance(value, (int, np.integer)) and not isinstance(value, bool)
+                and value >= 0):
+            raise ValueError(f'{name} must be an integer >= 0, got {value!r}')
     positive('speed_fraction', config.speed_fraction)
     if config.speed_fraction > 1.0:
         raise ValueError(f'speed_fraction must be <= 1, got {config.speed_fraction!r}')
@@ -219,11 +225,16 @@ def _waist_patterns() -> np.ndarray:
 
 
 def _arm_patterns() -> np.ndarray:
-    """Common arm postures as deviations (pitch, roll, yaw, elbow) from the swing, rad."""
+    """Common arm postures as deviations (pitch, roll, yaw, elbow) from the swing, rad.
+
+    Flexed, raised and abducted arms, and (last) the arm held in against the side, nearly
+    straight: the one posture that does not stick out sideways, for squeezing between two
+    obstacles with the waist turned (Figure 9b) rather than finding it by random growth.
+    """
     return np.array([(0.0, 0.0, 0.0, e) for e in (0.3, 0.6, 0.9, 1.2, 1.6)]
                     + [(0.3, 0.0, 0.0, 0.8), (0.6, 0.0, 0.0, 1.4), (-0.3, 0.0, 0.0, 0.6),
                        (0.0, 0.25, 0.0, 0.0), (0.0, 0.5, 0.0, 0.4), (0.0, 0.0, -0.5, 0.9),
-                       (0.0, 0.2, 0.0, 1.0)])
+                       (0.0, 0.2, 0.0, 1.0), (0.0, -ARM_CLEARANCE_ROLL, 0.0, -0.15)])
 
 
 class UpperBodyPlanner:
@@ -299,8 +310,9 @@ class UpperBodyPlanner:
                              f'is outside the joint limits [{skeleton.lower[upper[column]]}, '
                              f'{skeleton.upper[upper[column]]}]')
 
-    def plan(self, times: np.ndarray, frames: np.ndarray) -> UpperBodyPlan:
-        """Plan the upper body over one step (§5).
+    def plan(self, times: np.ndarray, frames: np.ndarray,
+             preview_from: Optional[int] = None) -> UpperBodyPlan:
+        """Plan the upper body over one step (§5), optionally with a preview after it.
 
         Parameters
         ----------
@@ -309,6 +321,11 @@ class UpperBodyPlanner:
         frames
             (k, 22) configurations, rad or m: root and legs fixed; upper-body columns hold the
             objective O(t) except frame 0, which holds the start (the previous plan's end).
+        preview_from
+            When the frames from this index on are a preview of the pelvis carrying on past
+            the step (a receding-horizon aid, not part of §5's goal), a branch search blocked
+            there backtracks at most ``config.preview_backtracks`` times, then gives up with
+            ``blocked_frame >= preview_from``; None: every frame is the step's own.
 
         Returns
         -------
@@ -320,6 +337,9 @@ class UpperBodyPlanner:
         times = np.asarray(times, dtype=float)
         frames = np.asarray(frames, dtype=float)
         self._check_input(times, frames)
+        if preview_from is not None and not 0 < preview_from < len(times):
+            raise ValueError(f'preview_from must be in (0, {len(times) - 1}], got '
+                             f'{preview_from}')
         config = self.config
         body = TimedBody(self.kinematics, self.shapes, self.environment, frames)
         out = frames.copy()
@@ -362,15 +382,18 @@ class UpperBodyPlanner:
                     speed_fraction=config.speed_fraction,
                     growth_attempts=config.growth_attempts,
                     node_budget=config.node_budget, max_backtracks=config.max_backtracks,
-                    check_budget=config.check_budget,
+                    check_budget=config.check_budget, preview_from=preview_from,
+                    preview_backtracks=config.preview_backtracks,
                     deadline=None if config.time_budget is None
                     else time.perf_counter() + config.time_budget)
                 record.update(nodes=result.nodes, backtracks=result.backtracks,
-                              grown=result.grown, ok=result.ok)
+                              grown=result.grown, ok=result.ok,
+                              preview_backtracks=result.preview_backtracks)
                 path = result.path
                 if not result.ok:
                     ok, blocked_frame = False, result.blocked_frame
-                    reason = f'{name} blocked at t={times[blocked_frame]:.2f} s'
+                    reason = f'{name} blocked at t={times[blocked_frame]:.2f} s' + (
+                        ' (in the preview)' if result.gave_up_in_preview else '')
             if path is not None and record['ok']:
                 path[0] = start
                 out[:, indices] = path
