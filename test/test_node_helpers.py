@@ -346,6 +346,48 @@ def test_environment_markers_are_built_once_per_scene_and_sent_serialized(monkey
     assert housekeeper.environment([ground, box], 'map') != first
 
 
+def test_stream_backup_thread_publishes_the_ticks_a_stalled_stream_thread_misses():
+    """The publishing thread stalls for three periods (as on a core the hypervisor took
+    away); the backup thread on the other core publishes those ticks, each tick once."""
+    if len(os.sched_getaffinity(0)) < 2:
+        pytest.skip('the backup thread needs a second core')
+    from digital_actor_planner.nodes.actor_planner import StreamTicker
+    period, stalled = 0.02, 20
+
+    class Stalling(StreamTicker):
+        def _publish(self, tick, now, backup):
+            if tick == stalled and not backup:
+                time.sleep(3.2 * period)  # woke up for its tick, then lost the core
+            super()._publish(tick, now, backup)
+
+    class Actor:
+        def __init__(self):
+            self.frames = []
+
+        def publish_frame(self, now, skipped):
+            # The tick being published (set under the ticker's lock before the actors are).
+            self.frames.append((ticker._published, skipped, threading.current_thread().name))
+
+    ticker, actor = Stalling(period, priority=1), Actor()
+    ticker.attach(actor)
+    try:
+        deadline = time.monotonic() + 5.0
+        while len(actor.frames) < stalled + 10 and time.monotonic() < deadline:
+            time.sleep(0.05)
+    finally:
+        ticker.detach(actor)
+    ticks = [tick for tick, _, _ in actor.frames]
+    assert ticks == sorted(set(ticks)), 'a tick was published twice or out of order'
+    by_backup = [t for t, (_, _, name) in zip(ticks, actor.frames)
+                 if name == 'joint_state_backup']
+    assert {stalled, stalled + 1, stalled + 2} <= set(by_backup), by_backup
+    assert ticker.backup_publishes == len(by_backup)
+    # Nothing skipped around the stall: the backup kept the stream going.
+    around = [skipped for t, (_, skipped, _) in zip(ticks, actor.frames)
+              if stalled - 2 <= t <= stalled + 4]
+    assert around and not any(around), actor.frames
+
+
 def test_planning_scheduler_plans_the_most_urgent_actor_first_and_skips_resting_ones():
     from digital_actor_planner.nodes.actor_planner import IDLE_RESCAN, PlanningScheduler
     scheduler = PlanningScheduler()

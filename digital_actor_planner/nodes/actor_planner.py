@@ -751,40 +751,81 @@ def real_time(priority: int) -> bool:
 
 
 class StreamTicker(NodesThread):
-    """One thread that publishes the joint_states of every actor attached to it.
+    """One thread that publishes the joint_states of every actor attached to it, and a backup
+    thread on another core that publishes a tick the first one has not reached in time.
 
     Ticks on a monotonic schedule at ``1 / period``; a late tick is published late and the
     ticks it missed are skipped (and counted by each actor), so a stream never bunches up.
     Actors hosted in one process share a ticker: one real-time thread instead of one per actor.
+
+    On a virtual machine a core is now and then taken away for 10-80 ms, and a real-time
+    thread on it cannot run (measured on the 2-core development VM: a bare SCHED_FIFO Python
+    thread waking every 10 ms overslept by more than 10 ms 58 times in 200 s; stalls of the two
+    cores rarely coincide). With two or more usable cores the publishing thread is pinned to
+    one and the backup, ``backup_delay`` s behind the schedule, to another: whichever wakes
+    first for a tick publishes it, under a lock, so each tick is published once.
     """
 
     name = 'joint_state_stream'
+    #: How far behind each tick the backup thread wakes, in periods.
+    BACKUP_DELAY = 0.3
 
     def __init__(self, period: float, priority: int, warn=None):
         super().__init__()
         self.period = float(period)
         self.priority = int(priority)
         self._warn = warn
+        self._tick_lock = threading.Lock()
+        self._published = -1
+        self._start = 0.0
+        self.backup_publishes = 0
 
     def _loop(self) -> None:
         if self.priority > 0 and not real_time(self.priority) and self._warn is not None:
             self._warn('joint_states thread keeps normal scheduling (SCHED_FIFO not '
                        'permitted); set stream_priority 0 to silence this')
-        start = time.monotonic()
+        cores = sorted(os.sched_getaffinity(0))
+        backup = None
+        self._start = time.monotonic()
+        if self.priority > 0 and len(cores) >= 2:
+            os.sched_setaffinity(0, {cores[-1]})  # this thread only
+            backup = threading.Thread(target=self._backup, args=(cores[-2],),
+                                      name='joint_state_backup', daemon=True)
+            backup.start()
+        self._run(0.0)
+        if backup is not None:
+            backup.join(timeout=5.0)
+
+    def _backup(self, core: int) -> None:
+        real_time(self.priority)
+        os.sched_setaffinity(0, {core})
+        self._run(self.BACKUP_DELAY * self.period)
+
+    def _run(self, delay: float) -> None:
+        """Wake ``delay`` s after each tick and publish it unless it has been."""
         tick = 0
         while not self._stop.is_set():
-            due = start + tick * self.period
-            delay = due - time.monotonic()
-            if delay > 0.0:
-                time.sleep(delay)
+            wake = self._start + tick * self.period + delay
+            pause = wake - time.monotonic()
+            if pause > 0.0:
+                time.sleep(pause)
             now = time.monotonic()
-            late_ticks = int((now - due) / self.period)
-            if late_ticks > 0:
-                tick += late_ticks
+            # The latest tick due for this thread (a late wake-up skips the ones it slept over).
+            tick = max(tick, int((now - delay - self._start) / self.period))
+            self._publish(tick, now, delay > 0.0)
             tick += 1
+
+    def _publish(self, tick: int, now: float, backup: bool) -> None:
+        with self._tick_lock:
+            if tick <= self._published:
+                return
+            skipped = tick - self._published - 1 if self._published >= 0 else 0
+            self._published = tick
+            if backup:
+                self.backup_publishes += 1
             for node in self._nodes:
                 try:
-                    node.publish_frame(now, late_ticks)
+                    node.publish_frame(now, skipped)
                 except Exception as error:  # noqa: B902 -- one actor must not stop the others
                     node.get_logger().error(f'joint_states not published: {error!r}',
                                             throttle_duration_sec=2.0)
@@ -1212,6 +1253,7 @@ class ActorPlannerNode(Node):
             'stream_jitter_p99_ms': f'{jitter_p99:.3f}',
             'stream_longest_interval_ms': f'{longest:.2f}',
             'missed_frames': str(self.missed_frames),
+            'stream_backup_ticks': str(self._ticker.backup_publishes),
             'buffer_underruns': str(self.underruns),
             'buffered_ahead_s': f'{self.buffer.end_time - self.playback_time:.3f}',
             'planning_lead_s': f'{self._effective_lead():.3f}',
