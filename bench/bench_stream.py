@@ -171,7 +171,8 @@ def bench_stream(domain: int, courses, duration: float, folder: str) -> None:
         print(f'  node diagnostics: state {last.get("state")}, steps {delta("steps")}, '
               f'planning p50 {last.get("planning_time_p50_ms")} ms p99 '
               f'{last.get("planning_time_p99_ms")} ms, missed {delta("missed_frames")}, '
-              f'underruns {delta("buffer_underruns")}, lead {last.get("planning_lead_s")} s')
+              f'underruns {delta("buffer_underruns")}, ticks by the backup thread '
+              f'{delta("stream_backup_ticks")}, lead {last.get("planning_lead_s")} s')
     finally:
         probe.close()
         process.stop()

@@ -768,7 +768,7 @@ class StreamTicker(NodesThread):
 
     name = 'joint_state_stream'
     #: How far behind each tick the backup thread wakes, in periods.
-    BACKUP_DELAY = 0.3
+    BACKUP_DELAY = 0.15
 
     def __init__(self, period: float, priority: int, warn=None):
         super().__init__()
