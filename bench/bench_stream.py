@@ -149,10 +149,10 @@ def bench_stream(domain: int, courses, duration: float, folder: str) -> None:
         print(f'stream walking {visits} course visits ({", ".join(courses)}) for '
               f'{span:.0f} s: root moving in {100 * moving.mean():.0f} % of frames, '
               f'{len(reloads)} scene reloads' + (f', FAILED: {failed}' if failed else ''))
-        print('  ' + health_line('all frames', stream_health(stamps_of(messages))))
+        stamps = stamps_of(messages)
+        print('  ' + health_line('all frames', stream_health(stamps)))
         # The same without the second after each scene reload (reloading builds and sends the
         # new environment's markers): the stream while the actor walks.
-        stamps = stamps_of(messages)
         times = np.array([t for t, _ in received])
         cuts = [0]
         for at in reloads:

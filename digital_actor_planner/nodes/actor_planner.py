@@ -266,16 +266,16 @@ def _placeholder_point(marker: int, point: int) -> Point:
 
 def _environment_array(drawn, frame_id: str, points_of) -> MarkerArray:
     array = MarkerArray(markers=[Marker(action=Marker.DELETEALL)])
+    array.markers[0].header.frame_id = frame_id
     for number, (index, _) in enumerate(drawn):
         marker = Marker(ns='environment', id=index, type=Marker.TRIANGLE_LIST,
                         action=Marker.ADD)
+        marker.header.frame_id = frame_id
         marker.pose.orientation.w = 1.0
         marker.scale.x = marker.scale.y = marker.scale.z = 1.0
         marker.color = _color(0.62, 0.64, 0.66)
         marker.points = points_of(number)
         array.markers.append(marker)
-    for marker in array.markers:
-        marker.header.frame_id = frame_id
     return array
 
 
@@ -762,7 +762,7 @@ class StreamTicker(NodesThread):
     thread on it cannot run (measured on the 2-core development VM: a bare SCHED_FIFO Python
     thread waking every 10 ms overslept by more than 10 ms 58 times in 200 s; stalls of the two
     cores rarely coincide). With two or more usable cores the publishing thread is pinned to
-    one and the backup, ``backup_delay`` s behind the schedule, to another: whichever wakes
+    one and the backup, ``BACKUP_DELAY`` periods behind the schedule, to another: whichever wakes
     first for a tick publishes it, under a lock, so each tick is published once.
     """
 
@@ -1044,9 +1044,9 @@ class ActorPlannerNode(Node):
                                                reason=f'scene not loaded: {error}')
                 with self._pending_lock:
                     self._pending_start = configuration
+                    self._environment_due = meshes
                 self.meshes, self.scene_path, self.scene_error = meshes, str(parameter.value), ''
                 self._scheduler.wake.set()
-                self._environment_due = meshes
                 self.get_logger().info(f'scene reloaded: {self.scene_path}')
         return SetParametersResult(successful=True)
 
@@ -1164,11 +1164,11 @@ class ActorPlannerNode(Node):
         if self._stop.is_set():
             return
         try:
-            meshes = self._environment_due
+            with self._pending_lock:  # a reload may hand over newer meshes meanwhile
+                meshes, self._environment_due = self._environment_due, None
             if meshes is not None:
-                # Built in this thread, not in the executor's: a large terrain takes ~0.5 s,
-                # which would hold up commands and the reply to the scene change.
-                self._environment_due = None
+                # Built in this thread, not in the executor's, which serves commands and the
+                # reply to the scene change.
                 self.environment_pub.publish(housekeeper.environment(meshes,
                                                                      self.config.frame_id))
             self._publish_markers()
