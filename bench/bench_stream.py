@@ -10,7 +10,11 @@ script), with localhost discovery in ROS_DOMAIN_ID 40-59 by default.
   scene parameter is reloaded between them) while a probe records every joint_states message.
   Jitter is the deviation of the header-stamp interval from the period (the node's publish
   instants); missed frames are the periods the stream carried no frame for (a late frame is
-  jitter). Reported with and without the second after each reload.
+  jitter). Reported with and without the second after each reload. A frame published a period
+  or more late (the node stalled) is stamped at its own tick instead, so stalls show in the
+  node's count of ticks published more than 2 ms late (publication lateness p99 <= 2 ms when
+  that is under 1 % of the ticks) and in the delivery delay, the probe's receipt minus the
+  stamp (which also holds the transport and the probe's own scheduling).
 * Command latency: from publishing a forward command to the first frame whose root moved, and from
   publishing a zero command to the first frame of a still actor; beside a bare rclpy
   publish -> echo -> receive round trip measured in the same run.
@@ -118,13 +122,14 @@ def walk_course(probe: Probe, course: str, until: float, settle: float = 1.0) ->
 def bench_stream(domain: int, courses, duration: float, folder: str) -> None:
     process = NodeProcess(node_command('-p', f'scene:={scene(courses[0])}'), ros_env(domain),
                           log_path=os.path.join(folder, 'stream.log'))
-    probe = Probe(domain)
+    probe = Probe(domain, rviz=False)  # only the stream: a probe busy elsewhere delays it
     probe.joint_states = collections.deque()  # every frame of the run, however long
     try:
         if not probe.wait_for_stream(process, 120.0):
             print('node did not start:\n' + process.output())
             return
         began = time.monotonic()
+        wall_offset = time.time() - time.monotonic()
         probe.spin_until(lambda: probe.diagnostic_values(), 5.0)
         first = probe.diagnostic_values()
         visits, reloads, failed = 0, [], []
@@ -160,8 +165,13 @@ def bench_stream(domain: int, courses, duration: float, folder: str) -> None:
         cuts.append(len(times))
         quiet = [stamps[a:b] for a, b in zip(cuts[::2], cuts[1::2])]
         print('  ' + health_line('without reloads', stream_health(*quiet)))
+        # The probe's receipt on the wall clock (the stamps' clock), minus the stamp.
+        delay = 1e3 * (times + wall_offset - stamps)
+        print(f'  delivery delay (receipt - stamp): p50 {np.percentile(delay, 50):.2f} ms, p99 '
+              f'{np.percentile(delay, 99):.2f} ms, max {delay.max():.1f} ms; frames more than '
+              f'10 ms late {int(np.sum(delay > 10.0))}')
         np.savez(os.path.join(folder, 'stream.npz'), received=times, stamps=stamps,
-                 reloads=np.array(reloads))
+                 reloads=np.array(reloads), wall_offset=wall_offset)
 
         def delta(key):
             try:
@@ -173,6 +183,12 @@ def bench_stream(domain: int, courses, duration: float, folder: str) -> None:
               f'{last.get("planning_time_p99_ms")} ms, missed {delta("missed_frames")}, '
               f'underruns {delta("buffer_underruns")}, ticks by the backup thread '
               f'{delta("stream_backup_ticks")}, lead {last.get("planning_lead_s")} s')
+        ticks = len(stamps)
+        late = delta('stream_late_ticks')
+        share = f' ({100 * late / ticks:.2f} % of {ticks})' if isinstance(late, int) else ''
+        print(f'  node publication: ticks more than 2 ms late {late}{share}, caught up after a '
+              f'stall {delta("stream_caught_up_ticks")}, latest '
+              f'{last.get("stream_lateness_max_ms")} ms')
     finally:
         probe.close()
         process.stop()

@@ -44,7 +44,8 @@ def node_command(*ros_args: str, executable: str = None) -> list:
 class Probe:
     """A test-side rclpy node that talks to one actor_planner (optionally namespaced)."""
 
-    def __init__(self, domain_id: int, namespace: str = '', stamped: bool = True):
+    def __init__(self, domain_id: int, namespace: str = '', stamped: bool = True,
+                 rviz: bool = True):
         import rclpy
         from rclpy.executors import SingleThreadedExecutor
         from rclpy.qos import DurabilityPolicy, QoSProfile
@@ -78,10 +79,11 @@ class Probe:
                                       latched)
         self.cmd_pub = self.node.create_publisher(TwistStamped if stamped else Twist,
                                                   'cmd_vel', 10)
-        # The RViz topics of the node named actor_planner in this namespace: latest of each.
+        # The RViz topics of the node named actor_planner in this namespace: latest of each
+        # (when ``rviz``: a large environment takes the probe ~1 s to take in).
         self.rviz = {}
         for topic, kind in (('environment', MarkerArray), ('markers', MarkerArray),
-                            ('path', Path)):
+                            ('path', Path)) if rviz else ():
             self.node.create_subscription(
                 kind, f'actor_planner/{topic}',
                 lambda msg, topic=topic: self.rviz.__setitem__(topic, msg), latched)
@@ -364,9 +366,12 @@ def test_stream_backup_thread_publishes_the_ticks_a_stalled_stream_thread_misses
         def __init__(self):
             self.frames = []
 
-        def publish_frame(self, now, skipped):
-            # The tick being published (set under the ticker's lock before the actors are).
-            self.frames.append((ticker._published, skipped, threading.current_thread().name))
+        def publish_frame(self, now, skipped, instant=None):
+            # The tick being published (the newest is set under the ticker's lock before the
+            # actors are called; a caught-up one is known by its instant).
+            tick = ticker._published if instant is None else \
+                round((instant - ticker._start) / period)
+            self.frames.append((tick, skipped, threading.current_thread().name))
 
     ticker, actor = Stalling(period, priority=1), Actor()
     ticker.attach(actor)
@@ -386,6 +391,57 @@ def test_stream_backup_thread_publishes_the_ticks_a_stalled_stream_thread_misses
     around = [skipped for t, (_, skipped, _) in zip(ticks, actor.frames)
               if stalled - 2 <= t <= stalled + 4]
     assert around and not any(around), actor.frames
+
+
+def test_stream_catches_up_the_ticks_a_stall_of_every_thread_slept_over():
+    """With no thread to take over (one core, or both stalled), a thread waking 4.5 periods late
+    publishes every tick it slept over at once, each showing its own instant, then the current
+    one: no frame is lost. A stall longer than ``CATCH_UP`` ticks skips the oldest ones."""
+    from digital_actor_planner.nodes.actor_planner import StreamTicker
+    period, stalled, long_stall = 0.02, 10, 30
+
+    class Stalling(StreamTicker):
+        CATCH_UP = 5
+
+        def _publish(self, tick, now, backup):
+            if tick in (stalled, long_stall):
+                time.sleep((4.5 if tick == stalled else 8.5) * period)
+                now = time.monotonic()
+            super()._publish(tick, now, backup)
+
+    class Actor:
+        def __init__(self):
+            self.frames = []
+
+        def publish_frame(self, now, skipped, instant=None):
+            # A frame without its own instant is the newest tick (set before the actors run).
+            tick = ticker._published if instant is None else \
+                round((instant - ticker._start) / period)
+            self.frames.append((now, skipped, instant, tick))
+
+    ticker, actor = Stalling(period, priority=0), Actor()
+    ticker.attach(actor)
+    try:
+        deadline = time.monotonic() + 5.0
+        while len(actor.frames) < long_stall + 12 and time.monotonic() < deadline:
+            time.sleep(0.05)
+    finally:
+        ticker.detach(actor)
+    ticks = [tick for _, _, _, tick in actor.frames]
+    assert ticks == sorted(set(ticks)), 'a tick published twice or out of order'
+    # The first stall: ticks 10 .. 13 slept over, all published, each showing its instant.
+    assert ticks[:long_stall] == list(range(long_stall)), ticks
+    for now, _, instant, tick in actor.frames:
+        if stalled <= tick < stalled + 4:
+            assert instant == pytest.approx(ticker._start + tick * period)
+            assert now - instant >= period  # published late, not lost
+    burst = [now for now, _, _, tick in actor.frames if stalled + 1 <= tick <= stalled + 4]
+    assert max(burst) - min(burst) < 0.5 * period  # caught up at once
+    # The long stall: 8.5 periods late with CATCH_UP 5, so the 2 oldest ticks are skipped.
+    assert sorted(set(range(ticks[-1] + 1)) - set(ticks)) == [long_stall + 1, long_stall + 2]
+    assert sum(skipped for _, skipped, _, _ in actor.frames) == 2
+    assert ticker.caught_up == 3 + 5  # 11 .. 13 with 14; 33 .. 37 with 38
+    assert ticker.late_ticks >= 12 and ticker.max_lateness >= 8 * period
 
 
 def test_planning_scheduler_plans_the_most_urgent_actor_first_and_skips_resting_ones():

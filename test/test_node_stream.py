@@ -6,6 +6,7 @@ motion it needs). CI-proof: rclpy only, localhost discovery, own ROS_DOMAIN_ID.
 """
 import math
 import os
+import signal
 import time
 
 import numpy as np
@@ -85,6 +86,33 @@ def test_forward_command_walks_the_stairs_at_a_steady_100_hz(actor):
     assert advance > 1.5, f'walked only {advance:.2f} m forward in 10 s at 0.5 m/s'
     values = probe.diagnostic_values()
     assert values['state'] in ('walking', 'stuck'), values
+
+
+def test_a_frozen_node_still_delivers_every_frame_late_not_lost(actor):
+    """The node process is frozen for 80 ms (SIGSTOP: as when the hypervisor takes every core
+    away). The subscriber still gets one frame per 10 ms tick, stamped on the tick grid and
+    moving smoothly; the frames of the freeze arrive late, together."""
+    process, probe = actor
+    probe.drive(0.5, 0.0, 1.5)
+    os.kill(process.pid, signal.SIGSTOP)
+    frozen = time.monotonic()
+    try:
+        probe.spin(0.08)  # the probe keeps listening
+    finally:
+        os.kill(process.pid, signal.SIGCONT)
+    probe.drive(0.5, 0.0, 1.0)
+    frames = [(t, m) for t, m in list(probe.joint_states) if frozen - 0.5 <= t <= frozen + 0.8]
+    received = np.array([t for t, _ in frames])
+    stamps = np.array([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for _, m in frames])
+    assert np.diff(received).max() > 0.05, 'the freeze did not hold the stream back'
+    ticks = int(round((stamps[-1] - stamps[0]) / 0.01)) + 1
+    assert len(stamps) == ticks, f'{ticks - len(stamps)} frames lost in the freeze'
+    assert np.all(np.diff(stamps) > 0.0) and np.diff(stamps).max() < 0.02
+    x = np.array([m.position[ROOT_X] for _, m in frames])
+    assert np.abs(np.diff(x)).max() < 0.02, 'the motion jumped across the freeze'
+    assert probe.spin_until(
+        lambda: int(probe.diagnostic_values().get('stream_caught_up_ticks', 0)) >= 5, 5.0), \
+        probe.diagnostic_values()
 
 
 def _triangles(environment) -> np.ndarray:
@@ -214,7 +242,8 @@ def test_diagnostics_report_state_planning_time_and_stream_health(actor):
     values = probe.diagnostic_values()
     for key in ('state', 'reason', 'planning_time_last_ms', 'planning_time_p50_ms',
                 'planning_time_p99_ms', 'publish_rate_hz', 'missed_frames', 'scene',
-                'stream_jitter_p99_ms', 'stream_longest_interval_ms'):
+                'stream_jitter_p99_ms', 'stream_longest_interval_ms', 'stream_late_ticks',
+                'stream_caught_up_ticks', 'stream_lateness_max_ms'):
         assert key in values, key
     assert float(values['planning_time_p99_ms']) > 0.0
     # The node's own account of its publishing instants over the last 2 s, in ms.

@@ -10,7 +10,8 @@ Planning never stalls the stream:
   share a planning process share its planning thread (:class:`PlanningScheduler`), and an actor
   standing at rest (or stuck) with an unchanged command is not planned for at all;
 * a publishing thread ticks on a monotonic schedule at ``publish_rate`` and publishes the frame
-  for "now", interpolated from the buffer; if planning is late it holds the last frame;
+  for "now", interpolated from the buffer; if planning is late it holds the last frame; ticks
+  it slept over (the machine took its core away) are published late, not dropped;
 * the executor thread handles cmd_vel, parameter changes, markers and diagnostics.
 """
 from __future__ import annotations
@@ -754,9 +755,14 @@ class StreamTicker(NodesThread):
     """One thread that publishes the joint_states of every actor attached to it, and a backup
     thread on another core that publishes a tick the first one has not reached in time.
 
-    Ticks on a monotonic schedule at ``1 / period``; a late tick is published late and the
-    ticks it missed are skipped (and counted by each actor), so a stream never bunches up.
-    Actors hosted in one process share a ticker: one real-time thread instead of one per actor.
+    Ticks on a monotonic schedule at ``1 / period``. A tick published late is late (jitter), not
+    lost: a thread that wakes after ticks it slept over publishes each of them at once, each
+    frame sampled and stamped at its own tick's instant, then the current tick. A subscriber
+    gets every frame, with the stamps and the motion of a regular stream, and a stall shows as
+    frames arriving late (counted in ``late_ticks``). Up to ``CATCH_UP`` ticks are caught up;
+    older ones are skipped and counted as missed by each actor (a motion that stale is of no
+    use to a controller). Actors hosted in one process share a ticker: one real-time thread
+    instead of one per actor.
 
     On a virtual machine a core is now and then taken away for 10-80 ms, and a real-time
     thread on it cannot run (measured on the 2-core development VM: a bare SCHED_FIFO Python
@@ -769,6 +775,10 @@ class StreamTicker(NodesThread):
     name = 'joint_state_stream'
     #: How far behind each tick the backup thread wakes, in periods.
     BACKUP_DELAY = 0.15
+    #: How many ticks a thread waking late publishes at most before the current one.
+    CATCH_UP = 20
+    #: Ticks published later than this (s) after their instant are counted as late.
+    LATE = 0.002
 
     def __init__(self, period: float, priority: int, warn=None):
         super().__init__()
@@ -779,6 +789,11 @@ class StreamTicker(NodesThread):
         self._published = -1
         self._start = 0.0
         self.backup_publishes = 0
+        #: Ticks published by a thread that woke after their successor's instant.
+        self.caught_up = 0
+        #: Ticks published more than ``LATE`` s after their instant, and the most late (s).
+        self.late_ticks = 0
+        self.max_lateness = 0.0
 
     def _loop(self) -> None:
         if self.priority > 0 and not real_time(self.priority) and self._warn is not None:
@@ -810,25 +825,39 @@ class StreamTicker(NodesThread):
             if pause > 0.0:
                 time.sleep(pause)
             now = time.monotonic()
-            # The latest tick due for this thread (a late wake-up skips the ones it slept over).
+            # The latest tick due for this thread (the ones it slept over are caught up).
             tick = max(tick, int((now - delay - self._start) / self.period))
             self._publish(tick, now, delay > 0.0)
             tick += 1
 
     def _publish(self, tick: int, now: float, backup: bool) -> None:
+        """Publish ``tick`` at monotonic time ``now``, and the ticks before it not published."""
         with self._tick_lock:
             if tick <= self._published:
                 return
-            skipped = tick - self._published - 1 if self._published >= 0 else 0
+            first = self._published + 1 if self._published >= 0 else tick
+            skipped = max(0, tick - self.CATCH_UP - first)
+            first += skipped
             self._published = tick
             if backup:
                 self.backup_publishes += 1
-            for node in self._nodes:
-                try:
-                    node.publish_frame(now, skipped)
-                except Exception as error:  # noqa: B902 -- one actor must not stop the others
-                    node.get_logger().error(f'joint_states not published: {error!r}',
-                                            throttle_duration_sec=2.0)
+            for late in range(first, tick + 1):
+                instant = self._start + late * self.period
+                lateness = now - instant
+                if lateness > self.LATE:
+                    self.late_ticks += 1
+                self.max_lateness = max(self.max_lateness, lateness)
+                if late < tick:
+                    self.caught_up += 1
+                for node in self._nodes:
+                    try:
+                        # A frame shows the time it is published at, unless that is past the
+                        # next tick's instant: then it shows its own tick's.
+                        node.publish_frame(now, skipped if late == first else 0,
+                                           instant if lateness >= self.period else None)
+                    except Exception as error:  # noqa: B902 -- one actor must not stop others
+                        node.get_logger().error(f'joint_states not published: {error!r}',
+                                                throttle_duration_sec=2.0)
 
 
 class SharedThreads:
@@ -922,6 +951,7 @@ class ActorPlannerNode(Node):
         self.playback_time = 0.0
         self.underruns = 0
         self.missed_frames = 0
+        self._last_instant = -math.inf
         self.tick_times = collections.deque(maxlen=max(4, int(2 * self.config.publish_rate)))
         self.committed_footsteps = collections.deque(maxlen=PAST_FOOTSTEPS)
         self._latest_block = None
@@ -1116,23 +1146,31 @@ class ActorPlannerNode(Node):
         slowest = max(self._responses, default=0.0)
         return min(MAX_LEAD, max(self.planning_lead, LEAD_SAFETY * slowest))
 
-    def publish_frame(self, now: float, late_ticks: int = 0) -> None:
-        """Publish the frame for monotonic time ``now`` (called by the stream ticker).
+    def publish_frame(self, now: float, late_ticks: int = 0,
+                      instant: Optional[float] = None) -> None:
+        """Publish the frame for monotonic time ``instant`` (default ``now``) at ``now``
+        (called by the stream ticker).
 
-        ``late_ticks`` ticks were skipped before this one because the tick came late.
+        ``late_ticks`` ticks were skipped before this one because the tick came too late to
+        catch them up. A frame published a period or more after its tick (``instant``) shows
+        the motion at ``instant`` and is stamped with it.
         """
         if self._stop.is_set():
             return
         self.missed_frames += late_ticks
+        # Never back in time: a backup thread's tick may have been published after the next
+        # tick's instant.
+        shown = now if instant is None else max(instant, self._last_instant)
+        self._last_instant = shown
         if self._clock_zero is None:
-            self._clock_zero = now
-        play = now - self._clock_zero
+            self._clock_zero = shown
+        play = max(0.0, shown - self._clock_zero)
         end = self.buffer.end_time
         if play > end:
             # Holding the last frame on purpose (at rest, or stuck) is not running dry.
             if play - end > self.period and not self._at_rest:
                 self.underruns += 1
-            self._clock_zero = now - end
+            self._clock_zero = shown - end
             play = end
         self.playback_time = play
         if end - play <= self._lead and self._holding_for is None:
@@ -1145,7 +1183,7 @@ class ActorPlannerNode(Node):
         if clock.ros_time_is_active:  # use_sim_time: the stamp comes from /clock
             msg.header.stamp = clock.now().to_msg()
         else:  # ROS time is system time; this is about 10 us cheaper per frame
-            nanoseconds = time.time_ns()
+            nanoseconds = time.time_ns() - int(1e9 * (now - shown))
             msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(nanoseconds, 1_000_000_000)
         # array('d') is taken by the message setters without a per-element type check.
         msg.position = array.array('d', q.tobytes())
@@ -1254,6 +1292,9 @@ class ActorPlannerNode(Node):
             'stream_longest_interval_ms': f'{longest:.2f}',
             'missed_frames': str(self.missed_frames),
             'stream_backup_ticks': str(self._ticker.backup_publishes),
+            'stream_caught_up_ticks': str(self._ticker.caught_up),
+            'stream_late_ticks': str(self._ticker.late_ticks),
+            'stream_lateness_max_ms': f'{1e3 * self._ticker.max_lateness:.2f}',
             'buffer_underruns': str(self.underruns),
             'buffered_ahead_s': f'{self.buffer.end_time - self.playback_time:.3f}',
             'planning_lead_s': f'{self._effective_lead():.3f}',
