@@ -444,10 +444,13 @@ class WalkGenerator:
                                           swing_profile)
         # The swing leg's IK of the last pass, when its inputs are final (the pass converged).
         swing_solution = None
+        # The parts of the pelvis height bound that do not change between passes (a minimum
+        # of three is the same in any order).
+        swing_reach = np.sqrt(np.maximum(r * r - forward * forward, 0.0))
+        z_bound = np.minimum(wanted_z, stance_bound)
         for _ in range(5):
             swing_z, lift = self._swing_heights(bezier, foot_w, landing, swing_pitch, footprint)
-            swing_bound = swing_z + np.sqrt(np.maximum(r * r - forward * forward, 0.0))
-            z = np.minimum(wanted_z, np.minimum(stance_bound, swing_bound))
+            z = np.minimum(z_bound, swing_z + swing_reach)
             hip = _points(swing_hip_xy, z)
             ankle = _points(swing_xy, swing_z)
             solution = leg_inverse_kinematics(leg, hip, ankle, plane_yaw, yaw, swing_pitch)
@@ -467,16 +470,22 @@ class WalkGenerator:
         pelvis[:, 2] = z
         pelvis[:, 3] = yaw
         frames[:, self._root] = pelvis
-        for side, hip_xy, ankle_xy, ankle_z, plane, pitch in (
-                (stance_side, stance_hip_xy, np.broadcast_to(foot_s.xy, (k, 2)),
-                 np.full(k, foot_s.z), np.full(k, foot_s.yaw), np.full(k, foot_s.pitch)),
-                (swing_side, swing_hip_xy, swing_xy, swing_z, plane_yaw, swing_pitch)):
+        # The stance ankle stays where it is: one row repeated (no broadcast_to, which costs
+        # more than the fill).
+        stance_ankle = np.empty((k, 3))
+        stance_ankle[:, :2] = foot_s.xy
+        stance_ankle[:, 2] = foot_s.z
+        for side, hip_xy, ankle, plane, pitch in (
+                (stance_side, stance_hip_xy, stance_ankle, np.full(k, foot_s.yaw),
+                 np.full(k, foot_s.pitch)),
+                (swing_side, swing_hip_xy, None, plane_yaw, swing_pitch)):
             if side == swing_side and swing_solution is not None:
                 # The same hip, ankle, plane and pitch as the converged pass: same answer.
                 hip, (joints, lateral, reach) = swing_solution
             else:
                 hip = _points(hip_xy, z)
-                ankle = _points(ankle_xy, ankle_z)
+                if ankle is None:
+                    ankle = _points(swing_xy, swing_z)
                 joints, lateral, reach = leg_inverse_kinematics(leg, hip, ankle, plane, yaw,
                                                                 pitch)
             if side == stance_side and np.any(joints[:, 3] > self._leg_upper[side][3] - 0.03):
