@@ -332,16 +332,13 @@ class BodyCollision:
             raise ValueError(f'frames must have shape (k, {len(self.skeleton.joint_names)}), '
                              f'got {frames.shape}')
         key = None if links is None else tuple(links)
-        chosen_names = self._broad_phase_sets.get(key)
-        if chosen_names is None:
+        chosen = self._broad_phase_sets.get(key)
+        if chosen is None:
             chosen = tuple(s for _, shapes in self._shapes_of(links) for s in shapes)
-            chosen_names = (chosen, frozenset(self.shapes[s].link for s in chosen))
-            self._broad_phase_sets[key] = chosen_names
-        chosen, names = chosen_names
+            self._broad_phase_sets[key] = chosen
         if not chosen or frames.shape[0] == 0:
             return -1, []
-        transforms = self.skeleton.shape_transforms(
-            self.skeleton.forward_kinematics(frames, links=names), shapes=chosen)
+        transforms = self.skeleton.shape_transforms_at(frames, chosen)
         centres = transforms[..., :3, 3]
         extent = self._aabb_half_extents(chosen, transforms[..., :3, :3])
         bottom = centres[..., 2] - extent[..., 2]
