@@ -253,7 +253,9 @@ class FootstepPlanner:
         cfg, leg = self.config, self.leg
         s = np.asarray(s, dtype=float)
         count = s.shape[0]
-        side = np.broadcast_to(np.asarray(side, dtype=int), s.shape)[:, None]
+        side = np.asarray(side, dtype=int)
+        # One side for all broadcasts as it is (broadcast_to costs more than the gathers).
+        side = side[:, None] if side.ndim else side
         i0 = np.floor((s - leg.heel - profile.s0) / profile.ds).astype(int)
         i1 = np.ceil((s + leg.toe - profile.s0) / profile.ds).astype(int)
         inside = (i0 >= 0) & (i1 < profile.samples)
