@@ -585,6 +585,7 @@ class FootstepPlanner:
         if state is None:
             return None
         effort, s, height_before, length_before, cumulative = state
+        w_length, w_height, w_pitch, w_smooth, span, up_range, pitch_range = self._effort_terms
         for i in range(start, len(config)):
             j = config[i]
             length = lengths[j]
@@ -616,8 +617,12 @@ class FootstepPlanner:
             if not clear:
                 prefixes[key] = None
                 return None
-            effort += self._step_effort(length, rise, memo.pitch[i][cumulative], length_before,
-                                        s_init)
+            # _step_effort written out (the same terms in the same order): it runs for every
+            # footstep the search visits.
+            effort += (w_length * ((length - s_init) / span) ** 2
+                       + w_height * (rise / up_range) ** 2
+                       + w_pitch * (memo.pitch[i][cumulative] / pitch_range) ** 2
+                       + w_smooth * ((length - length_before) / span) ** 2)
             prefixes[key] = (effort, s, hold_height, length, cumulative)
             height_before, length_before = hold_height, length
         return effort
