@@ -210,6 +210,9 @@ class FootstepPlanner:
                             + config.step_increment * np.arange(counts[i]) for i in range(n)]),
             [int(b) for b in np.cumsum([0] + counts)])
         self._lengths = config.lengths()
+        # (profile, stance and swing feet, _Search) of the last plan: its foothold tables and
+        # swing tests, reused by another attempt at the same step (see plan).
+        self._last_tables = None
         # Weights and ranges of the effort terms (see _step_effort), as plain floats.
         self._effort_terms = (
             float(config.weight_length), float(config.weight_height),
@@ -346,7 +349,17 @@ class FootstepPlanner:
         if len(q) != n or any(not 0 <= j <= m for j in q):
             raise ValueError(f'start configuration {q} is not {n} indices in [0, {m}]')
         sides = np.array([(1 - stance_side) if i % 2 == 0 else stance_side for i in range(n)])
-        memo = self._search_tables(profile, sides, stance_s)
+        # Another attempt at the same step (the walk generator could not realise the last
+        # s_1) reads the same footholds and swings: its tables are reused, the search is not.
+        key = (stance_side, stance_s, stance_height, swing_s, swing_height)
+        if self._last_tables is not None and self._last_tables[0] is profile \
+                and self._last_tables[1] == key:
+            last = self._last_tables[2]
+            memo = _Search(ok=last.ok, height=last.height, pitch=last.pitch,
+                           obstacle=last.obstacle, swings=last.swings)
+        else:
+            memo = self._search_tables(profile, sides, stance_s)
+            self._last_tables = (profile, key, memo)
         length_list, side_list = lengths.tolist(), sides.tolist()
         banned = set(int(b) for b in banned_first)
         banned_lengths = set(int(j) for j in np.flatnonzero(lengths > max_length + 1e-9))
