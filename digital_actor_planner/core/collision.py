@@ -346,8 +346,9 @@ class BodyCollision:
             # A shape entirely above the environment's height bound over its footprint cannot
             # touch it (most shapes, and a foot resting on level ground): one lookup each. Only
             # the others go through the ground map and, if still suspect, to FCL.
+            half_width = np.maximum(extent[..., 0], extent[..., 1])
             tops = self.environment.top_height_near(centres[..., :2].reshape(-1, 2),
-                                                    np.max(extent[..., :2], axis=-1).ravel())
+                                                    half_width.ravel())
             flat_bottom = bottom.ravel()
             suspect = ~(flat_bottom > tops)
             rest = np.flatnonzero(suspect)
@@ -455,7 +456,7 @@ class BodyCollision:
             out[:, columns] = np.einsum('kcij,cj->kci', np.abs(rotations[:, columns]), halves)
         if 'cylinder' in groups:
             columns, halves = groups['cylinder']
-            axis = np.abs(rotations[:, columns][..., 2])
+            axis = np.abs(rotations[..., 2][:, columns])
             out[:, columns] = (halves[:, 0, None] * np.sqrt(
                 np.minimum(np.maximum(1.0 - axis * axis, 0.0), 1.0))
                 + halves[:, 1, None] * axis)
