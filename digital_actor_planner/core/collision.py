@@ -23,6 +23,14 @@ _IDENTITY = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
 _FOOTPRINT_CORNERS = np.array([[0, 0], [1, 1], [1, -1], [-1, 1], [-1, -1]], dtype=float)
 
 
+def _last_axis_min(values: np.ndarray) -> np.ndarray:
+    """Minimum over a short last axis, NaN where any value is NaN (like ``np.min``)."""
+    out = values[..., 0]
+    for i in range(1, values.shape[-1]):
+        out = np.minimum(out, values[..., i])
+    return out
+
+
 def _matmul(a: Sequence[float], b: Sequence[float]) -> Tuple[float, ...]:
     """Product of two row-major 3x3 matrices held as 9 floats."""
     return (a[0] * b[0] + a[1] * b[3] + a[2] * b[6], a[0] * b[1] + a[1] * b[4] + a[2] * b[7],
@@ -430,8 +438,12 @@ class BodyCollision:
         room = room.reshape(points.shape[:-1])
         with np.errstate(invalid='ignore'):
             # NaN ground (no surface, or inside a solid) leaves a shape suspect.
-            bottom_clear = np.min(bottom[..., None] - ground, axis=-1) > margin
-            ceiling_clear = np.min(ground + room, axis=-1) > top + margin
+            # Minima over the points written out (a reduction over a short last axis costs
+            # more); NaN propagates the same way.
+            below = bottom[..., None] - ground
+            above = ground + room
+            bottom_clear = _last_axis_min(below) > margin
+            ceiling_clear = _last_axis_min(above) > top + margin
         return ~(bottom_clear & ceiling_clear)
 
     def _aabb_half_extents(self, shapes: Sequence[int], rotations: np.ndarray) -> np.ndarray:

@@ -297,7 +297,8 @@ class FootstepPlanner:
         # there is nothing to ask (a True border column on each side).
         padded = np.ones((count, span.size + 2), dtype=bool)
         padded[:, 1:-1] = supported | ~mask
-        around = np.all(padded[np.arange(count)[:, None], ankle[:, None] + _AROUND], axis=1)
+        near = padded[np.arange(count)[:, None], ankle[:, None] + _AROUND]
+        around = near[:, 0] & near[:, 1] & near[:, 2]
         fraction = np.sum(supported, axis=1) / width
         edge = usable & steady & ~flat & around & (fraction >= cfg.min_support_fraction)
         ok = flat | edge

@@ -416,7 +416,9 @@ class WalkGenerator:
         direction = np.empty((k, 2))
         direction[:, 0] = np.cos(plane_yaw)
         direction[:, 1] = np.sin(plane_yaw)
-        forward = np.sum((wanted_xy - swing_hip_xy) * direction, axis=-1)
+        # A two-term dot product written out (a reduction over an axis of 2 is slow).
+        reach_xy = wanted_xy - swing_hip_xy
+        forward = reach_xy[:, 0] * direction[:, 0] + reach_xy[:, 1] * direction[:, 1]
         swing_xy = swing_hip_xy + forward[:, None] * direction
         # The sole levels out early in the swing (after a heel-off) and takes the landing
         # pitch late, so it is flat while it travels over the ground.
