@@ -149,7 +149,7 @@ def standing_stance(skeleton: Skeleton, x: float, y: float, yaw: float, sole: fl
 
 def leg_inverse_kinematics(leg: LegGeometry, hip: np.ndarray, ankle: np.ndarray,
                            plane_yaw: np.ndarray, pelvis_yaw: np.ndarray,
-                           foot_pitch: np.ndarray):
+                           foot_pitch: np.ndarray, plane_direction=None):
     """Sagittal-plane IK of one leg for k frames (§4: legs move in their sagittal planes).
 
     Parameters
@@ -162,6 +162,8 @@ def leg_inverse_kinematics(leg: LegGeometry, hip: np.ndarray, ankle: np.ndarray,
         (k,) pelvis yaw, rad.
     foot_pitch
         (k,) sole pitch, rad, toes up positive.
+    plane_direction
+        Optional (cos, sin) of ``plane_yaw``, each (k,), when the caller has them already.
 
     Returns
     -------
@@ -173,7 +175,10 @@ def leg_inverse_kinematics(leg: LegGeometry, hip: np.ndarray, ankle: np.ndarray,
     # Few frames per call and many calls: minimum/maximum instead of clip and no stacking
     # keep the NumPy call overhead down (the values are the same).
     v = ankle - hip
-    cos_yaw, sin_yaw = np.cos(plane_yaw), np.sin(plane_yaw)
+    if plane_direction is None:
+        cos_yaw, sin_yaw = np.cos(plane_yaw), np.sin(plane_yaw)
+    else:
+        cos_yaw, sin_yaw = plane_direction
     forward = v[:, 0] * cos_yaw + v[:, 1] * sin_yaw
     lateral = v[:, 0] * -sin_yaw + v[:, 1] * cos_yaw
     down = -v[:, 2]
@@ -393,8 +398,14 @@ class WalkGenerator:
         yaw = yaw0 + (yaw1 - yaw0) * timing.turn
         lam = lam0 + (lam1 - lam0) * progress
         stance_hip_xy = foot_s.xy + lam[:, None] * d_s
-        pelvis_xy = stance_hip_xy - _lateral(yaw, w_s)
-        swing_hip_xy = pelvis_xy + _lateral(yaw, w_w)
+        # _lateral(yaw, w_s) and _lateral(yaw, w_w) from one sine and cosine of the yaw.
+        sin_yaw, cos_yaw = np.sin(yaw), np.cos(yaw)
+        pelvis_xy = np.empty((k, 2))
+        pelvis_xy[:, 0] = stance_hip_xy[:, 0] - -sin_yaw * w_s
+        pelvis_xy[:, 1] = stance_hip_xy[:, 1] - cos_yaw * w_s
+        swing_hip_xy = np.empty((k, 2))
+        swing_hip_xy[:, 0] = pelvis_xy[:, 0] + -sin_yaw * w_w
+        swing_hip_xy[:, 1] = pelvis_xy[:, 1] + cos_yaw * w_w
 
         # Touchdown: the landing ankle lies in the swing hip's plane at the end of the step.
         d_l = np.array([np.cos(landing_yaw), np.sin(landing_yaw)])
@@ -416,6 +427,8 @@ class WalkGenerator:
         direction = np.empty((k, 2))
         direction[:, 0] = np.cos(plane_yaw)
         direction[:, 1] = np.sin(plane_yaw)
+        # The swing leg's IK passes reuse them.
+        plane_direction = (direction[:, 0], direction[:, 1])
         # A two-term dot product written out (a reduction over an axis of 2 is slow).
         reach_xy = wanted_xy - swing_hip_xy
         forward = reach_xy[:, 0] * direction[:, 0] + reach_xy[:, 1] * direction[:, 1]
@@ -455,7 +468,8 @@ class WalkGenerator:
             z = np.minimum(z_bound, swing_z + swing_reach)
             hip = _points(swing_hip_xy, z)
             ankle = _points(swing_xy, swing_z)
-            solution = leg_inverse_kinematics(leg, hip, ankle, plane_yaw, yaw, swing_pitch)
+            solution = leg_inverse_kinematics(leg, hip, ankle, plane_yaw, yaw, swing_pitch,
+                                              plane_direction)
             joints = solution[0]
             correction = (np.minimum(np.maximum(joints[:, 3], ankle_low), ankle_high)
                           - joints[:, 3]) * fade
@@ -593,7 +607,8 @@ class WalkGenerator:
         slack = 0.015 * (1.0 - ramp)
         sampled = ((1 - b) ** 3, 3 * b * (1 - b) ** 2, 3 * b * b * (1 - b), b ** 3)
         frames = ((1 - tau) ** 3, 3 * tau * (1 - tau) ** 2, 3 * tau * tau * (1 - tau), tau ** 3)
-        return b, ramp, slack, sampled, frames
+        # The clearance the sole keeps at each sample (full away from lift-off and touchdown).
+        return b, self.config.swing_clearance * ramp, slack, sampled, frames
 
     def _swing_heights(self, tau, lift_foot: FootPose, landing: FootPose, swing_pitch,
                        footprint):
@@ -607,12 +622,12 @@ class WalkGenerator:
         """
         cfg, leg = self.config, self.leg
         z0, z1 = lift_foot.z, landing.z
-        samples, along, tops, (b, ramp, slack, sampled, frames) = footprint
+        samples, along, tops, (b, clearance, slack, sampled, frames) = footprint
         # Ground relative to a sole pitched like the foot: what the ankle must stay above.
-        tops = tops - along[None, :, None] * np.sin(swing_pitch[samples])[:, None, None]
+        pitch = swing_pitch[samples]
+        tops = tops - along[None, :, None] * np.sin(pitch)[:, None, None]
         ground = np.max(tops.reshape(len(samples), -1), axis=1)
-        need = (ground + leg.ankle_height * np.cos(swing_pitch[samples])
-                + cfg.swing_clearance * ramp)
+        need = ground + leg.ankle_height * np.cos(pitch) + clearance
         basis_0, basis_1, basis_2, basis_3 = sampled
         # Off a heel-off the toe is on the ground: lift more briskly so it does not scuff.
         h1 = cfg.swing_lift * (2.0 if lift_foot.pitch < -0.05 else 1.0) + max(0.0, z1 - z0)
