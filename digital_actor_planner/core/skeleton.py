@@ -312,6 +312,7 @@ class Skeleton:
         self._shape_layouts = {}
         # Compact chain, link rows and origins per tuple of shape indices (shape_transforms_at).
         self._shape_chains = {}
+        self._branches = {}
         self._chain_plan = tuple(
             (self.link_index[j.parent], self.link_index[j.child], j.origin,
              self.index.get(j.name, -1), j.kind, j.axis) for j in order)
@@ -378,6 +379,15 @@ class Skeleton:
 
         ``name`` is 'root', 'waist', 'left_arm', 'right_arm', 'left_leg' or 'right_leg'.
         """
+        # Built once per name (the motion patterns ask for them every step); a copy each time
+        # so a caller may change its own.
+        cached = self._branches.get(name)
+        if cached is None:
+            cached = self._branch(name)
+            self._branches[name] = cached
+        return cached.copy()
+
+    def _branch(self, name: str) -> np.ndarray:
         if name == 'root':
             return self.indices(*ROOT_JOINTS)
         if name == 'waist':
