@@ -155,6 +155,7 @@ class Actor:
         self._path_steps = np.arange(24.0)
         self._lower_body = np.concatenate([skeleton.branch(b) for b in
                                            ('root', 'left_leg', 'right_leg')])
+        self._lower_velocity_limit = skeleton.velocity_limit[self._lower_body]
         if upper_body_planner is None and config.plan_upper_body:
             from .upper_body import UpperBodyPlanner
             from .upper_body import UpperBodyConfig
@@ -284,8 +285,8 @@ class Actor:
     def _commit(self, status: str, reason: str, times: np.ndarray, frames: np.ndarray,
                 stance: Stance, footsteps: np.ndarray, path: np.ndarray, started: float,
                 category: str) -> StepBlock:
-        previous = np.vstack([self._configuration[None, :], frames])
-        velocities = np.diff(previous, axis=0) * self.config.frame_rate
+        previous = np.concatenate([self._configuration[None, :], frames])
+        velocities = (previous[1:] - previous[:-1]) * self.config.frame_rate
         absolute = self._time + times
         self._configuration = frames[-1].copy()
         self._stance = stance
@@ -450,8 +451,9 @@ class Actor:
             motion = self._walk.step(stance, landing_xy, landing_yaw, sole, pitch, target,
                                      duration, self._obstacles, to_rest=to_rest)
             lower = self._lower_body
-            frames = np.vstack([self._configuration[None, lower], motion.frames[:, lower]])
-            speed = np.abs(np.diff(frames, axis=0)) * rate / self.skeleton.velocity_limit[lower]
+            frames = np.concatenate([self._configuration[None, lower], motion.frames[:, lower]])
+            # np.diff without its wrapper: the same differences.
+            speed = np.abs(frames[1:] - frames[:-1]) * rate / self._lower_velocity_limit
             ratio = float(np.max(speed))
             if ratio <= 0.95:
                 return motion
