@@ -74,9 +74,10 @@ class PredictedPath:
         s = np.asarray(s, dtype=float)
         lateral = np.asarray(lateral, dtype=float)
         x, y, _, sin, cos = self._points(s)
-        out = np.empty(np.broadcast_shapes(s.shape, lateral.shape) + (2,))
         # The track's normal (left of the heading) is (-sin, cos).
-        out[..., 0] = x - lateral * sin
+        track_x = x - lateral * sin
+        out = np.empty(track_x.shape + (2,))
+        out[..., 0] = track_x
         out[..., 1] = y + lateral * cos
         return out
 
