@@ -720,12 +720,12 @@ def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: f
     height = height.reshape(shape)
     clearance = clearance.reshape(shape)
     obstacle = obstacle.reshape(shape)
-    with np.errstate(invalid='ignore'):
-        high = np.max(height, axis=1)
-        low = np.min(height, axis=1)
-        room = np.min(np.where(np.isnan(clearance), 0.0, clearance), axis=1)
-        # NaN (nothing to hit) read as -inf, so a plain max is the NaN-ignoring one.
-        tops = np.max(np.where(np.isnan(obstacle), -np.inf, obstacle), axis=1)
-        tops[tops == -np.inf] = np.nan
+    # Maxima, minima and comparisons with NaN raise no floating-point warnings: no errstate.
+    high = np.max(height, axis=1)
+    low = np.min(height, axis=1)
+    room = np.min(np.where(np.isnan(clearance), 0.0, clearance), axis=1)
+    # NaN (nothing to hit) read as -inf, so a plain max is the NaN-ignoring one.
+    tops = np.max(np.where(np.isnan(obstacle), -np.inf, obstacle), axis=1)
+    tops[tops == -np.inf] = np.nan
     return GroundProfile(s0=float(s_start), ds=float(ds), height=high, low=low, headroom=room,
                          obstacle=tops)

@@ -14,6 +14,7 @@ downhill the rear leg is bent first (the pelvis lowers early, before the foot la
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+import math
 from typing import Tuple
 
 import numpy as np
@@ -412,7 +413,9 @@ class WalkGenerator:
         forward_end = float(np.dot(np.asarray(landing_xy) - swing_hip_xy[-1], d_l))
         land_xy = swing_hip_xy[-1] + forward_end * d_l
         landing = foot_pose_on(land_xy, landing_yaw, landing_sole, landing_pitch, leg)
-        lateral_error = float(np.linalg.norm(land_xy - np.asarray(landing_xy)))
+        # A diagnostic (not in the frames): math on two floats, not np.linalg.norm.
+        error_x, error_y = (land_xy - np.asarray(landing_xy)).tolist()
+        lateral_error = math.sqrt(error_x * error_x + error_y * error_y)
 
         # Swing foot: straight horizontal line with Bezier timing, lifted to clear the ground.
         # The curve parameter is eased in time so the foot leaves and meets the ground at rest.
