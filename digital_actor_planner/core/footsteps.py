@@ -492,6 +492,7 @@ class FootstepPlanner:
         m = cfg.step_intervals
         up, down = cfg.max_step_up, cfg.max_step_down
         seed, cumulative, height_before, length_before = [], 0, stance_height, previous_length
+        w_length, w_height, w_pitch, w_smooth, span, up_range, pitch_range = self._effort_terms
         for i in range(cfg.window_steps):
             ok, height, pitch = memo.ok[i], memo.height[i], memo.pitch[i]
             best, best_cost = None, np.inf
@@ -502,7 +503,12 @@ class FootstepPlanner:
                 rise = height[c] - height_before
                 if rise > up or -rise > down:
                     continue
-                cost = self._step_effort(lengths[j], rise, pitch[c], length_before, s_init)
+                # _step_effort written out (the same terms in the same order).
+                length = lengths[j]
+                cost = (w_length * ((length - s_init) / span) ** 2
+                        + w_height * (rise / up_range) ** 2
+                        + w_pitch * (pitch[c] / pitch_range) ** 2
+                        + w_smooth * ((length - length_before) / span) ** 2)
                 if cost < best_cost:
                     best, best_cost = j, cost
             if best is None:
@@ -651,15 +657,18 @@ class FootstepPlanner:
                 + w_smooth * ((length - length_before) / span) ** 2)
 
     def _window(self, profile, config, lengths, sides, stance_s, effort, evaluated, memo):
-        ls = lengths[list(config)]
-        arcs = stance_s + np.cumsum(ls)
-        cumulative = np.cumsum(config)
-        return FootstepWindow(lengths=ls, indices=tuple(int(j) for j in config), arc_lengths=arcs,
-                              heights=np.array([memo.height[i][c]
-                                                for i, c in enumerate(cumulative)]),
-                              pitches=np.array([memo.pitch[i][c]
-                                                for i, c in enumerate(cumulative)]),
-                              sides=sides.copy(),
+        # Running sums in plain Python (np.cumsum adds in the same order): a few values.
+        chosen = [float(lengths[j]) for j in config]
+        arcs, heights, pitches, total, cumulative = [], [], [], 0.0, 0
+        for i, (j, length) in enumerate(zip(config, chosen)):
+            total += length
+            cumulative += j
+            arcs.append(stance_s + total)
+            heights.append(memo.height[i][cumulative])
+            pitches.append(memo.pitch[i][cumulative])
+        return FootstepWindow(lengths=np.array(chosen), indices=tuple(int(j) for j in config),
+                              arc_lengths=np.array(arcs), heights=np.array(heights),
+                              pitches=np.array(pitches), sides=sides.copy(),
                               effort=float(effort), evaluated=int(evaluated))
 
 
