@@ -454,7 +454,7 @@ class Actor:
             frames = np.concatenate([self._configuration[None, lower], motion.frames[:, lower]])
             # np.diff without its wrapper: the same differences.
             speed = np.abs(frames[1:] - frames[:-1]) * rate / self._lower_velocity_limit
-            ratio = float(np.max(speed))
+            ratio = float(speed.max())
             if ratio <= 0.95:
                 return motion
             duration = np.ceil(duration * ratio / 0.85 * rate) / rate
@@ -500,7 +500,7 @@ class Actor:
         """Heights a swinging sole must clear at ``xy`` (NaN over empty space)."""
         height, _ = self.environment.ground_height(xy, z_ref)
         missing = np.isnan(height)
-        if np.any(missing):
+        if missing.any():
             top, _ = self.environment.ground_height(xy[missing], z_ref + 3.0)
             height[missing] = top
         return height

@@ -375,9 +375,9 @@ class BodyCollision:
         after = pairs[pairs[:, 0] > 0]
         frame, column = after[:, 0], after[:, 1]
         moved = transforms[frame, column, :3, :] - transforms[frame - 1, column, :3, :]
-        unmoved = suspect[frame - 1, column] & (np.max(np.abs(moved).reshape(-1, 12), axis=1)
+        unmoved = suspect[frame - 1, column] & (np.abs(moved).reshape(-1, 12).max(axis=1)
                                                 <= 1e-9)
-        if np.any(unmoved):
+        if unmoved.any():
             keep = np.ones(pairs.shape[0], dtype=bool)
             keep[pairs.shape[0] - after.shape[0]:] = ~unmoved
             pairs = pairs[keep]
@@ -388,8 +388,8 @@ class BodyCollision:
             if first.size:
                 columns = pairs[first, 1]
                 moved = transforms[0, columns, :3, :] - self._free_end[1][columns]
-                unmoved = np.max(np.abs(moved).reshape(-1, 12), axis=1) <= 1e-9
-                if np.any(unmoved):
+                unmoved = np.abs(moved).reshape(-1, 12).max(axis=1) <= 1e-9
+                if unmoved.any():
                     keep = np.ones(pairs.shape[0], dtype=bool)
                     keep[first[unmoved]] = False
                     pairs = pairs[keep]
@@ -400,8 +400,8 @@ class BodyCollision:
             reach = self._reach_array[np.asarray(chosen)[columns]]
             centre = centres[pairs[:, 0], columns]
             low, high = centre - reach[:, None], centre + reach[:, None]
-            near = np.all((self._mesh_low <= high[:, None]) & (low[:, None] <= self._mesh_high),
-                          axis=-1).tolist()
+            near = ((self._mesh_low <= high[:, None])
+                    & (low[:, None] <= self._mesh_high)).all(axis=-1).tolist()
             targets = self.environment.objects
             for (j, column), meshes in zip(pairs.tolist(), near):
                 if hit_frame >= 0 and j != hit_frame:

@@ -272,34 +272,34 @@ class FootstepPlanner:
         high = np.take(profile.height, flat)
         low = np.take(profile.low, flat)
         room = np.where(mask, np.take(profile.headroom, flat), np.inf)
-        usable = inside & ~np.any(mask & np.isnan(high), axis=1)
-        usable &= np.min(room, axis=1) >= cfg.min_headroom
+        usable = inside & ~(mask & np.isnan(high)).any(axis=1)
+        usable &= room.min(axis=1) >= cfg.min_headroom
         high = np.where(mask & ~np.isnan(high), high, 0.0)
         low = np.where(mask & ~np.isnan(low), low, 0.0)
         x = profile.s0 + profile.ds * index - s[:, None]
-        mean = np.sum(np.where(mask, x, 0.0), axis=1) / width
+        mean = np.where(mask, x, 0.0).sum(axis=1) / width
         centred = np.where(mask, x - mean[:, None], 0.0)
         with np.errstate(invalid='ignore', divide='ignore'):
-            slope = np.where(width > 2, np.sum(centred * high, axis=1)
-                             / np.sum(centred * centred, axis=1), 0.0)
+            slope = np.where(width > 2, (centred * high).sum(axis=1)
+                             / (centred * centred).sum(axis=1), 0.0)
         pitch = np.arctan(slope)
         plane = slope[:, None] * x
-        lift = np.max(np.where(mask, high - plane, -np.inf), axis=1)
-        dip = np.min(np.where(mask, low - plane, np.inf), axis=1)
+        lift = np.where(mask, high - plane, -np.inf).max(axis=1)
+        dip = np.where(mask, low - plane, np.inf).min(axis=1)
         steady = np.abs(pitch) <= cfg.max_foot_pitch
         flat = usable & steady & (lift - dip <= cfg.flatness_tolerance)
         # At an edge a flat sole may overhang lower ground.
-        top = np.max(np.where(mask, high, -np.inf), axis=1)
+        top = np.where(mask, high, -np.inf).max(axis=1)
         level = top[:, None] - cfg.flatness_tolerance
         supported = mask & (high >= level) & (low >= level)
-        ankle = np.argmin(np.where(mask, np.abs(x), np.inf), axis=1)
+        ankle = np.where(mask, np.abs(x), np.inf).argmin(axis=1)
         # The ankle's sample and its neighbours must be supported; past either end of the sole
         # there is nothing to ask (a True border column on each side).
         padded = np.ones((count, span.size + 2), dtype=bool)
         padded[:, 1:-1] = supported | ~mask
         near = padded[np.arange(count)[:, None], ankle[:, None] + _AROUND]
         around = near[:, 0] & near[:, 1] & near[:, 2]
-        fraction = np.sum(supported, axis=1) / width
+        fraction = supported.sum(axis=1) / width
         edge = usable & steady & ~flat & around & (fraction >= cfg.min_support_fraction)
         ok = flat | edge
         height = np.where(flat, lift, np.where(edge, top, np.nan))
@@ -714,14 +714,14 @@ def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: f
     height, clearance = environment.ground_height(xy, base_height + max_step_up + 0.02)
     for level in range(1, max(levels, 1)):
         missing = np.isnan(height)
-        if not np.any(missing):
+        if not missing.any():
             break
         z_ref = base_height + (level + 1) * max_step_up + 0.02
         h, c = environment.ground_height(xy[missing], z_ref)
         height[missing], clearance[missing] = h, c
     obstacle = height.copy()
     missing = np.isnan(obstacle)
-    if np.any(missing):
+    if missing.any():
         # Inside a solid the swing must clear its top; over empty space there is nothing to hit.
         top, _ = environment.ground_height(xy[missing], base_height + 3.0)
         obstacle[missing] = top
@@ -730,11 +730,11 @@ def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: f
     clearance = clearance.reshape(shape)
     obstacle = obstacle.reshape(shape)
     # Maxima, minima and comparisons with NaN raise no floating-point warnings: no errstate.
-    high = np.max(height, axis=1)
-    low = np.min(height, axis=1)
-    room = np.min(np.where(np.isnan(clearance), 0.0, clearance), axis=1)
+    high = height.max(axis=1)
+    low = height.min(axis=1)
+    room = np.where(np.isnan(clearance), 0.0, clearance).min(axis=1)
     # NaN (nothing to hit) read as -inf, so a plain max is the NaN-ignoring one.
-    tops = np.max(np.where(np.isnan(obstacle), -np.inf, obstacle), axis=1)
+    tops = np.where(np.isnan(obstacle), -np.inf, obstacle).max(axis=1)
     tops[tops == -np.inf] = np.nan
     return GroundProfile(s0=float(s_start), ds=float(ds), height=high, low=low, headroom=room,
                          obstacle=tops)

@@ -450,7 +450,7 @@ class WalkGenerator:
         nominal = 0.5 * (foot_s.z + landing.z) + leg.thigh + leg.shank - cfg.pelvis_height_drop
         wanted_z = z0 + (nominal - z0) * timing.weight[category]
         r = cfg.reach_fraction * (leg.thigh + leg.shank)
-        if np.any(np.abs(lam) > r) or np.any(np.abs(forward) > r):
+        if (np.abs(lam) > r).any() or (np.abs(forward) > r).any():
             raise GaitError('footstep out of leg reach')
         stance_bound = foot_s.z + np.sqrt(np.maximum(r * r - lam * lam, 0.0))
         fade = timing.fade
@@ -476,7 +476,7 @@ class WalkGenerator:
             joints = solution[0]
             correction = (np.minimum(np.maximum(joints[:, 3], ankle_low), ankle_high)
                           - joints[:, 3]) * fade
-            if np.max(np.abs(correction)) < 0.005:
+            if np.abs(correction).max() < 0.005:
                 swing_solution = (hip, solution)
                 break
             swing_pitch = swing_pitch + correction
@@ -507,7 +507,7 @@ class WalkGenerator:
                     ankle = _points(swing_xy, swing_z)
                 joints, lateral, reach = leg_inverse_kinematics(leg, hip, ankle, plane, yaw,
                                                                 pitch)
-            if side == stance_side and np.any(joints[:, 3] > self._leg_upper[side][3] - 0.03):
+            if side == stance_side and (joints[:, 3] > self._leg_upper[side][3] - 0.03).any():
                 # Heel-off: the stance foot rolls about its toe instead of over-flexing the ankle.
                 joints, foot_s_end = self._heel_off(leg, hip, foot_s, yaw, joints,
                                                     self._leg_upper[side][3] - 0.03)
@@ -520,17 +520,17 @@ class WalkGenerator:
                 wanted = np.minimum(np.maximum(joints[:, 3], self._leg_lower[side][3] + 0.02),
                                     self._leg_upper[side][3] - 0.02)
                 joints[:, 3] += (wanted - joints[:, 3]) * fade
-            if np.max(reach) > 1.0 + 1e-9:
+            if reach.max() > 1.0 + 1e-9:
                 raise GaitError(f'{"left" if side == LEFT else "right"} leg out of reach')
             low, high = self._leg_lower[side], self._leg_upper[side]
             bad = (joints < low - 1e-9) | (joints > high + 1e-9)
-            if np.any(bad):
+            if bad.any():
                 column = int(np.argmax(np.any(bad, axis=0)))
                 name = self.skeleton.joint_names[self._leg_index[side][column]]
                 value = joints[np.any(bad, axis=1)][0, column]
                 raise GaitError(f'{name} would reach {value:.2f} rad, outside its limits')
             frames[:, self._leg_index[side]] = joints
-            lateral_error = max(lateral_error, float(np.max(np.abs(lateral[-1:]))))
+            lateral_error = max(lateral_error, float(np.abs(lateral[-1:]).max()))
         feet = foot_end
         feet[swing_side] = landing
         end = Stance(np.array([pelvis_xy[-1, 0], pelvis_xy[-1, 1], z[-1], yaw1]),
@@ -629,7 +629,7 @@ class WalkGenerator:
         # Ground relative to a sole pitched like the foot: what the ankle must stay above.
         pitch = swing_pitch[samples]
         tops = tops - along[None, :, None] * np.sin(pitch)[:, None, None]
-        ground = np.max(tops.reshape(len(samples), -1), axis=1)
+        ground = tops.reshape(len(samples), -1).max(axis=1)
         need = ground + leg.ankle_height * np.cos(pitch) + clearance
         basis_0, basis_1, basis_2, basis_3 = sampled
         # Off a heel-off the toe is on the ground: lift more briskly so it does not scuff.
@@ -639,7 +639,7 @@ class WalkGenerator:
         for _ in range(12):
             curve = start + basis_1 * (z0 + h1) + basis_2 * (z1 + h2) + end
             short = need - curve - slack
-            worst = int(np.argmax(short))
+            worst = int(short.argmax())
             if short[worst] <= 1e-4:
                 break
             weight = basis_1[worst] + basis_2[worst]
