@@ -359,7 +359,7 @@ class BodyCollision:
                                                     half_width.ravel())
             flat_bottom = bottom.ravel()
             suspect = ~(flat_bottom > tops)
-            rest = np.flatnonzero(suspect)
+            rest = suspect.nonzero()[0]
             if rest.size:
                 suspect[rest] = self._ground_map_suspects(
                     centres.reshape(-1, 3)[rest], extent.reshape(-1, 3)[rest], flat_bottom[rest],
@@ -371,7 +371,7 @@ class BodyCollision:
         # unmoved in turn (a stance foot), needs no other exact test. The 1e-9 m per frame
         # that counts as unmoved adds up to well under a micrometre over a step.
         # Only suspects are compared with the frame before (far fewer than all shapes).
-        pairs = np.argwhere(suspect)
+        pairs = np.array(suspect.nonzero()).T
         after = pairs[pairs[:, 0] > 0]
         frame, column = after[:, 0], after[:, 1]
         moved = transforms[frame, column, :3, :] - transforms[frame - 1, column, :3, :]
@@ -384,7 +384,7 @@ class BodyCollision:
         if self.top_bound and self._free_end is not None and self._free_end[0] == chosen:
             # The same for a shape at the first frame that has not moved from where the last
             # motion found free left it (both feet at the start of a step).
-            first = np.flatnonzero(pairs[:, 0] == 0)
+            first = (pairs[:, 0] == 0).nonzero()[0]
             if first.size:
                 columns = pairs[first, 1]
                 moved = transforms[0, columns, :3, :] - self._free_end[1][columns]

@@ -709,7 +709,7 @@ class Environment:
         """
         ny, nx = self._tops.shape
         cells = np.asarray(half_extent, dtype=float) * self._inverse_resolution + 1e-6
-        level = np.searchsorted(_TOP_RADII_ARRAY, np.ceil(cells))
+        level = _TOP_RADII_ARRAY.searchsorted(np.ceil(cells))
         fx = (xy[:, 0] - self._origin[0]) * self._inverse_resolution
         fy = (xy[:, 1] - self._origin[1]) * self._inverse_resolution
         column = np.fmin(np.fmax(np.floor(fx), 0.0), nx - 1)

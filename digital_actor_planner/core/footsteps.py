@@ -269,9 +269,9 @@ class FootstepPlanner:
         index = np.minimum(np.maximum(index, 0), profile.samples - 1)
         # One flat index into the (2, K) tracks for all three gathers.
         flat = side * profile.samples + index
-        high = np.take(profile.height, flat)
-        low = np.take(profile.low, flat)
-        room = np.where(mask, np.take(profile.headroom, flat), np.inf)
+        high = profile.height.take(flat)
+        low = profile.low.take(flat)
+        room = np.where(mask, profile.headroom.take(flat), np.inf)
         usable = inside & ~(mask & np.isnan(high)).any(axis=1)
         usable &= room.min(axis=1) >= cfg.min_headroom
         high = np.where(mask & ~np.isnan(high), high, 0.0)
@@ -363,7 +363,7 @@ class FootstepPlanner:
             self._last_tables = (profile, key, memo)
         length_list, side_list = lengths.tolist(), sides.tolist()
         banned = set(int(b) for b in banned_first)
-        banned_lengths = set(int(j) for j in np.flatnonzero(lengths > max_length + 1e-9))
+        banned_lengths = set((lengths > max_length + 1e-9).nonzero()[0].tolist())
 
         def evaluate(config: Tuple[int, ...]) -> Optional[float]:
             """Effort of a configuration, or None if it is not collision-free."""
