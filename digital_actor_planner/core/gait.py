@@ -187,10 +187,11 @@ def leg_inverse_kinematics(leg: LegGeometry, hip: np.ndarray, ankle: np.ndarray,
     l1, l2 = leg.thigh, leg.shank
     reach = distance / (l1 + l2)
     d = np.minimum(np.maximum(distance, 1e-6), l1 + l2)
-    cos_knee = np.minimum(np.maximum((l1 * l1 + l2 * l2 - d * d) / (2 * l1 * l2), -1.0), 1.0)
+    squared = d * d
+    cos_knee = np.minimum(np.maximum((l1 * l1 + l2 * l2 - squared) / (2 * l1 * l2), -1.0), 1.0)
     joints = np.empty((v.shape[0], 4))
     knee = np.pi - np.arccos(cos_knee)
-    cos_beta = np.minimum(np.maximum((l1 * l1 + d * d - l2 * l2) / (2 * l1 * d), -1.0), 1.0)
+    cos_beta = np.minimum(np.maximum((l1 * l1 + squared - l2 * l2) / (2 * l1 * d), -1.0), 1.0)
     hip_pitch = np.arctan2(forward, down) + np.arccos(cos_beta)
     joints[:, 0] = _wrap(plane_yaw - pelvis_yaw)
     joints[:, 1] = hip_pitch
@@ -458,7 +459,7 @@ class WalkGenerator:
         ankle_high = self._leg_upper[swing_side][3] - 0.02
         # The swing sole's real pitch depends on the leg posture (the ankle has limits), and the
         # posture on the swing height: two passes make the clearance test use the real pitch.
-        footprint = self._swing_footprint(timing, foot_w, landing, swing_xy, plane_yaw,
+        footprint = self._swing_footprint(timing, foot_w, landing, swing_xy, direction,
                                           swing_profile)
         # The swing leg's IK of the last pass, when its inputs are final (the pass converged).
         swing_solution = None
@@ -573,8 +574,10 @@ class WalkGenerator:
         return joints, end
 
     def _swing_footprint(self, timing: _StepTiming, lift_foot: FootPose, landing: FootPose,
-                         swing_xy, plane_yaw, swing_profile):
+                         swing_xy, direction, swing_profile):
         """The ground under the swinging sole at sampled frames (independent of its pitch).
+
+        ``direction`` is (k, 2), the cosine and sine of the swing foot's heading per frame.
 
         Returns
         -------
@@ -587,9 +590,7 @@ class WalkGenerator:
         """
         along, across = self._sole_along, self._sole_across
         samples = timing.samples
-        d = np.empty((samples.size, 2))
-        d[:, 0] = np.cos(plane_yaw[samples])
-        d[:, 1] = np.sin(plane_yaw[samples])
+        d = direction[samples]
         n = np.empty_like(d)
         n[:, 0] = -d[:, 1]
         n[:, 1] = d[:, 0]
