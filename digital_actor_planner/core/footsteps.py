@@ -365,17 +365,23 @@ class FootstepPlanner:
         banned = set(int(b) for b in banned_first)
         banned_lengths = set((lengths > max_length + 1e-9).nonzero()[0].tolist())
 
+        feasible = memo.feasible
+        search_effort = self._search_effort
+        unseen = object()
+
         def evaluate(config: Tuple[int, ...]) -> Optional[float]:
             """Effort of a configuration, or None if it is not collision-free."""
-            if config in memo.feasible:
-                return memo.feasible[config]
-            if banned_lengths.intersection(config):
-                memo.feasible[config] = None
+            # One dictionary lookup (hill-climbing asks mostly for configurations it has seen).
+            result = feasible.get(config, unseen)
+            if result is not unseen:
+                return result
+            if banned_lengths and banned_lengths.intersection(config):
+                feasible[config] = None
                 return None
-            result = self._search_effort(profile, config, length_list, side_list, stance_s,
-                                         stance_height, swing_s, swing_height, s_init,
-                                         previous_length, memo, banned)
-            memo.feasible[config] = result
+            result = search_effort(profile, config, length_list, side_list, stance_s,
+                                   stance_height, swing_s, swing_height, s_init,
+                                   previous_length, memo, banned)
+            feasible[config] = result
             return result
 
         # No configuration can be collision-free if some footstep has no foothold in reach.
