@@ -365,7 +365,7 @@ class FootstepPlanner:
         banned = set(int(b) for b in banned_first)
         banned_lengths = set((lengths > max_length + 1e-9).nonzero()[0].tolist())
 
-        feasible = memo.feasible
+        feasible, prefixes = memo.feasible, memo.prefixes
         search_effort = self._search_effort
         unseen = object()
 
@@ -376,6 +376,11 @@ class FootstepPlanner:
             if result is not unseen:
                 return result
             if banned_lengths and banned_lengths.intersection(config):
+                feasible[config] = None
+                return None
+            # All but the last footstep already found infeasible (the breadth-first search
+            # walks through many of these): the answer without resuming the search.
+            if prefixes.get(config[:-1], unseen) is None:
                 feasible[config] = None
                 return None
             result = search_effort(profile, config, length_list, side_list, stance_s,
