@@ -261,7 +261,7 @@ class _StepTiming:
 def _read_only(value):
     """Mark every array in a (nested) tuple or dict read-only; returns the value."""
     if isinstance(value, np.ndarray):
-        value.flags.writeable = False
+        value.setflags(write=False)
     elif isinstance(value, dict):
         for item in value.values():
             _read_only(item)
