@@ -269,3 +269,17 @@ def test_search_effort_from_prefixes_is_the_plain_effort(leg):
                 assert got == expected, (name, config)
                 answers.add(expected is None)
     assert answers == {True, False}
+
+
+def test_another_attempt_at_a_step_plans_as_a_fresh_planner_would(leg):
+    # The actor retries a step with the first length banned; the planner reuses the step's
+    # foothold tables then, and must answer exactly as a planner seeing the window first.
+    profile = profile_from(lambda s: 0.1 if 0.6 < s < 1.1 else 0.0)
+    planner = FootstepPlanner(FootstepConfig(), leg)
+    first = plan(planner, profile)
+    assert first is not None
+    retry = plan(planner, profile, banned=(first.indices[0],))
+    fresh = plan(FootstepPlanner(FootstepConfig(), leg), profile, banned=(first.indices[0],))
+    assert retry is not None and retry.indices != first.indices
+    assert retry.indices == fresh.indices and retry.effort == fresh.effort
+    np.testing.assert_array_equal(retry.heights, fresh.heights)

@@ -68,3 +68,13 @@ def test_offset_points_for_many_tracks_at_once_match_one_track_at_a_time(angular
     for i in range(5):
         np.testing.assert_allclose(per_point[i], path.offset_points(s[i:i + 1], laterals[i])[0],
                                    atol=1e-15)
+
+
+@pytest.mark.parametrize('angular', [0.0, 0.7])
+def test_offset_poses_are_the_offset_points_with_the_heading(angular):
+    path = predict_path(0.3, -0.2, 0.4, 0.8, angular, 3.0)
+    s = np.array([0.1, 0.9, 2.2])
+    lateral = np.array([0.1, -0.1, 0.0])
+    poses = path.offset_poses(s, lateral)
+    np.testing.assert_array_equal(poses[:, :2], path.offset_points(s, lateral))
+    np.testing.assert_array_equal(poses[:, 2], path.poses(s)[:, 2])

@@ -172,3 +172,14 @@ def test_forward_kinematics_matches_the_urdf_composed_joint_by_joint(skeleton):
         for link in legs:
             np.testing.assert_allclose(some[skeleton.link_index[link]], reference(link),
                                        atol=1e-12, err_msg=link)
+
+
+def test_shape_transforms_at_matches_the_full_kinematics(skeleton):
+    rng = np.random.default_rng(3)
+    frames = skeleton.neutral() + rng.normal(0.0, 0.3, (7, len(skeleton.joint_names)))
+    for shapes in ((0, 2, 5), tuple(range(len(skeleton.collision_shapes)))):
+        expected = skeleton.shape_transforms(skeleton.forward_kinematics(frames), shapes=shapes)
+        np.testing.assert_allclose(skeleton.shape_transforms_at(frames, shapes), expected,
+                                   atol=1e-12)
+    with pytest.raises(ValueError, match='shape'):
+        skeleton.shape_transforms_at(frames[0], (0,))

@@ -152,8 +152,10 @@ class Actor:
         self._walk = WalkGenerator(skeleton, config.gait_config(), self._footstep_config)
         self._collision = body_collision or BodyCollision(skeleton, environment)
         self._leg_links = LEG_LINKS
+        self._path_steps = np.arange(24.0)
         self._lower_body = np.concatenate([skeleton.branch(b) for b in
                                            ('root', 'left_leg', 'right_leg')])
+        self._lower_velocity_limit = skeleton.velocity_limit[self._lower_body]
         if upper_body_planner is None and config.plan_upper_body:
             from .upper_body import UpperBodyPlanner
             from .upper_body import UpperBodyConfig
@@ -283,8 +285,8 @@ class Actor:
     def _commit(self, status: str, reason: str, times: np.ndarray, frames: np.ndarray,
                 stance: Stance, footsteps: np.ndarray, path: np.ndarray, started: float,
                 category: str) -> StepBlock:
-        previous = np.vstack([self._configuration[None, :], frames])
-        velocities = np.diff(previous, axis=0) * self.config.frame_rate
+        previous = np.concatenate([self._configuration[None, :], frames])
+        velocities = (previous[1:] - previous[:-1]) * self.config.frame_rate
         absolute = self._time + times
         self._configuration = frames[-1].copy()
         self._stance = stance
@@ -423,10 +425,10 @@ class Actor:
         side = int(window.sides[0])
         offset = leg.hip_half_width if side == LEFT else -leg.hip_half_width
         stance_s = s1 - float(window.lengths[0])
-        # The landing heading and the middle of the step, from one call.
-        poses = path.poses(np.array([s1, 0.5 * (stance_s + s1)]))
+        # The landing foothold and heading and the middle of the step, from one call.
+        poses = path.offset_poses(np.array([s1, 0.5 * (stance_s + s1)]), np.array([offset, 0.0]))
         landing_yaw = float(poses[0, 2])
-        landing_xy = path.offset_points(np.array([s1]), offset)[0]
+        landing_xy = poses[0, :2]
         middle = poses[1]
         # The hip yaw range bounds how far the feet may point apart (a turn reversed mid-walk):
         # the new foot turns at most that far from the stance foot; the path catches up.
@@ -449,9 +451,10 @@ class Actor:
             motion = self._walk.step(stance, landing_xy, landing_yaw, sole, pitch, target,
                                      duration, self._obstacles, to_rest=to_rest)
             lower = self._lower_body
-            frames = np.vstack([self._configuration[None, lower], motion.frames[:, lower]])
-            speed = np.abs(np.diff(frames, axis=0)) * rate / self.skeleton.velocity_limit[lower]
-            ratio = float(np.max(speed))
+            frames = np.concatenate([self._configuration[None, lower], motion.frames[:, lower]])
+            # np.diff without its wrapper: the same differences.
+            speed = np.abs(frames[1:] - frames[:-1]) * rate / self._lower_velocity_limit
+            ratio = float(speed.max())
             if ratio <= 0.95:
                 return motion
             duration = np.ceil(duration * ratio / 0.85 * rate) / rate
@@ -497,7 +500,7 @@ class Actor:
         """Heights a swinging sole must clear at ``xy`` (NaN over empty space)."""
         height, _ = self.environment.ground_height(xy, z_ref)
         missing = np.isnan(height)
-        if np.any(missing):
+        if missing.any():
             top, _ = self.environment.ground_height(xy[missing], z_ref + 3.0)
             height[missing] = top
         return height
@@ -505,17 +508,21 @@ class Actor:
     def _footstep_poses(self, path, window: FootstepWindow) -> np.ndarray:
         leg = self.skeleton.leg
         offsets = np.where(window.sides == LEFT, leg.hip_half_width, -leg.hip_half_width)
-        poses = path.poses(window.arc_lengths)
+        poses = path.offset_poses(window.arc_lengths, offsets)
         out = np.empty((window.arc_lengths.size, 4))
-        out[:, :2] = path.offset_points(window.arc_lengths, offsets)
+        out[:, :2] = poses[:, :2]
         out[:, 2] = window.heights
         out[:, 3] = poses[:, 2]
         return out
 
     def _path_points(self, path, s_end: float) -> np.ndarray:
-        s = np.linspace(0.0, max(s_end, 0.1), 24)
-        poses = path.poses(s)
-        return np.column_stack([poses[:, :2], np.full(s.size, self._stance.feet[0].sole)])
+        # np.linspace(0, end, 24) without its overhead: the same values.
+        end = max(s_end, 0.1)
+        s = self._path_steps * (end / 23)
+        s[-1] = end
+        out = path.poses(s)
+        out[:, 2] = self._stance.feet[0].sole
+        return out
 
 
 def run_commands(actor: Actor, times, linear, angular, on_warning=None):

@@ -23,6 +23,14 @@ _IDENTITY = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
 _FOOTPRINT_CORNERS = np.array([[0, 0], [1, 1], [1, -1], [-1, 1], [-1, -1]], dtype=float)
 
 
+def _last_axis_min(values: np.ndarray) -> np.ndarray:
+    """Minimum over a short last axis, NaN where any value is NaN (like ``np.min``)."""
+    out = values[..., 0]
+    for i in range(1, values.shape[-1]):
+        out = np.minimum(out, values[..., i])
+    return out
+
+
 def _matmul(a: Sequence[float], b: Sequence[float]) -> Tuple[float, ...]:
     """Product of two row-major 3x3 matrices held as 9 floats."""
     return (a[0] * b[0] + a[1] * b[3] + a[2] * b[6], a[0] * b[1] + a[1] * b[4] + a[2] * b[7],
@@ -332,16 +340,13 @@ class BodyCollision:
             raise ValueError(f'frames must have shape (k, {len(self.skeleton.joint_names)}), '
                              f'got {frames.shape}')
         key = None if links is None else tuple(links)
-        chosen_names = self._broad_phase_sets.get(key)
-        if chosen_names is None:
+        chosen = self._broad_phase_sets.get(key)
+        if chosen is None:
             chosen = tuple(s for _, shapes in self._shapes_of(links) for s in shapes)
-            chosen_names = (chosen, frozenset(self.shapes[s].link for s in chosen))
-            self._broad_phase_sets[key] = chosen_names
-        chosen, names = chosen_names
+            self._broad_phase_sets[key] = chosen
         if not chosen or frames.shape[0] == 0:
             return -1, []
-        transforms = self.skeleton.shape_transforms(
-            self.skeleton.forward_kinematics(frames, links=names), shapes=chosen)
+        transforms = self.skeleton.shape_transforms_at(frames, chosen)
         centres = transforms[..., :3, 3]
         extent = self._aabb_half_extents(chosen, transforms[..., :3, :3])
         bottom = centres[..., 2] - extent[..., 2]
@@ -349,11 +354,12 @@ class BodyCollision:
             # A shape entirely above the environment's height bound over its footprint cannot
             # touch it (most shapes, and a foot resting on level ground): one lookup each. Only
             # the others go through the ground map and, if still suspect, to FCL.
+            half_width = np.maximum(extent[..., 0], extent[..., 1])
             tops = self.environment.top_height_near(centres[..., :2].reshape(-1, 2),
-                                                    np.max(extent[..., :2], axis=-1).ravel())
+                                                    half_width.ravel())
             flat_bottom = bottom.ravel()
             suspect = ~(flat_bottom > tops)
-            rest = np.flatnonzero(suspect)
+            rest = suspect.nonzero()[0]
             if rest.size:
                 suspect[rest] = self._ground_map_suspects(
                     centres.reshape(-1, 3)[rest], extent.reshape(-1, 3)[rest], flat_bottom[rest],
@@ -365,25 +371,25 @@ class BodyCollision:
         # unmoved in turn (a stance foot), needs no other exact test. The 1e-9 m per frame
         # that counts as unmoved adds up to well under a micrometre over a step.
         # Only suspects are compared with the frame before (far fewer than all shapes).
-        pairs = np.argwhere(suspect)
+        pairs = np.array(suspect.nonzero()).T
         after = pairs[pairs[:, 0] > 0]
         frame, column = after[:, 0], after[:, 1]
         moved = transforms[frame, column, :3, :] - transforms[frame - 1, column, :3, :]
-        unmoved = suspect[frame - 1, column] & (np.max(np.abs(moved).reshape(-1, 12), axis=1)
+        unmoved = suspect[frame - 1, column] & (np.abs(moved).reshape(-1, 12).max(axis=1)
                                                 <= 1e-9)
-        if np.any(unmoved):
+        if unmoved.any():
             keep = np.ones(pairs.shape[0], dtype=bool)
             keep[pairs.shape[0] - after.shape[0]:] = ~unmoved
             pairs = pairs[keep]
         if self.top_bound and self._free_end is not None and self._free_end[0] == chosen:
             # The same for a shape at the first frame that has not moved from where the last
             # motion found free left it (both feet at the start of a step).
-            first = np.flatnonzero(pairs[:, 0] == 0)
+            first = (pairs[:, 0] == 0).nonzero()[0]
             if first.size:
                 columns = pairs[first, 1]
                 moved = transforms[0, columns, :3, :] - self._free_end[1][columns]
-                unmoved = np.max(np.abs(moved).reshape(-1, 12), axis=1) <= 1e-9
-                if np.any(unmoved):
+                unmoved = np.abs(moved).reshape(-1, 12).max(axis=1) <= 1e-9
+                if unmoved.any():
                     keep = np.ones(pairs.shape[0], dtype=bool)
                     keep[first[unmoved]] = False
                     pairs = pairs[keep]
@@ -394,8 +400,8 @@ class BodyCollision:
             reach = self._reach_array[np.asarray(chosen)[columns]]
             centre = centres[pairs[:, 0], columns]
             low, high = centre - reach[:, None], centre + reach[:, None]
-            near = np.all((self._mesh_low <= high[:, None]) & (low[:, None] <= self._mesh_high),
-                          axis=-1).tolist()
+            near = ((self._mesh_low <= high[:, None])
+                    & (low[:, None] <= self._mesh_high)).all(axis=-1).tolist()
             targets = self.environment.objects
             for (j, column), meshes in zip(pairs.tolist(), near):
                 if hit_frame >= 0 and j != hit_frame:
@@ -432,8 +438,12 @@ class BodyCollision:
         room = room.reshape(points.shape[:-1])
         with np.errstate(invalid='ignore'):
             # NaN ground (no surface, or inside a solid) leaves a shape suspect.
-            bottom_clear = np.min(bottom[..., None] - ground, axis=-1) > margin
-            ceiling_clear = np.min(ground + room, axis=-1) > top + margin
+            # Minima over the points written out (a reduction over a short last axis costs
+            # more); NaN propagates the same way.
+            below = bottom[..., None] - ground
+            above = ground + room
+            bottom_clear = _last_axis_min(below) > margin
+            ceiling_clear = _last_axis_min(above) > top + margin
         return ~(bottom_clear & ceiling_clear)
 
     def _aabb_half_extents(self, shapes: Sequence[int], rotations: np.ndarray) -> np.ndarray:
@@ -454,10 +464,11 @@ class BodyCollision:
         # Each kind for all its shapes at once (the per-shape loop was mostly call overhead).
         if 'box' in groups:
             columns, halves = groups['box']
-            out[:, columns] = (np.abs(rotations[:, columns]) @ halves[:, :, None])[..., 0]
+            # einsum: a stack of (3, 3) @ (3, 1) products is mostly call overhead.
+            out[:, columns] = np.einsum('kcij,cj->kci', np.abs(rotations[:, columns]), halves)
         if 'cylinder' in groups:
             columns, halves = groups['cylinder']
-            axis = np.abs(rotations[:, columns][..., 2])
+            axis = np.abs(rotations[..., 2][:, columns])
             out[:, columns] = (halves[:, 0, None] * np.sqrt(
                 np.minimum(np.maximum(1.0 - axis * axis, 0.0), 1.0))
                 + halves[:, 1, None] * axis)

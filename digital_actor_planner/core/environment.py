@@ -427,6 +427,8 @@ class Environment:
         self._origin = lo.copy()
         self._inverse_resolution = 1.0 / res
         self._shape = (int(counts[1]), int(counts[0]))  # (ny, nx)
+        # The last node's x and y index (nx - 1, ny - 1), for _cells.
+        self._grid_last = np.array([self._shape[1] - 1, self._shape[0] - 1], dtype=float)
         nx, ny = int(counts[0]), int(counts[1])
         parts = []
         for mesh, vertices, faces in zip(self.meshes, self._vertices, self._faces):
@@ -707,7 +709,7 @@ class Environment:
         """
         ny, nx = self._tops.shape
         cells = np.asarray(half_extent, dtype=float) * self._inverse_resolution + 1e-6
-        level = np.searchsorted(_TOP_RADII_ARRAY, np.ceil(cells))
+        level = _TOP_RADII_ARRAY.searchsorted(np.ceil(cells))
         fx = (xy[:, 0] - self._origin[0]) * self._inverse_resolution
         fy = (xy[:, 1] - self._origin[1]) * self._inverse_resolution
         column = np.fmin(np.fmax(np.floor(fx), 0.0), nx - 1)
@@ -783,14 +785,15 @@ class Environment:
         xy = np.asarray(xy, dtype=float)
         if xy.ndim != 2 or xy.shape[1] != 2:
             raise ValueError(f'xy must have shape (N, 2), got {xy.shape}')
-        ny, nx = self._shape
-        fx = (xy[:, 0] - self._origin[0]) * self._inverse_resolution
-        fy = (xy[:, 1] - self._origin[1]) * self._inverse_resolution
-        valid = (fx >= 0) & (fx <= nx - 1) & (fy >= 0) & (fy <= ny - 1)
+        # x and y together (half the calls): a point is on the grid when clamping it to the
+        # grid's extent leaves it where it is (NaN clamps to 0, so it is not).
+        grid = (xy - self._origin) * self._inverse_resolution
+        clamped = np.fmin(np.fmax(grid, 0.0), self._grid_last)
+        inside = clamped == grid
+        valid = inside[:, 0] & inside[:, 1]
         # Off the grid (or NaN) the index is clamped into range; those points are not valid.
-        column = np.fmin(np.fmax(fx, 0.0), nx - 2).astype(np.int64)
-        row = np.fmin(np.fmax(fy, 0.0), ny - 2).astype(np.int64)
-        cell = row * (nx - 1) + column
+        index = np.minimum(clamped, self._grid_last - 1.0).astype(np.int64)
+        cell = index[:, 1] * (self._shape[1] - 1) + index[:, 0]
         return cell, valid
 
     def lowest_ground(self, xy) -> np.ndarray:

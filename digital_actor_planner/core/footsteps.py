@@ -210,6 +210,9 @@ class FootstepPlanner:
                             + config.step_increment * np.arange(counts[i]) for i in range(n)]),
             [int(b) for b in np.cumsum([0] + counts)])
         self._lengths = config.lengths()
+        # (profile, stance and swing feet, _Search) of the last plan: its foothold tables and
+        # swing tests, reused by another attempt at the same step (see plan).
+        self._last_tables = None
         # Weights and ranges of the effort terms (see _step_effort), as plain floats.
         self._effort_terms = (
             float(config.weight_length), float(config.weight_height),
@@ -253,7 +256,9 @@ class FootstepPlanner:
         cfg, leg = self.config, self.leg
         s = np.asarray(s, dtype=float)
         count = s.shape[0]
-        side = np.broadcast_to(np.asarray(side, dtype=int), s.shape)[:, None]
+        side = np.asarray(side, dtype=int)
+        # One side for all broadcasts as it is (broadcast_to costs more than the gathers).
+        side = side[:, None] if side.ndim else side
         i0 = np.floor((s - leg.heel - profile.s0) / profile.ds).astype(int)
         i1 = np.ceil((s + leg.toe - profile.s0) / profile.ds).astype(int)
         inside = (i0 >= 0) & (i1 < profile.samples)
@@ -264,36 +269,37 @@ class FootstepPlanner:
         index = np.minimum(np.maximum(index, 0), profile.samples - 1)
         # One flat index into the (2, K) tracks for all three gathers.
         flat = side * profile.samples + index
-        high = np.take(profile.height, flat)
-        low = np.take(profile.low, flat)
-        room = np.where(mask, np.take(profile.headroom, flat), np.inf)
-        usable = inside & ~np.any(mask & np.isnan(high), axis=1)
-        usable &= np.min(room, axis=1) >= cfg.min_headroom
+        high = profile.height.take(flat)
+        low = profile.low.take(flat)
+        room = np.where(mask, profile.headroom.take(flat), np.inf)
+        usable = inside & ~(mask & np.isnan(high)).any(axis=1)
+        usable &= room.min(axis=1) >= cfg.min_headroom
         high = np.where(mask & ~np.isnan(high), high, 0.0)
         low = np.where(mask & ~np.isnan(low), low, 0.0)
         x = profile.s0 + profile.ds * index - s[:, None]
-        mean = np.sum(np.where(mask, x, 0.0), axis=1) / width
+        mean = np.where(mask, x, 0.0).sum(axis=1) / width
         centred = np.where(mask, x - mean[:, None], 0.0)
         with np.errstate(invalid='ignore', divide='ignore'):
-            slope = np.where(width > 2, np.sum(centred * high, axis=1)
-                             / np.sum(centred * centred, axis=1), 0.0)
+            slope = np.where(width > 2, (centred * high).sum(axis=1)
+                             / (centred * centred).sum(axis=1), 0.0)
         pitch = np.arctan(slope)
         plane = slope[:, None] * x
-        lift = np.max(np.where(mask, high - plane, -np.inf), axis=1)
-        dip = np.min(np.where(mask, low - plane, np.inf), axis=1)
+        lift = np.where(mask, high - plane, -np.inf).max(axis=1)
+        dip = np.where(mask, low - plane, np.inf).min(axis=1)
         steady = np.abs(pitch) <= cfg.max_foot_pitch
         flat = usable & steady & (lift - dip <= cfg.flatness_tolerance)
         # At an edge a flat sole may overhang lower ground.
-        top = np.max(np.where(mask, high, -np.inf), axis=1)
+        top = np.where(mask, high, -np.inf).max(axis=1)
         level = top[:, None] - cfg.flatness_tolerance
         supported = mask & (high >= level) & (low >= level)
-        ankle = np.argmin(np.where(mask, np.abs(x), np.inf), axis=1)
+        ankle = np.where(mask, np.abs(x), np.inf).argmin(axis=1)
         # The ankle's sample and its neighbours must be supported; past either end of the sole
         # there is nothing to ask (a True border column on each side).
         padded = np.ones((count, span.size + 2), dtype=bool)
         padded[:, 1:-1] = supported | ~mask
-        around = np.all(padded[np.arange(count)[:, None], ankle[:, None] + _AROUND], axis=1)
-        fraction = np.sum(supported, axis=1) / width
+        near = padded[np.arange(count)[:, None], ankle[:, None] + _AROUND]
+        around = near[:, 0] & near[:, 1] & near[:, 2]
+        fraction = supported.sum(axis=1) / width
         edge = usable & steady & ~flat & around & (fraction >= cfg.min_support_fraction)
         ok = flat | edge
         height = np.where(flat, lift, np.where(edge, top, np.nan))
@@ -344,22 +350,43 @@ class FootstepPlanner:
         if len(q) != n or any(not 0 <= j <= m for j in q):
             raise ValueError(f'start configuration {q} is not {n} indices in [0, {m}]')
         sides = np.array([(1 - stance_side) if i % 2 == 0 else stance_side for i in range(n)])
-        memo = self._search_tables(profile, sides, stance_s)
+        # Another attempt at the same step (the walk generator could not realise the last
+        # s_1) reads the same footholds and swings: its tables are reused, the search is not.
+        key = (stance_side, stance_s, stance_height, swing_s, swing_height)
+        if self._last_tables is not None and self._last_tables[0] is profile \
+                and self._last_tables[1] == key:
+            last = self._last_tables[2]
+            memo = _Search(ok=last.ok, height=last.height, pitch=last.pitch,
+                           obstacle=last.obstacle, swings=last.swings)
+        else:
+            memo = self._search_tables(profile, sides, stance_s)
+            self._last_tables = (profile, key, memo)
         length_list, side_list = lengths.tolist(), sides.tolist()
         banned = set(int(b) for b in banned_first)
-        banned_lengths = set(int(j) for j in np.flatnonzero(lengths > max_length + 1e-9))
+        banned_lengths = set((lengths > max_length + 1e-9).nonzero()[0].tolist())
+
+        feasible, prefixes = memo.feasible, memo.prefixes
+        search_effort = self._search_effort
+        unseen = object()
 
         def evaluate(config: Tuple[int, ...]) -> Optional[float]:
             """Effort of a configuration, or None if it is not collision-free."""
-            if config in memo.feasible:
-                return memo.feasible[config]
-            if banned_lengths.intersection(config):
-                memo.feasible[config] = None
+            # One dictionary lookup (hill-climbing asks mostly for configurations it has seen).
+            result = feasible.get(config, unseen)
+            if result is not unseen:
+                return result
+            if banned_lengths and banned_lengths.intersection(config):
+                feasible[config] = None
                 return None
-            result = self._search_effort(profile, config, length_list, side_list, stance_s,
-                                         stance_height, swing_s, swing_height, s_init,
-                                         previous_length, memo, banned)
-            memo.feasible[config] = result
+            # All but the last footstep already found infeasible (the breadth-first search
+            # walks through many of these): the answer without resuming the search.
+            if prefixes.get(config[:-1], unseen) is None:
+                feasible[config] = None
+                return None
+            result = search_effort(profile, config, length_list, side_list, stance_s,
+                                   stance_height, swing_s, swing_height, s_init,
+                                   previous_length, memo, banned)
+            feasible[config] = result
             return result
 
         # No configuration can be collision-free if some footstep has no foothold in reach.
@@ -476,6 +503,7 @@ class FootstepPlanner:
         m = cfg.step_intervals
         up, down = cfg.max_step_up, cfg.max_step_down
         seed, cumulative, height_before, length_before = [], 0, stance_height, previous_length
+        w_length, w_height, w_pitch, w_smooth, span, up_range, pitch_range = self._effort_terms
         for i in range(cfg.window_steps):
             ok, height, pitch = memo.ok[i], memo.height[i], memo.pitch[i]
             best, best_cost = None, np.inf
@@ -486,7 +514,12 @@ class FootstepPlanner:
                 rise = height[c] - height_before
                 if rise > up or -rise > down:
                     continue
-                cost = self._step_effort(lengths[j], rise, pitch[c], length_before, s_init)
+                # _step_effort written out (the same terms in the same order).
+                length = lengths[j]
+                cost = (w_length * ((length - s_init) / span) ** 2
+                        + w_height * (rise / up_range) ** 2
+                        + w_pitch * (pitch[c] / pitch_range) ** 2
+                        + w_smooth * ((length - length_before) / span) ** 2)
                 if cost < best_cost:
                     best, best_cost = j, cost
             if best is None:
@@ -583,6 +616,7 @@ class FootstepPlanner:
         if state is None:
             return None
         effort, s, height_before, length_before, cumulative = state
+        w_length, w_height, w_pitch, w_smooth, span, up_range, pitch_range = self._effort_terms
         for i in range(start, len(config)):
             j = config[i]
             length = lengths[j]
@@ -614,8 +648,12 @@ class FootstepPlanner:
             if not clear:
                 prefixes[key] = None
                 return None
-            effort += self._step_effort(length, rise, memo.pitch[i][cumulative], length_before,
-                                        s_init)
+            # _step_effort written out (the same terms in the same order): it runs for every
+            # footstep the search visits.
+            effort += (w_length * ((length - s_init) / span) ** 2
+                       + w_height * (rise / up_range) ** 2
+                       + w_pitch * (memo.pitch[i][cumulative] / pitch_range) ** 2
+                       + w_smooth * ((length - length_before) / span) ** 2)
             prefixes[key] = (effort, s, hold_height, length, cumulative)
             height_before, length_before = hold_height, length
         return effort
@@ -630,15 +668,18 @@ class FootstepPlanner:
                 + w_smooth * ((length - length_before) / span) ** 2)
 
     def _window(self, profile, config, lengths, sides, stance_s, effort, evaluated, memo):
-        ls = lengths[list(config)]
-        arcs = stance_s + np.cumsum(ls)
-        cumulative = np.cumsum(config)
-        return FootstepWindow(lengths=ls, indices=tuple(int(j) for j in config), arc_lengths=arcs,
-                              heights=np.array([memo.height[i][c]
-                                                for i, c in enumerate(cumulative)]),
-                              pitches=np.array([memo.pitch[i][c]
-                                                for i, c in enumerate(cumulative)]),
-                              sides=sides.copy(),
+        # Running sums in plain Python (np.cumsum adds in the same order): a few values.
+        chosen = [float(lengths[j]) for j in config]
+        arcs, heights, pitches, total, cumulative = [], [], [], 0.0, 0
+        for i, (j, length) in enumerate(zip(config, chosen)):
+            total += length
+            cumulative += j
+            arcs.append(stance_s + total)
+            heights.append(memo.height[i][cumulative])
+            pitches.append(memo.pitch[i][cumulative])
+        return FootstepWindow(lengths=np.array(chosen), indices=tuple(int(j) for j in config),
+                              arc_lengths=np.array(arcs), heights=np.array(heights),
+                              pitches=np.array(pitches), sides=sides.copy(),
                               effort=float(effort), evaluated=int(evaluated))
 
 
@@ -684,14 +725,14 @@ def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: f
     height, clearance = environment.ground_height(xy, base_height + max_step_up + 0.02)
     for level in range(1, max(levels, 1)):
         missing = np.isnan(height)
-        if not np.any(missing):
+        if not missing.any():
             break
         z_ref = base_height + (level + 1) * max_step_up + 0.02
         h, c = environment.ground_height(xy[missing], z_ref)
         height[missing], clearance[missing] = h, c
     obstacle = height.copy()
     missing = np.isnan(obstacle)
-    if np.any(missing):
+    if missing.any():
         # Inside a solid the swing must clear its top; over empty space there is nothing to hit.
         top, _ = environment.ground_height(xy[missing], base_height + 3.0)
         obstacle[missing] = top
@@ -699,12 +740,12 @@ def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: f
     height = height.reshape(shape)
     clearance = clearance.reshape(shape)
     obstacle = obstacle.reshape(shape)
-    with np.errstate(invalid='ignore'):
-        high = np.max(height, axis=1)
-        low = np.min(height, axis=1)
-        room = np.min(np.where(np.isnan(clearance), 0.0, clearance), axis=1)
-        # NaN (nothing to hit) read as -inf, so a plain max is the NaN-ignoring one.
-        tops = np.max(np.where(np.isnan(obstacle), -np.inf, obstacle), axis=1)
-        tops[tops == -np.inf] = np.nan
+    # Maxima, minima and comparisons with NaN raise no floating-point warnings: no errstate.
+    high = height.max(axis=1)
+    low = height.min(axis=1)
+    room = np.where(np.isnan(clearance), 0.0, clearance).min(axis=1)
+    # NaN (nothing to hit) read as -inf, so a plain max is the NaN-ignoring one.
+    tops = np.where(np.isnan(obstacle), -np.inf, obstacle).max(axis=1)
+    tops[tops == -np.inf] = np.nan
     return GroundProfile(s0=float(s_start), ds=float(ds), height=high, low=low, headroom=room,
                          obstacle=tops)

@@ -14,6 +14,7 @@ downhill the rear leg is bent first (the pelvis lowers early, before the foot la
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+import math
 from typing import Tuple
 
 import numpy as np
@@ -149,7 +150,7 @@ def standing_stance(skeleton: Skeleton, x: float, y: float, yaw: float, sole: fl
 
 def leg_inverse_kinematics(leg: LegGeometry, hip: np.ndarray, ankle: np.ndarray,
                            plane_yaw: np.ndarray, pelvis_yaw: np.ndarray,
-                           foot_pitch: np.ndarray):
+                           foot_pitch: np.ndarray, plane_direction=None):
     """Sagittal-plane IK of one leg for k frames (§4: legs move in their sagittal planes).
 
     Parameters
@@ -162,6 +163,8 @@ def leg_inverse_kinematics(leg: LegGeometry, hip: np.ndarray, ankle: np.ndarray,
         (k,) pelvis yaw, rad.
     foot_pitch
         (k,) sole pitch, rad, toes up positive.
+    plane_direction
+        Optional (cos, sin) of ``plane_yaw``, each (k,), when the caller has them already.
 
     Returns
     -------
@@ -173,7 +176,10 @@ def leg_inverse_kinematics(leg: LegGeometry, hip: np.ndarray, ankle: np.ndarray,
     # Few frames per call and many calls: minimum/maximum instead of clip and no stacking
     # keep the NumPy call overhead down (the values are the same).
     v = ankle - hip
-    cos_yaw, sin_yaw = np.cos(plane_yaw), np.sin(plane_yaw)
+    if plane_direction is None:
+        cos_yaw, sin_yaw = np.cos(plane_yaw), np.sin(plane_yaw)
+    else:
+        cos_yaw, sin_yaw = plane_direction
     forward = v[:, 0] * cos_yaw + v[:, 1] * sin_yaw
     lateral = v[:, 0] * -sin_yaw + v[:, 1] * cos_yaw
     down = -v[:, 2]
@@ -181,10 +187,11 @@ def leg_inverse_kinematics(leg: LegGeometry, hip: np.ndarray, ankle: np.ndarray,
     l1, l2 = leg.thigh, leg.shank
     reach = distance / (l1 + l2)
     d = np.minimum(np.maximum(distance, 1e-6), l1 + l2)
-    cos_knee = np.minimum(np.maximum((l1 * l1 + l2 * l2 - d * d) / (2 * l1 * l2), -1.0), 1.0)
+    squared = d * d
+    cos_knee = np.minimum(np.maximum((l1 * l1 + l2 * l2 - squared) / (2 * l1 * l2), -1.0), 1.0)
     joints = np.empty((v.shape[0], 4))
     knee = np.pi - np.arccos(cos_knee)
-    cos_beta = np.minimum(np.maximum((l1 * l1 + d * d - l2 * l2) / (2 * l1 * d), -1.0), 1.0)
+    cos_beta = np.minimum(np.maximum((l1 * l1 + squared - l2 * l2) / (2 * l1 * d), -1.0), 1.0)
     hip_pitch = np.arctan2(forward, down) + np.arccos(cos_beta)
     joints[:, 0] = _wrap(plane_yaw - pelvis_yaw)
     joints[:, 1] = hip_pitch
@@ -254,7 +261,7 @@ class _StepTiming:
 def _read_only(value):
     """Mark every array in a (nested) tuple or dict read-only; returns the value."""
     if isinstance(value, np.ndarray):
-        value.flags.writeable = False
+        value.setflags(write=False)
     elif isinstance(value, dict):
         for item in value.values():
             _read_only(item)
@@ -393,15 +400,23 @@ class WalkGenerator:
         yaw = yaw0 + (yaw1 - yaw0) * timing.turn
         lam = lam0 + (lam1 - lam0) * progress
         stance_hip_xy = foot_s.xy + lam[:, None] * d_s
-        pelvis_xy = stance_hip_xy - _lateral(yaw, w_s)
-        swing_hip_xy = pelvis_xy + _lateral(yaw, w_w)
+        # _lateral(yaw, w_s) and _lateral(yaw, w_w) from one sine and cosine of the yaw.
+        sin_yaw, cos_yaw = np.sin(yaw), np.cos(yaw)
+        pelvis_xy = np.empty((k, 2))
+        pelvis_xy[:, 0] = stance_hip_xy[:, 0] - -sin_yaw * w_s
+        pelvis_xy[:, 1] = stance_hip_xy[:, 1] - cos_yaw * w_s
+        swing_hip_xy = np.empty((k, 2))
+        swing_hip_xy[:, 0] = pelvis_xy[:, 0] + -sin_yaw * w_w
+        swing_hip_xy[:, 1] = pelvis_xy[:, 1] + cos_yaw * w_w
 
         # Touchdown: the landing ankle lies in the swing hip's plane at the end of the step.
         d_l = np.array([np.cos(landing_yaw), np.sin(landing_yaw)])
         forward_end = float(np.dot(np.asarray(landing_xy) - swing_hip_xy[-1], d_l))
         land_xy = swing_hip_xy[-1] + forward_end * d_l
         landing = foot_pose_on(land_xy, landing_yaw, landing_sole, landing_pitch, leg)
-        lateral_error = float(np.linalg.norm(land_xy - np.asarray(landing_xy)))
+        # A diagnostic (not in the frames): math on two floats, not np.linalg.norm.
+        error_x, error_y = (land_xy - np.asarray(landing_xy)).tolist()
+        lateral_error = math.sqrt(error_x * error_x + error_y * error_y)
 
         # Swing foot: straight horizontal line with Bezier timing, lifted to clear the ground.
         # The curve parameter is eased in time so the foot leaves and meets the ground at rest.
@@ -416,7 +431,11 @@ class WalkGenerator:
         direction = np.empty((k, 2))
         direction[:, 0] = np.cos(plane_yaw)
         direction[:, 1] = np.sin(plane_yaw)
-        forward = np.sum((wanted_xy - swing_hip_xy) * direction, axis=-1)
+        # The swing leg's IK passes reuse them.
+        plane_direction = (direction[:, 0], direction[:, 1])
+        # A two-term dot product written out (a reduction over an axis of 2 is slow).
+        reach_xy = wanted_xy - swing_hip_xy
+        forward = reach_xy[:, 0] * direction[:, 0] + reach_xy[:, 1] * direction[:, 1]
         swing_xy = swing_hip_xy + forward[:, None] * direction
         # The sole levels out early in the swing (after a heel-off) and takes the landing
         # pitch late, so it is flat while it travels over the ground.
@@ -432,7 +451,7 @@ class WalkGenerator:
         nominal = 0.5 * (foot_s.z + landing.z) + leg.thigh + leg.shank - cfg.pelvis_height_drop
         wanted_z = z0 + (nominal - z0) * timing.weight[category]
         r = cfg.reach_fraction * (leg.thigh + leg.shank)
-        if np.any(np.abs(lam) > r) or np.any(np.abs(forward) > r):
+        if (np.abs(lam) > r).any() or (np.abs(forward) > r).any():
             raise GaitError('footstep out of leg reach')
         stance_bound = foot_s.z + np.sqrt(np.maximum(r * r - lam * lam, 0.0))
         fade = timing.fade
@@ -440,21 +459,25 @@ class WalkGenerator:
         ankle_high = self._leg_upper[swing_side][3] - 0.02
         # The swing sole's real pitch depends on the leg posture (the ankle has limits), and the
         # posture on the swing height: two passes make the clearance test use the real pitch.
-        footprint = self._swing_footprint(timing, foot_w, landing, swing_xy, plane_yaw,
+        footprint = self._swing_footprint(timing, foot_w, landing, swing_xy, direction,
                                           swing_profile)
         # The swing leg's IK of the last pass, when its inputs are final (the pass converged).
         swing_solution = None
+        # The parts of the pelvis height bound that do not change between passes (a minimum
+        # of three is the same in any order).
+        swing_reach = np.sqrt(np.maximum(r * r - forward * forward, 0.0))
+        z_bound = np.minimum(wanted_z, stance_bound)
         for _ in range(5):
             swing_z, lift = self._swing_heights(bezier, foot_w, landing, swing_pitch, footprint)
-            swing_bound = swing_z + np.sqrt(np.maximum(r * r - forward * forward, 0.0))
-            z = np.minimum(wanted_z, np.minimum(stance_bound, swing_bound))
+            z = np.minimum(z_bound, swing_z + swing_reach)
             hip = _points(swing_hip_xy, z)
             ankle = _points(swing_xy, swing_z)
-            solution = leg_inverse_kinematics(leg, hip, ankle, plane_yaw, yaw, swing_pitch)
+            solution = leg_inverse_kinematics(leg, hip, ankle, plane_yaw, yaw, swing_pitch,
+                                              plane_direction)
             joints = solution[0]
             correction = (np.minimum(np.maximum(joints[:, 3], ankle_low), ankle_high)
                           - joints[:, 3]) * fade
-            if np.max(np.abs(correction)) < 0.005:
+            if np.abs(correction).max() < 0.005:
                 swing_solution = (hip, solution)
                 break
             swing_pitch = swing_pitch + correction
@@ -467,19 +490,25 @@ class WalkGenerator:
         pelvis[:, 2] = z
         pelvis[:, 3] = yaw
         frames[:, self._root] = pelvis
-        for side, hip_xy, ankle_xy, ankle_z, plane, pitch in (
-                (stance_side, stance_hip_xy, np.broadcast_to(foot_s.xy, (k, 2)),
-                 np.full(k, foot_s.z), np.full(k, foot_s.yaw), np.full(k, foot_s.pitch)),
-                (swing_side, swing_hip_xy, swing_xy, swing_z, plane_yaw, swing_pitch)):
+        # The stance ankle stays where it is: one row repeated (no broadcast_to, which costs
+        # more than the fill).
+        stance_ankle = np.empty((k, 3))
+        stance_ankle[:, :2] = foot_s.xy
+        stance_ankle[:, 2] = foot_s.z
+        for side, hip_xy, ankle, plane, pitch in (
+                (stance_side, stance_hip_xy, stance_ankle, np.full(k, foot_s.yaw),
+                 np.full(k, foot_s.pitch)),
+                (swing_side, swing_hip_xy, None, plane_yaw, swing_pitch)):
             if side == swing_side and swing_solution is not None:
                 # The same hip, ankle, plane and pitch as the converged pass: same answer.
                 hip, (joints, lateral, reach) = swing_solution
             else:
                 hip = _points(hip_xy, z)
-                ankle = _points(ankle_xy, ankle_z)
+                if ankle is None:
+                    ankle = _points(swing_xy, swing_z)
                 joints, lateral, reach = leg_inverse_kinematics(leg, hip, ankle, plane, yaw,
                                                                 pitch)
-            if side == stance_side and np.any(joints[:, 3] > self._leg_upper[side][3] - 0.03):
+            if side == stance_side and (joints[:, 3] > self._leg_upper[side][3] - 0.03).any():
                 # Heel-off: the stance foot rolls about its toe instead of over-flexing the ankle.
                 joints, foot_s_end = self._heel_off(leg, hip, foot_s, yaw, joints,
                                                     self._leg_upper[side][3] - 0.03)
@@ -492,17 +521,17 @@ class WalkGenerator:
                 wanted = np.minimum(np.maximum(joints[:, 3], self._leg_lower[side][3] + 0.02),
                                     self._leg_upper[side][3] - 0.02)
                 joints[:, 3] += (wanted - joints[:, 3]) * fade
-            if np.max(reach) > 1.0 + 1e-9:
+            if reach.max() > 1.0 + 1e-9:
                 raise GaitError(f'{"left" if side == LEFT else "right"} leg out of reach')
             low, high = self._leg_lower[side], self._leg_upper[side]
             bad = (joints < low - 1e-9) | (joints > high + 1e-9)
-            if np.any(bad):
+            if bad.any():
                 column = int(np.argmax(np.any(bad, axis=0)))
                 name = self.skeleton.joint_names[self._leg_index[side][column]]
                 value = joints[np.any(bad, axis=1)][0, column]
                 raise GaitError(f'{name} would reach {value:.2f} rad, outside its limits')
             frames[:, self._leg_index[side]] = joints
-            lateral_error = max(lateral_error, float(np.max(np.abs(lateral[-1:]))))
+            lateral_error = max(lateral_error, float(np.abs(lateral[-1:]).max()))
         feet = foot_end
         feet[swing_side] = landing
         end = Stance(np.array([pelvis_xy[-1, 0], pelvis_xy[-1, 1], z[-1], yaw1]),
@@ -545,8 +574,10 @@ class WalkGenerator:
         return joints, end
 
     def _swing_footprint(self, timing: _StepTiming, lift_foot: FootPose, landing: FootPose,
-                         swing_xy, plane_yaw, swing_profile):
+                         swing_xy, direction, swing_profile):
         """The ground under the swinging sole at sampled frames (independent of its pitch).
+
+        ``direction`` is (k, 2), the cosine and sine of the swing foot's heading per frame.
 
         Returns
         -------
@@ -559,9 +590,7 @@ class WalkGenerator:
         """
         along, across = self._sole_along, self._sole_across
         samples = timing.samples
-        d = np.empty((samples.size, 2))
-        d[:, 0] = np.cos(plane_yaw[samples])
-        d[:, 1] = np.sin(plane_yaw[samples])
+        d = direction[samples]
         n = np.empty_like(d)
         n[:, 0] = -d[:, 1]
         n[:, 1] = d[:, 0]
@@ -582,7 +611,8 @@ class WalkGenerator:
         slack = 0.015 * (1.0 - ramp)
         sampled = ((1 - b) ** 3, 3 * b * (1 - b) ** 2, 3 * b * b * (1 - b), b ** 3)
         frames = ((1 - tau) ** 3, 3 * tau * (1 - tau) ** 2, 3 * tau * tau * (1 - tau), tau ** 3)
-        return b, ramp, slack, sampled, frames
+        # The clearance the sole keeps at each sample (full away from lift-off and touchdown).
+        return b, self.config.swing_clearance * ramp, slack, sampled, frames
 
     def _swing_heights(self, tau, lift_foot: FootPose, landing: FootPose, swing_pitch,
                        footprint):
@@ -596,12 +626,12 @@ class WalkGenerator:
         """
         cfg, leg = self.config, self.leg
         z0, z1 = lift_foot.z, landing.z
-        samples, along, tops, (b, ramp, slack, sampled, frames) = footprint
+        samples, along, tops, (b, clearance, slack, sampled, frames) = footprint
         # Ground relative to a sole pitched like the foot: what the ankle must stay above.
-        tops = tops - along[None, :, None] * np.sin(swing_pitch[samples])[:, None, None]
-        ground = np.max(tops.reshape(len(samples), -1), axis=1)
-        need = (ground + leg.ankle_height * np.cos(swing_pitch[samples])
-                + cfg.swing_clearance * ramp)
+        pitch = swing_pitch[samples]
+        tops = tops - along[None, :, None] * np.sin(pitch)[:, None, None]
+        ground = tops.reshape(len(samples), -1).max(axis=1)
+        need = ground + leg.ankle_height * np.cos(pitch) + clearance
         basis_0, basis_1, basis_2, basis_3 = sampled
         # Off a heel-off the toe is on the ground: lift more briskly so it does not scuff.
         h1 = cfg.swing_lift * (2.0 if lift_foot.pitch < -0.05 else 1.0) + max(0.0, z1 - z0)
@@ -610,7 +640,7 @@ class WalkGenerator:
         for _ in range(12):
             curve = start + basis_1 * (z0 + h1) + basis_2 * (z1 + h2) + end
             short = need - curve - slack
-            worst = int(np.argmax(short))
+            worst = int(short.argmax())
             if short[worst] <= 1e-4:
                 break
             weight = basis_1[worst] + basis_2[worst]

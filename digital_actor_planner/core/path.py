@@ -74,10 +74,36 @@ class PredictedPath:
         s = np.asarray(s, dtype=float)
         lateral = np.asarray(lateral, dtype=float)
         x, y, _, sin, cos = self._points(s)
-        out = np.empty(np.broadcast_shapes(s.shape, lateral.shape) + (2,))
         # The track's normal (left of the heading) is (-sin, cos).
+        track_x = x - lateral * sin
+        out = np.empty(track_x.shape + (2,))
+        out[..., 0] = track_x
+        out[..., 1] = y + lateral * cos
+        return out
+
+    def offset_poses(self, s: np.ndarray, lateral) -> np.ndarray:
+        """Points on parallel tracks with the path's heading there: :meth:`offset_points` and
+        the heading column of :meth:`poses` from one evaluation of the path.
+
+        Parameters
+        ----------
+        s
+            (N,) arc lengths, m.
+        lateral
+            Scalar or (N,) offsets to the left of the path, m.
+
+        Returns
+        -------
+        numpy.ndarray
+            (N, 3) x (m), y (m), heading (rad).
+
+        """
+        s = np.asarray(s, dtype=float)
+        x, y, heading, sin, cos = self._points(s)
+        out = np.empty(s.shape + (3,))
         out[..., 0] = x - lateral * sin
         out[..., 1] = y + lateral * cos
+        out[..., 2] = heading
         return out
 
     def _points(self, s: np.ndarray):

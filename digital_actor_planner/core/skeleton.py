@@ -196,6 +196,30 @@ def _compile_plan(plan) -> tuple:
             np.array(prismatic_q, dtype=int))
 
 
+def _compose(qs: np.ndarray, links, terms, out: np.ndarray) -> None:
+    """Compose a compiled chain (see :func:`_compile_plan`) for configurations ``qs`` (k, 22).
+
+    ``links`` (parents, children) index the link-major ``out`` (L, k, 4, 4), whose row 0 is the
+    root (set to the identity here); ``terms`` are the rest of the compiled plan.
+    """
+    parents, children = links
+    basis, revolute, revolute_q, prismatic, prismatic_q = terms
+    k = qs.shape[0]
+    out[0] = _IDENTITY
+    # Local transforms A + w1 B + w2 C (see _compile_plan) for all joints and frames as one
+    # batched (k, 3) @ (3, 16) product per joint (far cheaper than one (1, 3) @ (3, 16)
+    # product per joint and frame).
+    weights = np.zeros((len(parents), k, 3))
+    weights[:, :, 0] = 1.0
+    angles = qs[:, revolute_q].T
+    weights[revolute, :, 1] = np.cos(angles)
+    weights[revolute, :, 2] = np.sin(angles)
+    weights[prismatic, :, 1] = qs[:, prismatic_q].T
+    local = (weights @ basis).reshape(len(parents), k, 4, 4)
+    for j, (parent, child) in enumerate(zip(parents, children)):
+        np.matmul(out[parent], local[j], out=out[child])
+
+
 class Skeleton:
     """The actor's kinematic tree, joint order and limits, read from a URDF.
 
@@ -286,6 +310,9 @@ class Skeleton:
         self._partial_plans = {}
         # Link index and origin of each shape, per tuple of shape indices (None: all shapes).
         self._shape_layouts = {}
+        # Compact chain, link rows and origins per tuple of shape indices (shape_transforms_at).
+        self._shape_chains = {}
+        self._branches = {}
         self._chain_plan = tuple(
             (self.link_index[j.parent], self.link_index[j.child], j.origin,
              self.index.get(j.name, -1), j.kind, j.axis) for j in order)
@@ -352,6 +379,15 @@ class Skeleton:
 
         ``name`` is 'root', 'waist', 'left_arm', 'right_arm', 'left_leg' or 'right_leg'.
         """
+        # Built once per name (the motion patterns ask for them every step); a copy each time
+        # so a caller may change its own.
+        cached = self._branches.get(name)
+        if cached is None:
+            cached = self._branch(name)
+            self._branches[name] = cached
+        return cached.copy()
+
+    def _branch(self, name: str) -> np.ndarray:
         if name == 'root':
             return self.indices(*ROOT_JOINTS)
         if name == 'waist':
@@ -418,28 +454,61 @@ class Skeleton:
         if qs.shape[-1] != len(self.joint_names):
             raise ValueError(f'configuration has {qs.shape[-1]} values, expected '
                              f'{len(self.joint_names)}')
-        k = qs.shape[0]
         # Link-major (L, k, 4, 4) so each joint composes contiguous (k, 4, 4) blocks; the
         # result is returned as a (k, L, 4, 4) view.
-        shape = (len(self.link_names), k, 4, 4)
+        shape = (len(self.link_names), qs.shape[0], 4, 4)
         out = np.empty(shape) if links is None else np.zeros(shape)
-        out[0] = _IDENTITY
         chain = self._chain_compiled if links is None else self._plan_for(links)
-        parents, children, basis, revolute, revolute_q, prismatic, prismatic_q = chain
-        # Local transforms A + w1 B + w2 C (see _compile_plan) for all joints and frames as one
-        # batched (k, 3) @ (3, 16) product per joint (far cheaper than one (1, 3) @ (3, 16)
-        # product per joint and frame).
-        weights = np.zeros((len(parents), k, 3))
-        weights[:, :, 0] = 1.0
-        angles = qs[:, revolute_q].T
-        weights[revolute, :, 1] = np.cos(angles)
-        weights[revolute, :, 2] = np.sin(angles)
-        weights[prismatic, :, 1] = qs[:, prismatic_q].T
-        local = (weights @ basis).reshape(len(parents), k, 4, 4)
-        for j, (parent, child) in enumerate(zip(parents, children)):
-            np.matmul(out[parent], local[j], out=out[child])
+        _compose(qs, chain[:2], chain[2:], out)
         out = out.transpose(1, 0, 2, 3)
         return out[0] if single else out
+
+    def shape_transforms_at(self, q: np.ndarray, shapes) -> np.ndarray:
+        """World transforms of some collision shapes straight from configurations.
+
+        The same as ``shape_transforms(forward_kinematics(q, links), shapes)`` for the shapes'
+        links, but only the links the shapes hang from (and their ancestors) are composed,
+        in a compact array.
+
+        Parameters
+        ----------
+        q
+            (k, 22) configurations, rad or m.
+        shapes
+            Indices into ``collision_shapes``.
+
+        Returns
+        -------
+        numpy.ndarray
+            (k, S, 4, 4) shape->world transforms, in ``shapes`` order (C-contiguous).
+
+        """
+        key = tuple(int(i) for i in shapes)
+        layout = self._shape_chains.get(key)
+        if layout is None:
+            chain = self._plan_for({self.collision_shapes[i].link for i in key})
+            # Compact rows: 0 the root link (identity), then each joint's child in plan order.
+            row = {0: 0}
+            for child in chain[1]:
+                row[child] = len(row)
+            links = (tuple(row[p] for p in chain[0]), tuple(row[c] for c in chain[1]))
+            layout = (links, chain[2:],
+                      np.array([row[self.link_index[self.collision_shapes[i].link]]
+                                for i in key], dtype=int),
+                      np.stack([self.collision_shapes[i].origin for i in key]))
+            self._shape_chains[key] = layout
+        links, terms, rows, origins = layout
+        qs = np.asarray(q, dtype=float)
+        if qs.ndim != 2 or qs.shape[1] != len(self.joint_names):
+            raise ValueError(f'configurations must have shape (k, {len(self.joint_names)}), '
+                             f'got {qs.shape}')
+        k = qs.shape[0]
+        out = np.empty((len(links[1]) + 1, k, 4, 4))
+        _compose(qs, links, terms, out)
+        # Each shape's origin for all frames as one (4 k, 4) @ (4, 4) product, not k (4, 4)
+        # ones.
+        placed = (out[rows].reshape(len(rows), 4 * k, 4) @ origins).reshape(len(rows), k, 4, 4)
+        return np.ascontiguousarray(placed.transpose(1, 0, 2, 3))
 
     def link_transform(self, q: np.ndarray, link: str) -> np.ndarray:
         """World transform(s) of one link: (4, 4) or (k, 4, 4)."""
