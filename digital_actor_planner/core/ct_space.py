@@ -442,6 +442,78 @@ class TimedBody:
         self.shape_lower, self.shape_upper = shapes.bounds(self.shape_rotation,
                                                            self.shape_centre, every)
 
+    def first_collision(self, checked: np.ndarray, pairs: np.ndarray,
+                        frames: Optional[np.ndarray] = None) -> int:
+        """First frame at which a checked shape touches the environment or its pair's shape.
+
+        Uses the poses the body already holds (no kinematics): the broad phase over all the
+        frames at once, the narrow phase in FCL in frame order, stopping at the first collision.
+
+        Parameters
+        ----------
+        checked
+            (n,) shapes to check.
+        pairs
+            (P, 2) shape pairs (a checked shape, a body shape it must not touch).
+        frames
+            (m,) frame indices to check, in increasing order (default: every frame).
+
+        Returns
+        -------
+        int
+            The first frame in collision, or -1.
+
+        """
+        if frames is None:
+            frames = np.arange(len(self.frames))
+        frames = np.asarray(frames, dtype=int)
+        if not len(frames) or not len(checked):
+            return -1
+        shapes = self.shapes
+        environment = self.environment
+        lower, upper = self.shape_lower[frames], self.shape_upper[frames]
+        low, high = lower[:, checked], upper[:, checked]
+        rows, targets, owners = [], [], []
+        near = self.triangles_near(low.min(axis=(0, 1)), high.max(axis=(0, 1)))
+        if len(near):
+            owner = environment.owner[near]
+            row, column, mesh = mesh_contacts(low, high, environment.lower[near],
+                                              environment.upper[near], owner,
+                                              int(owner.max()) + 1)
+            rows.append(row)
+            targets.append(checked[column])
+            owners.append(-1 - mesh)
+        if len(pairs):
+            a, b = pairs[:, 0], pairs[:, 1]
+            # Only pairs whose boxes swept over the frames meet can meet at one of them.
+            active = boxes_overlap(lower[:, a].min(axis=0), upper[:, a].max(axis=0),
+                                   lower[:, b].min(axis=0), upper[:, b].max(axis=0))
+            a, b = a[active], b[active]
+            if len(a):
+                row, pair = np.nonzero(boxes_overlap(lower[:, a], upper[:, a], lower[:, b],
+                                                     upper[:, b]))
+                rows.append(row)
+                targets.append(a[pair])
+                owners.append(b[pair])
+        if not rows:
+            return -1
+        rows = np.concatenate(rows)
+        order = np.argsort(rows, kind='stable')
+        shape_of = np.concatenate(targets)[order].tolist()
+        other_of = np.concatenate(owners)[order].tolist()
+        for row, shape, other in zip(rows[order].tolist(), shape_of, other_of):
+            frame = int(frames[row])
+            if other < 0:
+                target = environment.object_of(-1 - other)
+            else:
+                target = shapes.objects[other]
+                target.setTransform(fcl.Transform(self.shape_rotation[frame, other],
+                                                  self.shape_centre[frame, other]))
+            if shapes.collides(shape, self.shape_rotation[frame, shape],
+                               self.shape_centre[frame, shape], target):
+                return frame
+        return -1
+
     def set_branch(self, indices: np.ndarray, values: np.ndarray,
                    steps: Sequence[_Step]) -> None:
         """Fix a planned branch: write its (k, d) values and update the poses of its subtree."""
@@ -499,6 +571,64 @@ def mesh_contacts(low: np.ndarray, high: np.ndarray, triangle_lower: np.ndarray,
     return np.nonzero(hit)
 
 
+def branch_layout(kinematics: BodyKinematics, shapes: BodyShapes, branch: str,
+                  checked_links: Sequence[str], obstacle_links: Sequence[str]) -> tuple:
+    """The model-only data of a branch, built once and kept in ``shapes.branch_layouts``.
+
+    Returns
+    -------
+    tuple
+        (steps that move with the branch, checked shapes (n,) int, steps needed for the
+        checks, shape pairs (P, 2) int, link at the centre of its reach, reach radius m).
+
+    """
+    key = (branch, tuple(checked_links), tuple(obstacle_links), id(kinematics))
+    layout = shapes.branch_layouts.get(key)
+    if layout is not None:
+        return layout
+    skeleton = kinematics.skeleton
+    joint_names = tuple(skeleton.joint_names[i] for i in skeleton.branch(branch))
+    steps = kinematics.subtree_steps(joint_names)
+    moving = {step.child for step in steps}
+    checked = shapes.shapes_of(checked_links)
+    checked = checked[np.isin(shapes.link[checked], list(moving))]
+    # Only the links on the way to the checked shapes matter for validity.
+    needed = set(shapes.link[checked].tolist())
+    parent_of = {step.child: step.parent for step in steps}
+    for link in list(needed):
+        while link in parent_of:
+            link = parent_of[link]
+            needed.add(link)
+    check_steps = tuple(step for step in steps if step.child in needed)
+    pairs = shapes.pairs(checked, shapes.shapes_of(obstacle_links))
+    first, reach = _reach_bound(shapes, steps, checked)
+    layout = (steps, checked, check_steps, pairs, first, reach)
+    shapes.branch_layouts[key] = layout
+    return layout
+
+
+def _reach_bound(shapes: BodyShapes, steps: Sequence[_Step],
+                 checked: np.ndarray) -> Tuple[int, float]:
+    """Link at the centre and radius (m) of a ball holding the checked shapes at any pose.
+
+    The centre is the branch's first joint, which the branch itself cannot move; the radius
+    is the longest chain of joint offsets from it plus the shape's own extent.
+    """
+    if not steps:
+        return 0, 0.0
+    first = steps[0].child
+    link_reach = {first: 0.0}
+    for step in steps[1:]:
+        link_reach[step.child] = (link_reach.get(step.parent, 0.0)
+                                  + float(np.linalg.norm(step.origin_translation)))
+    reach = 0.0
+    for shape in checked:
+        radius = float(np.linalg.norm(shapes.half[shape]))
+        offset = float(np.linalg.norm(shapes.origin_translation[shape]))
+        reach = max(reach, link_reach.get(int(shapes.link[shape]), 0.0) + offset + radius)
+    return first, reach
+
+
 class CTSpace:
     """Configuration-time space of one branch, with OMPL-shaped queries (paper §5.2).
 
@@ -540,11 +670,8 @@ class CTSpace:
         self.speed_limit = skeleton.velocity_limit[self.indices]
         self.time_weight = float(time_weight)
         # What depends on the model only is worked out once per branch and reused every step.
-        key = (branch, tuple(checked_links), tuple(obstacle_links), id(body.kinematics))
-        layout = body.shapes.branch_layouts.get(key)
-        if layout is None:
-            layout = self._branch_layout(body, checked_links, obstacle_links)
-            body.shapes.branch_layouts[key] = layout
+        layout = branch_layout(body.kinematics, body.shapes, branch, checked_links,
+                               obstacle_links)
         #: steps: the steps to re-evaluate when the branch moves (all links it carries).
         self.steps, self.checked, self._check_steps, self.pairs, first, self._reach = layout
         self._reach_centre = body.positions[:, first]
@@ -567,49 +694,6 @@ class CTSpace:
         self._pair_swept_upper = self._pair_upper.max(axis=0)
         self._prepare_environment()
         self.checks = 0
-
-    def _branch_layout(self, body: TimedBody, checked_links: Sequence[str],
-                       obstacle_links: Sequence[str]) -> tuple:
-        """The branch's model-only data: (steps, checked shapes, steps needed for the checks,
-        shape pairs, link at the centre of its reach, reach radius m)."""
-        steps = body.kinematics.subtree_steps(self.joint_names)
-        moving = {step.child for step in steps}
-        shapes = body.shapes
-        checked = shapes.shapes_of(checked_links)
-        checked = checked[np.isin(shapes.link[checked], list(moving))]
-        # Only the links on the way to the checked shapes matter for validity.
-        needed = set(shapes.link[checked].tolist())
-        parent_of = {step.child: step.parent for step in steps}
-        for link in list(needed):
-            while link in parent_of:
-                link = parent_of[link]
-                needed.add(link)
-        check_steps = tuple(step for step in steps if step.child in needed)
-        pairs = shapes.pairs(checked, shapes.shapes_of(obstacle_links))
-        first, reach = self._reach_bound(shapes, steps, checked)
-        return steps, checked, check_steps, pairs, first, reach
-
-    @staticmethod
-    def _reach_bound(shapes: BodyShapes, steps: Sequence[_Step],
-                     checked: np.ndarray) -> Tuple[int, float]:
-        """Link at the centre and radius (m) of a ball holding the checked shapes at any pose.
-
-        The centre is the branch's first joint, which the branch itself cannot move; the radius
-        is the longest chain of joint offsets from it plus the shape's own extent.
-        """
-        if not steps:
-            return 0, 0.0
-        first = steps[0].child
-        link_reach = {first: 0.0}
-        for step in steps[1:]:
-            link_reach[step.child] = (link_reach.get(step.parent, 0.0)
-                                      + float(np.linalg.norm(step.origin_translation)))
-        reach = 0.0
-        for shape in checked:
-            radius = float(np.linalg.norm(shapes.half[shape]))
-            offset = float(np.linalg.norm(shapes.origin_translation[shape]))
-            reach = max(reach, link_reach.get(int(shapes.link[shape]), 0.0) + offset + radius)
-        return first, reach
 
     def _prepare_environment(self) -> None:
         """Keep only triangles the branch could reach during the step (§5: broad phase)."""

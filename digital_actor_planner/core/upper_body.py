@@ -16,8 +16,8 @@ import numpy as np
 
 from digital_actor_planner.core.ct_roadmap import CTRoadmap
 from digital_actor_planner.core.ct_space import (
-    BodyKinematics, BodyShapes, boxes_overlap, CTSpace, EnvironmentIndex, mesh_contacts,
-    TimedBody)
+    BodyKinematics, BodyShapes, boxes_overlap, branch_layout, CTSpace, EnvironmentIndex,
+    mesh_contacts, TimedBody)
 from digital_actor_planner.core.skeleton import Skeleton
 
 #: Shoulder roll that keeps a hanging arm clear of the torso and the thigh, rad.
@@ -362,11 +362,10 @@ class UpperBodyPlanner:
             objective[0] = np.clip(2 * objective[1] - objective[2] if last >= 2
                                    else objective[1], self.skeleton.lower[indices],
                                    self.skeleton.upper[indices])
-            space = CTSpace(name, body, times, objective, self._checked[name],
-                            self._obstacles[name], config.time_weight)
             record = dict(ok=True, fast=False, nodes=0, backtracks=0, grown=0)
             path = None
-            start_legal, objective_legal = self._start_and_objective(space, start)
+            checks = 0
+            start_legal, objective_legal = self.start_and_objective(times, body, name)
             if not start_legal:
                 ok, record['ok'], blocked_frame = False, False, 0
                 links = self._links_in_collision(frames[0], name)
@@ -377,6 +376,9 @@ class UpperBodyPlanner:
                 path = objective.copy()
                 record['fast'] = True
             else:
+                # Only a branch that must leave its motion pattern needs its CT-space.
+                space = CTSpace(name, body, times, objective, self._checked[name],
+                                self._obstacles[name], config.time_weight)
                 result = self.roadmaps[name].solve(
                     space, start, hold_frames=config.hold_frames,
                     speed_fraction=config.speed_fraction,
@@ -390,6 +392,7 @@ class UpperBodyPlanner:
                               grown=result.grown, ok=result.ok,
                               preview_backtracks=result.preview_backtracks)
                 path = result.path
+                steps, checks = space.steps, space.checks
                 if not result.ok:
                     ok, blocked_frame = False, result.blocked_frame
                     reason = f'{name} blocked at t={times[blocked_frame]:.2f} s' + (
@@ -397,9 +400,10 @@ class UpperBodyPlanner:
             if path is not None and record['ok']:
                 path[0] = start
                 out[:, indices] = path
-                body.set_branch(indices, path, space.steps)
+                if not record['fast']:
+                    body.set_branch(indices, path, steps)
             record['deviation'] = float(np.max(np.abs(out[1:, indices] - frames[1:, indices])))
-            record['checks'] = space.checks
+            record['checks'] = checks
             record['time'] = time.perf_counter() - tic
             per_branch[name] = record
             if not ok:
@@ -409,6 +413,45 @@ class UpperBodyPlanner:
         return UpperBodyPlan(frames=out, ok=ok, reason=reason, deviation=deviation,
                              planning_time=time.perf_counter() - began, per_branch=per_branch,
                              blocked_frame=blocked_frame)
+
+    def start_and_objective(self, times: np.ndarray, body: TimedBody,
+                            name: str) -> Tuple[bool, bool]:
+        """Whether a branch's start is legal, and whether its motion in ``body`` is.
+
+        Before the branch is planned its columns of ``body`` hold its start at frame 0, then
+        its objective: the motion its fast path would take. Checked on the poses ``body``
+        already holds (no kinematics), in one batch for both answers, with the shapes, pairs
+        and narrow phase of the branch's :class:`CTSpace`.
+
+        Parameters
+        ----------
+        times
+            (k,) frame times, s.
+        body
+            The actor over the step, with the branches before ``name`` fixed.
+        name
+            The branch.
+
+        Returns
+        -------
+        tuple of bool
+            (start legal at frame 0, the whole motion legal: start included).
+
+        """
+        _, checked, _, pairs, _, _ = branch_layout(self.kinematics, self.shapes, name,
+                                                   self._checked[name], self._obstacles[name])
+        indices = self.indices[name]
+        path = body.frames[:, indices]
+        skeleton = self.skeleton
+        inside = np.all((path >= skeleton.lower[indices] - 1e-9)
+                        & (path <= skeleton.upper[indices] + 1e-9), axis=1)
+        speed = np.abs(np.diff(path, axis=0)) / np.diff(times)[:, None]
+        if np.any(speed > skeleton.velocity_limit[indices] * (1 + 1e-6)):
+            return bool(inside[0]) and body.first_collision(checked, pairs, [0]) < 0, False
+        if not inside.all():
+            return bool(inside[0]) and body.first_collision(checked, pairs, [0]) < 0, False
+        bad = body.first_collision(checked, pairs)
+        return bad != 0, bad < 0
 
     @staticmethod
     def _start_and_objective(space: CTSpace, start: np.ndarray) -> Tuple[bool, bool]:
