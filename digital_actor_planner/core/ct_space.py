@@ -279,8 +279,11 @@ class BodyShapes:
     def poses(self, rotations: np.ndarray, positions: np.ndarray,
               shapes: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
         """World poses of some shapes: rotations (k, n, 3, 3) and centres (k, n, 3), m."""
-        link_rotation = rotations[:, self.link[shapes]]
-        centre = positions[:, self.link[shapes]] + (
+        # take() keeps the result C-ordered (fancy indexing a middle axis does not), which
+        # keeps later reductions over it on NumPy's fast path.
+        links = self.link[shapes]
+        link_rotation = rotations.take(links, axis=1)
+        centre = positions.take(links, axis=1) + (
             link_rotation @ self.origin_translation[shapes][:, :, None])[..., 0]
         if self.identity_origin[shapes].all():
             return link_rotation, centre
@@ -426,8 +429,8 @@ class TimedBody:
         environment = self.environment
         if (self._near is None or np.any(lower < self._near_lower)
                 or np.any(upper > self._near_upper)):
-            box_lower = np.minimum(lower, self.shape_lower.min(axis=(0, 1)) - NEAR_MARGIN)
-            box_upper = np.maximum(upper, self.shape_upper.max(axis=(0, 1)) + NEAR_MARGIN)
+            box_lower = np.minimum(lower, self.swept_lower.min(axis=0) - NEAR_MARGIN)
+            box_upper = np.maximum(upper, self.swept_upper.max(axis=0) + NEAR_MARGIN)
             self._near = environment.triangles_near(box_lower, box_upper)
             self._near_lower, self._near_upper = box_lower, box_upper
         near = self._near
@@ -441,6 +444,9 @@ class TimedBody:
                                                               every)
         self.shape_lower, self.shape_upper = shapes.bounds(self.shape_rotation,
                                                            self.shape_centre, every)
+        #: (S, 3) box corners of every shape swept over the step, m.
+        self.swept_lower = self.shape_lower.min(axis=0)
+        self.swept_upper = self.shape_upper.max(axis=0)
 
     def first_collision(self, checked: np.ndarray, pairs: np.ndarray,
                         frames: Optional[np.ndarray] = None) -> int:
@@ -472,9 +478,11 @@ class TimedBody:
         shapes = self.shapes
         environment = self.environment
         lower, upper = self.shape_lower[frames], self.shape_upper[frames]
-        low, high = lower[:, checked], upper[:, checked]
+        low, high = lower.take(checked, axis=1), upper.take(checked, axis=1)
         rows, targets, owners = [], [], []
-        near = self.triangles_near(low.min(axis=(0, 1)), high.max(axis=(0, 1)))
+        # The boxes swept over the whole step hold those at the frames checked.
+        near = self.triangles_near(self.swept_lower[checked].min(axis=0),
+                                   self.swept_upper[checked].max(axis=0))
         if len(near):
             owner = environment.owner[near]
             row, column, mesh = mesh_contacts(low, high, environment.lower[near],
@@ -485,13 +493,15 @@ class TimedBody:
             owners.append(-1 - mesh)
         if len(pairs):
             a, b = pairs[:, 0], pairs[:, 1]
-            # Only pairs whose boxes swept over the frames meet can meet at one of them.
-            active = boxes_overlap(lower[:, a].min(axis=0), upper[:, a].max(axis=0),
-                                   lower[:, b].min(axis=0), upper[:, b].max(axis=0))
+            # Only pairs whose boxes swept over the step meet can meet at one of its frames.
+            swept_lower, swept_upper = self.swept_lower, self.swept_upper
+            active = boxes_overlap(swept_lower[a], swept_upper[a], swept_lower[b],
+                                   swept_upper[b])
             a, b = a[active], b[active]
             if len(a):
-                row, pair = np.nonzero(boxes_overlap(lower[:, a], upper[:, a], lower[:, b],
-                                                     upper[:, b]))
+                row, pair = np.nonzero(boxes_overlap(
+                    lower.take(a, axis=1), upper.take(a, axis=1), lower.take(b, axis=1),
+                    upper.take(b, axis=1)))
                 rows.append(row)
                 targets.append(a[pair])
                 owners.append(b[pair])
@@ -528,6 +538,8 @@ class TimedBody:
         self.shape_centre[:, moved] = centre
         self.shape_lower[:, moved], self.shape_upper[:, moved] = self.shapes.bounds(
             rotation, centre, moved)
+        self.swept_lower = self.shape_lower.min(axis=0)
+        self.swept_upper = self.shape_upper.max(axis=0)
 
 
 def boxes_overlap(lower_a: np.ndarray, upper_a: np.ndarray, lower_b: np.ndarray,
@@ -541,6 +553,21 @@ def boxes_overlap(lower_a: np.ndarray, upper_a: np.ndarray, lower_b: np.ndarray,
         out &= upper_a[..., axis] >= lower_b[..., axis]
         out &= lower_a[..., axis] <= upper_b[..., axis]
     return out
+
+
+def span(lower: np.ndarray, upper: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+    """The box around boxes with corners (m, n, 3): lower and upper corners (3,), m.
+
+    Reduces over the rows first: reducing a large array straight to 3 values is one of
+    NumPy's slow paths (a short innermost output), about 10x slower.
+    """
+    m = len(lower)
+    if m > 1:
+        lower = lower.reshape(m, -1).min(axis=0).reshape(-1, 3)
+        upper = upper.reshape(m, -1).max(axis=0).reshape(-1, 3)
+    else:
+        lower, upper = lower.reshape(-1, 3), upper.reshape(-1, 3)
+    return lower.min(axis=0), upper.max(axis=0)
 
 
 def mesh_contacts(low: np.ndarray, high: np.ndarray, triangle_lower: np.ndarray,
@@ -679,19 +706,19 @@ class CTSpace:
         # shape tested once, however many of the branch's shapes it pairs with).
         obstacle, pair_obstacle = np.unique(self.pairs[:, 1], return_inverse=True)
         centre = self._reach_centre[:, None]
-        gap = np.maximum(np.maximum(body.shape_lower[:, obstacle] - centre, 0.0),
-                         centre - body.shape_upper[:, obstacle])
+        gap = np.maximum(np.maximum(body.shape_lower.take(obstacle, axis=1) - centre, 0.0),
+                         centre - body.shape_upper.take(obstacle, axis=1))
         reachable = np.any(np.sum(gap * gap, axis=-1) <= self._reach ** 2, axis=0)
         self.pairs = self.pairs[reachable[pair_obstacle.ravel()]]
         # The obstacle shapes do not move while this branch is planned.
         other = self.pairs[:, 1]
-        self._pair_rotation = body.shape_rotation[:, other]
-        self._pair_centre = body.shape_centre[:, other]
-        self._pair_lower = body.shape_lower[:, other]
-        self._pair_upper = body.shape_upper[:, other]
+        self._pair_rotation = body.shape_rotation.take(other, axis=1)
+        self._pair_centre = body.shape_centre.take(other, axis=1)
+        self._pair_lower = body.shape_lower.take(other, axis=1)
+        self._pair_upper = body.shape_upper.take(other, axis=1)
         self._pair_column = np.searchsorted(self.checked, self.pairs[:, 0])
-        self._pair_swept_lower = self._pair_lower.min(axis=0)
-        self._pair_swept_upper = self._pair_upper.max(axis=0)
+        self._pair_swept_lower = body.swept_lower[other]
+        self._pair_swept_upper = body.swept_upper[other]
         self._prepare_environment()
         self.checks = 0
 
@@ -715,8 +742,7 @@ class CTSpace:
         """
         if not len(self._triangle_lower) or not low.size:
             return np.zeros(0, dtype=int)
-        lower = low.reshape(-1, 3).min(axis=0)
-        upper = high.reshape(-1, 3).max(axis=0)
+        lower, upper = span(low, high)
         return np.flatnonzero(boxes_overlap(lower, upper, self._triangle_lower,
                                             self._triangle_upper))
 
@@ -992,8 +1018,35 @@ class CTSpace:
                 done += 1
             size *= 2
 
-    def _broad_phase(self, q: np.ndarray, frames: np.ndarray) -> tuple:
-        """Boxes of the branch's shapes against triangles and body shapes, all rows at once."""
+    def _shape_boxes(self, q: np.ndarray, frames: np.ndarray) -> tuple:
+        """Poses and boxes of the branch's checked shapes for a batch of rows.
+
+        Rows where the branch is where the body already holds it (the objective, or the start
+        at frame 0, before the branch is fixed) take the body's poses; only the others need
+        kinematics.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            Rotations (m, n, 3, 3), centres (m, n, 3) and box corners (m, n, 3) x 2, m.
+
+        """
+        body = self.body
+        checked = self.checked
+        held = np.all(q == body.frames[frames[:, None], self.indices], axis=1)
+        if not held.any():
+            return self._kinematic_boxes(q, frames)
+        at = (frames[:, None], checked)
+        rotation, centre = body.shape_rotation[at], body.shape_centre[at]
+        low, high = body.shape_lower[at], body.shape_upper[at]
+        moved = np.flatnonzero(~held)
+        if len(moved):
+            rotation[moved], centre[moved], low[moved], high[moved] = self._kinematic_boxes(
+                q[moved], frames[moved])
+        return rotation, centre, low, high
+
+    def _kinematic_boxes(self, q: np.ndarray, frames: np.ndarray) -> tuple:
+        """Like :meth:`_shape_boxes`, by forward kinematics of the branch's links."""
         body = self.body
         full = body.frames[frames]
         full[:, self.indices] = q
@@ -1003,6 +1056,11 @@ class CTSpace:
         shapes = body.shapes
         rotation, centre = shapes.poses(rotations, positions, self.checked)
         low, high = shapes.bounds(rotation, centre, self.checked)
+        return rotation, centre, low, high
+
+    def _broad_phase(self, q: np.ndarray, frames: np.ndarray) -> tuple:
+        """Boxes of the branch's shapes against triangles and body shapes, all rows at once."""
+        rotation, centre, low, high = self._shape_boxes(q, frames)
         suspects: Dict[int, list] = {}
         near = self._triangles_near(low, high)
         if len(near):
@@ -1019,7 +1077,7 @@ class CTSpace:
             if len(active):
                 columns = self._pair_column[active]
                 rows, which = np.nonzero(boxes_overlap(
-                    low[:, columns], high[:, columns],
+                    low.take(columns, axis=1), high.take(columns, axis=1),
                     self._pair_lower[frames[:, None], active], self._pair_upper[frames[:, None],
                                                                                 active]))
                 for row, pair in zip(rows.tolist(), active[which].tolist()):

@@ -489,9 +489,11 @@ class UpperBodyPlanner:
             return False
         shapes = self.shapes
         upper_shapes = self._upper_shapes
-        low, high = body.shape_lower[:, upper_shapes], body.shape_upper[:, upper_shapes]
+        low = body.shape_lower.take(upper_shapes, axis=1)
+        high = body.shape_upper.take(upper_shapes, axis=1)
         environment = self.environment
-        near = body.triangles_near(low.min(axis=(0, 1)), high.max(axis=(0, 1)))
+        near = body.triangles_near(body.swept_lower[upper_shapes].min(axis=0),
+                                   body.swept_upper[upper_shapes].max(axis=0))
         if len(near):
             owner = environment.owner[near]
             frames, columns, owners = mesh_contacts(
@@ -505,11 +507,12 @@ class UpperBodyPlanner:
                     return False
         a, b = self._upper_pairs[:, 0], self._upper_pairs[:, 1]
         # Only pairs whose boxes swept over the step meet can meet at some frame.
-        swept_lower, swept_upper = body.shape_lower.min(axis=0), body.shape_upper.max(axis=0)
+        swept_lower, swept_upper = body.swept_lower, body.swept_upper
         active = boxes_overlap(swept_lower[a], swept_upper[a], swept_lower[b], swept_upper[b])
         a, b = a[active], b[active]
-        frames, pairs = np.nonzero(boxes_overlap(body.shape_lower[:, a], body.shape_upper[:, a],
-                                                 body.shape_lower[:, b], body.shape_upper[:, b]))
+        lower, upper = body.shape_lower, body.shape_upper
+        frames, pairs = np.nonzero(boxes_overlap(lower.take(a, axis=1), upper.take(a, axis=1),
+                                                 lower.take(b, axis=1), upper.take(b, axis=1)))
         for frame, shape, other in zip(frames.tolist(), a[pairs].tolist(), b[pairs].tolist()):
             target = shapes.objects[other]
             target.setTransform(fcl.Transform(body.shape_rotation[frame, other],
