@@ -33,6 +33,10 @@ SPEED_TOLERANCE = 1e-6
 #: Links this many joints apart or closer are adjacent and never checked against each other.
 ADJACENT_JOINTS = 2
 UPPER_BODY_BRANCHES = ('waist', 'left_arm', 'right_arm')
+#: Kept triangles up to which a batch's boxes are tested against all of them at once.
+FEW_TRIANGLES = 64
+#: Rows x shape pairs up to which a batch tests every pair at every row at once.
+FEW_PAIR_ROWS = 2048
 #: Room around the actor's shapes over a step for the triangles kept per step, m (about the
 #: reach of a bending trunk or a raised arm beyond its place in the motion pattern).
 NEAR_MARGIN = 0.6
@@ -58,6 +62,9 @@ class _Step:
     axis_coordinate: int
     axis_sign: float
     has_offset: bool
+    # An offset along one coordinate axis: its coordinate (-1 otherwise) and length, m.
+    offset_axis: int
+    offset_length: float
 
 
 class BodyKinematics:
@@ -82,20 +89,24 @@ class BodyKinematics:
         for joint in joints:
             rotation = joint.origin[:3, :3]
             coordinate, sign = _axis_code(joint.axis)
+            along = np.flatnonzero(joint.origin[:3, 3] != 0.0)
+            offset_axis = int(along[0]) if len(along) == 1 else -1
             steps.append(_Step(
                 parent=order[joint.parent], child=order[joint.child],
                 origin_rotation=None if np.allclose(rotation, np.eye(3)) else rotation.copy(),
                 origin_translation=joint.origin[:3, 3].copy(),
                 joint=skeleton.index.get(joint.name, -1), kind=joint.kind, axis=joint.axis,
                 axis_coordinate=coordinate, axis_sign=sign,
-                has_offset=bool(np.any(joint.origin[:3, 3] != 0.0))))
+                has_offset=bool(np.any(joint.origin[:3, 3] != 0.0)),
+                offset_axis=offset_axis,
+                offset_length=float(joint.origin[offset_axis, 3]) if offset_axis >= 0 else 0.0))
         self.steps: Tuple[_Step, ...] = tuple(steps)
         self.link_count = len(skeleton.link_names)
         # Per set of steps, the index arrays of its joint rotations (built once, used per call).
         self._layouts: Dict[Tuple[int, ...], tuple] = {}
 
     def _layout(self, steps: Sequence[_Step]) -> tuple:
-        """Joint columns, signs and scatter indices of the revolute joints among ``steps``."""
+        """Revolute joints among ``steps``: their columns, signs, and those about general axes."""
         key = tuple(step.child for step in steps)
         layout = self._layouts.get(key)
         if layout is None:
@@ -104,11 +115,8 @@ class BodyKinematics:
             joints = np.array([st.joint for st in revolute], dtype=int)
             signs = np.array([st.axis_sign if st.axis_coordinate >= 0 else 1.0
                               for st in revolute])
-            n = np.array([i for i, st in enumerate(revolute) if st.axis_coordinate >= 0],
-                         dtype=int)
-            c = np.array([revolute[i].axis_coordinate for i in n], dtype=int)
-            general = [(i, st) for i, st in enumerate(revolute) if st.axis_coordinate < 0]
-            layout = (revolute, local, joints, signs, n, c, (c + 1) % 3, (c + 2) % 3, general)
+            general = [st for st in revolute if st.axis_coordinate < 0]
+            layout = (revolute, local, joints, signs, general)
             self._layouts[key] = layout
         return layout
 
@@ -155,23 +163,22 @@ class BodyKinematics:
             positions[:, 0] = 0.0
         steps = self.steps if steps is None else steps
         # All joint rotations at once: few large NumPy calls instead of many small ones.
-        revolute, local, joints, signs, n, c, a, b, general = self._layout(steps)
+        revolute, local, joints, signs, general = self._layout(steps)
         if revolute:
             angle = q[:, joints] * signs
             cos, sin = np.cos(angle), np.sin(angle)
-            mats = np.zeros((k, len(revolute), 3, 3))
-            # Rotations about coordinate axes: five scattered writes for all joints at once.
-            if len(n):
-                mats[:, n, c, c] = 1.0
-                mats[:, n, a, a] = cos[:, n]
-                mats[:, n, b, b] = cos[:, n]
-                mats[:, n, b, a] = sin[:, n]
-                mats[:, n, a, b] = -sin[:, n]
-            for i, st in general:
-                mats[:, i] = axis_rotation(st.axis, q[:, st.joint])
+            # Rotations about a general axis as matrices; about a coordinate axis a rotation only
+            # mixes two columns of the parent's (below), cheaper than a product per matrix.
+            mats = {st.child: axis_rotation(st.axis, q[:, st.joint]) for st in general}
         for step in steps:
             parent_rotation = rotations[:, step.parent]
-            if step.has_offset:
+            if step.offset_axis >= 0:
+                # An offset along one axis moves along that column of the rotation (the same
+                # numbers as the matrix product, without its per-matrix cost).
+                positions[:, step.child] = (positions[:, step.parent]
+                                            + parent_rotation[..., step.offset_axis]
+                                            * step.offset_length)
+            elif step.has_offset:
                 positions[:, step.child] = (positions[:, step.parent]
                                             + parent_rotation @ step.origin_translation)
             else:
@@ -182,9 +189,25 @@ class BodyKinematics:
                 rotations[:, step.child] = base
             elif step.kind == 'prismatic':
                 rotations[:, step.child] = base
-                positions[:, step.child] += (base @ step.axis) * q[:, step.joint, None]
+                if step.axis_coordinate >= 0:
+                    # Along a coordinate axis: that column of the rotation, as in the product.
+                    along = base[..., step.axis_coordinate] * step.axis_sign
+                else:
+                    along = base @ step.axis
+                positions[:, step.child] += along * q[:, step.joint, None]
+            elif step.axis_coordinate >= 0:
+                # base @ (rotation by the angle about axis c): columns a and b mix, c stays.
+                c = step.axis_coordinate
+                a, b = (c + 1) % 3, (c + 2) % 3
+                column = local[step.child]
+                cos_angle, sin_angle = cos[:, column, None], sin[:, column, None]
+                out = rotations[:, step.child]
+                column_a, column_b = base[..., a], base[..., b]
+                out[..., a] = column_a * cos_angle + column_b * sin_angle
+                out[..., b] = column_b * cos_angle - column_a * sin_angle
+                out[..., c] = base[..., c]
             else:
-                np.matmul(base, mats[:, local[step.child]], out=rotations[:, step.child])
+                np.matmul(base, mats[step.child], out=rotations[:, step.child])
         return rotations, positions
 
 
@@ -296,9 +319,13 @@ class BodyShapes:
             self._bounds_layout(shapes))
         extent = np.empty(centre.shape)
         if len(box):
-            extent[:, box] = (np.abs(rotation[:, box]) @ box_half)[..., 0]
+            # |R| @ half, one column at a time (a product per 3x3 matrix costs more).
+            size = np.abs(rotation.take(box, axis=1))
+            half = box_half[..., 0]
+            extent[:, box] = (size[..., 0] * half[:, None, 0] + size[..., 1] * half[:, None, 1]
+                              + size[..., 2] * half[:, None, 2])
         if len(cylinder):
-            axis = np.abs(rotation[..., 2][:, cylinder])
+            axis = np.abs(rotation.take(cylinder, axis=1)[..., 2])
             extent[:, cylinder] = (radius * np.sqrt(np.clip(1.0 - axis * axis, 0.0, 1.0))
                                    + half_length * axis)
         if len(sphere):
@@ -833,22 +860,11 @@ class CTSpace:
 
         """
         qa, ia = a
-        motions = []
-        for qb, ib in goals:
-            if ib <= ia:
-                motions.append((np.zeros((0, self.dimension)), ia))
-                continue
-            path = self.motion_frames((qa, ia), (qb, ib))
-            speed = np.abs(np.diff(path, axis=0)) / np.diff(self.times[ia:ib + 1])[:, None]
-            too_fast = np.flatnonzero(np.any(speed > self.speed_limit * (1 + SPEED_TOLERANCE),
-                                             axis=1))
-            if len(too_fast):
-                end = ia + 1 + int(too_fast[0])
-                motions.append((path[1:end - ia], end))
-            else:
-                motions.append((path[1:], -1))
-        failures = []
-        for first, batch in ((True, motions[:1]), (False, motions[1:])):
+        failures: List[int] = []
+        for first in (True, False):
+            # The others are interpolated only when the first goal fails.
+            batch = [self._motion_rows(qa, ia, qb, ib)
+                     for qb, ib in (goals[:1] if first else goals[1:])]
             if not batch:
                 continue
             lengths = np.array([len(rows) for rows, _ in batch])
@@ -865,6 +881,21 @@ class CTSpace:
                 if bad < 0:
                     return len(failures) - 1, failures
         return -1, failures
+
+    def _motion_rows(self, qa: np.ndarray, ia: int, qb: np.ndarray,
+                     ib: int) -> Tuple[np.ndarray, int]:
+        """Configurations at frames ia+1.. of the motion to (qb, ib) that keep to the speed
+        limits, and the frame of the first speed violation (-1 when none)."""
+        if ib <= ia:
+            return np.zeros((0, self.dimension)), ia
+        path = self.motion_frames((qa, ia), (qb, ib))
+        speed = np.abs(np.diff(path, axis=0)) / np.diff(self.times[ia:ib + 1])[:, None]
+        too_fast = np.flatnonzero(np.any(speed > self.speed_limit * (1 + SPEED_TOLERANCE),
+                                         axis=1))
+        if len(too_fast):
+            end = ia + 1 + int(too_fast[0])
+            return path[1:end - ia], end
+        return path[1:], -1
 
     def first_invalid(self, q: np.ndarray, frames: np.ndarray) -> int:
         """Row of the first illegal configuration in a batch, or -1 when all are legal.
@@ -1062,24 +1093,35 @@ class CTSpace:
         """Boxes of the branch's shapes against triangles and body shapes, all rows at once."""
         rotation, centre, low, high = self._shape_boxes(q, frames)
         suspects: Dict[int, list] = {}
-        near = self._triangles_near(low, high)
-        if len(near):
+        if len(self._triangle_lower) > FEW_TRIANGLES:
+            near = self._triangles_near(low, high)
+        else:
+            # A few triangles: the first cut would cost more than it saves.
+            near = slice(None) if len(self._triangle_lower) else []
+        if len(self._triangle_lower[near]):
             rows, columns, owners = mesh_contacts(
                 low, high, self._triangle_lower[near], self._triangle_upper[near],
                 self._triangle_owner[near], self._mesh_count)
             for row, column, owner in zip(rows.tolist(), columns.tolist(), owners.tolist()):
                 suspects.setdefault(row, []).append((column, -1 - owner))
-        if len(self.pairs):
-            # Only pairs whose boxes meet when swept over all rows and the whole step can meet.
-            active = np.flatnonzero(boxes_overlap(
-                low.min(axis=0)[self._pair_column], high.max(axis=0)[self._pair_column],
-                self._pair_swept_lower, self._pair_swept_upper))
+        pairs = len(self.pairs)
+        if pairs:
+            if len(frames) * pairs > FEW_PAIR_ROWS:
+                # Only pairs whose boxes meet when swept over all rows and the whole step can
+                # meet.
+                active = np.flatnonzero(boxes_overlap(
+                    low.min(axis=0)[self._pair_column], high.max(axis=0)[self._pair_column],
+                    self._pair_swept_lower, self._pair_swept_upper))
+                other_lower = self._pair_lower[frames[:, None], active]
+                other_upper = self._pair_upper[frames[:, None], active]
+            else:
+                active = np.arange(pairs)
+                other_lower, other_upper = self._pair_lower[frames], self._pair_upper[frames]
             if len(active):
                 columns = self._pair_column[active]
                 rows, which = np.nonzero(boxes_overlap(
-                    low.take(columns, axis=1), high.take(columns, axis=1),
-                    self._pair_lower[frames[:, None], active], self._pair_upper[frames[:, None],
-                                                                                active]))
+                    low.take(columns, axis=1), high.take(columns, axis=1), other_lower,
+                    other_upper))
                 for row, pair in zip(rows.tolist(), active[which].tolist()):
                     suspects.setdefault(row, []).append((int(self._pair_column[pair]), pair))
         return suspects, rotation, centre
