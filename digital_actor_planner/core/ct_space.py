@@ -20,6 +20,7 @@ when it provides them.
 """
 from __future__ import annotations
 
+import bisect
 from dataclasses import dataclass
 from typing import Dict, List, Optional, Sequence, Tuple
 
@@ -582,6 +583,14 @@ def boxes_overlap(lower_a: np.ndarray, upper_a: np.ndarray, lower_b: np.ndarray,
     return out
 
 
+def _watched_rows(inside: np.ndarray, broad: tuple) -> List[int]:
+    """Rows of a checked batch that can be illegal: outside the limits or with suspects."""
+    outside = np.flatnonzero(~inside).tolist()
+    if not outside:
+        return sorted(broad[0])
+    return sorted(set(outside).union(broad[0]))
+
+
 def span(lower: np.ndarray, upper: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
     """The box around boxes with corners (m, n, 3): lower and upper corners (3,), m.
 
@@ -993,12 +1002,16 @@ class CTSpace:
         """
         m = len(frames)
         self.checks += m
+        watch: List[int] = []
         if m:
             inside = self.within_bounds(q)
             suspects = self._broad_phase(q, frames)
+            watch = _watched_rows(inside, suspects)
         for (begin, end), late in zip(segments, early):
             bad = -1
-            for row in range(begin, end):
+            for row in watch[bisect.bisect_left(watch, begin):]:
+                if row >= end:
+                    break
                 if not inside[row] or self._narrow_phase(row, frames[row], suspects):
                     bad = int(frames[row])
                     break
@@ -1030,14 +1043,17 @@ class CTSpace:
             rows = np.concatenate([np.arange(begin, end) for _, begin, end in wave])
             self.checks += len(rows)
             suspects = self._broad_phase(q[rows], frames[rows]) if len(rows) else None
+            watch = _watched_rows(inside[rows], suspects) if len(rows) else []
             local = 0
             for i, begin, end in wave:
-                for row in range(begin, end):
-                    if not inside[row] or self._narrow_phase(local + row - begin, frames[row],
-                                                             suspects):
-                        results[i] = int(frames[row])
+                for row in watch[bisect.bisect_left(watch, local):]:
+                    if row >= local + end - begin:
                         break
-                else:
+                    if not inside[begin + row - local] or self._narrow_phase(
+                            row, frames[begin + row - local], suspects):
+                        results[i] = int(frames[begin + row - local])
+                        break
+                if results[i] is None:
                     if end == segments[i][1]:
                         results[i] = int(early[i]) if early[i] >= 0 else -1
                     position[i] = end
