@@ -321,8 +321,13 @@ class CTRoadmap:
         return free
 
     def _candidates(self, space: CTSpace, state: _State, horizon: _Horizon,
-                    speed_fraction: float) -> List[Tuple[float, int, np.ndarray]]:
-        """Neighbouring states forward in time, ranked by closeness to the objective."""
+                    speed_fraction: float,
+                    visited: Optional[set] = None) -> List[Tuple[float, int, np.ndarray]]:
+        """Neighbouring states forward in time, ranked by closeness to the objective.
+
+        With ``visited`` (the search's tried neighbours), the motion to the best untried one,
+        usually the next motion checked, shares the broad phase of the neighbours' check.
+        """
         last = space.frame_count - 1
         here = state.frame
         hold_frames = horizon.hold_frames
@@ -371,9 +376,16 @@ class CTRoadmap:
                             np.round(closeness, 6)))
         # Endpoints in collision cannot start a legal motion: filter them, best first, until
         # enough are legal (holding the current posture is kept whatever its rank).
+        motion = None
+        if visited is not None and not on_objective and not state.followed:
+            for i in order.tolist():
+                if (int(frames[i]), tuple(np.round(targets[i], 3))) not in visited:
+                    motion = ((space.objective[here] + state.deviation, here),
+                              (space.objective[frames[i]] + targets[i], int(frames[i])))
+                    break
         legal = space.best_valid_rows(space.objective[frames] + targets, frames, order,
                                       self.max_candidates,
-                                      also=np.flatnonzero(holds).tolist())
+                                      also=np.flatnonzero(holds).tolist(), motion=motion)
         ranked = [(float(closeness[i]), int(frames[i]), targets[i]) for i in order if legal[i]]
         # The neighbours closest to the objective, plus holding the current posture.
         hold = [c for c in ranked[self.max_candidates:]
@@ -399,7 +411,7 @@ class CTRoadmap:
                     if child is not None:
                         return child
         if state.candidates is None:
-            state.candidates = self._candidates(space, state, horizon, speed_fraction)
+            state.candidates = self._candidates(space, state, horizon, speed_fraction, visited)
             if state.followed:
                 # The search already went on from here along the objective.
                 state.candidates = [c for c in state.candidates

@@ -583,6 +583,11 @@ def boxes_overlap(lower_a: np.ndarray, upper_a: np.ndarray, lower_b: np.ndarray,
     return out
 
 
+def _same_motion(a: tuple, b: tuple) -> bool:
+    """Whether two motions ((qa, ia), (qb, ib)) are the same."""
+    return all(ia == ib and np.array_equal(qa, qb) for (qa, ia), (qb, ib) in zip(a, b))
+
+
 def _watched_rows(inside: np.ndarray, broad: tuple) -> List[int]:
     """Rows of a checked batch that can be illegal: outside the limits or with suspects."""
     outside = np.flatnonzero(~inside).tolist()
@@ -731,6 +736,9 @@ class CTSpace:
         self.lower = skeleton.lower[self.indices]
         self.upper = skeleton.upper[self.indices]
         self.speed_limit = skeleton.velocity_limit[self.indices]
+        self._speed_cap = self.speed_limit * (1 + SPEED_TOLERANCE)
+        #: (k - 1, 1) time from each frame to the next, s.
+        self._frame_step = np.diff(self.times)[:, None]
         self.time_weight = float(time_weight)
         # What depends on the model only is worked out once per branch and reused every step.
         layout = branch_layout(body.kinematics, body.shapes, branch, checked_links,
@@ -757,6 +765,8 @@ class CTSpace:
         self._pair_swept_upper = body.swept_upper[other]
         self._prepare_environment()
         self.checks = 0
+        # A motion whose broad phase ran ahead (see best_valid_rows), or None.
+        self._prefetched: Optional[tuple] = None
 
     def _prepare_environment(self) -> None:
         """Keep only triangles the branch could reach during the step (§5: broad phase)."""
@@ -815,12 +825,13 @@ class CTSpace:
         states on the objective follows it exactly.
         """
         (qa, ia), (qb, ib) = a, b
-        frames = np.arange(ia, ib + 1)
-        da = np.asarray(qa) - self.objective[ia]
-        db = np.asarray(qb) - self.objective[ib]
-        span = self.times[ib] - self.times[ia]
-        s = (self.times[frames] - self.times[ia]) / span if span > 0 else np.zeros(len(frames))
-        return self.objective[frames] + da + s[:, None] * (db - da)
+        objective = self.objective[ia:ib + 1]
+        times = self.times[ia:ib + 1]
+        da = np.asarray(qa) - objective[0]
+        db = np.asarray(qb) - objective[-1]
+        span = times[-1] - times[0]
+        s = (times - times[0]) / span if span > 0 else np.zeros(len(times))
+        return objective + da + s[:, None] * (db - da)
 
     def interpolate(self, a: Tuple[np.ndarray, int], b: Tuple[np.ndarray, int],
                     s: float) -> Tuple[np.ndarray, float]:
@@ -870,7 +881,23 @@ class CTSpace:
         """
         qa, ia = a
         failures: List[int] = []
+        prefetched, self._prefetched = self._prefetched, None
+        if goals and prefetched is not None and _same_motion(prefetched[0], (a, goals[0])):
+            # The first goal's broad phase ran with the neighbours' (best_valid_rows).
+            _, _, late, frames, inside, broad = prefetched
+            bad = -1
+            for row in _watched_rows(inside, broad):
+                if not inside[row] or self._narrow_phase(row, frames[row], broad):
+                    bad = int(frames[row])
+                    break
+            if bad < 0 and late >= 0:
+                bad = int(late)
+            failures.append(bad)
+            if bad < 0:
+                return 0, failures
         for first in (True, False):
+            if first and failures:
+                continue
             # The others are interpolated only when the first goal fails.
             batch = [self._motion_rows(qa, ia, qb, ib)
                      for qb, ib in (goals[:1] if first else goals[1:])]
@@ -898,9 +925,8 @@ class CTSpace:
         if ib <= ia:
             return np.zeros((0, self.dimension)), ia
         path = self.motion_frames((qa, ia), (qb, ib))
-        speed = np.abs(np.diff(path, axis=0)) / np.diff(self.times[ia:ib + 1])[:, None]
-        too_fast = np.flatnonzero(np.any(speed > self.speed_limit * (1 + SPEED_TOLERANCE),
-                                         axis=1))
+        speed = np.abs(path[1:] - path[:-1]) / self._frame_step[ia:ib]
+        too_fast = np.flatnonzero((speed > self._speed_cap).any(axis=1))
         if len(too_fast):
             end = ia + 1 + int(too_fast[0])
             return path[1:end - ia], end
@@ -946,7 +972,9 @@ class CTSpace:
             dtype=bool)
 
     def best_valid_rows(self, q: np.ndarray, frames: np.ndarray, order: np.ndarray,
-                        count: int, also: Sequence[int] = ()) -> np.ndarray:
+                        count: int, also: Sequence[int] = (),
+                        motion: Optional[Tuple[Tuple[np.ndarray, int],
+                                               Tuple[np.ndarray, int]]] = None) -> np.ndarray:
         """Legality of the first ``count`` legal rows of a batch in a given order: (m,) bool.
 
         The broad phase runs over all rows at once, the narrow phase row by row in ``order``
@@ -966,17 +994,36 @@ class CTSpace:
             Legal rows wanted.
         also
             Rows checked whatever their rank.
+        motion
+            A motion (a, b) likely to be checked next (by :meth:`first_legal_motion`, as its
+            first goal): its frames share this broad phase, and only its narrow phase is left
+            for then.
 
         """
         frames = np.asarray(frames)
         q = np.asarray(q, dtype=float)
         m = len(frames)
         legal = np.zeros(m, dtype=bool)
-        self.checks += m
+        self._prefetched = None
         if not m:
             return legal
         inside = self.within_bounds(q)
+        extra = None
+        if motion is not None:
+            (qa, ia), (qb, ib) = motion
+            rows, late = self._motion_rows(qa, ia, qb, ib)
+            if len(rows):
+                extra = (motion, rows, late, np.arange(ia + 1, ia + 1 + len(rows)))
+                q = np.concatenate([q, rows])
+                frames = np.concatenate([frames, extra[3]])
+        self.checks += len(frames)
         suspects = self._broad_phase(q, frames)
+        if extra is not None:
+            kept, rotation, centre = suspects
+            # The motion's rows as a broad phase of their own (rows numbered from 0).
+            own = {row - m: pairs for row, pairs in kept.items() if row >= m}
+            self._prefetched = extra + (self.within_bounds(extra[1]),
+                                        (own, rotation[m:], centre[m:]))
         checked = set()
         found = 0
         for row in list(order):
