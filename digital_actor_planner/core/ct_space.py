@@ -107,7 +107,7 @@ class BodyKinematics:
         self._layouts: Dict[Tuple[int, ...], tuple] = {}
 
     def _layout(self, steps: Sequence[_Step]) -> tuple:
-        """Revolute joints among ``steps``: their columns, signs, and those about general axes."""
+        """Joint columns, signs and scatter indices of the revolute joints among ``steps``."""
         key = tuple(step.child for step in steps)
         layout = self._layouts.get(key)
         if layout is None:
@@ -116,8 +116,15 @@ class BodyKinematics:
             joints = np.array([st.joint for st in revolute], dtype=int)
             signs = np.array([st.axis_sign if st.axis_coordinate >= 0 else 1.0
                               for st in revolute])
-            general = [st for st in revolute if st.axis_coordinate < 0]
-            layout = (revolute, local, joints, signs, general)
+            n = np.array([i for i, st in enumerate(revolute) if st.axis_coordinate >= 0],
+                         dtype=int)
+            c = np.array([revolute[i].axis_coordinate for i in n], dtype=int)
+            a, b = (c + 1) % 3, (c + 2) % 3
+            # Flat positions in (len(revolute) * 9) of the entries of each rotation matrix.
+            flat = [n * 9 + row * 3 + column for row, column in ((c, c), (a, a), (b, b),
+                                                                 (b, a), (a, b))]
+            general = [(i, st) for i, st in enumerate(revolute) if st.axis_coordinate < 0]
+            layout = (revolute, local, joints, signs, n, flat, general)
             self._layouts[key] = layout
         return layout
 
@@ -164,13 +171,24 @@ class BodyKinematics:
             positions[:, 0] = 0.0
         steps = self.steps if steps is None else steps
         # All joint rotations at once: few large NumPy calls instead of many small ones.
-        revolute, local, joints, signs, general = self._layout(steps)
+        revolute, local, joints, signs, n, flat, general = self._layout(steps)
         if revolute:
             angle = q[:, joints] * signs
             cos, sin = np.cos(angle), np.sin(angle)
-            # Rotations about a general axis as matrices; about a coordinate axis a rotation only
-            # mixes two columns of the parent's (below), cheaper than a product per matrix.
-            mats = {st.child: axis_rotation(st.axis, q[:, st.joint]) for st in general}
+            flat_mats = np.zeros((k, len(revolute) * 9))
+            mats = flat_mats.reshape(k, len(revolute), 3, 3)
+            # Rotations about coordinate axes: five scattered writes for all joints at once
+            # (into the flat array: cheaper than into four indexed axes).
+            if len(n):
+                one, first, second, lower, upper = flat
+                cos, sin = cos[:, n], sin[:, n]
+                flat_mats[:, one] = 1.0
+                flat_mats[:, first] = cos
+                flat_mats[:, second] = cos
+                flat_mats[:, lower] = sin
+                flat_mats[:, upper] = -sin
+            for i, st in general:
+                mats[:, i] = axis_rotation(st.axis, q[:, st.joint])
         for step in steps:
             parent_rotation = rotations[:, step.parent]
             if step.offset_axis >= 0:
@@ -196,19 +214,8 @@ class BodyKinematics:
                 else:
                     along = base @ step.axis
                 positions[:, step.child] += along * q[:, step.joint, None]
-            elif step.axis_coordinate >= 0:
-                # base @ (rotation by the angle about axis c): columns a and b mix, c stays.
-                c = step.axis_coordinate
-                a, b = (c + 1) % 3, (c + 2) % 3
-                column = local[step.child]
-                cos_angle, sin_angle = cos[:, column, None], sin[:, column, None]
-                out = rotations[:, step.child]
-                column_a, column_b = base[..., a], base[..., b]
-                out[..., a] = column_a * cos_angle + column_b * sin_angle
-                out[..., b] = column_b * cos_angle - column_a * sin_angle
-                out[..., c] = base[..., c]
             else:
-                np.matmul(base, mats[step.child], out=rotations[:, step.child])
+                np.matmul(base, mats[:, local[step.child]], out=rotations[:, step.child])
         return rotations, positions
 
 
@@ -320,11 +327,7 @@ class BodyShapes:
             self._bounds_layout(shapes))
         extent = np.empty(centre.shape)
         if len(box):
-            # |R| @ half, one column at a time (a product per 3x3 matrix costs more).
-            size = np.abs(rotation.take(box, axis=1))
-            half = box_half[..., 0]
-            extent[:, box] = (size[..., 0] * half[:, None, 0] + size[..., 1] * half[:, None, 1]
-                              + size[..., 2] * half[:, None, 2])
+            extent[:, box] = (np.abs(rotation.take(box, axis=1)) @ box_half)[..., 0]
         if len(cylinder):
             axis = np.abs(rotation.take(cylinder, axis=1)[..., 2])
             extent[:, cylinder] = (radius * np.sqrt(np.clip(1.0 - axis * axis, 0.0, 1.0))
