@@ -38,6 +38,8 @@ UPPER_BODY_BRANCHES = ('waist', 'left_arm', 'right_arm')
 FEW_TRIANGLES = 64
 #: Rows x shape pairs up to which a batch tests every pair at every row at once.
 FEW_PAIR_ROWS = 2048
+#: Rows x shapes x triangles above which contacts are first cut by the shapes' swept boxes.
+SWEPT_CONTACTS = 4096
 #: Room around the actor's shapes over a step for the triangles kept per step, m (about the
 #: reach of a bending trunk or a raised arm beyond its place in the motion pattern).
 NEAR_MARGIN = 0.6
@@ -634,9 +636,21 @@ def mesh_contacts(low: np.ndarray, high: np.ndarray, triangle_lower: np.ndarray,
         Index arrays in row, shape, mesh order (a scatter, not a sort).
 
     """
-    rows, columns, triangles = np.nonzero(boxes_overlap(
-        low[:, :, None], high[:, :, None], triangle_lower[None, None],
-        triangle_upper[None, None]))
+    m, n = low.shape[:2]
+    if m > 1 and m * n * len(triangle_lower) > SWEPT_CONTACTS:
+        # Many rows: only the (shape, triangle) pairs whose boxes meet when the shape's is
+        # swept over all rows can meet in one of them.
+        shape, triangle = np.nonzero(boxes_overlap(
+            low.min(axis=0)[:, None], high.max(axis=0)[:, None], triangle_lower[None],
+            triangle_upper[None]))
+        rows, which = np.nonzero(boxes_overlap(
+            low.take(shape, axis=1), high.take(shape, axis=1), triangle_lower[triangle],
+            triangle_upper[triangle]))
+        columns, triangles = shape[which], triangle[which]
+    else:
+        rows, columns, triangles = np.nonzero(boxes_overlap(
+            low[:, :, None], high[:, :, None], triangle_lower[None, None],
+            triangle_upper[None, None]))
     hit = np.zeros(low.shape[:2] + (mesh_count,), dtype=bool)
     hit[rows, columns, triangle_owner[triangles]] = True
     return np.nonzero(hit)
