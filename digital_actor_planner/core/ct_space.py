@@ -778,6 +778,9 @@ class CTSpace:
         self._pair_lower = body.shape_lower.take(other, axis=1)
         self._pair_upper = body.shape_upper.take(other, axis=1)
         self._pair_column = np.searchsorted(self.checked, self.pairs[:, 0])
+        # For the narrow phase, as Python ints and objects.
+        self._pair_other = other.tolist()
+        self._checked_list = self.checked.tolist()
         self._pair_swept_lower = body.swept_lower[other]
         self._pair_swept_upper = body.swept_upper[other]
         self._prepare_environment()
@@ -796,6 +799,9 @@ class CTSpace:
         self._triangle_upper = env.upper[near]
         self._triangle_owner = env.owner[near]
         self._mesh_count = int(self._triangle_owner.max()) + 1 if len(near) else 1
+        owners = set(self._triangle_owner.tolist())
+        self._mesh_objects = [env.object_of(mesh) if mesh in owners else None
+                              for mesh in range(self._mesh_count)]
 
     def _triangles_near(self, low: np.ndarray, high: np.ndarray) -> np.ndarray:
         """Indices of the kept triangles whose boxes meet the box around all boxes (m, n, 3).
@@ -1209,15 +1215,23 @@ class CTSpace:
     def _narrow_phase(self, row: int, frame: int, broad: tuple) -> bool:
         """Whether any suspect pair of one row really collides (FCL)."""
         suspects, rotation, centre = broad
+        pairs = suspects.get(row)
+        if not pairs:
+            return False
         shapes = self.body.shapes
-        for column, other in suspects.get(row, ()):
-            shape = int(self.checked[column])
+        objects, request = shapes.objects, shapes._request
+        for column, other in pairs:
             if other < 0:
-                target = self.body.environment.object_of(-1 - other)
+                target = self._mesh_objects[-1 - other]
             else:
-                target = shapes.objects[int(self.pairs[other, 1])]
+                target = objects[self._pair_other[other]]
                 target.setTransform(fcl.Transform(self._pair_rotation[frame, other],
                                                   self._pair_centre[frame, other]))
-            if shapes.collides(shape, rotation[row, column], centre[row, column], target):
+            # BodyShapes.collides, inline: this is the innermost loop of every search.
+            shape = objects[self._checked_list[column]]
+            shape.setTransform(fcl.Transform(rotation[row, column], centre[row, column]))
+            result = fcl.CollisionResult()
+            fcl.collide(shape, target, request, result)
+            if result.is_collision:
                 return True
         return False
