@@ -180,7 +180,8 @@ class OmplBranchPlanner:
             if path is None:
                 return False, 0.0, time.perf_counter() - began
             out[:, indices] = path
-            body.set_branch(indices, path, space.steps)
+            if name != BRANCH_ORDER[-1]:
+                body.set_branch(indices, path, space.steps)
         upper = planner.upper_indices
         deviation = float(np.max(np.abs(out[1:, upper] - frames[1:, upper])))
         return True, deviation, time.perf_counter() - began

@@ -989,10 +989,18 @@ class CTSpace:
 
         """
         frames = np.asarray(frames)
-        segments = [(i, i + 1) for i in range(len(frames))]
-        return np.array([bad < 0 for bad in self._check_segments(
-            np.asarray(q, dtype=float), frames, segments, [-1] * len(frames), False)],
-            dtype=bool)
+        q = np.asarray(q, dtype=float)
+        m = len(frames)
+        self.checks += m
+        if not m:
+            return np.zeros(0, dtype=bool)
+        legal = self.within_bounds(q)
+        broad = self._broad_phase(q, frames)
+        # Only rows with suspect pairs need the narrow phase.
+        for row in broad[0]:
+            if legal[row] and self._narrow_phase(row, frames[row], broad):
+                legal[row] = False
+        return legal
 
     def best_valid_rows(self, q: np.ndarray, frames: np.ndarray, order: np.ndarray,
                         count: int, also: Sequence[int] = (),

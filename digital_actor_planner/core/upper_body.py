@@ -400,7 +400,8 @@ class UpperBodyPlanner:
             if path is not None and record['ok']:
                 path[0] = start
                 out[:, indices] = path
-                if not record['fast']:
+                if not record['fast'] and name != BRANCH_ORDER[-1]:
+                    # The branches planned after this one see it where it now is.
                     body.set_branch(indices, path, steps)
             record['deviation'] = float(np.max(np.abs(out[1:, indices] - frames[1:, indices])))
             record['checks'] = checks
