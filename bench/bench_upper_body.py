@@ -164,23 +164,24 @@ class OmplBranchPlanner:
             objective[0] = np.clip(2 * objective[1] - objective[2],
                                    planner.skeleton.lower[indices],
                                    planner.skeleton.upper[indices])
-            space = CTSpace(name, body, times, objective, planner._checked[name],
-                            planner._obstacles[name])
             # The same checks of the start and of the motion pattern as the CT-roadmap's plan.
-            start_legal, objective_legal = planner._start_and_objective(space, start)
+            start_legal, objective_legal = planner.start_and_objective(times, body, name)
             if not start_legal:
                 return False, 0.0, time.perf_counter() - began
             if objective_legal:
-                path = objective.copy()
-                path[0] = start
-            else:
-                goal = (objective[-1] if space.is_valid(objective[-1], len(times) - 1)
-                        else reference[-1, indices])
-                path = self._solve_branch(space, start, goal)
-                if path is None:
-                    return False, 0.0, time.perf_counter() - began
+                # The body already holds this motion (the CT-roadmap's fast path).
+                continue
+            # Only a branch that must leave its motion pattern needs its CT-space.
+            space = CTSpace(name, body, times, objective, planner._checked[name],
+                            planner._obstacles[name])
+            goal = (objective[-1] if space.is_valid(objective[-1], len(times) - 1)
+                    else reference[-1, indices])
+            path = self._solve_branch(space, start, goal)
+            if path is None:
+                return False, 0.0, time.perf_counter() - began
             out[:, indices] = path
-            body.set_branch(indices, path, space.steps)
+            if name != BRANCH_ORDER[-1]:
+                body.set_branch(indices, path, space.steps)
         upper = planner.upper_indices
         deviation = float(np.max(np.abs(out[1:, upper] - frames[1:, upper])))
         return True, deviation, time.perf_counter() - began

@@ -150,8 +150,9 @@ def test_following_the_objective_reaches_the_states_holding_it_would_in_one_chec
     space = waist_space(skeleton, 1.60, frame_count=150)
     first_blocked = space.first_invalid(space.objective[1:], np.arange(1, space.frame_count)) + 1
     assert first_blocked > 20
+    horizon = _Horizon(roadmap()._objective_free(space, 5), 5)
     before = space.checks
-    child = roadmap()._follow(space, _State(np.zeros(2), 3), hold_frames=5)
+    child = roadmap()._follow(space, _State(np.zeros(2), 3), horizon)
     assert space.checks - before <= space.frame_count, 'one motion check'
     states = child.via + [child]
     # Every hold_frames frames, on the objective, up to the last such frame before it is blocked.
@@ -159,7 +160,8 @@ def test_following_the_objective_reaches_the_states_holding_it_would_in_one_chec
     assert all(s.followed and not np.any(s.deviation) for s in states)
     # Open ground to the end: nothing to shortcut, the regular advance follows the objective.
     open_space = waist_space(skeleton, None, frame_count=150)
-    assert roadmap()._follow(open_space, _State(np.zeros(2), 0), hold_frames=5) is None
+    open_horizon = _Horizon(roadmap()._objective_free(open_space, 5), 5)
+    assert roadmap()._follow(open_space, _State(np.zeros(2), 0), open_horizon) is None
 
 
 def test_a_long_hold_ends_in_time_to_be_back_on_the_objective_after_the_beam(beam_space):

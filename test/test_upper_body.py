@@ -226,8 +226,11 @@ def test_one_batch_pattern_check_agrees_with_the_branch_fast_paths(skeleton):
             start = window[0, indices]
             start_legal = space.is_valid(start, 0)
             objective_legal = planner._objective_is_legal(space, start)
-            # The plan's single batch check of both says the same.
+            # The plan's single batch check of both says the same, on the CT-space and on the
+            # poses the body already holds.
             assert planner._start_and_objective(space, start) == (
+                start_legal, start_legal and objective_legal)
+            assert planner.start_and_objective(times[:61], body, name) == (
                 start_legal, start_legal and objective_legal)
             expected &= start_legal and objective_legal
         got = planner._pattern_is_legal(times[:61], body)

@@ -80,6 +80,9 @@ class _State:
     followed: bool = False
     # States passed on the way to this one, pushed before it (as if reached one by one).
     via: List['_State'] = field(default_factory=list)
+    # On the objective: following it to the final frame was tried before the neighbours were
+    # ranked (they are ranked only if the search comes back here).
+    tried_objective: bool = False
 
 
 class _Horizon:
@@ -98,6 +101,7 @@ class _Horizon:
         self.hold_frames = int(hold_frames)
         last = len(free) - 1
         self.last = last
+        self.free = free
         # next_free[i]: the first frame >= i where the objective is legal (last if none).
         self.next_free = np.full(last + 2, last, dtype=int)
         for i in range(last, -1, -1):
@@ -317,8 +321,13 @@ class CTRoadmap:
         return free
 
     def _candidates(self, space: CTSpace, state: _State, horizon: _Horizon,
-                    speed_fraction: float) -> List[Tuple[float, int, np.ndarray]]:
-        """Neighbouring states forward in time, ranked by closeness to the objective."""
+                    speed_fraction: float,
+                    visited: Optional[set] = None) -> List[Tuple[float, int, np.ndarray]]:
+        """Neighbouring states forward in time, ranked by closeness to the objective.
+
+        With ``visited`` (the search's tried neighbours), the motion to the best untried one,
+        usually the next motion checked, shares the broad phase of the neighbours' check.
+        """
         last = space.frame_count - 1
         here = state.frame
         hold_frames = horizon.hold_frames
@@ -333,18 +342,19 @@ class CTRoadmap:
             # Backtracking set a sub-goal: stay among the nodes legal at the blocking frame.
             nodes = state.allowed
             targets, frames = [], []
-        travels = self._travel_frames(space, here, nodes - state.deviation, speed_fraction)
-        for node, travel in zip(nodes, travels):
-            if not np.any(node - state.deviation):
-                travel = hold_frames
-            arrival = here + travel
-            if arrival > last:
-                # Steer: go as far towards the node as the remaining time allows.
-                share = (last - here) / travel
-                node = state.deviation + share * (node - state.deviation)
-                arrival = last
-            targets.append(node)
-            frames.append(arrival)
+        change = nodes - state.deviation
+        travels = np.atleast_1d(self._travel_frames(space, here, change, speed_fraction))
+        travels[~np.any(change, axis=1)] = hold_frames
+        arrivals = here + travels
+        # Steer: go as far towards a node as the remaining time allows.
+        steer = np.flatnonzero(arrivals > last)
+        if len(steer):
+            nodes = nodes.copy()
+            share = (last - here) / travels[steer]
+            nodes[steer] = state.deviation + share[:, None] * change[steer]
+            arrivals[steer] = last
+        targets.extend(nodes)
+        frames.extend(arrivals.tolist())
         # Holding the posture: first past the stretch where the objective is blocked (one long
         # advance), else for hold_frames.
         hold_end = horizon.hold_end(here)
@@ -366,9 +376,16 @@ class CTRoadmap:
                             np.round(closeness, 6)))
         # Endpoints in collision cannot start a legal motion: filter them, best first, until
         # enough are legal (holding the current posture is kept whatever its rank).
+        motion = None
+        if visited is not None and not on_objective and not state.followed:
+            for i in order.tolist():
+                if (int(frames[i]), tuple(np.round(targets[i], 3))) not in visited:
+                    motion = ((space.objective[here] + state.deviation, here),
+                              (space.objective[frames[i]] + targets[i], int(frames[i])))
+                    break
         legal = space.best_valid_rows(space.objective[frames] + targets, frames, order,
                                       self.max_candidates,
-                                      also=np.flatnonzero(holds).tolist())
+                                      also=np.flatnonzero(holds).tolist(), motion=motion)
         ranked = [(float(closeness[i]), int(frames[i]), targets[i]) for i in order if legal[i]]
         # The neighbours closest to the objective, plus holding the current posture.
         hold = [c for c in ranked[self.max_candidates:]
@@ -378,22 +395,34 @@ class CTRoadmap:
     def _advance(self, space: CTSpace, state: _State, visited: set, horizon: _Horizon,
                  speed_fraction: float) -> Optional[_State]:
         """Try the ranked neighbours forward in time; return the first legal one."""
-        if state.candidates is None and not state.followed and not np.any(state.deviation):
-            child = self._follow(space, state, horizon.hold_frames)
-            if child is not None:
-                return child
+        on_objective = not np.any(state.deviation)
+        if state.candidates is None and not state.followed and on_objective:
+            if not state.tried_objective:
+                child = self._follow(space, state, horizon)
+                if child is not None:
+                    return child
+                last = space.frame_count - 1
+                if horizon.free[last] and not (state.allowed is not None
+                                               and state.frame < state.until):
+                    # Following the objective to the final frame is then the best-ranked
+                    # neighbour: try it before ranking the others, which are seldom needed.
+                    state.tried_objective = True
+                    child = self._try(space, state, np.zeros_like(state.deviation), last)
+                    if child is not None:
+                        return child
         if state.candidates is None:
-            state.candidates = self._candidates(space, state, horizon, speed_fraction)
+            state.candidates = self._candidates(space, state, horizon, speed_fraction, visited)
             if state.followed:
                 # The search already went on from here along the objective.
                 state.candidates = [c for c in state.candidates
                                     if np.any(c[2]) or c[1] > state.frame + horizon.hold_frames]
-            elif state.candidates and not np.any(state.deviation):
+            elif state.candidates and on_objective:
                 # On the objective: follow it as far as it is legal (one motion check).
                 _, arrival, target = state.candidates.pop(0)
-                child = self._try(space, state, target, arrival)
-                if child is not None:
-                    return child
+                if not state.tried_objective:
+                    child = self._try(space, state, target, arrival)
+                    if child is not None:
+                        return child
         fresh = []
         while state.candidates:
             _, arrival, target = state.candidates.pop(0)
@@ -419,7 +448,7 @@ class CTRoadmap:
             child.until, child.allowed = state.until, state.allowed
         return child
 
-    def _follow(self, space: CTSpace, state: _State, hold_frames: int) -> Optional[_State]:
+    def _follow(self, space: CTSpace, state: _State, horizon: _Horizon) -> Optional[_State]:
         """Follow the objective from a state on it, hold_frames at a time, in one motion check.
 
         The states every hold_frames frames up to the last one before the objective is blocked
@@ -429,8 +458,9 @@ class CTRoadmap:
         as it goes (``_try``), which the regular candidates do.
         """
         here, last = state.frame, space.frame_count - 1
+        hold_frames = horizon.hold_frames
         zero = np.zeros_like(state.deviation)
-        if here + hold_frames >= last or space.is_valid(space.objective[last], last):
+        if here + hold_frames >= last or horizon.free[last]:
             return None
         bad = space.first_invalid_motion((space.objective[here], here),
                                          (space.objective[last], last))

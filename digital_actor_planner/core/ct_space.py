@@ -20,6 +20,7 @@ when it provides them.
 """
 from __future__ import annotations
 
+import bisect
 from dataclasses import dataclass
 from typing import Dict, List, Optional, Sequence, Tuple
 
@@ -33,6 +34,12 @@ SPEED_TOLERANCE = 1e-6
 #: Links this many joints apart or closer are adjacent and never checked against each other.
 ADJACENT_JOINTS = 2
 UPPER_BODY_BRANCHES = ('waist', 'left_arm', 'right_arm')
+#: Kept triangles up to which a batch's boxes are tested against all of them at once.
+FEW_TRIANGLES = 64
+#: Rows x shape pairs up to which a batch tests every pair at every row at once.
+FEW_PAIR_ROWS = 2048
+#: Rows x shapes x triangles above which contacts are first cut by the shapes' swept boxes.
+SWEPT_CONTACTS = 4096
 #: Room around the actor's shapes over a step for the triangles kept per step, m (about the
 #: reach of a bending trunk or a raised arm beyond its place in the motion pattern).
 NEAR_MARGIN = 0.6
@@ -58,6 +65,9 @@ class _Step:
     axis_coordinate: int
     axis_sign: float
     has_offset: bool
+    # An offset along one coordinate axis: its coordinate (-1 otherwise) and length, m.
+    offset_axis: int
+    offset_length: float
 
 
 class BodyKinematics:
@@ -82,13 +92,17 @@ class BodyKinematics:
         for joint in joints:
             rotation = joint.origin[:3, :3]
             coordinate, sign = _axis_code(joint.axis)
+            along = np.flatnonzero(joint.origin[:3, 3] != 0.0)
+            offset_axis = int(along[0]) if len(along) == 1 else -1
             steps.append(_Step(
                 parent=order[joint.parent], child=order[joint.child],
                 origin_rotation=None if np.allclose(rotation, np.eye(3)) else rotation.copy(),
                 origin_translation=joint.origin[:3, 3].copy(),
                 joint=skeleton.index.get(joint.name, -1), kind=joint.kind, axis=joint.axis,
                 axis_coordinate=coordinate, axis_sign=sign,
-                has_offset=bool(np.any(joint.origin[:3, 3] != 0.0))))
+                has_offset=bool(np.any(joint.origin[:3, 3] != 0.0)),
+                offset_axis=offset_axis,
+                offset_length=float(joint.origin[offset_axis, 3]) if offset_axis >= 0 else 0.0))
         self.steps: Tuple[_Step, ...] = tuple(steps)
         self.link_count = len(skeleton.link_names)
         # Per set of steps, the index arrays of its joint rotations (built once, used per call).
@@ -107,8 +121,12 @@ class BodyKinematics:
             n = np.array([i for i, st in enumerate(revolute) if st.axis_coordinate >= 0],
                          dtype=int)
             c = np.array([revolute[i].axis_coordinate for i in n], dtype=int)
+            a, b = (c + 1) % 3, (c + 2) % 3
+            # Flat positions in (len(revolute) * 9) of the entries of each rotation matrix.
+            flat = [n * 9 + row * 3 + column for row, column in ((c, c), (a, a), (b, b),
+                                                                 (b, a), (a, b))]
             general = [(i, st) for i, st in enumerate(revolute) if st.axis_coordinate < 0]
-            layout = (revolute, local, joints, signs, n, c, (c + 1) % 3, (c + 2) % 3, general)
+            layout = (revolute, local, joints, signs, n, flat, general)
             self._layouts[key] = layout
         return layout
 
@@ -155,23 +173,33 @@ class BodyKinematics:
             positions[:, 0] = 0.0
         steps = self.steps if steps is None else steps
         # All joint rotations at once: few large NumPy calls instead of many small ones.
-        revolute, local, joints, signs, n, c, a, b, general = self._layout(steps)
+        revolute, local, joints, signs, n, flat, general = self._layout(steps)
         if revolute:
             angle = q[:, joints] * signs
             cos, sin = np.cos(angle), np.sin(angle)
-            mats = np.zeros((k, len(revolute), 3, 3))
-            # Rotations about coordinate axes: five scattered writes for all joints at once.
+            flat_mats = np.zeros((k, len(revolute) * 9))
+            mats = flat_mats.reshape(k, len(revolute), 3, 3)
+            # Rotations about coordinate axes: five scattered writes for all joints at once
+            # (into the flat array: cheaper than into four indexed axes).
             if len(n):
-                mats[:, n, c, c] = 1.0
-                mats[:, n, a, a] = cos[:, n]
-                mats[:, n, b, b] = cos[:, n]
-                mats[:, n, b, a] = sin[:, n]
-                mats[:, n, a, b] = -sin[:, n]
+                one, first, second, lower, upper = flat
+                cos, sin = cos[:, n], sin[:, n]
+                flat_mats[:, one] = 1.0
+                flat_mats[:, first] = cos
+                flat_mats[:, second] = cos
+                flat_mats[:, lower] = sin
+                flat_mats[:, upper] = -sin
             for i, st in general:
                 mats[:, i] = axis_rotation(st.axis, q[:, st.joint])
         for step in steps:
             parent_rotation = rotations[:, step.parent]
-            if step.has_offset:
+            if step.offset_axis >= 0:
+                # An offset along one axis moves along that column of the rotation (the same
+                # numbers as the matrix product, without its per-matrix cost).
+                positions[:, step.child] = (positions[:, step.parent]
+                                            + parent_rotation[..., step.offset_axis]
+                                            * step.offset_length)
+            elif step.has_offset:
                 positions[:, step.child] = (positions[:, step.parent]
                                             + parent_rotation @ step.origin_translation)
             else:
@@ -182,7 +210,12 @@ class BodyKinematics:
                 rotations[:, step.child] = base
             elif step.kind == 'prismatic':
                 rotations[:, step.child] = base
-                positions[:, step.child] += (base @ step.axis) * q[:, step.joint, None]
+                if step.axis_coordinate >= 0:
+                    # Along a coordinate axis: that column of the rotation, as in the product.
+                    along = base[..., step.axis_coordinate] * step.axis_sign
+                else:
+                    along = base @ step.axis
+                positions[:, step.child] += along * q[:, step.joint, None]
             else:
                 np.matmul(base, mats[:, local[step.child]], out=rotations[:, step.child])
         return rotations, positions
@@ -279,8 +312,11 @@ class BodyShapes:
     def poses(self, rotations: np.ndarray, positions: np.ndarray,
               shapes: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
         """World poses of some shapes: rotations (k, n, 3, 3) and centres (k, n, 3), m."""
-        link_rotation = rotations[:, self.link[shapes]]
-        centre = positions[:, self.link[shapes]] + (
+        # take() keeps the result C-ordered (fancy indexing a middle axis does not), which
+        # keeps later reductions over it on NumPy's fast path.
+        links = self.link[shapes]
+        link_rotation = rotations.take(links, axis=1)
+        centre = positions.take(links, axis=1) + (
             link_rotation @ self.origin_translation[shapes][:, :, None])[..., 0]
         if self.identity_origin[shapes].all():
             return link_rotation, centre
@@ -293,9 +329,9 @@ class BodyShapes:
             self._bounds_layout(shapes))
         extent = np.empty(centre.shape)
         if len(box):
-            extent[:, box] = (np.abs(rotation[:, box]) @ box_half)[..., 0]
+            extent[:, box] = (np.abs(rotation.take(box, axis=1)) @ box_half)[..., 0]
         if len(cylinder):
-            axis = np.abs(rotation[..., 2][:, cylinder])
+            axis = np.abs(rotation.take(cylinder, axis=1)[..., 2])
             extent[:, cylinder] = (radius * np.sqrt(np.clip(1.0 - axis * axis, 0.0, 1.0))
                                    + half_length * axis)
         if len(sphere):
@@ -426,8 +462,8 @@ class TimedBody:
         environment = self.environment
         if (self._near is None or np.any(lower < self._near_lower)
                 or np.any(upper > self._near_upper)):
-            box_lower = np.minimum(lower, self.shape_lower.min(axis=(0, 1)) - NEAR_MARGIN)
-            box_upper = np.maximum(upper, self.shape_upper.max(axis=(0, 1)) + NEAR_MARGIN)
+            box_lower = np.minimum(lower, self.swept_lower.min(axis=0) - NEAR_MARGIN)
+            box_upper = np.maximum(upper, self.swept_upper.max(axis=0) + NEAR_MARGIN)
             self._near = environment.triangles_near(box_lower, box_upper)
             self._near_lower, self._near_upper = box_lower, box_upper
         near = self._near
@@ -441,6 +477,85 @@ class TimedBody:
                                                               every)
         self.shape_lower, self.shape_upper = shapes.bounds(self.shape_rotation,
                                                            self.shape_centre, every)
+        #: (S, 3) box corners of every shape swept over the step, m.
+        self.swept_lower = self.shape_lower.min(axis=0)
+        self.swept_upper = self.shape_upper.max(axis=0)
+
+    def first_collision(self, checked: np.ndarray, pairs: np.ndarray,
+                        frames: Optional[np.ndarray] = None) -> int:
+        """First frame at which a checked shape touches the environment or its pair's shape.
+
+        Uses the poses the body already holds (no kinematics): the broad phase over all the
+        frames at once, the narrow phase in FCL in frame order, stopping at the first collision.
+
+        Parameters
+        ----------
+        checked
+            (n,) shapes to check.
+        pairs
+            (P, 2) shape pairs (a checked shape, a body shape it must not touch).
+        frames
+            (m,) frame indices to check, in increasing order (default: every frame).
+
+        Returns
+        -------
+        int
+            The first frame in collision, or -1.
+
+        """
+        if frames is None:
+            frames = np.arange(len(self.frames))
+        frames = np.asarray(frames, dtype=int)
+        if not len(frames) or not len(checked):
+            return -1
+        shapes = self.shapes
+        environment = self.environment
+        lower, upper = self.shape_lower[frames], self.shape_upper[frames]
+        low, high = lower.take(checked, axis=1), upper.take(checked, axis=1)
+        rows, targets, owners = [], [], []
+        # The boxes swept over the whole step hold those at the frames checked.
+        near = self.triangles_near(self.swept_lower[checked].min(axis=0),
+                                   self.swept_upper[checked].max(axis=0))
+        if len(near):
+            owner = environment.owner[near]
+            row, column, mesh = mesh_contacts(low, high, environment.lower[near],
+                                              environment.upper[near], owner,
+                                              int(owner.max()) + 1)
+            rows.append(row)
+            targets.append(checked[column])
+            owners.append(-1 - mesh)
+        if len(pairs):
+            a, b = pairs[:, 0], pairs[:, 1]
+            # Only pairs whose boxes swept over the step meet can meet at one of its frames.
+            swept_lower, swept_upper = self.swept_lower, self.swept_upper
+            active = boxes_overlap(swept_lower[a], swept_upper[a], swept_lower[b],
+                                   swept_upper[b])
+            a, b = a[active], b[active]
+            if len(a):
+                row, pair = np.nonzero(boxes_overlap(
+                    lower.take(a, axis=1), upper.take(a, axis=1), lower.take(b, axis=1),
+                    upper.take(b, axis=1)))
+                rows.append(row)
+                targets.append(a[pair])
+                owners.append(b[pair])
+        if not rows:
+            return -1
+        rows = np.concatenate(rows)
+        order = np.argsort(rows, kind='stable')
+        shape_of = np.concatenate(targets)[order].tolist()
+        other_of = np.concatenate(owners)[order].tolist()
+        for row, shape, other in zip(rows[order].tolist(), shape_of, other_of):
+            frame = int(frames[row])
+            if other < 0:
+                target = environment.object_of(-1 - other)
+            else:
+                target = shapes.objects[other]
+                target.setTransform(fcl.Transform(self.shape_rotation[frame, other],
+                                                  self.shape_centre[frame, other]))
+            if shapes.collides(shape, self.shape_rotation[frame, shape],
+                               self.shape_centre[frame, shape], target):
+                return frame
+        return -1
 
     def set_branch(self, indices: np.ndarray, values: np.ndarray,
                    steps: Sequence[_Step]) -> None:
@@ -456,6 +571,8 @@ class TimedBody:
         self.shape_centre[:, moved] = centre
         self.shape_lower[:, moved], self.shape_upper[:, moved] = self.shapes.bounds(
             rotation, centre, moved)
+        self.swept_lower = self.shape_lower.min(axis=0)
+        self.swept_upper = self.shape_upper.max(axis=0)
 
 
 def boxes_overlap(lower_a: np.ndarray, upper_a: np.ndarray, lower_b: np.ndarray,
@@ -469,6 +586,34 @@ def boxes_overlap(lower_a: np.ndarray, upper_a: np.ndarray, lower_b: np.ndarray,
         out &= upper_a[..., axis] >= lower_b[..., axis]
         out &= lower_a[..., axis] <= upper_b[..., axis]
     return out
+
+
+def _same_motion(a: tuple, b: tuple) -> bool:
+    """Whether two motions ((qa, ia), (qb, ib)) are the same."""
+    return all(ia == ib and np.array_equal(qa, qb) for (qa, ia), (qb, ib) in zip(a, b))
+
+
+def _watched_rows(inside: np.ndarray, broad: tuple) -> List[int]:
+    """Rows of a checked batch that can be illegal: outside the limits or with suspects."""
+    outside = np.flatnonzero(~inside).tolist()
+    if not outside:
+        return sorted(broad[0])
+    return sorted(set(outside).union(broad[0]))
+
+
+def span(lower: np.ndarray, upper: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
+    """The box around boxes with corners (m, n, 3): lower and upper corners (3,), m.
+
+    Reduces over the rows first: reducing a large array straight to 3 values is one of
+    NumPy's slow paths (a short innermost output), about 10x slower.
+    """
+    m = len(lower)
+    if m > 1:
+        lower = lower.reshape(m, -1).min(axis=0).reshape(-1, 3)
+        upper = upper.reshape(m, -1).max(axis=0).reshape(-1, 3)
+    else:
+        lower, upper = lower.reshape(-1, 3), upper.reshape(-1, 3)
+    return lower.min(axis=0), upper.max(axis=0)
 
 
 def mesh_contacts(low: np.ndarray, high: np.ndarray, triangle_lower: np.ndarray,
@@ -491,12 +636,82 @@ def mesh_contacts(low: np.ndarray, high: np.ndarray, triangle_lower: np.ndarray,
         Index arrays in row, shape, mesh order (a scatter, not a sort).
 
     """
-    rows, columns, triangles = np.nonzero(boxes_overlap(
-        low[:, :, None], high[:, :, None], triangle_lower[None, None],
-        triangle_upper[None, None]))
+    m, n = low.shape[:2]
+    if m > 1 and m * n * len(triangle_lower) > SWEPT_CONTACTS:
+        # Many rows: only the (shape, triangle) pairs whose boxes meet when the shape's is
+        # swept over all rows can meet in one of them.
+        shape, triangle = np.nonzero(boxes_overlap(
+            low.min(axis=0)[:, None], high.max(axis=0)[:, None], triangle_lower[None],
+            triangle_upper[None]))
+        rows, which = np.nonzero(boxes_overlap(
+            low.take(shape, axis=1), high.take(shape, axis=1), triangle_lower[triangle],
+            triangle_upper[triangle]))
+        columns, triangles = shape[which], triangle[which]
+    else:
+        rows, columns, triangles = np.nonzero(boxes_overlap(
+            low[:, :, None], high[:, :, None], triangle_lower[None, None],
+            triangle_upper[None, None]))
     hit = np.zeros(low.shape[:2] + (mesh_count,), dtype=bool)
     hit[rows, columns, triangle_owner[triangles]] = True
     return np.nonzero(hit)
+
+
+def branch_layout(kinematics: BodyKinematics, shapes: BodyShapes, branch: str,
+                  checked_links: Sequence[str], obstacle_links: Sequence[str]) -> tuple:
+    """The model-only data of a branch, built once and kept in ``shapes.branch_layouts``.
+
+    Returns
+    -------
+    tuple
+        (steps that move with the branch, checked shapes (n,) int, steps needed for the
+        checks, shape pairs (P, 2) int, link at the centre of its reach, reach radius m).
+
+    """
+    key = (branch, tuple(checked_links), tuple(obstacle_links), id(kinematics))
+    layout = shapes.branch_layouts.get(key)
+    if layout is not None:
+        return layout
+    skeleton = kinematics.skeleton
+    joint_names = tuple(skeleton.joint_names[i] for i in skeleton.branch(branch))
+    steps = kinematics.subtree_steps(joint_names)
+    moving = {step.child for step in steps}
+    checked = shapes.shapes_of(checked_links)
+    checked = checked[np.isin(shapes.link[checked], list(moving))]
+    # Only the links on the way to the checked shapes matter for validity.
+    needed = set(shapes.link[checked].tolist())
+    parent_of = {step.child: step.parent for step in steps}
+    for link in list(needed):
+        while link in parent_of:
+            link = parent_of[link]
+            needed.add(link)
+    check_steps = tuple(step for step in steps if step.child in needed)
+    pairs = shapes.pairs(checked, shapes.shapes_of(obstacle_links))
+    first, reach = _reach_bound(shapes, steps, checked)
+    layout = (steps, checked, check_steps, pairs, first, reach)
+    shapes.branch_layouts[key] = layout
+    return layout
+
+
+def _reach_bound(shapes: BodyShapes, steps: Sequence[_Step],
+                 checked: np.ndarray) -> Tuple[int, float]:
+    """Link at the centre and radius (m) of a ball holding the checked shapes at any pose.
+
+    The centre is the branch's first joint, which the branch itself cannot move; the radius
+    is the longest chain of joint offsets from it plus the shape's own extent.
+    """
+    if not steps:
+        return 0, 0.0
+    first = steps[0].child
+    link_reach = {first: 0.0}
+    for step in steps[1:]:
+        link_reach[step.child] = (link_reach.get(step.parent, 0.0)
+                                  + float(np.linalg.norm(step.origin_translation)))
+    reach = 0.0
+    for shape in checked:
+        radius = float(np.linalg.norm(shapes.half[shape]))
+        offset = float(np.linalg.norm(shapes.origin_translation[shape]))
+        reach = max(reach, link_reach.get(int(shapes.link[shape]), 0.0) + offset + radius)
+    return first, reach
 
 
 class CTSpace:
@@ -538,13 +753,13 @@ class CTSpace:
         self.lower = skeleton.lower[self.indices]
         self.upper = skeleton.upper[self.indices]
         self.speed_limit = skeleton.velocity_limit[self.indices]
+        self._speed_cap = self.speed_limit * (1 + SPEED_TOLERANCE)
+        #: (k - 1, 1) time from each frame to the next, s.
+        self._frame_step = np.diff(self.times)[:, None]
         self.time_weight = float(time_weight)
         # What depends on the model only is worked out once per branch and reused every step.
-        key = (branch, tuple(checked_links), tuple(obstacle_links), id(body.kinematics))
-        layout = body.shapes.branch_layouts.get(key)
-        if layout is None:
-            layout = self._branch_layout(body, checked_links, obstacle_links)
-            body.shapes.branch_layouts[key] = layout
+        layout = branch_layout(body.kinematics, body.shapes, branch, checked_links,
+                               obstacle_links)
         #: steps: the steps to re-evaluate when the branch moves (all links it carries).
         self.steps, self.checked, self._check_steps, self.pairs, first, self._reach = layout
         self._reach_centre = body.positions[:, first]
@@ -552,64 +767,26 @@ class CTSpace:
         # shape tested once, however many of the branch's shapes it pairs with).
         obstacle, pair_obstacle = np.unique(self.pairs[:, 1], return_inverse=True)
         centre = self._reach_centre[:, None]
-        gap = np.maximum(np.maximum(body.shape_lower[:, obstacle] - centre, 0.0),
-                         centre - body.shape_upper[:, obstacle])
+        gap = np.maximum(np.maximum(body.shape_lower.take(obstacle, axis=1) - centre, 0.0),
+                         centre - body.shape_upper.take(obstacle, axis=1))
         reachable = np.any(np.sum(gap * gap, axis=-1) <= self._reach ** 2, axis=0)
         self.pairs = self.pairs[reachable[pair_obstacle.ravel()]]
         # The obstacle shapes do not move while this branch is planned.
         other = self.pairs[:, 1]
-        self._pair_rotation = body.shape_rotation[:, other]
-        self._pair_centre = body.shape_centre[:, other]
-        self._pair_lower = body.shape_lower[:, other]
-        self._pair_upper = body.shape_upper[:, other]
+        self._pair_rotation = body.shape_rotation.take(other, axis=1)
+        self._pair_centre = body.shape_centre.take(other, axis=1)
+        self._pair_lower = body.shape_lower.take(other, axis=1)
+        self._pair_upper = body.shape_upper.take(other, axis=1)
         self._pair_column = np.searchsorted(self.checked, self.pairs[:, 0])
-        self._pair_swept_lower = self._pair_lower.min(axis=0)
-        self._pair_swept_upper = self._pair_upper.max(axis=0)
+        # For the narrow phase, as Python ints and objects.
+        self._pair_other = other.tolist()
+        self._checked_list = self.checked.tolist()
+        self._pair_swept_lower = body.swept_lower[other]
+        self._pair_swept_upper = body.swept_upper[other]
         self._prepare_environment()
         self.checks = 0
-
-    def _branch_layout(self, body: TimedBody, checked_links: Sequence[str],
-                       obstacle_links: Sequence[str]) -> tuple:
-        """The branch's model-only data: (steps, checked shapes, steps needed for the checks,
-        shape pairs, link at the centre of its reach, reach radius m)."""
-        steps = body.kinematics.subtree_steps(self.joint_names)
-        moving = {step.child for step in steps}
-        shapes = body.shapes
-        checked = shapes.shapes_of(checked_links)
-        checked = checked[np.isin(shapes.link[checked], list(moving))]
-        # Only the links on the way to the checked shapes matter for validity.
-        needed = set(shapes.link[checked].tolist())
-        parent_of = {step.child: step.parent for step in steps}
-        for link in list(needed):
-            while link in parent_of:
-                link = parent_of[link]
-                needed.add(link)
-        check_steps = tuple(step for step in steps if step.child in needed)
-        pairs = shapes.pairs(checked, shapes.shapes_of(obstacle_links))
-        first, reach = self._reach_bound(shapes, steps, checked)
-        return steps, checked, check_steps, pairs, first, reach
-
-    @staticmethod
-    def _reach_bound(shapes: BodyShapes, steps: Sequence[_Step],
-                     checked: np.ndarray) -> Tuple[int, float]:
-        """Link at the centre and radius (m) of a ball holding the checked shapes at any pose.
-
-        The centre is the branch's first joint, which the branch itself cannot move; the radius
-        is the longest chain of joint offsets from it plus the shape's own extent.
-        """
-        if not steps:
-            return 0, 0.0
-        first = steps[0].child
-        link_reach = {first: 0.0}
-        for step in steps[1:]:
-            link_reach[step.child] = (link_reach.get(step.parent, 0.0)
-                                      + float(np.linalg.norm(step.origin_translation)))
-        reach = 0.0
-        for shape in checked:
-            radius = float(np.linalg.norm(shapes.half[shape]))
-            offset = float(np.linalg.norm(shapes.origin_translation[shape]))
-            reach = max(reach, link_reach.get(int(shapes.link[shape]), 0.0) + offset + radius)
-        return first, reach
+        # A motion whose broad phase ran ahead (see best_valid_rows), or None.
+        self._prefetched: Optional[tuple] = None
 
     def _prepare_environment(self) -> None:
         """Keep only triangles the branch could reach during the step (§5: broad phase)."""
@@ -622,6 +799,9 @@ class CTSpace:
         self._triangle_upper = env.upper[near]
         self._triangle_owner = env.owner[near]
         self._mesh_count = int(self._triangle_owner.max()) + 1 if len(near) else 1
+        owners = set(self._triangle_owner.tolist())
+        self._mesh_objects = [env.object_of(mesh) if mesh in owners else None
+                              for mesh in range(self._mesh_count)]
 
     def _triangles_near(self, low: np.ndarray, high: np.ndarray) -> np.ndarray:
         """Indices of the kept triangles whose boxes meet the box around all boxes (m, n, 3).
@@ -631,8 +811,7 @@ class CTSpace:
         """
         if not len(self._triangle_lower) or not low.size:
             return np.zeros(0, dtype=int)
-        lower = low.reshape(-1, 3).min(axis=0)
-        upper = high.reshape(-1, 3).max(axis=0)
+        lower, upper = span(low, high)
         return np.flatnonzero(boxes_overlap(lower, upper, self._triangle_lower,
                                             self._triangle_upper))
 
@@ -669,12 +848,13 @@ class CTSpace:
         states on the objective follows it exactly.
         """
         (qa, ia), (qb, ib) = a, b
-        frames = np.arange(ia, ib + 1)
-        da = np.asarray(qa) - self.objective[ia]
-        db = np.asarray(qb) - self.objective[ib]
-        span = self.times[ib] - self.times[ia]
-        s = (self.times[frames] - self.times[ia]) / span if span > 0 else np.zeros(len(frames))
-        return self.objective[frames] + da + s[:, None] * (db - da)
+        objective = self.objective[ia:ib + 1]
+        times = self.times[ia:ib + 1]
+        da = np.asarray(qa) - objective[0]
+        db = np.asarray(qb) - objective[-1]
+        span = times[-1] - times[0]
+        s = (times - times[0]) / span if span > 0 else np.zeros(len(times))
+        return objective + da + s[:, None] * (db - da)
 
     def interpolate(self, a: Tuple[np.ndarray, int], b: Tuple[np.ndarray, int],
                     s: float) -> Tuple[np.ndarray, float]:
@@ -723,22 +903,27 @@ class CTSpace:
 
         """
         qa, ia = a
-        motions = []
-        for qb, ib in goals:
-            if ib <= ia:
-                motions.append((np.zeros((0, self.dimension)), ia))
+        failures: List[int] = []
+        prefetched, self._prefetched = self._prefetched, None
+        if goals and prefetched is not None and _same_motion(prefetched[0], (a, goals[0])):
+            # The first goal's broad phase ran with the neighbours' (best_valid_rows).
+            _, _, late, frames, inside, broad = prefetched
+            bad = -1
+            for row in _watched_rows(inside, broad):
+                if not inside[row] or self._narrow_phase(row, frames[row], broad):
+                    bad = int(frames[row])
+                    break
+            if bad < 0 and late >= 0:
+                bad = int(late)
+            failures.append(bad)
+            if bad < 0:
+                return 0, failures
+        for first in (True, False):
+            if first and failures:
                 continue
-            path = self.motion_frames((qa, ia), (qb, ib))
-            speed = np.abs(np.diff(path, axis=0)) / np.diff(self.times[ia:ib + 1])[:, None]
-            too_fast = np.flatnonzero(np.any(speed > self.speed_limit * (1 + SPEED_TOLERANCE),
-                                             axis=1))
-            if len(too_fast):
-                end = ia + 1 + int(too_fast[0])
-                motions.append((path[1:end - ia], end))
-            else:
-                motions.append((path[1:], -1))
-        failures = []
-        for first, batch in ((True, motions[:1]), (False, motions[1:])):
+            # The others are interpolated only when the first goal fails.
+            batch = [self._motion_rows(qa, ia, qb, ib)
+                     for qb, ib in (goals[:1] if first else goals[1:])]
             if not batch:
                 continue
             lengths = np.array([len(rows) for rows, _ in batch])
@@ -755,6 +940,20 @@ class CTSpace:
                 if bad < 0:
                     return len(failures) - 1, failures
         return -1, failures
+
+    def _motion_rows(self, qa: np.ndarray, ia: int, qb: np.ndarray,
+                     ib: int) -> Tuple[np.ndarray, int]:
+        """Configurations at frames ia+1.. of the motion to (qb, ib) that keep to the speed
+        limits, and the frame of the first speed violation (-1 when none)."""
+        if ib <= ia:
+            return np.zeros((0, self.dimension)), ia
+        path = self.motion_frames((qa, ia), (qb, ib))
+        speed = np.abs(path[1:] - path[:-1]) / self._frame_step[ia:ib]
+        too_fast = np.flatnonzero((speed > self._speed_cap).any(axis=1))
+        if len(too_fast):
+            end = ia + 1 + int(too_fast[0])
+            return path[1:end - ia], end
+        return path[1:], -1
 
     def first_invalid(self, q: np.ndarray, frames: np.ndarray) -> int:
         """Row of the first illegal configuration in a batch, or -1 when all are legal.
@@ -790,13 +989,23 @@ class CTSpace:
 
         """
         frames = np.asarray(frames)
-        segments = [(i, i + 1) for i in range(len(frames))]
-        return np.array([bad < 0 for bad in self._check_segments(
-            np.asarray(q, dtype=float), frames, segments, [-1] * len(frames), False)],
-            dtype=bool)
+        q = np.asarray(q, dtype=float)
+        m = len(frames)
+        self.checks += m
+        if not m:
+            return np.zeros(0, dtype=bool)
+        legal = self.within_bounds(q)
+        broad = self._broad_phase(q, frames)
+        # Only rows with suspect pairs need the narrow phase.
+        for row in broad[0]:
+            if legal[row] and self._narrow_phase(row, frames[row], broad):
+                legal[row] = False
+        return legal
 
     def best_valid_rows(self, q: np.ndarray, frames: np.ndarray, order: np.ndarray,
-                        count: int, also: Sequence[int] = ()) -> np.ndarray:
+                        count: int, also: Sequence[int] = (),
+                        motion: Optional[Tuple[Tuple[np.ndarray, int],
+                                               Tuple[np.ndarray, int]]] = None) -> np.ndarray:
         """Legality of the first ``count`` legal rows of a batch in a given order: (m,) bool.
 
         The broad phase runs over all rows at once, the narrow phase row by row in ``order``
@@ -816,17 +1025,36 @@ class CTSpace:
             Legal rows wanted.
         also
             Rows checked whatever their rank.
+        motion
+            A motion (a, b) likely to be checked next (by :meth:`first_legal_motion`, as its
+            first goal): its frames share this broad phase, and only its narrow phase is left
+            for then.
 
         """
         frames = np.asarray(frames)
         q = np.asarray(q, dtype=float)
         m = len(frames)
         legal = np.zeros(m, dtype=bool)
-        self.checks += m
+        self._prefetched = None
         if not m:
             return legal
         inside = self.within_bounds(q)
+        extra = None
+        if motion is not None:
+            (qa, ia), (qb, ib) = motion
+            rows, late = self._motion_rows(qa, ia, qb, ib)
+            if len(rows):
+                extra = (motion, rows, late, np.arange(ia + 1, ia + 1 + len(rows)))
+                q = np.concatenate([q, rows])
+                frames = np.concatenate([frames, extra[3]])
+        self.checks += len(frames)
         suspects = self._broad_phase(q, frames)
+        if extra is not None:
+            kept, rotation, centre = suspects
+            # The motion's rows as a broad phase of their own (rows numbered from 0).
+            own = {row - m: pairs for row, pairs in kept.items() if row >= m}
+            self._prefetched = extra + (self.within_bounds(extra[1]),
+                                        (own, rotation[m:], centre[m:]))
         checked = set()
         found = 0
         for row in list(order):
@@ -852,12 +1080,16 @@ class CTSpace:
         """
         m = len(frames)
         self.checks += m
+        watch: List[int] = []
         if m:
             inside = self.within_bounds(q)
             suspects = self._broad_phase(q, frames)
+            watch = _watched_rows(inside, suspects)
         for (begin, end), late in zip(segments, early):
             bad = -1
-            for row in range(begin, end):
+            for row in watch[bisect.bisect_left(watch, begin):]:
+                if row >= end:
+                    break
                 if not inside[row] or self._narrow_phase(row, frames[row], suspects):
                     bad = int(frames[row])
                     break
@@ -889,14 +1121,17 @@ class CTSpace:
             rows = np.concatenate([np.arange(begin, end) for _, begin, end in wave])
             self.checks += len(rows)
             suspects = self._broad_phase(q[rows], frames[rows]) if len(rows) else None
+            watch = _watched_rows(inside[rows], suspects) if len(rows) else []
             local = 0
             for i, begin, end in wave:
-                for row in range(begin, end):
-                    if not inside[row] or self._narrow_phase(local + row - begin, frames[row],
-                                                             suspects):
-                        results[i] = int(frames[row])
+                for row in watch[bisect.bisect_left(watch, local):]:
+                    if row >= local + end - begin:
                         break
-                else:
+                    if not inside[begin + row - local] or self._narrow_phase(
+                            row, frames[begin + row - local], suspects):
+                        results[i] = int(frames[begin + row - local])
+                        break
+                if results[i] is None:
                     if end == segments[i][1]:
                         results[i] = int(early[i]) if early[i] >= 0 else -1
                     position[i] = end
@@ -908,8 +1143,35 @@ class CTSpace:
                 done += 1
             size *= 2
 
-    def _broad_phase(self, q: np.ndarray, frames: np.ndarray) -> tuple:
-        """Boxes of the branch's shapes against triangles and body shapes, all rows at once."""
+    def _shape_boxes(self, q: np.ndarray, frames: np.ndarray) -> tuple:
+        """Poses and boxes of the branch's checked shapes for a batch of rows.
+
+        Rows where the branch is where the body already holds it (the objective, or the start
+        at frame 0, before the branch is fixed) take the body's poses; only the others need
+        kinematics.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            Rotations (m, n, 3, 3), centres (m, n, 3) and box corners (m, n, 3) x 2, m.
+
+        """
+        body = self.body
+        checked = self.checked
+        held = np.all(q == body.frames[frames[:, None], self.indices], axis=1)
+        if not held.any():
+            return self._kinematic_boxes(q, frames)
+        at = (frames[:, None], checked)
+        rotation, centre = body.shape_rotation[at], body.shape_centre[at]
+        low, high = body.shape_lower[at], body.shape_upper[at]
+        moved = np.flatnonzero(~held)
+        if len(moved):
+            rotation[moved], centre[moved], low[moved], high[moved] = self._kinematic_boxes(
+                q[moved], frames[moved])
+        return rotation, centre, low, high
+
+    def _kinematic_boxes(self, q: np.ndarray, frames: np.ndarray) -> tuple:
+        """Like :meth:`_shape_boxes`, by forward kinematics of the branch's links."""
         body = self.body
         full = body.frames[frames]
         full[:, self.indices] = q
@@ -919,25 +1181,41 @@ class CTSpace:
         shapes = body.shapes
         rotation, centre = shapes.poses(rotations, positions, self.checked)
         low, high = shapes.bounds(rotation, centre, self.checked)
+        return rotation, centre, low, high
+
+    def _broad_phase(self, q: np.ndarray, frames: np.ndarray) -> tuple:
+        """Boxes of the branch's shapes against triangles and body shapes, all rows at once."""
+        rotation, centre, low, high = self._shape_boxes(q, frames)
         suspects: Dict[int, list] = {}
-        near = self._triangles_near(low, high)
-        if len(near):
+        if len(self._triangle_lower) > FEW_TRIANGLES:
+            near = self._triangles_near(low, high)
+        else:
+            # A few triangles: the first cut would cost more than it saves.
+            near = slice(None) if len(self._triangle_lower) else []
+        if len(self._triangle_lower[near]):
             rows, columns, owners = mesh_contacts(
                 low, high, self._triangle_lower[near], self._triangle_upper[near],
                 self._triangle_owner[near], self._mesh_count)
             for row, column, owner in zip(rows.tolist(), columns.tolist(), owners.tolist()):
                 suspects.setdefault(row, []).append((column, -1 - owner))
-        if len(self.pairs):
-            # Only pairs whose boxes meet when swept over all rows and the whole step can meet.
-            active = np.flatnonzero(boxes_overlap(
-                low.min(axis=0)[self._pair_column], high.max(axis=0)[self._pair_column],
-                self._pair_swept_lower, self._pair_swept_upper))
+        pairs = len(self.pairs)
+        if pairs:
+            if len(frames) * pairs > FEW_PAIR_ROWS:
+                # Only pairs whose boxes meet when swept over all rows and the whole step can
+                # meet.
+                active = np.flatnonzero(boxes_overlap(
+                    low.min(axis=0)[self._pair_column], high.max(axis=0)[self._pair_column],
+                    self._pair_swept_lower, self._pair_swept_upper))
+                other_lower = self._pair_lower[frames[:, None], active]
+                other_upper = self._pair_upper[frames[:, None], active]
+            else:
+                active = np.arange(pairs)
+                other_lower, other_upper = self._pair_lower[frames], self._pair_upper[frames]
             if len(active):
                 columns = self._pair_column[active]
                 rows, which = np.nonzero(boxes_overlap(
-                    low[:, columns], high[:, columns],
-                    self._pair_lower[frames[:, None], active], self._pair_upper[frames[:, None],
-                                                                                active]))
+                    low.take(columns, axis=1), high.take(columns, axis=1), other_lower,
+                    other_upper))
                 for row, pair in zip(rows.tolist(), active[which].tolist()):
                     suspects.setdefault(row, []).append((int(self._pair_column[pair]), pair))
         return suspects, rotation, centre
@@ -945,15 +1223,23 @@ class CTSpace:
     def _narrow_phase(self, row: int, frame: int, broad: tuple) -> bool:
         """Whether any suspect pair of one row really collides (FCL)."""
         suspects, rotation, centre = broad
+        pairs = suspects.get(row)
+        if not pairs:
+            return False
         shapes = self.body.shapes
-        for column, other in suspects.get(row, ()):
-            shape = int(self.checked[column])
+        objects, request = shapes.objects, shapes._request
+        for column, other in pairs:
             if other < 0:
-                target = self.body.environment.object_of(-1 - other)
+                target = self._mesh_objects[-1 - other]
             else:
-                target = shapes.objects[int(self.pairs[other, 1])]
+                target = objects[self._pair_other[other]]
                 target.setTransform(fcl.Transform(self._pair_rotation[frame, other],
                                                   self._pair_centre[frame, other]))
-            if shapes.collides(shape, rotation[row, column], centre[row, column], target):
+            # BodyShapes.collides, inline: this is the innermost loop of every search.
+            shape = objects[self._checked_list[column]]
+            shape.setTransform(fcl.Transform(rotation[row, column], centre[row, column]))
+            result = fcl.CollisionResult()
+            fcl.collide(shape, target, request, result)
+            if result.is_collision:
                 return True
         return False

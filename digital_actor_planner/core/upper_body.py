@@ -16,8 +16,8 @@ import numpy as np
 
 from digital_actor_planner.core.ct_roadmap import CTRoadmap
 from digital_actor_planner.core.ct_space import (
-    BodyKinematics, BodyShapes, boxes_overlap, CTSpace, EnvironmentIndex, mesh_contacts,
-    TimedBody)
+    BodyKinematics, BodyShapes, boxes_overlap, branch_layout, CTSpace, EnvironmentIndex,
+    mesh_contacts, TimedBody)
 from digital_actor_planner.core.skeleton import Skeleton
 
 #: Shoulder roll that keeps a hanging arm clear of the torso and the thigh, rad.
@@ -362,11 +362,10 @@ class UpperBodyPlanner:
             objective[0] = np.clip(2 * objective[1] - objective[2] if last >= 2
                                    else objective[1], self.skeleton.lower[indices],
                                    self.skeleton.upper[indices])
-            space = CTSpace(name, body, times, objective, self._checked[name],
-                            self._obstacles[name], config.time_weight)
             record = dict(ok=True, fast=False, nodes=0, backtracks=0, grown=0)
             path = None
-            start_legal, objective_legal = self._start_and_objective(space, start)
+            checks = 0
+            start_legal, objective_legal = self.start_and_objective(times, body, name)
             if not start_legal:
                 ok, record['ok'], blocked_frame = False, False, 0
                 links = self._links_in_collision(frames[0], name)
@@ -377,6 +376,9 @@ class UpperBodyPlanner:
                 path = objective.copy()
                 record['fast'] = True
             else:
+                # Only a branch that must leave its motion pattern needs its CT-space.
+                space = CTSpace(name, body, times, objective, self._checked[name],
+                                self._obstacles[name], config.time_weight)
                 result = self.roadmaps[name].solve(
                     space, start, hold_frames=config.hold_frames,
                     speed_fraction=config.speed_fraction,
@@ -390,6 +392,7 @@ class UpperBodyPlanner:
                               grown=result.grown, ok=result.ok,
                               preview_backtracks=result.preview_backtracks)
                 path = result.path
+                steps, checks = space.steps, space.checks
                 if not result.ok:
                     ok, blocked_frame = False, result.blocked_frame
                     reason = f'{name} blocked at t={times[blocked_frame]:.2f} s' + (
@@ -397,9 +400,11 @@ class UpperBodyPlanner:
             if path is not None and record['ok']:
                 path[0] = start
                 out[:, indices] = path
-                body.set_branch(indices, path, space.steps)
+                if not record['fast'] and name != BRANCH_ORDER[-1]:
+                    # The branches planned after this one see it where it now is.
+                    body.set_branch(indices, path, steps)
             record['deviation'] = float(np.max(np.abs(out[1:, indices] - frames[1:, indices])))
-            record['checks'] = space.checks
+            record['checks'] = checks
             record['time'] = time.perf_counter() - tic
             per_branch[name] = record
             if not ok:
@@ -409,6 +414,45 @@ class UpperBodyPlanner:
         return UpperBodyPlan(frames=out, ok=ok, reason=reason, deviation=deviation,
                              planning_time=time.perf_counter() - began, per_branch=per_branch,
                              blocked_frame=blocked_frame)
+
+    def start_and_objective(self, times: np.ndarray, body: TimedBody,
+                            name: str) -> Tuple[bool, bool]:
+        """Whether a branch's start is legal, and whether its motion in ``body`` is.
+
+        Before the branch is planned its columns of ``body`` hold its start at frame 0, then
+        its objective: the motion its fast path would take. Checked on the poses ``body``
+        already holds (no kinematics), in one batch for both answers, with the shapes, pairs
+        and narrow phase of the branch's :class:`CTSpace`.
+
+        Parameters
+        ----------
+        times
+            (k,) frame times, s.
+        body
+            The actor over the step, with the branches before ``name`` fixed.
+        name
+            The branch.
+
+        Returns
+        -------
+        tuple of bool
+            (start legal at frame 0, the whole motion legal: start included).
+
+        """
+        _, checked, _, pairs, _, _ = branch_layout(self.kinematics, self.shapes, name,
+                                                   self._checked[name], self._obstacles[name])
+        indices = self.indices[name]
+        path = body.frames[:, indices]
+        skeleton = self.skeleton
+        inside = np.all((path >= skeleton.lower[indices] - 1e-9)
+                        & (path <= skeleton.upper[indices] + 1e-9), axis=1)
+        speed = np.abs(np.diff(path, axis=0)) / np.diff(times)[:, None]
+        if np.any(speed > skeleton.velocity_limit[indices] * (1 + 1e-6)):
+            return bool(inside[0]) and body.first_collision(checked, pairs, [0]) < 0, False
+        if not inside.all():
+            return bool(inside[0]) and body.first_collision(checked, pairs, [0]) < 0, False
+        bad = body.first_collision(checked, pairs)
+        return bad != 0, bad < 0
 
     @staticmethod
     def _start_and_objective(space: CTSpace, start: np.ndarray) -> Tuple[bool, bool]:
@@ -446,9 +490,11 @@ class UpperBodyPlanner:
             return False
         shapes = self.shapes
         upper_shapes = self._upper_shapes
-        low, high = body.shape_lower[:, upper_shapes], body.shape_upper[:, upper_shapes]
+        low = body.shape_lower.take(upper_shapes, axis=1)
+        high = body.shape_upper.take(upper_shapes, axis=1)
         environment = self.environment
-        near = body.triangles_near(low.min(axis=(0, 1)), high.max(axis=(0, 1)))
+        near = body.triangles_near(body.swept_lower[upper_shapes].min(axis=0),
+                                   body.swept_upper[upper_shapes].max(axis=0))
         if len(near):
             owner = environment.owner[near]
             frames, columns, owners = mesh_contacts(
@@ -462,11 +508,12 @@ class UpperBodyPlanner:
                     return False
         a, b = self._upper_pairs[:, 0], self._upper_pairs[:, 1]
         # Only pairs whose boxes swept over the step meet can meet at some frame.
-        swept_lower, swept_upper = body.shape_lower.min(axis=0), body.shape_upper.max(axis=0)
+        swept_lower, swept_upper = body.swept_lower, body.swept_upper
         active = boxes_overlap(swept_lower[a], swept_upper[a], swept_lower[b], swept_upper[b])
         a, b = a[active], b[active]
-        frames, pairs = np.nonzero(boxes_overlap(body.shape_lower[:, a], body.shape_upper[:, a],
-                                                 body.shape_lower[:, b], body.shape_upper[:, b]))
+        lower, upper = body.shape_lower, body.shape_upper
+        frames, pairs = np.nonzero(boxes_overlap(lower.take(a, axis=1), upper.take(a, axis=1),
+                                                 lower.take(b, axis=1), upper.take(b, axis=1)))
         for frame, shape, other in zip(frames.tolist(), a[pairs].tolist(), b[pairs].tolist()):
             target = shapes.objects[other]
             target.setTransform(fcl.Transform(body.shape_rotation[frame, other],
