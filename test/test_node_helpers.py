@@ -348,6 +348,35 @@ def test_environment_markers_are_built_once_per_scene_and_sent_serialized(monkey
     assert housekeeper.environment([ground, box], 'map') != first
 
 
+class _TickRecorder:
+    """Stands in for an actor node attached to a StreamTicker: records, per frame, the time it
+    was published, the ticks skipped before it, its own instant (None: "now"), its tick and the
+    publishing thread."""
+
+    def __init__(self, ticker):
+        self.ticker = ticker
+        self.frames = []
+
+    def publish_frame(self, now, skipped, instant=None):
+        ticker = self.ticker
+        # A frame without its own instant is the newest tick (set under the ticker's lock
+        # before the actors are called); a caught-up one is known by its instant.
+        tick = ticker._published if instant is None else \
+            round((instant - ticker._start) / ticker.period)
+        self.frames.append((now, skipped, instant, tick, threading.current_thread().name))
+
+    def record(self, frames: int) -> list:
+        """Attach to the ticker until ``frames`` frames are published (5 s at most)."""
+        self.ticker.attach(self)
+        try:
+            deadline = time.monotonic() + 5.0
+            while len(self.frames) < frames and time.monotonic() < deadline:
+                time.sleep(0.05)
+        finally:
+            self.ticker.detach(self)
+        return self.frames
+
+
 def test_stream_backup_thread_publishes_the_ticks_a_stalled_stream_thread_misses():
     """The publishing thread stalls for three periods (as on a core the hypervisor took
     away); the backup thread on the other core publishes those ticks, each tick once."""
@@ -362,35 +391,16 @@ def test_stream_backup_thread_publishes_the_ticks_a_stalled_stream_thread_misses
                 time.sleep(3.2 * period)  # woke up for its tick, then lost the core
             super()._publish(tick, now, backup)
 
-    class Actor:
-        def __init__(self):
-            self.frames = []
-
-        def publish_frame(self, now, skipped, instant=None):
-            # The tick being published (the newest is set under the ticker's lock before the
-            # actors are called; a caught-up one is known by its instant).
-            tick = ticker._published if instant is None else \
-                round((instant - ticker._start) / period)
-            self.frames.append((tick, skipped, threading.current_thread().name))
-
-    ticker, actor = Stalling(period, priority=1), Actor()
-    ticker.attach(actor)
-    try:
-        deadline = time.monotonic() + 5.0
-        while len(actor.frames) < stalled + 10 and time.monotonic() < deadline:
-            time.sleep(0.05)
-    finally:
-        ticker.detach(actor)
-    ticks = [tick for tick, _, _ in actor.frames]
+    ticker = Stalling(period, priority=1)
+    frames = _TickRecorder(ticker).record(stalled + 10)
+    ticks = [tick for _, _, _, tick, _ in frames]
     assert ticks == sorted(set(ticks)), 'a tick was published twice or out of order'
-    by_backup = [t for t, (_, _, name) in zip(ticks, actor.frames)
-                 if name == 'joint_state_backup']
+    by_backup = [tick for _, _, _, tick, name in frames if name == 'joint_state_backup']
     assert {stalled, stalled + 1, stalled + 2} <= set(by_backup), by_backup
     assert ticker.backup_publishes == len(by_backup)
     # Nothing skipped around the stall: the backup kept the stream going.
-    around = [skipped for t, (_, skipped, _) in zip(ticks, actor.frames)
-              if stalled - 2 <= t <= stalled + 4]
-    assert around and not any(around), actor.frames
+    around = [skipped for _, skipped, _, tick, _ in frames if stalled - 2 <= tick <= stalled + 4]
+    assert around and not any(around), frames
 
 
 def test_stream_catches_up_the_ticks_a_stall_of_every_thread_slept_over():
@@ -409,37 +419,21 @@ def test_stream_catches_up_the_ticks_a_stall_of_every_thread_slept_over():
                 now = time.monotonic()
             super()._publish(tick, now, backup)
 
-    class Actor:
-        def __init__(self):
-            self.frames = []
-
-        def publish_frame(self, now, skipped, instant=None):
-            # A frame without its own instant is the newest tick (set before the actors run).
-            tick = ticker._published if instant is None else \
-                round((instant - ticker._start) / period)
-            self.frames.append((now, skipped, instant, tick))
-
-    ticker, actor = Stalling(period, priority=0), Actor()
-    ticker.attach(actor)
-    try:
-        deadline = time.monotonic() + 5.0
-        while len(actor.frames) < long_stall + 12 and time.monotonic() < deadline:
-            time.sleep(0.05)
-    finally:
-        ticker.detach(actor)
-    ticks = [tick for _, _, _, tick in actor.frames]
+    ticker = Stalling(period, priority=0)
+    frames = _TickRecorder(ticker).record(long_stall + 12)
+    ticks = [tick for _, _, _, tick, _ in frames]
     assert ticks == sorted(set(ticks)), 'a tick published twice or out of order'
     # The first stall: ticks 10 .. 13 slept over, all published, each showing its instant.
     assert ticks[:long_stall] == list(range(long_stall)), ticks
-    for now, _, instant, tick in actor.frames:
+    for now, _, instant, tick, _ in frames:
         if stalled <= tick < stalled + 4:
             assert instant == pytest.approx(ticker._start + tick * period)
             assert now - instant >= period  # published late, not lost
-    burst = [now for now, _, _, tick in actor.frames if stalled + 1 <= tick <= stalled + 4]
+    burst = [now for now, _, _, tick, _ in frames if stalled + 1 <= tick <= stalled + 4]
     assert max(burst) - min(burst) < 0.5 * period  # caught up at once
     # The long stall: 8.5 periods late with CATCH_UP 5, so the 2 oldest ticks are skipped.
     assert sorted(set(range(ticks[-1] + 1)) - set(ticks)) == [long_stall + 1, long_stall + 2]
-    assert sum(skipped for _, skipped, _, _ in actor.frames) == 2
+    assert sum(skipped for _, skipped, _, _, _ in frames) == 2
     assert ticker.caught_up == 3 + 5  # 11 .. 13 with 14; 33 .. 37 with 38
     assert ticker.late_ticks >= 12 and ticker.max_lateness >= 8 * period
 

@@ -508,7 +508,6 @@ class TimedBody:
         frames = np.asarray(frames, dtype=int)
         if not len(frames) or not len(checked):
             return -1
-        shapes = self.shapes
         environment = self.environment
         lower, upper = self.shape_lower[frames], self.shape_upper[frames]
         low, high = lower.take(checked, axis=1), upper.take(checked, axis=1)
@@ -546,16 +545,23 @@ class TimedBody:
         other_of = np.concatenate(owners)[order].tolist()
         for row, shape, other in zip(rows[order].tolist(), shape_of, other_of):
             frame = int(frames[row])
-            if other < 0:
-                target = environment.object_of(-1 - other)
-            else:
-                target = shapes.objects[other]
-                target.setTransform(fcl.Transform(self.shape_rotation[frame, other],
-                                                  self.shape_centre[frame, other]))
-            if shapes.collides(shape, self.shape_rotation[frame, shape],
-                               self.shape_centre[frame, shape], target):
+            target = (environment.object_of(-1 - other) if other < 0
+                      else self.posed_shape(frame, other))
+            if self.collides(frame, shape, target):
                 return frame
         return -1
+
+    def posed_shape(self, frame: int, shape: int) -> fcl.CollisionObject:
+        """The FCL object of body shape ``shape``, placed where it is at ``frame``."""
+        target = self.shapes.objects[shape]
+        target.setTransform(fcl.Transform(self.shape_rotation[frame, shape],
+                                          self.shape_centre[frame, shape]))
+        return target
+
+    def collides(self, frame: int, shape: int, target: fcl.CollisionObject) -> bool:
+        """Whether body shape ``shape``, where it is at ``frame``, touches ``target``."""
+        return self.shapes.collides(shape, self.shape_rotation[frame, shape],
+                                    self.shape_centre[frame, shape], target)
 
     def set_branch(self, indices: np.ndarray, values: np.ndarray,
                    steps: Sequence[_Step]) -> None:

@@ -47,13 +47,7 @@ class PredictedPath:
             (N, 3) x (m), y (m), heading (rad).
 
         """
-        s = np.asarray(s, dtype=float)
-        x, y, heading, _, _ = self._points(s)
-        out = np.empty(s.shape + (3,))
-        out[..., 0] = x
-        out[..., 1] = y
-        out[..., 2] = heading
-        return out
+        return self.offset_poses(s, 0.0)
 
     def offset_points(self, s: np.ndarray, lateral) -> np.ndarray:
         """Points on the parallel tracks ``lateral`` m to the left of the path.

@@ -11,7 +11,6 @@ from dataclasses import dataclass
 import time
 from typing import Dict, Optional, Tuple
 
-import fcl
 import numpy as np
 
 from digital_actor_planner.core.ct_roadmap import CTRoadmap
@@ -488,7 +487,6 @@ class UpperBodyPlanner:
         speed = np.abs(np.diff(body.frames[:, upper], axis=0)) / np.diff(times)[:, None]
         if np.any(speed > self.skeleton.velocity_limit[upper] * (1 + 1e-6)):
             return False
-        shapes = self.shapes
         upper_shapes = self._upper_shapes
         low = body.shape_lower.take(upper_shapes, axis=1)
         high = body.shape_upper.take(upper_shapes, axis=1)
@@ -502,9 +500,7 @@ class UpperBodyPlanner:
                 int(owner.max()) + 1)
             for frame, shape, owner in zip(frames.tolist(), upper_shapes[columns].tolist(),
                                            owners.tolist()):
-                if shapes.collides(shape, body.shape_rotation[frame, shape],
-                                   body.shape_centre[frame, shape],
-                                   environment.object_of(owner)):
+                if body.collides(frame, shape, environment.object_of(owner)):
                     return False
         a, b = self._upper_pairs[:, 0], self._upper_pairs[:, 1]
         # Only pairs whose boxes swept over the step meet can meet at some frame.
@@ -515,11 +511,7 @@ class UpperBodyPlanner:
         frames, pairs = np.nonzero(boxes_overlap(lower.take(a, axis=1), upper.take(a, axis=1),
                                                  lower.take(b, axis=1), upper.take(b, axis=1)))
         for frame, shape, other in zip(frames.tolist(), a[pairs].tolist(), b[pairs].tolist()):
-            target = shapes.objects[other]
-            target.setTransform(fcl.Transform(body.shape_rotation[frame, other],
-                                              body.shape_centre[frame, other]))
-            if shapes.collides(shape, body.shape_rotation[frame, shape],
-                               body.shape_centre[frame, shape], target):
+            if body.collides(frame, shape, body.posed_shape(frame, other)):
                 return False
         return True
 
