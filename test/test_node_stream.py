@@ -147,6 +147,18 @@ def test_rviz_sees_the_scene_the_footstep_window_and_the_path(actor):
 
 def test_scene_reload_at_run_time_keeps_the_old_scene_when_broken(actor, tmp_path):
     _, probe = actor
+    # Reloading a large scene while walking: the walk runs out while it loads, and the actor
+    # holds meanwhile on purpose; that is not the planner running dry.
+    probe.drive(0.5, 0.0, 1.0)
+    before = int(probe.diagnostic_values()['buffer_underruns'])
+    large = scene('uneven_beam')  # 40k triangles
+    result = probe.set_scene(large)
+    assert result.successful, result.reason
+    probe.drive(0.5, 0.0, 3.0)
+    assert probe.spin_until(lambda: probe.diagnostic_values().get('scene') == large, 5.0)
+    assert probe.latest()[ROOT_X] > 0.5, 'no walk on the reloaded scene'
+    assert int(probe.diagnostic_values()['buffer_underruns']) == before, \
+        probe.diagnostic_values()
     flat = scene('flat')
     result = probe.set_scene(flat)
     assert result.successful, result.reason

@@ -967,6 +967,10 @@ class ActorPlannerNode(Node):
         # The last block committed holds the actor still (at rest or stuck): the stream running
         # past it is not a buffer underrun, also while the first step after it is planned.
         self._at_rest = False
+        # A scene is loading (or the new actor has not had its first block): the walk on the
+        # old scene may run out meanwhile; holding then is not running dry either.
+        self._reloading = False
+        self._restarted = False
         self._retry_at = 0.0
         self._clock_zero = None
         # Seconds from each recent block falling due to its commit: its wait for the shared
@@ -1064,9 +1068,11 @@ class ActorPlannerNode(Node):
                                                reason=f'cmd_timeout {parameter.value!r}')
                 self.cmd_timeout = float(parameter.value)
             elif parameter.name == 'scene':
+                self._reloading = True
                 try:
                     configuration, meshes = self.planner.load_scene(str(parameter.value))
                 except (ConfigurationError, PlanningFailed) as error:
+                    self._reloading = False
                     self.scene_error = f'{parameter.value}: {error}'
                     self.get_logger().error(f'scene not reloaded, keeping {self.scene_path}: '
                                             f'{error}')
@@ -1100,6 +1106,7 @@ class ActorPlannerNode(Node):
             self.buffer.restart(pending, self.actor_offset)
             self.committed_footsteps.clear()
             self._holding_for = None
+            self._restarted = True
         if self._holding_for is not None:
             if self.command.current(now, self.cmd_timeout) == self._holding_for:
                 return None
@@ -1126,6 +1133,8 @@ class ActorPlannerNode(Node):
             return  # planned on the old scene while the new one loaded
         self.buffer.append(np.asarray(block.times) + self.actor_offset, block.frames,
                            block.velocities, self.playback_time)
+        if self._restarted:  # the new scene's first block
+            self._reloading = self._restarted = False
         self.stats.record(block.status, block.reason, block.planning_time)
         due, self._due_since = self._due_since, None
         self._responses.append(time.monotonic() - min(started, due or started))
@@ -1167,8 +1176,9 @@ class ActorPlannerNode(Node):
         play = max(0.0, shown - self._clock_zero)
         end = self.buffer.end_time
         if play > end:
-            # Holding the last frame on purpose (at rest, or stuck) is not running dry.
-            if play - end > self.period and not self._at_rest:
+            # Holding the last frame on purpose (at rest, or stuck), or while a new scene
+            # loads, is not running dry.
+            if play - end > self.period and not (self._at_rest or self._reloading):
                 self.underruns += 1
             self._clock_zero = shown - end
             play = end
