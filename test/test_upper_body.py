@@ -200,6 +200,26 @@ def test_times_must_increase(skeleton):
         planner.plan(times, frames)
 
 
+def _start_and_objective(space, start) -> tuple:
+    """Reference on the CT-space's own checks: whether the start is legal at frame 0, and
+    whether the start, then the objective at frames 1..k-1, is a legal motion (one batch)."""
+    path = np.vstack([start[None], space.objective[1:]])
+    speed = np.abs(np.diff(path, axis=0)) / np.diff(space.times)[:, None]
+    if np.any(speed > space.speed_limit * (1 + 1e-6)):
+        return space.is_valid(start, 0), False
+    bad = space.first_invalid(path, np.arange(len(path)))
+    return bad != 0, bad < 0
+
+
+def _objective_is_legal(space, start) -> bool:
+    """Reference: whether start, then the objective at frames 1..k-1, is a legal motion."""
+    path = np.vstack([start[None], space.objective[1:]])
+    speed = np.abs(np.diff(path, axis=0)) / np.diff(space.times)[:, None]
+    if np.any(speed > space.speed_limit * (1 + 1e-6)):
+        return False
+    return space.first_invalid(path[1:], np.arange(1, len(path))) < 0
+
+
 def test_one_batch_pattern_check_agrees_with_the_branch_fast_paths(skeleton):
     # Offset postures held over 0.6 s windows walking past a low beam and a table: the one-batch
     # check of the whole pattern must say legal exactly when every branch's own check does.
@@ -225,10 +245,10 @@ def test_one_batch_pattern_check_agrees_with_the_branch_fast_paths(skeleton):
                             planner._obstacles[name])
             start = window[0, indices]
             start_legal = space.is_valid(start, 0)
-            objective_legal = planner._objective_is_legal(space, start)
+            objective_legal = _objective_is_legal(space, start)
             # The plan's single batch check of both says the same, on the CT-space and on the
             # poses the body already holds.
-            assert planner._start_and_objective(space, start) == (
+            assert _start_and_objective(space, start) == (
                 start_legal, start_legal and objective_legal)
             assert planner.start_and_objective(times[:61], body, name) == (
                 start_legal, start_legal and objective_legal)

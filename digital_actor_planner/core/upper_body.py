@@ -15,8 +15,7 @@ import numpy as np
 
 from digital_actor_planner.core.ct_roadmap import CTRoadmap
 from digital_actor_planner.core.ct_space import (
-    BodyKinematics, BodyShapes, boxes_overlap, branch_layout, CTSpace, EnvironmentIndex,
-    mesh_contacts, TimedBody)
+    BodyKinematics, BodyShapes, branch_layout, CTSpace, EnvironmentIndex, TimedBody)
 from digital_actor_planner.core.skeleton import Skeleton
 
 #: Shoulder roll that keeps a hanging arm clear of the torso and the thigh, rad.
@@ -446,32 +445,11 @@ class UpperBodyPlanner:
         inside = np.all((path >= skeleton.lower[indices] - 1e-9)
                         & (path <= skeleton.upper[indices] + 1e-9), axis=1)
         speed = np.abs(np.diff(path, axis=0)) / np.diff(times)[:, None]
-        if np.any(speed > skeleton.velocity_limit[indices] * (1 + 1e-6)):
-            return bool(inside[0]) and body.first_collision(checked, pairs, [0]) < 0, False
-        if not inside.all():
+        if np.any(speed > skeleton.velocity_limit[indices] * (1 + 1e-6)) or not inside.all():
+            # The motion is not legal whatever it touches: only the start is left to check.
             return bool(inside[0]) and body.first_collision(checked, pairs, [0]) < 0, False
         bad = body.first_collision(checked, pairs)
         return bad != 0, bad < 0
-
-    @staticmethod
-    def _start_and_objective(space: CTSpace, start: np.ndarray) -> Tuple[bool, bool]:
-        """Whether the start is legal at frame 0, and whether the start, then the objective at
-        frames 1..k-1, is a legal motion (start included): one batch check for both."""
-        path = np.vstack([start[None], space.objective[1:]])
-        speed = np.abs(np.diff(path, axis=0)) / np.diff(space.times)[:, None]
-        if np.any(speed > space.speed_limit * (1 + 1e-6)):
-            return space.is_valid(start, 0), False
-        bad = space.first_invalid(path, np.arange(len(path)))
-        return bad != 0, bad < 0
-
-    @staticmethod
-    def _objective_is_legal(space: CTSpace, start: np.ndarray) -> bool:
-        """Whether start, then the objective at frames 1..k-1, is a legal motion."""
-        path = np.vstack([start[None], space.objective[1:]])
-        speed = np.abs(np.diff(path, axis=0)) / np.diff(space.times)[:, None]
-        if np.any(speed > space.speed_limit * (1 + 1e-6)):
-            return False
-        return space.first_invalid(path[1:], np.arange(1, len(path))) < 0
 
     def _pattern_is_legal(self, times: np.ndarray, body: TimedBody) -> bool:
         """Whether the input upper-body motion is legal as it is, in one batch over the step (§5).
@@ -487,33 +465,7 @@ class UpperBodyPlanner:
         speed = np.abs(np.diff(body.frames[:, upper], axis=0)) / np.diff(times)[:, None]
         if np.any(speed > self.skeleton.velocity_limit[upper] * (1 + 1e-6)):
             return False
-        upper_shapes = self._upper_shapes
-        low = body.shape_lower.take(upper_shapes, axis=1)
-        high = body.shape_upper.take(upper_shapes, axis=1)
-        environment = self.environment
-        near = body.triangles_near(body.swept_lower[upper_shapes].min(axis=0),
-                                   body.swept_upper[upper_shapes].max(axis=0))
-        if len(near):
-            owner = environment.owner[near]
-            frames, columns, owners = mesh_contacts(
-                low, high, environment.lower[near], environment.upper[near], owner,
-                int(owner.max()) + 1)
-            for frame, shape, owner in zip(frames.tolist(), upper_shapes[columns].tolist(),
-                                           owners.tolist()):
-                if body.collides(frame, shape, environment.object_of(owner)):
-                    return False
-        a, b = self._upper_pairs[:, 0], self._upper_pairs[:, 1]
-        # Only pairs whose boxes swept over the step meet can meet at some frame.
-        swept_lower, swept_upper = body.swept_lower, body.swept_upper
-        active = boxes_overlap(swept_lower[a], swept_upper[a], swept_lower[b], swept_upper[b])
-        a, b = a[active], b[active]
-        lower, upper = body.shape_lower, body.shape_upper
-        frames, pairs = np.nonzero(boxes_overlap(lower.take(a, axis=1), upper.take(a, axis=1),
-                                                 lower.take(b, axis=1), upper.take(b, axis=1)))
-        for frame, shape, other in zip(frames.tolist(), a[pairs].tolist(), b[pairs].tolist()):
-            if body.collides(frame, shape, body.posed_shape(frame, other)):
-                return False
-        return True
+        return body.first_collision(self._upper_shapes, self._upper_pairs) < 0
 
     def _links_in_collision(self, q: np.ndarray, branch: str) -> list:
         """Names of the branch's links touching the environment at ``q`` (for the reason)."""
