@@ -470,3 +470,93 @@ def test_planning_scheduler_plans_the_most_urgent_actor_first_and_skips_resting_
         for actor in actors:
             scheduler.detach(actor)
     assert not scheduler._thread.is_alive(), 'the planning thread outlived its last actor'
+
+
+@pytest.mark.ros
+def test_a_scene_reload_racing_a_plan_neither_breaks_the_buffer_nor_drops_the_first_block(
+        monkeypatch):
+    """The executor thread loads a new scene while the planning thread wants the next block.
+
+    The worker serves one request at a time, so the plan runs on the new scene as soon as the
+    load is done. If the planning thread got in before the executor thread handed the new
+    start over (a preemption on a busy machine), the new scene's first block went into the old
+    scene's buffer: a ValueError there, which ended the planning thread for good, and later a
+    jump past the lost block. Loading and planning now exclude each other.
+    """
+    import rclpy
+    from rclpy.parameter import Parameter
+    from ros_harness import fresh_domain_id, ros_env
+    from digital_actor_planner.nodes.actor_planner import ActorPlannerNode
+    for key, value in ros_env(fresh_domain_id()).items():
+        monkeypatch.setenv(key, value)
+    context = rclpy.Context()
+    rclpy.init(context=context, domain_id=int(os.environ['ROS_DOMAIN_ID']))
+    node = ActorPlannerNode(context=context, parameter_overrides=[
+        Parameter('scene', value=scene('flat')), Parameter('cmd_timeout', value=60.0)])
+    try:
+        node._scheduler.detach(node)  # this test is the planning thread
+        node.command.update(0.6, 0.0, time.monotonic())
+        for _ in range(3):
+            assert node.planning_slack() is not None
+            node.plan_once()
+        assert node.buffer.end_time > 1.0
+
+        real_load = node.planner.load_scene
+        loaded, go_on, started = threading.Event(), threading.Event(), {}
+
+        def load_then_stall(path, timeout=300.0):
+            result = real_load(path, timeout)  # the worker holds the new scene from here on
+            started['q'] = result[0]
+            loaded.set()
+            go_on.wait(10.0)  # the executor thread is preempted before it hands it over
+            return result
+
+        node.planner.load_scene = load_then_stall
+        replies, errors = [], []
+        reload = threading.Thread(target=lambda: replies.append(node._on_set_parameters(
+            [Parameter('scene', value=scene('stairs_up'))])))
+
+        def plan():
+            try:
+                node.planning_slack()
+                node.plan_once()
+            except Exception as error:  # noqa: B902 -- reported by the assertion below
+                errors.append(error)
+
+        planning = threading.Thread(target=plan)
+        reload.start()
+        assert loaded.wait(120.0), 'the new scene did not load'
+        planning.start()
+        planning.join(1.0)  # it either plans now (on which scene?) or waits for the hand-over
+        go_on.set()
+        reload.join(60.0)
+        planning.join(60.0)
+        assert not errors, f'the planning thread failed: {errors!r}'
+        assert replies and replies[0].successful
+        for _ in range(2):
+            assert node.planning_slack() is not None
+            node.plan_once()
+
+        # The buffer from the restart on: the new start, then the new actor's blocks with no
+        # frame missing in between (a lost first block shows as a jump to the second one).
+        times, frames, _ = node.buffer._data
+        after = times >= node.actor_offset - 1e-9
+        assert np.array_equal(frames[after][0], started['q'])
+        assert times[after][-1] - node.actor_offset > 1.0
+        gaps = np.diff(times[after])
+        assert gaps.max() < 1.5 / node.config.publish_rate, f'a gap of {gaps.max():.3f} s'
+        speed = np.abs(np.diff(frames[after], axis=0)) / gaps[:, None]
+        limit = node.skeleton.velocity_limit
+        assert np.all(speed[:, 4:] <= 1.05 * limit[4:]), 'the motion jumps'
+
+        # A fault while planning leaves this actor holding; the planning thread goes on.
+        def fault(*args):
+            raise RuntimeError('fault')
+
+        node.planner.plan = fault
+        node.plan_once()
+        assert 0.0 < node.planning_slack() <= 1.0, 'not tried again soon'
+    finally:
+        node.stop()
+        node.destroy_node()
+        rclpy.try_shutdown(context=context)

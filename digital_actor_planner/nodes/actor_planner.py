@@ -30,6 +30,7 @@ import sys
 import itertools
 import threading
 import time
+import traceback
 import weakref
 from typing import Optional, Tuple
 
@@ -958,6 +959,10 @@ class ActorPlannerNode(Node):
         self._markers_block = None
         self._pending_start = None
         self._pending_lock = threading.Lock()
+        # Loading a scene and planning a block exclude each other: the new scene's start is
+        # handed over before anything is planned on it, so no block planned on the new scene
+        # reaches the old scene's buffer, and none is dropped as if planned on the old one.
+        self._scene_lock = threading.Lock()
         self._stop = threading.Event()
         # The planning lead in force (s); the stream wakes the planner when less is buffered.
         self._lead = self.planning_lead
@@ -1069,18 +1074,19 @@ class ActorPlannerNode(Node):
                 self.cmd_timeout = float(parameter.value)
             elif parameter.name == 'scene':
                 self._reloading = True
-                try:
-                    configuration, meshes = self.planner.load_scene(str(parameter.value))
-                except (ConfigurationError, PlanningFailed) as error:
-                    self._reloading = False
-                    self.scene_error = f'{parameter.value}: {error}'
-                    self.get_logger().error(f'scene not reloaded, keeping {self.scene_path}: '
-                                            f'{error}')
-                    return SetParametersResult(successful=False,
-                                               reason=f'scene not loaded: {error}')
-                with self._pending_lock:
-                    self._pending_start = configuration
-                    self._environment_due = meshes
+                with self._scene_lock:
+                    try:
+                        configuration, meshes = self.planner.load_scene(str(parameter.value))
+                    except (ConfigurationError, PlanningFailed) as error:
+                        self._reloading = False
+                        self.scene_error = f'{parameter.value}: {error}'
+                        self.get_logger().error(f'scene not reloaded, keeping '
+                                                f'{self.scene_path}: {error}')
+                        return SetParametersResult(successful=False,
+                                                   reason=f'scene not loaded: {error}')
+                    with self._pending_lock:
+                        self._pending_start = configuration
+                        self._environment_due = meshes
                 self.meshes, self.scene_path, self.scene_error = meshes, str(parameter.value), ''
                 self._scheduler.wake.set()
                 self.get_logger().info(f'scene reloaded: {self.scene_path}')
@@ -1091,22 +1097,15 @@ class ActorPlannerNode(Node):
         """Seconds until this actor's next block is due (<= 0: due now); None: nothing to plan.
 
         Nothing is planned while the last block would only repeat: a hold at rest or a stuck
-        hold, with the command unchanged since. A new scene restarts the buffer here.
+        hold, with the command unchanged since. A new scene's first block is due at once.
         """
         if self._stop.is_set():
             return None
         now = time.monotonic()
         if now < self._retry_at:
             return self._retry_at - now
-        with self._pending_lock:
-            pending, self._pending_start = self._pending_start, None
-        if pending is not None:
-            # A new scene: the new actor's clock starts at 0 from its start pose.
-            self.actor_offset = self.playback_time + self.period
-            self.buffer.restart(pending, self.actor_offset)
-            self.committed_footsteps.clear()
-            self._holding_for = None
-            self._restarted = True
+        if self._pending_start is not None:
+            return -self._lead
         if self._holding_for is not None:
             if self.command.current(now, self.cmd_timeout) == self._holding_for:
                 return None
@@ -1115,7 +1114,29 @@ class ActorPlannerNode(Node):
         return self.buffer.end_time - self.playback_time - lead
 
     def plan_once(self) -> None:
-        """Plan this actor's next block and commit it to the buffer."""
+        """Plan this actor's next block and commit it to the buffer (a new scene's first
+        block after the buffer restarts at the new start)."""
+        with self._scene_lock:
+            with self._pending_lock:
+                pending, self._pending_start = self._pending_start, None
+            if pending is not None:
+                # A new scene: the new actor's clock starts at 0 from its start pose.
+                self.actor_offset = self.playback_time + self.period
+                self.buffer.restart(pending, self.actor_offset)
+                self.committed_footsteps.clear()
+                self._holding_for = None
+                self._restarted = True
+            try:
+                self._plan_block()
+            except Exception as error:  # noqa: B902 -- the planning thread serves every actor
+                # A fault here must not end the thread that plans for all the process's
+                # actors: this one holds its last frame and tries again later.
+                self.stats.record('stuck', f'internal error: {error!r}', float('nan'))
+                self.get_logger().error(f'planning failed: {error!r}\n'
+                                        f'{traceback.format_exc()}', throttle_duration_sec=2.0)
+                self._retry_at = time.monotonic() + RETRY_AFTER
+
+    def _plan_block(self) -> None:
         started = time.monotonic()
         command = self.command.current(started, self.cmd_timeout)
         try:
@@ -1129,8 +1150,6 @@ class ActorPlannerNode(Node):
             return
         if warning:
             self.get_logger().warning(warning, throttle_duration_sec=2.0)
-        if self._pending_start is not None:
-            return  # planned on the old scene while the new one loaded
         self.buffer.append(np.asarray(block.times) + self.actor_offset, block.frames,
                            block.velocities, self.playback_time)
         if self._restarted:  # the new scene's first block
