@@ -106,6 +106,15 @@ def smoothstep(t: np.ndarray) -> np.ndarray:
     return t * t * (3.0 - 2.0 * t)
 
 
+# (start, length) of the ramps in a step's time shapes (see WalkGenerator._timing): over the
+# normalised time (the plain smoothstep, the pelvis turn, the uphill and downhill weights) and
+# over the swing curve's parameter (lift-off without and with delay, the swing foot's turn, the
+# release of the lift-off pitch, the take-up of the landing pitch).
+_TIME_RAMPS = np.array([[0.0, 1.0], [0.2, 0.8], [0.35, 0.65], [0.3, 0.65]])
+_SWING_RAMPS = np.array([[0.0, 0.88 - 0.0], [0.12, 0.88 - 0.12], [0.2, 0.55], [0.15, 0.35],
+                         [0.65, 0.35]])
+
+
 def _wrap(angle):
     return (angle + np.pi) % (2.0 * np.pi) - np.pi
 
@@ -260,14 +269,20 @@ class _StepTiming:
 
 def _read_only(value):
     """Mark every array in a (nested) tuple or dict read-only; returns the value."""
-    if isinstance(value, np.ndarray):
-        value.setflags(write=False)
-    elif isinstance(value, dict):
-        for item in value.values():
-            _read_only(item)
-    elif isinstance(value, tuple):
-        for item in value:
-            _read_only(item)
+    # A stack rather than recursion: a step's time shapes hold some forty arrays and a
+    # call per item was most of the cost.
+    pending = [value]
+    while pending:
+        item = pending.pop()
+        if isinstance(item, np.ndarray):
+            item.setflags(write=False)
+            if isinstance(item.base, np.ndarray):
+                # A row of a block built at once: the block too, or the row could be unlocked.
+                item.base.setflags(write=False)
+        elif isinstance(item, dict):
+            pending.extend(item.values())
+        elif isinstance(item, tuple):
+            pending.extend(item)
     return value
 
 
@@ -309,21 +324,27 @@ class WalkGenerator:
         if timing is not None:
             return timing
         tau = np.arange(1, k + 1) / k
-        bezier = 0.5 * (tau + smoothstep(tau))
+        # The ramps over time through one smoothstep call, the ramps over the swing curve's
+        # parameter through another (each row is the formula's own (x - start) / length).
+        level, turn, uphill, downhill = smoothstep(
+            (tau - _TIME_RAMPS[:, :1]) / _TIME_RAMPS[:, 1:])
+        bezier = 0.5 * (tau + level)
+        lift_now, lift_late, plane_turn, release, take = smoothstep(
+            (bezier - _SWING_RAMPS[:, :1]) / _SWING_RAMPS[:, 1:])
         samples = np.arange(0, tau.size, max(1, tau.size // 24))
         if samples[-1] != tau.size - 1:
             samples = np.append(samples, tau.size - 1)
         timing = _StepTiming(
             tau=tau,
-            ease={(a, b): _ease(tau, a, b) for a in (False, True) for b in (False, True)},
-            turn=smoothstep((tau - 0.2) / 0.8),
+            ease={(False, False): tau, (False, True): _ease(tau, False, True),
+                  (True, False): _ease(tau, True, False), (True, True): level},
+            turn=turn,
             bezier=bezier,
-            lift={delay: smoothstep((bezier - delay) / (0.88 - delay)) for delay in (0.0, 0.12)},
-            plane_turn=smoothstep((bezier - 0.2) / 0.55),
-            pitch_release=1.0 - smoothstep((bezier - 0.15) / 0.35),
-            pitch_take=smoothstep((bezier - 0.65) / 0.35),
-            weight={'uphill': smoothstep((tau - 0.35) / 0.65),
-                    'downhill': smoothstep((tau - 0.3) / 0.65), 'level': smoothstep(tau)},
+            lift={0.0: lift_now, 0.12: lift_late},
+            plane_turn=plane_turn,
+            pitch_release=1.0 - release,
+            pitch_take=take,
+            weight={'uphill': uphill, 'downhill': downhill, 'level': level},
             fade=np.minimum(1.0, 6.0 * (1 - tau)),
             samples=samples,
             bezier_terms=self._bezier_terms(bezier, samples))
@@ -609,8 +630,14 @@ class WalkGenerator:
         # Near lift-off and touchdown the sole is by definition at its foothold: the
         # conservative map may read a few mm high there (the 3D check is exact).
         slack = 0.015 * (1.0 - ramp)
-        sampled = ((1 - b) ** 3, 3 * b * (1 - b) ** 2, 3 * b * b * (1 - b), b ** 3)
-        frames = ((1 - tau) ** 3, 3 * tau * (1 - tau) ** 2, 3 * tau * tau * (1 - tau), tau ** 3)
+        frames = np.empty((4, tau.size))
+        frames[0] = (1 - tau) ** 3
+        frames[1] = 3 * tau * (1 - tau) ** 2
+        frames[2] = 3 * tau * tau * (1 - tau)
+        frames[3] = tau ** 3
+        # The same formulas at the sampled frames give the same values: gathered, not redone.
+        sampled = tuple(frames[:, samples])
+        frames = tuple(frames)
         # The clearance the sole keeps at each sample (full away from lift-off and touchdown).
         return b, self.config.swing_clearance * ramp, slack, sampled, frames
 
