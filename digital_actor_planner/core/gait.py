@@ -191,22 +191,35 @@ def leg_inverse_kinematics(leg: LegGeometry, hip: np.ndarray, ankle: np.ndarray,
         cos_yaw, sin_yaw = plane_direction
     forward = v[:, 0] * cos_yaw + v[:, 1] * sin_yaw
     lateral = v[:, 0] * -sin_yaw + v[:, 1] * cos_yaw
-    down = -v[:, 2]
+    joints = np.empty((v.shape[0], 4))
+    joints[:, 0] = _wrap(plane_yaw - pelvis_yaw)
+    reach = _sagittal_leg(leg, forward, -v[:, 2], foot_pitch, joints)
+    return joints, lateral, reach
+
+
+def _sagittal_leg(leg: LegGeometry, forward: np.ndarray, down: np.ndarray,
+                  foot_pitch: np.ndarray, joints: np.ndarray) -> np.ndarray:
+    """The in-plane part of :func:`leg_inverse_kinematics`.
+
+    The ankle lies ``forward`` (k,) and ``down`` (k,) m from the hip in the leg's plane; hip
+    pitch, knee and ankle (rad) go to columns 1..3 of ``joints`` (k, 4). Returns the reach
+    (k,), the hip-ankle distance over the maximum. The hip yaw and the out-of-plane distance
+    do not depend on the heights: the swing leg's passes, which change only those, solve
+    just this part.
+    """
     distance = np.hypot(forward, down)
     l1, l2 = leg.thigh, leg.shank
     reach = distance / (l1 + l2)
     d = np.minimum(np.maximum(distance, 1e-6), l1 + l2)
     squared = d * d
     cos_knee = np.minimum(np.maximum((l1 * l1 + l2 * l2 - squared) / (2 * l1 * l2), -1.0), 1.0)
-    joints = np.empty((v.shape[0], 4))
     knee = np.pi - np.arccos(cos_knee)
     cos_beta = np.minimum(np.maximum((l1 * l1 + squared - l2 * l2) / (2 * l1 * d), -1.0), 1.0)
     hip_pitch = np.arctan2(forward, down) + np.arccos(cos_beta)
-    joints[:, 0] = _wrap(plane_yaw - pelvis_yaw)
     joints[:, 1] = hip_pitch
     joints[:, 2] = knee
     joints[:, 3] = foot_pitch - (hip_pitch - knee)
-    return joints, lateral, reach
+    return reach
 
 
 def _ease(tau: np.ndarray, from_rest: bool, to_rest: bool) -> np.ndarray:
@@ -267,6 +280,14 @@ class _StepTiming:
     bezier_terms: tuple
 
 
+def _columns(indices: np.ndarray):
+    """A slice over ``indices`` when they are consecutive, else the indices themselves."""
+    indices = np.asarray(indices)
+    if indices.size and np.array_equal(indices, np.arange(indices[0], indices[0] + indices.size)):
+        return slice(int(indices[0]), int(indices[0]) + indices.size)
+    return indices
+
+
 def _read_only(value):
     """Mark every array in a (nested) tuple or dict read-only; returns the value."""
     # A stack rather than recursion: a step's time shapes hold some forty arrays and a
@@ -312,6 +333,13 @@ class WalkGenerator:
         self._leg_lower = {s: skeleton.lower[i] for s, i in self._leg_index.items()}
         self._leg_upper = {s: skeleton.upper[i] for s, i in self._leg_index.items()}
         self._root = skeleton.branch('root')
+        # Where the pelvis and each leg go in a frame: a slice when the columns are in a run
+        # (writing through a slice is cheaper than through an index array).
+        self._root_columns = _columns(self._root)
+        self._leg_columns = {s: _columns(i) for s, i in self._leg_index.items()}
+        # The joint limits a planned leg is held to, with 1e-9 rad of rounding allowed.
+        self._leg_bounds = {s: (self._leg_lower[s] - 1e-9, self._leg_upper[s] + 1e-9)
+                            for s in (LEFT, RIGHT)}
         # Where the swing clearance looks under the sole: 9 points heel..toe, 2 across, m.
         self._sole_along = np.linspace(-self.leg.heel, self.leg.toe, 9)
         self._sole_across = np.array([-0.5, 0.5]) * self.leg.foot_width
@@ -452,8 +480,6 @@ class WalkGenerator:
         direction = np.empty((k, 2))
         direction[:, 0] = np.cos(plane_yaw)
         direction[:, 1] = np.sin(plane_yaw)
-        # The swing leg's IK passes reuse them.
-        plane_direction = (direction[:, 0], direction[:, 1])
         # A two-term dot product written out (a reduction over an axis of 2 is slow).
         reach_xy = wanted_xy - swing_hip_xy
         forward = reach_xy[:, 0] * direction[:, 0] + reach_xy[:, 1] * direction[:, 1]
@@ -488,18 +514,25 @@ class WalkGenerator:
         # of three is the same in any order).
         swing_reach = np.sqrt(np.maximum(r * r - forward * forward, 0.0))
         z_bound = np.minimum(wanted_z, stance_bound)
+        # Only the heights change between passes: the swing leg's hip yaw and its horizontal
+        # reach in and across its plane (leg_inverse_kinematics' first part) are solved once.
+        swing_x = swing_xy[:, 0] - swing_hip_xy[:, 0]
+        swing_y = swing_xy[:, 1] - swing_hip_xy[:, 1]
+        swing_forward = swing_x * direction[:, 0] + swing_y * direction[:, 1]
+        # Only the last frame's distance from the leg's plane is reported.
+        cos_end, sin_end = direction[-1].tolist()
+        swing_lateral = float(swing_x[-1]) * -sin_end + float(swing_y[-1]) * cos_end
+        swing_hip_yaw = _wrap(plane_yaw - yaw)
         for _ in range(5):
             swing_z, lift = self._swing_heights(bezier, foot_w, landing, swing_pitch, footprint)
             z = np.minimum(z_bound, swing_z + swing_reach)
-            hip = _points(swing_hip_xy, z)
-            ankle = _points(swing_xy, swing_z)
-            solution = leg_inverse_kinematics(leg, hip, ankle, plane_yaw, yaw, swing_pitch,
-                                              plane_direction)
-            joints = solution[0]
+            joints = np.empty((k, 4))
+            joints[:, 0] = swing_hip_yaw
+            reach = _sagittal_leg(leg, swing_forward, -(swing_z - z), swing_pitch, joints)
             correction = (np.minimum(np.maximum(joints[:, 3], ankle_low), ankle_high)
                           - joints[:, 3]) * fade
             if np.abs(correction).max() < 0.005:
-                swing_solution = (hip, solution)
+                swing_solution = (joints, reach)
                 break
             swing_pitch = swing_pitch + correction
 
@@ -510,55 +543,64 @@ class WalkGenerator:
         pelvis[:, :2] = pelvis_xy
         pelvis[:, 2] = z
         pelvis[:, 3] = yaw
-        frames[:, self._root] = pelvis
-        # The stance ankle stays where it is: one row repeated (no broadcast_to, which costs
-        # more than the fill).
-        stance_ankle = np.empty((k, 3))
-        stance_ankle[:, :2] = foot_s.xy
-        stance_ankle[:, 2] = foot_s.z
-        for side, hip_xy, ankle, plane, pitch in (
-                (stance_side, stance_hip_xy, stance_ankle, np.full(k, foot_s.yaw),
-                 np.full(k, foot_s.pitch)),
-                (swing_side, swing_hip_xy, None, plane_yaw, swing_pitch)):
-            if side == swing_side and swing_solution is not None:
-                # The same hip, ankle, plane and pitch as the converged pass: same answer.
-                hip, (joints, lateral, reach) = swing_solution
-            else:
-                hip = _points(hip_xy, z)
-                if ankle is None:
-                    ankle = _points(swing_xy, swing_z)
-                joints, lateral, reach = leg_inverse_kinematics(leg, hip, ankle, plane, yaw,
-                                                                pitch)
-            if side == stance_side and (joints[:, 3] > self._leg_upper[side][3] - 0.03).any():
-                # Heel-off: the stance foot rolls about its toe instead of over-flexing the ankle.
-                joints, foot_s_end = self._heel_off(leg, hip, foot_s, yaw, joints,
-                                                    self._leg_upper[side][3] - 0.03)
-                foot_end[stance_side] = foot_s_end
-            if side == swing_side:
-                # A foot in the air may point its toes (push-off) or lift them: its pitch is
-                # free, so the ankle stays inside its range; contact frames are unchanged.
-                # It rolls on from a heel-off at lift-off; the correction fades out towards
-                # touchdown, where the sole must meet its foothold flat.
-                wanted = np.minimum(np.maximum(joints[:, 3], self._leg_lower[side][3] + 0.02),
-                                    self._leg_upper[side][3] - 0.02)
-                joints[:, 3] += (wanted - joints[:, 3]) * fade
-            if reach.max() > 1.0 + 1e-9:
-                raise GaitError(f'{"left" if side == LEFT else "right"} leg out of reach')
-            low, high = self._leg_lower[side], self._leg_upper[side]
-            bad = (joints < low - 1e-9) | (joints > high + 1e-9)
-            if bad.any():
-                column = int(np.argmax(np.any(bad, axis=0)))
-                name = self.skeleton.joint_names[self._leg_index[side][column]]
-                value = joints[np.any(bad, axis=1)][0, column]
-                raise GaitError(f'{name} would reach {value:.2f} rad, outside its limits')
-            frames[:, self._leg_index[side]] = joints
-            lateral_error = max(lateral_error, float(np.abs(lateral[-1:]).max()))
+        frames[:, self._root_columns] = pelvis
+        # The stance leg (leg_inverse_kinematics written out): its ankle, plane and sole pitch
+        # stay put over the step, so they enter as numbers, not as columns of k equal values.
+        cos_s, sin_s = d_s.tolist()
+        stance_x = foot_s.xy[0] - stance_hip_xy[:, 0]
+        stance_y = foot_s.xy[1] - stance_hip_xy[:, 1]
+        joints = np.empty((k, 4))
+        joints[:, 0] = _wrap(foot_s.yaw - yaw)
+        reach = _sagittal_leg(leg, stance_x * cos_s + stance_y * sin_s, -(foot_s.z - z),
+                              foot_s.pitch, joints)
+        # Only the last frame's distance from the leg's plane is reported.
+        stance_lateral = float(stance_x[-1]) * -sin_s + float(stance_y[-1]) * cos_s
+        limit = self._leg_upper[stance_side][3] - 0.03
+        if (joints[:, 3] > limit).any():
+            # Heel-off: the stance foot rolls about its toe instead of over-flexing the ankle.
+            joints, foot_s_end = self._heel_off(leg, _points(stance_hip_xy, z), foot_s, yaw,
+                                                joints, limit)
+            foot_end[stance_side] = foot_s_end
+        self._check_leg(stance_side, joints, reach)
+        frames[:, self._leg_columns[stance_side]] = joints
+        lateral_error = max(lateral_error, abs(stance_lateral))
+
+        if swing_solution is not None:
+            # The same hip, ankle, plane and pitch as the converged pass: same answer.
+            joints, reach = swing_solution
+        else:
+            joints, lateral, reach = leg_inverse_kinematics(
+                leg, _points(swing_hip_xy, z), _points(swing_xy, swing_z), plane_yaw, yaw,
+                swing_pitch)
+            swing_lateral = float(lateral[-1])
+        # A foot in the air may point its toes (push-off) or lift them: its pitch is free, so
+        # the ankle stays inside its range; contact frames are unchanged. It rolls on from a
+        # heel-off at lift-off; the correction fades out towards touchdown, where the sole
+        # must meet its foothold flat.
+        wanted = np.minimum(np.maximum(joints[:, 3], self._leg_lower[swing_side][3] + 0.02),
+                            self._leg_upper[swing_side][3] - 0.02)
+        joints[:, 3] += (wanted - joints[:, 3]) * fade
+        self._check_leg(swing_side, joints, reach)
+        frames[:, self._leg_columns[swing_side]] = joints
+        lateral_error = max(lateral_error, abs(swing_lateral))
         feet = foot_end
         feet[swing_side] = landing
         end = Stance(np.array([pelvis_xy[-1, 0], pelvis_xy[-1, 1], z[-1], yaw1]),
                      (feet[0], feet[1]), swing_side, to_rest)
         return StepMotion(times=tau * duration, frames=frames, stance=end, category=category,
                           swing_lift=lift, lateral_error=lateral_error)
+
+    def _check_leg(self, side: int, joints: np.ndarray, reach: np.ndarray) -> None:
+        """Raise GaitError if a leg's (k, 4) joints leave their limits or it is out of reach."""
+        if reach.max() > 1.0 + 1e-9:
+            raise GaitError(f'{"left" if side == LEFT else "right"} leg out of reach')
+        low, high = self._leg_bounds[side]
+        bad = (joints < low) | (joints > high)
+        if bad.any():
+            column = int(np.argmax(np.any(bad, axis=0)))
+            name = self.skeleton.joint_names[self._leg_index[side][column]]
+            value = joints[np.any(bad, axis=1)][0, column]
+            raise GaitError(f'{name} would reach {value:.2f} rad, outside its limits')
 
     @staticmethod
     def _heel_off(leg: LegGeometry, hip: np.ndarray, foot: FootPose, pelvis_yaw: np.ndarray,
