@@ -646,7 +646,8 @@ class WalkGenerator:
         -------
         tuple
             (samples (s,) frame indices, along (9,) sole offsets heel..toe in m,
-            tops (s, 9, 2) obstacle heights under the sole, m, -inf over empty space,
+            tops (s, 9) highest obstacle across the sole at each point along it, m, -inf
+            over empty space,
             bezier: the swing-height terms that do not depend on the pitch, see
             :meth:`_bezier_terms`).
 
@@ -662,7 +663,10 @@ class WalkGenerator:
         z_ref = max(lift_foot.z, landing.z) + self.config.max_swing_lift
         tops = swing_profile(points.reshape(-1, 2), z_ref).reshape(len(samples), along.size, -1)
         tops[np.isnan(tops)] = -np.inf
-        return samples, along, tops, timing.bezier_terms
+        # The pitch moves the points across the sole together (they share an offset along
+        # it), and subtracting one number keeps the order: their maximum is taken here, once,
+        # not in every pass of the swing heights.
+        return samples, along, tops.max(axis=2), timing.bezier_terms
 
     def _bezier_terms(self, tau, samples):
         """Per-frame Bernstein weights of the swing Bezier and the clearance terms at the
@@ -698,8 +702,7 @@ class WalkGenerator:
         samples, along, tops, (b, clearance, slack, sampled, frames) = footprint
         # Ground relative to a sole pitched like the foot: what the ankle must stay above.
         pitch = swing_pitch[samples]
-        tops = tops - along[None, :, None] * np.sin(pitch)[:, None, None]
-        ground = tops.reshape(len(samples), -1).max(axis=1)
+        ground = (tops - along * np.sin(pitch)[:, None]).max(axis=1)
         need = ground + leg.ankle_height * np.cos(pitch) + clearance
         basis_0, basis_1, basis_2, basis_3 = sampled
         # Off a heel-off the toe is on the ground: lift more briskly so it does not scuff.
