@@ -298,7 +298,8 @@ def _read_only(value):
         if isinstance(item, np.ndarray):
             item.setflags(write=False)
             if isinstance(item.base, np.ndarray):
-                # A row of a block built at once: the block too, or the row could be unlocked.
+                # A row of a block built at once: the block too, or it is writable through
+                # its base.
                 item.base.setflags(write=False)
         elif isinstance(item, dict):
             pending.extend(item.values())
