@@ -7,9 +7,18 @@ For every walking step on the lower-body courses (upper-body planning off) it re
 and CPU time of the whole step (profile + footstep window + leg motion + 3D check), and for every
 footstep window it also solves the same window exhaustively to compare effort and time (issue 2:
 effort ratio <= 1.05, time <= 1/20). CPU time is reported because the machine may be shared.
+
+     .venv/bin/python bench/bench_lower_body.py --against ../other-checkout [--rounds 8]
+
+walks every course with this package and with the one in another checkout in one process,
+course by course in alternating order, checks that both produce the same frames, and reports
+both CPU times per step: on a shared machine whose speed drifts, separate runs differ by more
+than most changes do.
 """
 import argparse
 import dataclasses
+import importlib
+import importlib.util
 import os
 import sys
 import time
@@ -53,13 +62,92 @@ class ComparingPlanner(FootstepPlanner):
         return window
 
 
+def _load_other(root):
+    """The actor module of the package in another checkout, imported as ``other_dap``."""
+    package = os.path.join(os.path.abspath(root), 'digital_actor_planner')
+    for name, path in (('other_dap', package), ('other_dap.core', os.path.join(package, 'core'))):
+        spec = importlib.util.spec_from_file_location(
+            name, os.path.join(path, '__init__.py'), submodule_search_locations=[path])
+        module = importlib.util.module_from_spec(spec)
+        sys.modules[name] = module
+        spec.loader.exec_module(module)
+    return importlib.import_module('other_dap.core.actor')
+
+
+def _walk(actor_module, sc, commands):
+    """CPU time of each walking step (s) and the bytes of all frames of one course."""
+    actor = actor_module.Actor(skeleton(), sc.environment,
+                               actor_module.ActorConfig(plan_upper_body=False), start=sc.start)
+    cpu = []
+    plan_next = actor.plan_next
+
+    def timed():
+        c0 = time.process_time()
+        block = plan_next()
+        if block.status == 'walking':
+            cpu.append(time.process_time() - c0)
+        return block
+
+    actor.plan_next = timed
+    blocks = actor_module.run_commands(actor, [c.time for c in commands],
+                                       [c.linear_x for c in commands],
+                                       [c.angular_z for c in commands])
+    return cpu, np.concatenate([b.frames for b in blocks]).tobytes()
+
+
+def compare(courses, other_root, rounds):
+    """Paired CPU times per step of this package and the one at ``other_root``."""
+    from digital_actor_planner.core import actor as this_actor
+    labels = {'this': this_actor, 'other': _load_other(other_root)}
+    setups = [(name, scene(name),
+               read_commands(os.path.join(ROOT, 'config', 'scenes', name + '.csv')))
+              for name in courses]
+    per_round = {label: [] for label in labels}
+    print(f'load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; other = {other_root}')
+    print('| round | this p50 ms | this p99 ms | other p50 ms | other p99 ms |')
+    print('|---|---:|---:|---:|---:|')
+    for r in range(rounds):
+        cpu = {label: [] for label in labels}
+        for i, (name, sc, commands) in enumerate(setups):
+            order = list(labels) if (r + i) % 2 == 0 else list(labels)[::-1]
+            frames = {}
+            for label in order:
+                times, frames[label] = _walk(labels[label], sc, commands)
+                cpu[label] += times
+            if frames['this'] != frames['other']:
+                raise SystemExit(f'{name}: the two packages produce different frames')
+        for label in labels:
+            per_round[label].append(np.array(cpu[label]))
+        print(f'| {r} | {1e3 * np.percentile(cpu["this"], 50):.2f} | '
+              f'{1e3 * np.percentile(cpu["this"], 99):.2f} | '
+              f'{1e3 * np.percentile(cpu["other"], 50):.2f} | '
+              f'{1e3 * np.percentile(cpu["other"], 99):.2f} |')
+    # Each step's fastest round is the least disturbed one.
+    best = {label: np.min(per_round[label], axis=0) for label in labels}
+    for label in labels:
+        print(f'{label}: median of the rounds p50 '
+              f'{1e3 * np.median([np.percentile(c, 50) for c in per_round[label]]):.2f} ms, p99 '
+              f'{1e3 * np.median([np.percentile(c, 99) for c in per_round[label]]):.2f} ms; '
+              f'fastest round per step p50 {1e3 * np.percentile(best[label], 50):.2f} ms, '
+              f'p99 {1e3 * np.percentile(best[label], 99):.2f} ms')
+    print(f'this / other per step (fastest rounds): median '
+          f'{np.median(best["this"] / best["other"]):.3f}; frames identical on every course')
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--courses', nargs='*')
     parser.add_argument('--whole-body', action='store_true',
                         help='plan the upper body too (default courses: the obstacle courses)')
+    parser.add_argument('--against', metavar='CHECKOUT',
+                        help='compare with the package in another checkout, paired in one '
+                             'process (lower-body courses)')
+    parser.add_argument('--rounds', type=int, default=8, help='rounds of --against')
     args = parser.parse_args(argv)
     courses = args.courses or (OBSTACLE_COURSES if args.whole_body else COURSES)
+    if args.against:
+        compare(args.courses or COURSES, args.against, args.rounds)
+        return
     upper = args.whole_body
     wall_all, cpu_all = [], []
     ratios, speed = {False: [], True: []}, {False: [], True: []}

@@ -154,3 +154,8 @@ def test_time_shapes_shared_by_steps_of_one_length_match_the_formulas(skeleton):
     assert timing.samples[-1] == k - 1 and np.all(np.diff(timing.samples) > 0)
     with pytest.raises(ValueError):
         timing.bezier[0] = 1.0
+    # Shapes built as rows of one block: neither a row nor the block can be written.
+    with pytest.raises(ValueError):
+        timing.turn[0] = 1.0
+    with pytest.raises(ValueError):
+        timing.turn.base[0, 0] = 1.0

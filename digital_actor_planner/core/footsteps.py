@@ -20,8 +20,8 @@ from .skeleton import LegGeometry
 LEFT, RIGHT = 0, 1
 
 
-# Columns of the ankle's sample and its two neighbours in a sole window padded by one.
-_AROUND = np.arange(3)
+# Rows of the ankle's sample and its two neighbours in a sole window padded by one.
+_AROUND = np.arange(3)[:, None]
 
 
 @dataclass(frozen=True)
@@ -257,49 +257,55 @@ class FootstepPlanner:
         s = np.asarray(s, dtype=float)
         count = s.shape[0]
         side = np.asarray(side, dtype=int)
-        # One side for all broadcasts as it is (broadcast_to costs more than the gathers).
-        side = side[:, None] if side.ndim else side
         i0 = np.floor((s - leg.heel - profile.s0) / profile.ds).astype(int)
         i1 = np.ceil((s + leg.toe - profile.s0) / profile.ds).astype(int)
         inside = (i0 >= 0) & (i1 < profile.samples)
         width = i1 - i0 + 1
-        span = np.arange(int(width.max()) if count else 0)
-        index = i0[:, None] + span
-        mask = span < width[:, None]
+        # The samples under a sole run down the rows, the soles across the columns: (W, N).
+        # A reduction over a sole's samples is then one elementwise pass per row, where along
+        # a short last axis it paid a loop per sole. The float sums keep their order: they are
+        # taken along the rows of an (N, W) copy, as before.
+        span = np.arange(int(width.max()) if count else 0)[:, None]
+        index = i0 + span
+        mask = span < width
         index = np.minimum(np.maximum(index, 0), profile.samples - 1)
         # One flat index into the (2, K) tracks for all three gathers.
         flat = side * profile.samples + index
         high = profile.height.take(flat)
         low = profile.low.take(flat)
         room = np.where(mask, profile.headroom.take(flat), np.inf)
-        usable = inside & ~(mask & np.isnan(high)).any(axis=1)
-        usable &= room.min(axis=1) >= cfg.min_headroom
-        high = np.where(mask & ~np.isnan(high), high, 0.0)
+        missing = np.isnan(high)
+        usable = inside & ~(mask & missing).any(axis=0)
+        usable &= room.min(axis=0) >= cfg.min_headroom
+        high = np.where(mask & ~missing, high, 0.0)
         low = np.where(mask & ~np.isnan(low), low, 0.0)
-        x = profile.s0 + profile.ds * index - s[:, None]
-        mean = np.where(mask, x, 0.0).sum(axis=1) / width
-        centred = np.where(mask, x - mean[:, None], 0.0)
+        x = profile.s0 + profile.ds * index - s
+        mean = np.where(mask, x, 0.0).T.copy().sum(axis=1) / width
+        centred = np.where(mask, x - mean, 0.0)
+        # Two samples or fewer fit no slope: 0 there. A sole clamped past the profile's end
+        # (not usable) may divide zero by zero.
         with np.errstate(invalid='ignore', divide='ignore'):
-            slope = np.where(width > 2, (centred * high).sum(axis=1)
-                             / (centred * centred).sum(axis=1), 0.0)
+            slope = np.divide((centred * high).T.copy().sum(axis=1),
+                              (centred * centred).T.copy().sum(axis=1), out=np.zeros(count),
+                              where=width > 2)
         pitch = np.arctan(slope)
-        plane = slope[:, None] * x
-        lift = np.where(mask, high - plane, -np.inf).max(axis=1)
-        dip = np.where(mask, low - plane, np.inf).min(axis=1)
+        plane = slope * x
+        lift = np.where(mask, high - plane, -np.inf).max(axis=0)
+        dip = np.where(mask, low - plane, np.inf).min(axis=0)
         steady = np.abs(pitch) <= cfg.max_foot_pitch
         flat = usable & steady & (lift - dip <= cfg.flatness_tolerance)
         # At an edge a flat sole may overhang lower ground.
-        top = np.where(mask, high, -np.inf).max(axis=1)
-        level = top[:, None] - cfg.flatness_tolerance
+        top = np.where(mask, high, -np.inf).max(axis=0)
+        level = top - cfg.flatness_tolerance
         supported = mask & (high >= level) & (low >= level)
-        ankle = np.where(mask, np.abs(x), np.inf).argmin(axis=1)
+        ankle = np.where(mask, np.abs(x), np.inf).argmin(axis=0)
         # The ankle's sample and its neighbours must be supported; past either end of the sole
-        # there is nothing to ask (a True border column on each side).
-        padded = np.ones((count, span.size + 2), dtype=bool)
-        padded[:, 1:-1] = supported | ~mask
-        near = padded[np.arange(count)[:, None], ankle[:, None] + _AROUND]
-        around = near[:, 0] & near[:, 1] & near[:, 2]
-        fraction = supported.sum(axis=1) / width
+        # there is nothing to ask (a True border row on each side). One gather of the three.
+        padded = np.ones((span.size + 2, count), dtype=bool)
+        padded[1:-1] = supported | ~mask
+        near = padded.take((ankle + _AROUND) * count + np.arange(count))
+        around = near.all(axis=0)
+        fraction = supported.sum(axis=0) / width
         edge = usable & steady & ~flat & around & (fraction >= cfg.min_support_fraction)
         ok = flat | edge
         height = np.where(flat, lift, np.where(edge, top, np.nan))

@@ -106,6 +106,15 @@ def smoothstep(t: np.ndarray) -> np.ndarray:
     return t * t * (3.0 - 2.0 * t)
 
 
+# (start, length) of the ramps in a step's time shapes (see WalkGenerator._timing): over the
+# normalised time (the plain smoothstep, the pelvis turn, the uphill and downhill weights) and
+# over the swing curve's parameter (lift-off without and with delay, the swing foot's turn, the
+# release of the lift-off pitch, the take-up of the landing pitch).
+_TIME_RAMPS = np.array([[0.0, 1.0], [0.2, 0.8], [0.35, 0.65], [0.3, 0.65]])
+_SWING_RAMPS = np.array([[0.0, 0.88 - 0.0], [0.12, 0.88 - 0.12], [0.2, 0.55], [0.15, 0.35],
+                         [0.65, 0.35]])
+
+
 def _wrap(angle):
     return (angle + np.pi) % (2.0 * np.pi) - np.pi
 
@@ -182,22 +191,35 @@ def leg_inverse_kinematics(leg: LegGeometry, hip: np.ndarray, ankle: np.ndarray,
         cos_yaw, sin_yaw = plane_direction
     forward = v[:, 0] * cos_yaw + v[:, 1] * sin_yaw
     lateral = v[:, 0] * -sin_yaw + v[:, 1] * cos_yaw
-    down = -v[:, 2]
+    joints = np.empty((v.shape[0], 4))
+    joints[:, 0] = _wrap(plane_yaw - pelvis_yaw)
+    reach = _sagittal_leg(leg, forward, -v[:, 2], foot_pitch, joints)
+    return joints, lateral, reach
+
+
+def _sagittal_leg(leg: LegGeometry, forward: np.ndarray, down: np.ndarray,
+                  foot_pitch: np.ndarray, joints: np.ndarray) -> np.ndarray:
+    """The in-plane part of :func:`leg_inverse_kinematics`.
+
+    The ankle lies ``forward`` (k,) and ``down`` (k,) m from the hip in the leg's plane; hip
+    pitch, knee and ankle (rad) go to columns 1..3 of ``joints`` (k, 4). Returns the reach
+    (k,), the hip-ankle distance over the maximum. The hip yaw and the out-of-plane distance
+    do not depend on the heights: the swing leg's passes, which change only those, solve
+    just this part.
+    """
     distance = np.hypot(forward, down)
     l1, l2 = leg.thigh, leg.shank
     reach = distance / (l1 + l2)
     d = np.minimum(np.maximum(distance, 1e-6), l1 + l2)
     squared = d * d
     cos_knee = np.minimum(np.maximum((l1 * l1 + l2 * l2 - squared) / (2 * l1 * l2), -1.0), 1.0)
-    joints = np.empty((v.shape[0], 4))
     knee = np.pi - np.arccos(cos_knee)
     cos_beta = np.minimum(np.maximum((l1 * l1 + squared - l2 * l2) / (2 * l1 * d), -1.0), 1.0)
     hip_pitch = np.arctan2(forward, down) + np.arccos(cos_beta)
-    joints[:, 0] = _wrap(plane_yaw - pelvis_yaw)
     joints[:, 1] = hip_pitch
     joints[:, 2] = knee
     joints[:, 3] = foot_pitch - (hip_pitch - knee)
-    return joints, lateral, reach
+    return reach
 
 
 def _ease(tau: np.ndarray, from_rest: bool, to_rest: bool) -> np.ndarray:
@@ -258,16 +280,31 @@ class _StepTiming:
     bezier_terms: tuple
 
 
+def _columns(indices: np.ndarray):
+    """A slice over ``indices`` when they are consecutive, else the indices themselves."""
+    indices = np.asarray(indices)
+    if indices.size and np.array_equal(indices, np.arange(indices[0], indices[0] + indices.size)):
+        return slice(int(indices[0]), int(indices[0]) + indices.size)
+    return indices
+
+
 def _read_only(value):
     """Mark every array in a (nested) tuple or dict read-only; returns the value."""
-    if isinstance(value, np.ndarray):
-        value.setflags(write=False)
-    elif isinstance(value, dict):
-        for item in value.values():
-            _read_only(item)
-    elif isinstance(value, tuple):
-        for item in value:
-            _read_only(item)
+    # A stack rather than recursion: a step's time shapes hold some forty arrays and a
+    # call per item was most of the cost.
+    pending = [value]
+    while pending:
+        item = pending.pop()
+        if isinstance(item, np.ndarray):
+            item.setflags(write=False)
+            if isinstance(item.base, np.ndarray):
+                # A row of a block built at once: the block too, or it is writable through
+                # its base.
+                item.base.setflags(write=False)
+        elif isinstance(item, dict):
+            pending.extend(item.values())
+        elif isinstance(item, tuple):
+            pending.extend(item)
     return value
 
 
@@ -297,6 +334,13 @@ class WalkGenerator:
         self._leg_lower = {s: skeleton.lower[i] for s, i in self._leg_index.items()}
         self._leg_upper = {s: skeleton.upper[i] for s, i in self._leg_index.items()}
         self._root = skeleton.branch('root')
+        # Where the pelvis and each leg go in a frame: a slice when the columns are in a run
+        # (writing through a slice is cheaper than through an index array).
+        self._root_columns = _columns(self._root)
+        self._leg_columns = {s: _columns(i) for s, i in self._leg_index.items()}
+        # The joint limits a planned leg is held to, with 1e-9 rad of rounding allowed.
+        self._leg_bounds = {s: (self._leg_lower[s] - 1e-9, self._leg_upper[s] + 1e-9)
+                            for s in (LEFT, RIGHT)}
         # Where the swing clearance looks under the sole: 9 points heel..toe, 2 across, m.
         self._sole_along = np.linspace(-self.leg.heel, self.leg.toe, 9)
         self._sole_across = np.array([-0.5, 0.5]) * self.leg.foot_width
@@ -309,21 +353,27 @@ class WalkGenerator:
         if timing is not None:
             return timing
         tau = np.arange(1, k + 1) / k
-        bezier = 0.5 * (tau + smoothstep(tau))
+        # The ramps over time through one smoothstep call, the ramps over the swing curve's
+        # parameter through another (each row is the formula's own (x - start) / length).
+        level, turn, uphill, downhill = smoothstep(
+            (tau - _TIME_RAMPS[:, :1]) / _TIME_RAMPS[:, 1:])
+        bezier = 0.5 * (tau + level)
+        lift_now, lift_late, plane_turn, release, take = smoothstep(
+            (bezier - _SWING_RAMPS[:, :1]) / _SWING_RAMPS[:, 1:])
         samples = np.arange(0, tau.size, max(1, tau.size // 24))
         if samples[-1] != tau.size - 1:
             samples = np.append(samples, tau.size - 1)
         timing = _StepTiming(
             tau=tau,
-            ease={(a, b): _ease(tau, a, b) for a in (False, True) for b in (False, True)},
-            turn=smoothstep((tau - 0.2) / 0.8),
+            ease={(False, False): tau, (False, True): _ease(tau, False, True),
+                  (True, False): _ease(tau, True, False), (True, True): level},
+            turn=turn,
             bezier=bezier,
-            lift={delay: smoothstep((bezier - delay) / (0.88 - delay)) for delay in (0.0, 0.12)},
-            plane_turn=smoothstep((bezier - 0.2) / 0.55),
-            pitch_release=1.0 - smoothstep((bezier - 0.15) / 0.35),
-            pitch_take=smoothstep((bezier - 0.65) / 0.35),
-            weight={'uphill': smoothstep((tau - 0.35) / 0.65),
-                    'downhill': smoothstep((tau - 0.3) / 0.65), 'level': smoothstep(tau)},
+            lift={0.0: lift_now, 0.12: lift_late},
+            plane_turn=plane_turn,
+            pitch_release=1.0 - release,
+            pitch_take=take,
+            weight={'uphill': uphill, 'downhill': downhill, 'level': level},
             fade=np.minimum(1.0, 6.0 * (1 - tau)),
             samples=samples,
             bezier_terms=self._bezier_terms(bezier, samples))
@@ -431,8 +481,6 @@ class WalkGenerator:
         direction = np.empty((k, 2))
         direction[:, 0] = np.cos(plane_yaw)
         direction[:, 1] = np.sin(plane_yaw)
-        # The swing leg's IK passes reuse them.
-        plane_direction = (direction[:, 0], direction[:, 1])
         # A two-term dot product written out (a reduction over an axis of 2 is slow).
         reach_xy = wanted_xy - swing_hip_xy
         forward = reach_xy[:, 0] * direction[:, 0] + reach_xy[:, 1] * direction[:, 1]
@@ -467,18 +515,25 @@ class WalkGenerator:
         # of three is the same in any order).
         swing_reach = np.sqrt(np.maximum(r * r - forward * forward, 0.0))
         z_bound = np.minimum(wanted_z, stance_bound)
+        # Only the heights change between passes: the swing leg's hip yaw and its horizontal
+        # reach in and across its plane (leg_inverse_kinematics' first part) are solved once.
+        swing_x = swing_xy[:, 0] - swing_hip_xy[:, 0]
+        swing_y = swing_xy[:, 1] - swing_hip_xy[:, 1]
+        swing_forward = swing_x * direction[:, 0] + swing_y * direction[:, 1]
+        # Only the last frame's distance from the leg's plane is reported.
+        cos_end, sin_end = direction[-1].tolist()
+        swing_lateral = float(swing_x[-1]) * -sin_end + float(swing_y[-1]) * cos_end
+        swing_hip_yaw = _wrap(plane_yaw - yaw)
         for _ in range(5):
             swing_z, lift = self._swing_heights(bezier, foot_w, landing, swing_pitch, footprint)
             z = np.minimum(z_bound, swing_z + swing_reach)
-            hip = _points(swing_hip_xy, z)
-            ankle = _points(swing_xy, swing_z)
-            solution = leg_inverse_kinematics(leg, hip, ankle, plane_yaw, yaw, swing_pitch,
-                                              plane_direction)
-            joints = solution[0]
+            joints = np.empty((k, 4))
+            joints[:, 0] = swing_hip_yaw
+            reach = _sagittal_leg(leg, swing_forward, -(swing_z - z), swing_pitch, joints)
             correction = (np.minimum(np.maximum(joints[:, 3], ankle_low), ankle_high)
                           - joints[:, 3]) * fade
             if np.abs(correction).max() < 0.005:
-                swing_solution = (hip, solution)
+                swing_solution = (joints, reach)
                 break
             swing_pitch = swing_pitch + correction
 
@@ -489,55 +544,64 @@ class WalkGenerator:
         pelvis[:, :2] = pelvis_xy
         pelvis[:, 2] = z
         pelvis[:, 3] = yaw
-        frames[:, self._root] = pelvis
-        # The stance ankle stays where it is: one row repeated (no broadcast_to, which costs
-        # more than the fill).
-        stance_ankle = np.empty((k, 3))
-        stance_ankle[:, :2] = foot_s.xy
-        stance_ankle[:, 2] = foot_s.z
-        for side, hip_xy, ankle, plane, pitch in (
-                (stance_side, stance_hip_xy, stance_ankle, np.full(k, foot_s.yaw),
-                 np.full(k, foot_s.pitch)),
-                (swing_side, swing_hip_xy, None, plane_yaw, swing_pitch)):
-            if side == swing_side and swing_solution is not None:
-                # The same hip, ankle, plane and pitch as the converged pass: same answer.
-                hip, (joints, lateral, reach) = swing_solution
-            else:
-                hip = _points(hip_xy, z)
-                if ankle is None:
-                    ankle = _points(swing_xy, swing_z)
-                joints, lateral, reach = leg_inverse_kinematics(leg, hip, ankle, plane, yaw,
-                                                                pitch)
-            if side == stance_side and (joints[:, 3] > self._leg_upper[side][3] - 0.03).any():
-                # Heel-off: the stance foot rolls about its toe instead of over-flexing the ankle.
-                joints, foot_s_end = self._heel_off(leg, hip, foot_s, yaw, joints,
-                                                    self._leg_upper[side][3] - 0.03)
-                foot_end[stance_side] = foot_s_end
-            if side == swing_side:
-                # A foot in the air may point its toes (push-off) or lift them: its pitch is
-                # free, so the ankle stays inside its range; contact frames are unchanged.
-                # It rolls on from a heel-off at lift-off; the correction fades out towards
-                # touchdown, where the sole must meet its foothold flat.
-                wanted = np.minimum(np.maximum(joints[:, 3], self._leg_lower[side][3] + 0.02),
-                                    self._leg_upper[side][3] - 0.02)
-                joints[:, 3] += (wanted - joints[:, 3]) * fade
-            if reach.max() > 1.0 + 1e-9:
-                raise GaitError(f'{"left" if side == LEFT else "right"} leg out of reach')
-            low, high = self._leg_lower[side], self._leg_upper[side]
-            bad = (joints < low - 1e-9) | (joints > high + 1e-9)
-            if bad.any():
-                column = int(np.argmax(np.any(bad, axis=0)))
-                name = self.skeleton.joint_names[self._leg_index[side][column]]
-                value = joints[np.any(bad, axis=1)][0, column]
-                raise GaitError(f'{name} would reach {value:.2f} rad, outside its limits')
-            frames[:, self._leg_index[side]] = joints
-            lateral_error = max(lateral_error, float(np.abs(lateral[-1:]).max()))
+        frames[:, self._root_columns] = pelvis
+        # The stance leg (leg_inverse_kinematics written out): its ankle, plane and sole pitch
+        # stay put over the step, so they enter as numbers, not as columns of k equal values.
+        cos_s, sin_s = d_s.tolist()
+        stance_x = foot_s.xy[0] - stance_hip_xy[:, 0]
+        stance_y = foot_s.xy[1] - stance_hip_xy[:, 1]
+        joints = np.empty((k, 4))
+        joints[:, 0] = _wrap(foot_s.yaw - yaw)
+        reach = _sagittal_leg(leg, stance_x * cos_s + stance_y * sin_s, -(foot_s.z - z),
+                              foot_s.pitch, joints)
+        # Only the last frame's distance from the leg's plane is reported.
+        stance_lateral = float(stance_x[-1]) * -sin_s + float(stance_y[-1]) * cos_s
+        limit = self._leg_upper[stance_side][3] - 0.03
+        if (joints[:, 3] > limit).any():
+            # Heel-off: the stance foot rolls about its toe instead of over-flexing the ankle.
+            joints, foot_s_end = self._heel_off(leg, _points(stance_hip_xy, z), foot_s, yaw,
+                                                joints, limit)
+            foot_end[stance_side] = foot_s_end
+        self._check_leg(stance_side, joints, reach)
+        frames[:, self._leg_columns[stance_side]] = joints
+        lateral_error = max(lateral_error, abs(stance_lateral))
+
+        if swing_solution is not None:
+            # The same hip, ankle, plane and pitch as the converged pass: same answer.
+            joints, reach = swing_solution
+        else:
+            joints, lateral, reach = leg_inverse_kinematics(
+                leg, _points(swing_hip_xy, z), _points(swing_xy, swing_z), plane_yaw, yaw,
+                swing_pitch)
+            swing_lateral = float(lateral[-1])
+        # A foot in the air may point its toes (push-off) or lift them: its pitch is free, so
+        # the ankle stays inside its range; contact frames are unchanged. It rolls on from a
+        # heel-off at lift-off; the correction fades out towards touchdown, where the sole
+        # must meet its foothold flat.
+        wanted = np.minimum(np.maximum(joints[:, 3], self._leg_lower[swing_side][3] + 0.02),
+                            self._leg_upper[swing_side][3] - 0.02)
+        joints[:, 3] += (wanted - joints[:, 3]) * fade
+        self._check_leg(swing_side, joints, reach)
+        frames[:, self._leg_columns[swing_side]] = joints
+        lateral_error = max(lateral_error, abs(swing_lateral))
         feet = foot_end
         feet[swing_side] = landing
         end = Stance(np.array([pelvis_xy[-1, 0], pelvis_xy[-1, 1], z[-1], yaw1]),
                      (feet[0], feet[1]), swing_side, to_rest)
         return StepMotion(times=tau * duration, frames=frames, stance=end, category=category,
                           swing_lift=lift, lateral_error=lateral_error)
+
+    def _check_leg(self, side: int, joints: np.ndarray, reach: np.ndarray) -> None:
+        """Raise GaitError if a leg's (k, 4) joints leave their limits or it is out of reach."""
+        if reach.max() > 1.0 + 1e-9:
+            raise GaitError(f'{"left" if side == LEFT else "right"} leg out of reach')
+        low, high = self._leg_bounds[side]
+        bad = (joints < low) | (joints > high)
+        if bad.any():
+            column = int(np.argmax(np.any(bad, axis=0)))
+            name = self.skeleton.joint_names[self._leg_index[side][column]]
+            value = joints[np.any(bad, axis=1)][0, column]
+            raise GaitError(f'{name} would reach {value:.2f} rad, outside its limits')
 
     @staticmethod
     def _heel_off(leg: LegGeometry, hip: np.ndarray, foot: FootPose, pelvis_yaw: np.ndarray,
@@ -583,7 +647,8 @@ class WalkGenerator:
         -------
         tuple
             (samples (s,) frame indices, along (9,) sole offsets heel..toe in m,
-            tops (s, 9, 2) obstacle heights under the sole, m, -inf over empty space,
+            tops (s, 9) highest obstacle across the sole at each point along it, m, -inf
+            over empty space,
             bezier: the swing-height terms that do not depend on the pitch, see
             :meth:`_bezier_terms`).
 
@@ -599,7 +664,10 @@ class WalkGenerator:
         z_ref = max(lift_foot.z, landing.z) + self.config.max_swing_lift
         tops = swing_profile(points.reshape(-1, 2), z_ref).reshape(len(samples), along.size, -1)
         tops[np.isnan(tops)] = -np.inf
-        return samples, along, tops, timing.bezier_terms
+        # The pitch moves the points across the sole together (they share an offset along
+        # it), and subtracting one number keeps the order: their maximum is taken here, once,
+        # not in every pass of the swing heights.
+        return samples, along, tops.max(axis=2), timing.bezier_terms
 
     def _bezier_terms(self, tau, samples):
         """Per-frame Bernstein weights of the swing Bezier and the clearance terms at the
@@ -609,8 +677,14 @@ class WalkGenerator:
         # Near lift-off and touchdown the sole is by definition at its foothold: the
         # conservative map may read a few mm high there (the 3D check is exact).
         slack = 0.015 * (1.0 - ramp)
-        sampled = ((1 - b) ** 3, 3 * b * (1 - b) ** 2, 3 * b * b * (1 - b), b ** 3)
-        frames = ((1 - tau) ** 3, 3 * tau * (1 - tau) ** 2, 3 * tau * tau * (1 - tau), tau ** 3)
+        frames = np.empty((4, tau.size))
+        frames[0] = (1 - tau) ** 3
+        frames[1] = 3 * tau * (1 - tau) ** 2
+        frames[2] = 3 * tau * tau * (1 - tau)
+        frames[3] = tau ** 3
+        # The same formulas at the sampled frames give the same values: gathered, not redone.
+        sampled = tuple(frames[:, samples])
+        frames = tuple(frames)
         # The clearance the sole keeps at each sample (full away from lift-off and touchdown).
         return b, self.config.swing_clearance * ramp, slack, sampled, frames
 
@@ -629,8 +703,7 @@ class WalkGenerator:
         samples, along, tops, (b, clearance, slack, sampled, frames) = footprint
         # Ground relative to a sole pitched like the foot: what the ankle must stay above.
         pitch = swing_pitch[samples]
-        tops = tops - along[None, :, None] * np.sin(pitch)[:, None, None]
-        ground = tops.reshape(len(samples), -1).max(axis=1)
+        ground = (tops - along * np.sin(pitch)[:, None]).max(axis=1)
         need = ground + leg.ankle_height * np.cos(pitch) + clearance
         basis_0, basis_1, basis_2, basis_3 = sampled
         # Off a heel-off the toe is on the ground: lift more briskly so it does not scuff.
