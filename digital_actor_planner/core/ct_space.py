@@ -70,6 +70,24 @@ class _Step:
     offset_length: float
 
 
+@dataclass(frozen=True)
+class _Chain:
+    """A set of joint steps laid out over a compact array of only the links they touch.
+
+    ``links`` lists the links the steps start from, then each step's child; ``moves`` holds,
+    per step, (step, position of its parent in ``links``, position of its child, position of
+    its rotation among ``joints``). ``table_index`` picks the nine entries of each joint
+    rotation from the columns [cos | sin | -sin | 0 | 1] of the joint angles.
+    """
+
+    links: np.ndarray
+    moves: Tuple[Tuple[_Step, int, int, int], ...]
+    joints: np.ndarray
+    signs: np.ndarray
+    table_index: np.ndarray
+    general: Tuple[Tuple[int, _Step], ...]
+
+
 class BodyKinematics:
     """Batched forward kinematics as link rotations and positions, fast for small batches.
 
@@ -107,6 +125,9 @@ class BodyKinematics:
         self.link_count = len(skeleton.link_names)
         # Per set of steps, the index arrays of its joint rotations (built once, used per call).
         self._layouts: Dict[Tuple[int, ...], tuple] = {}
+        self._chains: Dict[Tuple[int, ...], _Chain] = {}
+        # Constant columns (0, 1) of the joint-rotation table, grown as batches need.
+        self._zero_one = np.tile([0.0, 1.0], (64, 1))
 
     def _layout(self, steps: Sequence[_Step]) -> tuple:
         """Joint columns, signs and scatter indices of the revolute joints among ``steps``."""
@@ -129,6 +150,96 @@ class BodyKinematics:
             layout = (revolute, local, joints, signs, n, flat, general)
             self._layouts[key] = layout
         return layout
+
+    def chain(self, steps: Sequence[_Step]) -> _Chain:
+        """The compact layout of ``steps`` for :meth:`chain_poses` (built once per set)."""
+        key = tuple(step.child for step in steps)
+        chain = self._chains.get(key)
+        if chain is not None:
+            return chain
+        children = [step.child for step in steps]
+        starts = []
+        for step in steps:
+            if step.parent not in children and step.parent not in starts:
+                starts.append(step.parent)
+        links = starts + children
+        place = {link: i for i, link in enumerate(links)}
+        revolute, local, joints, signs, n, _, general = self._layout(steps)
+        count = len(revolute)
+        # Column of the table [cos (count) | sin (count) | -sin (count) | 0 | 1] for each of
+        # the nine entries of each joint rotation, as the scattered writes of poses() place
+        # them (general axes are filled in separately).
+        zero, one = 3 * count, 3 * count + 1
+        table_index = np.full((count, 3, 3), zero, dtype=int)
+        for i in n.tolist():
+            c = revolute[i].axis_coordinate
+            a, b = (c + 1) % 3, (c + 2) % 3
+            table_index[i, c, c] = one
+            table_index[i, a, a] = table_index[i, b, b] = i
+            table_index[i, b, a] = count + i
+            table_index[i, a, b] = 2 * count + i
+        moves = tuple((step, place[step.parent], place[step.child], local.get(step.child, -1))
+                      for step in steps)
+        chain = _Chain(links=np.array(links, dtype=int), moves=moves, joints=joints,
+                       signs=signs, table_index=table_index.ravel(), general=tuple(general))
+        self._chains[key] = chain
+        return chain
+
+    def chain_poses(self, q: np.ndarray, rotations: np.ndarray, positions: np.ndarray,
+                    chain: _Chain) -> None:
+        """Evaluate a chain's steps in place over compact poses of its links.
+
+        The same numbers as :meth:`poses` with the chain's steps, but over (k, C) arrays of
+        the C links of ``chain.links`` instead of every link, and with the joint rotations
+        gathered from one table instead of scattered: fewer and smaller NumPy calls, which is
+        what a branch's small batches pay for.
+
+        Parameters
+        ----------
+        q
+            (k, 22) configurations, rad or m.
+        rotations, positions
+            (k, C, 3, 3) and (k, C, 3) poses of ``chain.links``: those of the links the chain
+            starts from are read, the others written.
+        chain
+            From :meth:`chain`.
+
+        """
+        k = q.shape[0]
+        count = len(chain.joints)
+        if count:
+            angle = q[:, chain.joints] * chain.signs
+            sin = np.sin(angle)
+            if len(self._zero_one) < k:
+                self._zero_one = np.tile([0.0, 1.0], (k, 1))
+            table = np.concatenate((np.cos(angle), sin, -sin, self._zero_one[:k]), axis=1)
+            mats = table.take(chain.table_index, axis=1).reshape(k, count, 3, 3)
+            for i, st in chain.general:
+                mats[:, i] = axis_rotation(st.axis, q[:, st.joint])
+        for step, parent, child, joint in chain.moves:
+            parent_rotation = rotations[:, parent]
+            if step.offset_axis >= 0:
+                positions[:, child] = (positions[:, parent]
+                                       + parent_rotation[..., step.offset_axis]
+                                       * step.offset_length)
+            elif step.has_offset:
+                positions[:, child] = (positions[:, parent]
+                                       + parent_rotation @ step.origin_translation)
+            else:
+                positions[:, child] = positions[:, parent]
+            base = (parent_rotation if step.origin_rotation is None
+                    else parent_rotation @ step.origin_rotation)
+            if step.joint < 0:
+                rotations[:, child] = base
+            elif step.kind == 'prismatic':
+                rotations[:, child] = base
+                if step.axis_coordinate >= 0:
+                    along = base[..., step.axis_coordinate] * step.axis_sign
+                else:
+                    along = base @ step.axis
+                positions[:, child] += along * q[:, step.joint, None]
+            else:
+                np.matmul(base, mats[:, joint], out=rotations[:, child])
 
     def subtree_steps(self, joint_names: Sequence[str]) -> Tuple[_Step, ...]:
         """Return the steps that move when any of the named joints moves, in evaluation order."""
@@ -759,6 +870,9 @@ class CTSpace:
         self.lower = skeleton.lower[self.indices]
         self.upper = skeleton.upper[self.indices]
         self.speed_limit = skeleton.velocity_limit[self.indices]
+        # The joint limits with the tolerance of within_bounds, worked out once.
+        self._lower_tolerant = self.lower - 1e-9
+        self._upper_tolerant = self.upper + 1e-9
         self._speed_cap = self.speed_limit * (1 + SPEED_TOLERANCE)
         #: (k - 1, 1) time from each frame to the next, s.
         self._frame_step = np.diff(self.times)[:, None]
@@ -786,9 +900,24 @@ class CTSpace:
         self._pair_column = np.searchsorted(self.checked, self.pairs[:, 0])
         # For the narrow phase, as Python ints and objects.
         self._pair_other = other.tolist()
+        self._pair_column_list = self._pair_column.tolist()
+        self._pair_other_checked = np.isin(other, self.checked).tolist()
+        # FCL transforms of the obstacle shapes, per (frame, pair), made on first use: the
+        # narrow phase meets the same ones again and again.
+        self._pair_transforms: Dict[Tuple[int, int], fcl.Transform] = {}
         self._checked_list = self.checked.tolist()
         self._pair_swept_lower = body.swept_lower[other]
         self._pair_swept_upper = body.swept_upper[other]
+        # The links the checks need, in a compact layout, and where the checked shapes sit on
+        # them (kinematics of the branch's few links, not of the whole body, per batch).
+        self._chain = body.kinematics.chain(self._check_steps)
+        place = {link: i for i, link in enumerate(self._chain.links.tolist())}
+        shapes = body.shapes
+        self._shape_links = np.array([place[link] for link in shapes.link[self.checked]],
+                                     dtype=int)
+        self._shape_offsets = shapes.origin_translation[self.checked][:, :, None]
+        self._shape_turns = (None if shapes.identity_origin[self.checked].all()
+                             else shapes.origin_rotation[self.checked])
         self._prepare_environment()
         self.checks = 0
         # A motion whose broad phase ran ahead (see best_valid_rows), or None.
@@ -874,7 +1003,7 @@ class CTSpace:
 
     def within_bounds(self, q: np.ndarray) -> np.ndarray:
         """Whether each configuration is within the joint limits: (...,) bool."""
-        return np.all((q >= self.lower - 1e-9) & (q <= self.upper + 1e-9), axis=-1)
+        return np.all((q >= self._lower_tolerant) & (q <= self._upper_tolerant), axis=-1)
 
     def is_valid(self, q: np.ndarray, i: int) -> bool:
         """Whether branch configuration q (d,) is legal at frame i (limits, no collision)."""
@@ -1181,12 +1310,16 @@ class CTSpace:
         body = self.body
         full = body.frames[frames]
         full[:, self.indices] = q
-        rotations = body.rotations[frames]
-        positions = body.positions[frames]
-        body.kinematics.poses(full, rotations, positions, self._check_steps)
-        shapes = body.shapes
-        rotation, centre = shapes.poses(rotations, positions, self.checked)
-        low, high = shapes.bounds(rotation, centre, self.checked)
+        at = (frames[:, None], self._chain.links)
+        rotations, positions = body.rotations[at], body.positions[at]
+        body.kinematics.chain_poses(full, rotations, positions, self._chain)
+        # BodyShapes.poses, over the compact links.
+        links = self._shape_links
+        link_rotation = rotations.take(links, axis=1)
+        centre = positions.take(links, axis=1) + (link_rotation @ self._shape_offsets)[..., 0]
+        rotation = (link_rotation if self._shape_turns is None
+                    else link_rotation @ self._shape_turns)
+        low, high = body.shapes.bounds(rotation, centre, self.checked)
         return rotation, centre, low, high
 
     def _broad_phase(self, q: np.ndarray, frames: np.ndarray) -> tuple:
@@ -1219,11 +1352,12 @@ class CTSpace:
                 other_lower, other_upper = self._pair_lower[frames], self._pair_upper[frames]
             if len(active):
                 columns = self._pair_column[active]
+                column_of = self._pair_column_list
                 rows, which = np.nonzero(boxes_overlap(
                     low.take(columns, axis=1), high.take(columns, axis=1), other_lower,
                     other_upper))
                 for row, pair in zip(rows.tolist(), active[which].tolist()):
-                    suspects.setdefault(row, []).append((int(self._pair_column[pair]), pair))
+                    suspects.setdefault(row, []).append((column_of[pair], pair))
         return suspects, rotation, centre
 
     def _narrow_phase(self, row: int, frame: int, broad: tuple) -> bool:
@@ -1234,16 +1368,27 @@ class CTSpace:
             return False
         shapes = self.body.shapes
         objects, request = shapes.objects, shapes._request
+        transforms = self._pair_transforms
+        posed = -1
         for column, other in pairs:
             if other < 0:
                 target = self._mesh_objects[-1 - other]
             else:
                 target = objects[self._pair_other[other]]
-                target.setTransform(fcl.Transform(self._pair_rotation[frame, other],
-                                                  self._pair_centre[frame, other]))
-            # BodyShapes.collides, inline: this is the innermost loop of every search.
+                key = (frame, other)
+                transform = transforms.get(key)
+                if transform is None:
+                    transform = transforms[key] = fcl.Transform(
+                        self._pair_rotation[frame, other], self._pair_centre[frame, other])
+                target.setTransform(transform)
+                if self._pair_other_checked[other]:
+                    posed = -1  # the target is one of the branch's shapes, now moved
+            # BodyShapes.collides, inline: this is the innermost loop of every search. A row's
+            # successive suspects often share the branch's shape: it is placed when it changes.
             shape = objects[self._checked_list[column]]
-            shape.setTransform(fcl.Transform(rotation[row, column], centre[row, column]))
+            if column != posed:
+                shape.setTransform(fcl.Transform(rotation[row, column], centre[row, column]))
+                posed = column
             result = fcl.CollisionResult()
             fcl.collide(shape, target, request, result)
             if result.is_collision:
