@@ -696,8 +696,17 @@ def boxes_overlap(lower_a: np.ndarray, upper_a: np.ndarray, lower_b: np.ndarray,
                   upper_b: np.ndarray) -> np.ndarray:
     """Whether axis-aligned boxes overlap: corners (..., 3) broadcast together, -> (...) bool.
 
-    One comparison per axis: much faster than ``np.all(..., axis=-1)`` over a last axis of 3.
+    Never ``np.all(..., axis=-1)``: reducing a last axis of 3 is one of NumPy's slow paths.
     """
+    if lower_a.ndim == 1 or lower_b.ndim == 1 or lower_a.shape[-2:] == lower_b.shape[-2:]:
+        # Broadcast along leading axes only: two comparisons over all three axes, then the
+        # three columns joined (5 NumPy calls instead of 11; about twice as fast on a branch's
+        # rows x pairs).
+        both = upper_a >= lower_b
+        both &= lower_a <= upper_b
+        return both[..., 0] & both[..., 1] & both[..., 2]
+    # Broadcast inside (boxes against triangles): one comparison per axis keeps the long axis
+    # innermost.
     out = (upper_a[..., 0] >= lower_b[..., 0]) & (lower_a[..., 0] <= upper_b[..., 0])
     for axis in (1, 2):
         out &= upper_a[..., axis] >= lower_b[..., axis]
@@ -735,7 +744,7 @@ def span(lower: np.ndarray, upper: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
 
 def mesh_contacts(low: np.ndarray, high: np.ndarray, triangle_lower: np.ndarray,
                   triangle_upper: np.ndarray, triangle_owner: np.ndarray,
-                  mesh_count: int) -> tuple:
+                  mesh_count: int, swept: Optional[bool] = None) -> tuple:
     """Which shape boxes meet a triangle box of which mesh, once per (row, shape, mesh).
 
     Parameters
@@ -746,6 +755,10 @@ def mesh_contacts(low: np.ndarray, high: np.ndarray, triangle_lower: np.ndarray,
         (T, 3) triangle box corners, m.
     triangle_owner
         (T,) mesh index of each triangle (< ``mesh_count``).
+    swept
+        Whether to cut the (shape, triangle) pairs first by the shapes' boxes swept over the
+        rows (None: when there are many rows x shapes x triangles). The contacts are the same
+        either way; only the work differs.
 
     Returns
     -------
@@ -754,7 +767,9 @@ def mesh_contacts(low: np.ndarray, high: np.ndarray, triangle_lower: np.ndarray,
 
     """
     m, n = low.shape[:2]
-    if m > 1 and m * n * len(triangle_lower) > SWEPT_CONTACTS:
+    if swept is None:
+        swept = m * n * len(triangle_lower) > SWEPT_CONTACTS
+    if m > 1 and swept:
         # Many rows: only the (shape, triangle) pairs whose boxes meet when the shape's is
         # swept over all rows can meet in one of them.
         shape, triangle = np.nonzero(boxes_overlap(
@@ -1326,15 +1341,13 @@ class CTSpace:
         """Boxes of the branch's shapes against triangles and body shapes, all rows at once."""
         rotation, centre, low, high = self._shape_boxes(q, frames)
         suspects: Dict[int, list] = {}
-        if len(self._triangle_lower) > FEW_TRIANGLES:
-            near = self._triangles_near(low, high)
-        else:
-            # A few triangles: the first cut would cost more than it saves.
-            near = slice(None) if len(self._triangle_lower) else []
-        if len(self._triangle_lower[near]):
+        if len(self._triangle_lower):
+            # Many triangles: the pairs (shape, triangle) are first cut by each shape's box
+            # swept over the rows, which also drops the triangles far from every box (one
+            # (n, T) test; a cut by the box around all boxes first would only add calls).
             rows, columns, owners = mesh_contacts(
-                low, high, self._triangle_lower[near], self._triangle_upper[near],
-                self._triangle_owner[near], self._mesh_count)
+                low, high, self._triangle_lower, self._triangle_upper, self._triangle_owner,
+                self._mesh_count, swept=len(self._triangle_lower) > FEW_TRIANGLES or None)
             for row, column, owner in zip(rows.tolist(), columns.tolist(), owners.tolist()):
                 suspects.setdefault(row, []).append((column, -1 - owner))
         pairs = len(self.pairs)
