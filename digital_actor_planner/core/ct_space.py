@@ -36,6 +36,9 @@ ADJACENT_JOINTS = 2
 UPPER_BODY_BRANCHES = ('waist', 'left_arm', 'right_arm')
 #: Kept triangles up to which a batch's boxes are tested against all of them at once.
 FEW_TRIANGLES = 64
+#: Triangles above which one box is tested against them coordinate by coordinate (contiguous
+#: rows; below it, fewer NumPy calls over interleaved coordinates are faster).
+MANY_TRIANGLES = 256
 #: Rows x shape pairs up to which a batch tests every pair at every row at once.
 FEW_PAIR_ROWS = 2048
 #: Rows x shapes x triangles above which contacts are first cut by the shapes' swept boxes.
@@ -443,7 +446,9 @@ class BodyShapes:
             extent[:, box] = (np.abs(rotation.take(box, axis=1)) @ box_half)[..., 0]
         if len(cylinder):
             axis = np.abs(rotation.take(cylinder, axis=1)[..., 2])
-            extent[:, cylinder] = (radius * np.sqrt(np.clip(1.0 - axis * axis, 0.0, 1.0))
+            # 1 - axis^2 <= 1 always: only the lower clip can bite (np.clip's wrapper costs
+            # more than the arithmetic on a branch's few shapes).
+            extent[:, cylinder] = (radius * np.sqrt(np.maximum(1.0 - axis * axis, 0.0))
                                    + half_length * axis)
         if len(sphere):
             extent[:, sphere] = sphere_radius
@@ -517,6 +522,11 @@ class EnvironmentIndex:
             self.lower = np.zeros((0, 3))
             self.upper = np.zeros((0, 3))
             self.owner = np.zeros(0, dtype=int)
+        # The corners coordinate by coordinate, each contiguous: a box is tested against
+        # thousands of triangles per plan, and comparisons over contiguous rows are several
+        # times faster than over every third number.
+        self.lower_by_axis = np.ascontiguousarray(self.lower.T)
+        self.upper_by_axis = np.ascontiguousarray(self.upper.T)
         if objects is None:
             # Map mesh index -> object index (empty meshes were skipped).
             kept = [i for i, mesh in enumerate(meshes) if len(mesh.faces)]
@@ -530,7 +540,9 @@ class EnvironmentIndex:
 
     def triangles_near(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
         """Indices of triangles whose boxes overlap the box [lower, upper] (3,) m."""
-        return np.flatnonzero(boxes_overlap(lower, upper, self.lower, self.upper))
+        if len(self.lower) <= MANY_TRIANGLES:
+            return np.flatnonzero(boxes_overlap(lower, upper, self.lower, self.upper))
+        return np.flatnonzero(_box_meets(lower, upper, self.lower_by_axis, self.upper_by_axis))
 
 
 class TimedBody:
@@ -578,7 +590,11 @@ class TimedBody:
             self._near = environment.triangles_near(box_lower, box_upper)
             self._near_lower, self._near_upper = box_lower, box_upper
         near = self._near
-        return near[boxes_overlap(lower, upper, environment.lower[near], environment.upper[near])]
+        if len(near) <= MANY_TRIANGLES:
+            return near[boxes_overlap(lower, upper, environment.lower[near],
+                                      environment.upper[near])]
+        return near[_box_meets(lower, upper, environment.lower_by_axis.take(near, axis=1),
+                               environment.upper_by_axis.take(near, axis=1))]
 
     def _shape_poses(self) -> None:
         shapes = self.shapes
@@ -711,6 +727,21 @@ def boxes_overlap(lower_a: np.ndarray, upper_a: np.ndarray, lower_b: np.ndarray,
     for axis in (1, 2):
         out &= upper_a[..., axis] >= lower_b[..., axis]
         out &= lower_a[..., axis] <= upper_b[..., axis]
+    return out
+
+
+def _box_meets(lower: np.ndarray, upper: np.ndarray, lower_by_axis: np.ndarray,
+               upper_by_axis: np.ndarray) -> np.ndarray:
+    """Whether one box [lower, upper] (3,) meets each of T boxes given as (3, T) corners: (T,).
+
+    The same answers as :func:`boxes_overlap`, several times faster for thousands of boxes
+    (38k triangles of uneven ground: 0.14 instead of 0.98 ms).
+    """
+    out = upper_by_axis[0] >= lower[0]
+    out &= lower_by_axis[0] <= upper[0]
+    for axis in (1, 2):
+        out &= upper_by_axis[axis] >= lower[axis]
+        out &= lower_by_axis[axis] <= upper[axis]
     return out
 
 
@@ -1358,11 +1389,13 @@ class CTSpace:
                 active = np.flatnonzero(boxes_overlap(
                     low.min(axis=0)[self._pair_column], high.max(axis=0)[self._pair_column],
                     self._pair_swept_lower, self._pair_swept_upper))
-                other_lower = self._pair_lower[frames[:, None], active]
-                other_upper = self._pair_upper[frames[:, None], active]
+                # Two take() calls: several times cheaper than one two-axis fancy index.
+                other_lower = self._pair_lower.take(frames, axis=0).take(active, axis=1)
+                other_upper = self._pair_upper.take(frames, axis=0).take(active, axis=1)
             else:
                 active = np.arange(pairs)
-                other_lower, other_upper = self._pair_lower[frames], self._pair_upper[frames]
+                other_lower = self._pair_lower.take(frames, axis=0)
+                other_upper = self._pair_upper.take(frames, axis=0)
             if len(active):
                 columns = self._pair_column[active]
                 column_of = self._pair_column_list
