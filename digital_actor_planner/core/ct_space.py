@@ -376,6 +376,7 @@ class BodyShapes:
             self.half[i] = half
             self.objects.append(fcl.CollisionObject(geometry, fcl.Transform()))
         self._request = fcl.CollisionRequest()
+        self._result = fcl.CollisionResult()
         self.is_box = np.array([k == 'box' for k in self.kind])
         self.is_cylinder = np.array([k == 'cylinder' for k in self.kind])
         self.is_sphere = np.array([k == 'sphere' for k in self.kind])
@@ -473,9 +474,11 @@ class BodyShapes:
         """Narrow phase: does shape ``shape`` posed at (rotation, centre) touch ``other``?"""
         obj = self.objects[shape]
         obj.setTransform(fcl.Transform(rotation, centre))
-        result = fcl.CollisionResult()
-        fcl.collide(obj, other, self._request, result)
-        return bool(result.is_collision)
+        # The contact count says it (see CTSpace._narrow_phase); one result serves every call.
+        if fcl.collide(obj, other, self._request, self._result):
+            del self._result.contacts[:]
+            return True
+        return False
 
 
 class EnvironmentIndex:
@@ -951,6 +954,7 @@ class CTSpace:
         # FCL transforms of the obstacle shapes, per (frame, pair), made on first use: the
         # narrow phase meets the same ones again and again.
         self._pair_transforms: Dict[Tuple[int, int], fcl.Transform] = {}
+        self._result = fcl.CollisionResult()
         self._checked_list = self.checked.tolist()
         self._pair_swept_lower = body.swept_lower[other]
         self._pair_swept_upper = body.swept_upper[other]
@@ -1415,6 +1419,7 @@ class CTSpace:
         shapes = self.body.shapes
         objects, request = shapes.objects, shapes._request
         transforms = self._pair_transforms
+        result = self._result
         posed = -1
         for column, other in pairs:
             if other < 0:
@@ -1435,8 +1440,10 @@ class CTSpace:
             if column != posed:
                 shape.setTransform(fcl.Transform(rotation[row, column], centre[row, column]))
                 posed = column
-            result = fcl.CollisionResult()
-            fcl.collide(shape, target, request, result)
-            if result.is_collision:
+            # collide() returns the number of contacts, > 0 exactly when the shapes touch (FCL's
+            # isCollision); one result object serves every call (a new one costs as much as
+            # the arithmetic around it), emptied when it receives a contact.
+            if fcl.collide(shape, target, request, result):
+                del result.contacts[:]
                 return True
         return False
