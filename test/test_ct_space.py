@@ -37,6 +37,29 @@ def test_kinematics_match_the_skeleton(skeleton):
     assert np.allclose(positions, expected[:, :, :3, 3], atol=1e-12)
 
 
+@pytest.mark.parametrize('branch', ['waist', 'left_arm', 'right_arm'])
+def test_chain_kinematics_give_the_same_numbers_as_the_whole_body(skeleton, branch):
+    # A branch's checks evaluate only its few links; the plans stay the same only if the poses
+    # are bit for bit those of the whole-body kinematics.
+    rng = np.random.default_rng(1)
+    q = skeleton.lower + rng.random((30, 22)) * (np.minimum(skeleton.upper, 3)
+                                                 - np.maximum(skeleton.lower, -3))
+    q = np.clip(q, skeleton.lower, skeleton.upper)
+    kinematics = BodyKinematics(skeleton)
+    rotations, positions = kinematics.poses(q)
+    names = [skeleton.joint_names[i] for i in skeleton.branch(branch)]
+    steps = kinematics.subtree_steps(names)
+    chain = kinematics.chain(steps)
+    moved = np.isin(chain.links, [step.child for step in steps])
+    chain_rotations = rotations[:, chain.links]
+    chain_positions = positions[:, chain.links]
+    chain_rotations[:, moved] = np.nan
+    chain_positions[:, moved] = np.nan
+    kinematics.chain_poses(q, chain_rotations, chain_positions, chain)
+    assert chain_rotations.tobytes() == rotations[:, chain.links].tobytes()
+    assert chain_positions.tobytes() == positions[:, chain.links].tobytes()
+
+
 def test_validity_agrees_with_body_collision(skeleton, beam_world):
     space, collision, frames = beam_world
     disagreements = []

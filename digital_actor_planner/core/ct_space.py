@@ -36,6 +36,9 @@ ADJACENT_JOINTS = 2
 UPPER_BODY_BRANCHES = ('waist', 'left_arm', 'right_arm')
 #: Kept triangles up to which a batch's boxes are tested against all of them at once.
 FEW_TRIANGLES = 64
+#: Triangles above which one box is tested against them coordinate by coordinate (contiguous
+#: rows; below it, fewer NumPy calls over interleaved coordinates are faster).
+MANY_TRIANGLES = 256
 #: Rows x shape pairs up to which a batch tests every pair at every row at once.
 FEW_PAIR_ROWS = 2048
 #: Rows x shapes x triangles above which contacts are first cut by the shapes' swept boxes.
@@ -68,6 +71,24 @@ class _Step:
     # An offset along one coordinate axis: its coordinate (-1 otherwise) and length, m.
     offset_axis: int
     offset_length: float
+
+
+@dataclass(frozen=True)
+class _Chain:
+    """A set of joint steps laid out over a compact array of only the links they touch.
+
+    ``links`` lists the links the steps start from, then each step's child; ``moves`` holds,
+    per step, (step, position of its parent in ``links``, position of its child, position of
+    its rotation among ``joints``). ``table_index`` picks the nine entries of each joint
+    rotation from the columns [cos | sin | -sin | 0 | 1] of the joint angles.
+    """
+
+    links: np.ndarray
+    moves: Tuple[Tuple[_Step, int, int, int], ...]
+    joints: np.ndarray
+    signs: np.ndarray
+    table_index: np.ndarray
+    general: Tuple[Tuple[int, _Step], ...]
 
 
 class BodyKinematics:
@@ -107,6 +128,9 @@ class BodyKinematics:
         self.link_count = len(skeleton.link_names)
         # Per set of steps, the index arrays of its joint rotations (built once, used per call).
         self._layouts: Dict[Tuple[int, ...], tuple] = {}
+        self._chains: Dict[Tuple[int, ...], _Chain] = {}
+        # Constant columns (0, 1) of the joint-rotation table, grown as batches need.
+        self._zero_one = np.tile([0.0, 1.0], (64, 1))
 
     def _layout(self, steps: Sequence[_Step]) -> tuple:
         """Joint columns, signs and scatter indices of the revolute joints among ``steps``."""
@@ -129,6 +153,96 @@ class BodyKinematics:
             layout = (revolute, local, joints, signs, n, flat, general)
             self._layouts[key] = layout
         return layout
+
+    def chain(self, steps: Sequence[_Step]) -> _Chain:
+        """The compact layout of ``steps`` for :meth:`chain_poses` (built once per set)."""
+        key = tuple(step.child for step in steps)
+        chain = self._chains.get(key)
+        if chain is not None:
+            return chain
+        children = [step.child for step in steps]
+        starts = []
+        for step in steps:
+            if step.parent not in children and step.parent not in starts:
+                starts.append(step.parent)
+        links = starts + children
+        place = {link: i for i, link in enumerate(links)}
+        revolute, local, joints, signs, n, _, general = self._layout(steps)
+        count = len(revolute)
+        # Column of the table [cos (count) | sin (count) | -sin (count) | 0 | 1] for each of
+        # the nine entries of each joint rotation, as the scattered writes of poses() place
+        # them (general axes are filled in separately).
+        zero, one = 3 * count, 3 * count + 1
+        table_index = np.full((count, 3, 3), zero, dtype=int)
+        for i in n.tolist():
+            c = revolute[i].axis_coordinate
+            a, b = (c + 1) % 3, (c + 2) % 3
+            table_index[i, c, c] = one
+            table_index[i, a, a] = table_index[i, b, b] = i
+            table_index[i, b, a] = count + i
+            table_index[i, a, b] = 2 * count + i
+        moves = tuple((step, place[step.parent], place[step.child], local.get(step.child, -1))
+                      for step in steps)
+        chain = _Chain(links=np.array(links, dtype=int), moves=moves, joints=joints,
+                       signs=signs, table_index=table_index.ravel(), general=tuple(general))
+        self._chains[key] = chain
+        return chain
+
+    def chain_poses(self, q: np.ndarray, rotations: np.ndarray, positions: np.ndarray,
+                    chain: _Chain) -> None:
+        """Evaluate a chain's steps in place over compact poses of its links.
+
+        The same numbers as :meth:`poses` with the chain's steps, but over (k, C) arrays of
+        the C links of ``chain.links`` instead of every link, and with the joint rotations
+        gathered from one table instead of scattered: fewer and smaller NumPy calls, which is
+        what a branch's small batches pay for.
+
+        Parameters
+        ----------
+        q
+            (k, 22) configurations, rad or m.
+        rotations, positions
+            (k, C, 3, 3) and (k, C, 3) poses of ``chain.links``: those of the links the chain
+            starts from are read, the others written.
+        chain
+            From :meth:`chain`.
+
+        """
+        k = q.shape[0]
+        count = len(chain.joints)
+        if count:
+            angle = q[:, chain.joints] * chain.signs
+            sin = np.sin(angle)
+            if len(self._zero_one) < k:
+                self._zero_one = np.tile([0.0, 1.0], (k, 1))
+            table = np.concatenate((np.cos(angle), sin, -sin, self._zero_one[:k]), axis=1)
+            mats = table.take(chain.table_index, axis=1).reshape(k, count, 3, 3)
+            for i, st in chain.general:
+                mats[:, i] = axis_rotation(st.axis, q[:, st.joint])
+        for step, parent, child, joint in chain.moves:
+            parent_rotation = rotations[:, parent]
+            if step.offset_axis >= 0:
+                positions[:, child] = (positions[:, parent]
+                                       + parent_rotation[..., step.offset_axis]
+                                       * step.offset_length)
+            elif step.has_offset:
+                positions[:, child] = (positions[:, parent]
+                                       + parent_rotation @ step.origin_translation)
+            else:
+                positions[:, child] = positions[:, parent]
+            base = (parent_rotation if step.origin_rotation is None
+                    else parent_rotation @ step.origin_rotation)
+            if step.joint < 0:
+                rotations[:, child] = base
+            elif step.kind == 'prismatic':
+                rotations[:, child] = base
+                if step.axis_coordinate >= 0:
+                    along = base[..., step.axis_coordinate] * step.axis_sign
+                else:
+                    along = base @ step.axis
+                positions[:, child] += along * q[:, step.joint, None]
+            else:
+                np.matmul(base, mats[:, joint], out=rotations[:, child])
 
     def subtree_steps(self, joint_names: Sequence[str]) -> Tuple[_Step, ...]:
         """Return the steps that move when any of the named joints moves, in evaluation order."""
@@ -262,6 +376,7 @@ class BodyShapes:
             self.half[i] = half
             self.objects.append(fcl.CollisionObject(geometry, fcl.Transform()))
         self._request = fcl.CollisionRequest()
+        self._result = fcl.CollisionResult()
         self.is_box = np.array([k == 'box' for k in self.kind])
         self.is_cylinder = np.array([k == 'cylinder' for k in self.kind])
         self.is_sphere = np.array([k == 'sphere' for k in self.kind])
@@ -332,7 +447,9 @@ class BodyShapes:
             extent[:, box] = (np.abs(rotation.take(box, axis=1)) @ box_half)[..., 0]
         if len(cylinder):
             axis = np.abs(rotation.take(cylinder, axis=1)[..., 2])
-            extent[:, cylinder] = (radius * np.sqrt(np.clip(1.0 - axis * axis, 0.0, 1.0))
+            # 1 - axis^2 <= 1 always: only the lower clip can bite (np.clip's wrapper costs
+            # more than the arithmetic on a branch's few shapes).
+            extent[:, cylinder] = (radius * np.sqrt(np.maximum(1.0 - axis * axis, 0.0))
                                    + half_length * axis)
         if len(sphere):
             extent[:, sphere] = sphere_radius
@@ -357,9 +474,11 @@ class BodyShapes:
         """Narrow phase: does shape ``shape`` posed at (rotation, centre) touch ``other``?"""
         obj = self.objects[shape]
         obj.setTransform(fcl.Transform(rotation, centre))
-        result = fcl.CollisionResult()
-        fcl.collide(obj, other, self._request, result)
-        return bool(result.is_collision)
+        # The contact count says it (see CTSpace._narrow_phase); one result serves every call.
+        if fcl.collide(obj, other, self._request, self._result):
+            del self._result.contacts[:]
+            return True
+        return False
 
 
 class EnvironmentIndex:
@@ -406,6 +525,11 @@ class EnvironmentIndex:
             self.lower = np.zeros((0, 3))
             self.upper = np.zeros((0, 3))
             self.owner = np.zeros(0, dtype=int)
+        # The corners coordinate by coordinate, each contiguous: a box is tested against
+        # thousands of triangles per plan, and comparisons over contiguous rows are several
+        # times faster than over every third number.
+        self.lower_by_axis = np.ascontiguousarray(self.lower.T)
+        self.upper_by_axis = np.ascontiguousarray(self.upper.T)
         if objects is None:
             # Map mesh index -> object index (empty meshes were skipped).
             kept = [i for i, mesh in enumerate(meshes) if len(mesh.faces)]
@@ -419,7 +543,9 @@ class EnvironmentIndex:
 
     def triangles_near(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
         """Indices of triangles whose boxes overlap the box [lower, upper] (3,) m."""
-        return np.flatnonzero(boxes_overlap(lower, upper, self.lower, self.upper))
+        if len(self.lower) <= MANY_TRIANGLES:
+            return np.flatnonzero(boxes_overlap(lower, upper, self.lower, self.upper))
+        return np.flatnonzero(_box_meets(lower, upper, self.lower_by_axis, self.upper_by_axis))
 
 
 class TimedBody:
@@ -467,7 +593,11 @@ class TimedBody:
             self._near = environment.triangles_near(box_lower, box_upper)
             self._near_lower, self._near_upper = box_lower, box_upper
         near = self._near
-        return near[boxes_overlap(lower, upper, environment.lower[near], environment.upper[near])]
+        if len(near) <= MANY_TRIANGLES:
+            return near[boxes_overlap(lower, upper, environment.lower[near],
+                                      environment.upper[near])]
+        return near[_box_meets(lower, upper, environment.lower_by_axis.take(near, axis=1),
+                               environment.upper_by_axis.take(near, axis=1))]
 
     def _shape_poses(self) -> None:
         shapes = self.shapes
@@ -585,12 +715,36 @@ def boxes_overlap(lower_a: np.ndarray, upper_a: np.ndarray, lower_b: np.ndarray,
                   upper_b: np.ndarray) -> np.ndarray:
     """Whether axis-aligned boxes overlap: corners (..., 3) broadcast together, -> (...) bool.
 
-    One comparison per axis: much faster than ``np.all(..., axis=-1)`` over a last axis of 3.
+    Never ``np.all(..., axis=-1)``: reducing a last axis of 3 is one of NumPy's slow paths.
     """
+    if lower_a.ndim == 1 or lower_b.ndim == 1 or lower_a.shape[-2:] == lower_b.shape[-2:]:
+        # Broadcast along leading axes only: two comparisons over all three axes, then the
+        # three columns joined (5 NumPy calls instead of 11; about twice as fast on a branch's
+        # rows x pairs).
+        both = upper_a >= lower_b
+        both &= lower_a <= upper_b
+        return both[..., 0] & both[..., 1] & both[..., 2]
+    # Broadcast inside (boxes against triangles): one comparison per axis keeps the long axis
+    # innermost.
     out = (upper_a[..., 0] >= lower_b[..., 0]) & (lower_a[..., 0] <= upper_b[..., 0])
     for axis in (1, 2):
         out &= upper_a[..., axis] >= lower_b[..., axis]
         out &= lower_a[..., axis] <= upper_b[..., axis]
+    return out
+
+
+def _box_meets(lower: np.ndarray, upper: np.ndarray, lower_by_axis: np.ndarray,
+               upper_by_axis: np.ndarray) -> np.ndarray:
+    """Whether one box [lower, upper] (3,) meets each of T boxes given as (3, T) corners: (T,).
+
+    The same answers as :func:`boxes_overlap`, several times faster for thousands of boxes
+    (38k triangles of uneven ground: 0.14 instead of 0.98 ms).
+    """
+    out = upper_by_axis[0] >= lower[0]
+    out &= lower_by_axis[0] <= upper[0]
+    for axis in (1, 2):
+        out &= upper_by_axis[axis] >= lower[axis]
+        out &= lower_by_axis[axis] <= upper[axis]
     return out
 
 
@@ -624,7 +778,7 @@ def span(lower: np.ndarray, upper: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
 
 def mesh_contacts(low: np.ndarray, high: np.ndarray, triangle_lower: np.ndarray,
                   triangle_upper: np.ndarray, triangle_owner: np.ndarray,
-                  mesh_count: int) -> tuple:
+                  mesh_count: int, swept: Optional[bool] = None) -> tuple:
     """Which shape boxes meet a triangle box of which mesh, once per (row, shape, mesh).
 
     Parameters
@@ -635,6 +789,10 @@ def mesh_contacts(low: np.ndarray, high: np.ndarray, triangle_lower: np.ndarray,
         (T, 3) triangle box corners, m.
     triangle_owner
         (T,) mesh index of each triangle (< ``mesh_count``).
+    swept
+        Whether to cut the (shape, triangle) pairs first by the shapes' boxes swept over the
+        rows (None: when there are many rows x shapes x triangles). The contacts are the same
+        either way; only the work differs.
 
     Returns
     -------
@@ -643,7 +801,9 @@ def mesh_contacts(low: np.ndarray, high: np.ndarray, triangle_lower: np.ndarray,
 
     """
     m, n = low.shape[:2]
-    if m > 1 and m * n * len(triangle_lower) > SWEPT_CONTACTS:
+    if swept is None:
+        swept = m * n * len(triangle_lower) > SWEPT_CONTACTS
+    if m > 1 and swept:
         # Many rows: only the (shape, triangle) pairs whose boxes meet when the shape's is
         # swept over all rows can meet in one of them.
         shape, triangle = np.nonzero(boxes_overlap(
@@ -759,6 +919,9 @@ class CTSpace:
         self.lower = skeleton.lower[self.indices]
         self.upper = skeleton.upper[self.indices]
         self.speed_limit = skeleton.velocity_limit[self.indices]
+        # The joint limits with the tolerance of within_bounds, worked out once.
+        self._lower_tolerant = self.lower - 1e-9
+        self._upper_tolerant = self.upper + 1e-9
         self._speed_cap = self.speed_limit * (1 + SPEED_TOLERANCE)
         #: (k - 1, 1) time from each frame to the next, s.
         self._frame_step = np.diff(self.times)[:, None]
@@ -786,9 +949,25 @@ class CTSpace:
         self._pair_column = np.searchsorted(self.checked, self.pairs[:, 0])
         # For the narrow phase, as Python ints and objects.
         self._pair_other = other.tolist()
+        self._pair_column_list = self._pair_column.tolist()
+        self._pair_other_checked = np.isin(other, self.checked).tolist()
+        # FCL transforms of the obstacle shapes, per (frame, pair), made on first use: the
+        # narrow phase meets the same ones again and again.
+        self._pair_transforms: Dict[Tuple[int, int], fcl.Transform] = {}
+        self._result = fcl.CollisionResult()
         self._checked_list = self.checked.tolist()
         self._pair_swept_lower = body.swept_lower[other]
         self._pair_swept_upper = body.swept_upper[other]
+        # The links the checks need, in a compact layout, and where the checked shapes sit on
+        # them (kinematics of the branch's few links, not of the whole body, per batch).
+        self._chain = body.kinematics.chain(self._check_steps)
+        place = {link: i for i, link in enumerate(self._chain.links.tolist())}
+        shapes = body.shapes
+        self._shape_links = np.array([place[link] for link in shapes.link[self.checked]],
+                                     dtype=int)
+        self._shape_offsets = shapes.origin_translation[self.checked][:, :, None]
+        self._shape_turns = (None if shapes.identity_origin[self.checked].all()
+                             else shapes.origin_rotation[self.checked])
         self._prepare_environment()
         self.checks = 0
         # A motion whose broad phase ran ahead (see best_valid_rows), or None.
@@ -874,7 +1053,7 @@ class CTSpace:
 
     def within_bounds(self, q: np.ndarray) -> np.ndarray:
         """Whether each configuration is within the joint limits: (...,) bool."""
-        return np.all((q >= self.lower - 1e-9) & (q <= self.upper + 1e-9), axis=-1)
+        return np.all((q >= self._lower_tolerant) & (q <= self._upper_tolerant), axis=-1)
 
     def is_valid(self, q: np.ndarray, i: int) -> bool:
         """Whether branch configuration q (d,) is legal at frame i (limits, no collision)."""
@@ -1181,27 +1360,29 @@ class CTSpace:
         body = self.body
         full = body.frames[frames]
         full[:, self.indices] = q
-        rotations = body.rotations[frames]
-        positions = body.positions[frames]
-        body.kinematics.poses(full, rotations, positions, self._check_steps)
-        shapes = body.shapes
-        rotation, centre = shapes.poses(rotations, positions, self.checked)
-        low, high = shapes.bounds(rotation, centre, self.checked)
+        at = (frames[:, None], self._chain.links)
+        rotations, positions = body.rotations[at], body.positions[at]
+        body.kinematics.chain_poses(full, rotations, positions, self._chain)
+        # BodyShapes.poses, over the compact links.
+        links = self._shape_links
+        link_rotation = rotations.take(links, axis=1)
+        centre = positions.take(links, axis=1) + (link_rotation @ self._shape_offsets)[..., 0]
+        rotation = (link_rotation if self._shape_turns is None
+                    else link_rotation @ self._shape_turns)
+        low, high = body.shapes.bounds(rotation, centre, self.checked)
         return rotation, centre, low, high
 
     def _broad_phase(self, q: np.ndarray, frames: np.ndarray) -> tuple:
         """Boxes of the branch's shapes against triangles and body shapes, all rows at once."""
         rotation, centre, low, high = self._shape_boxes(q, frames)
         suspects: Dict[int, list] = {}
-        if len(self._triangle_lower) > FEW_TRIANGLES:
-            near = self._triangles_near(low, high)
-        else:
-            # A few triangles: the first cut would cost more than it saves.
-            near = slice(None) if len(self._triangle_lower) else []
-        if len(self._triangle_lower[near]):
+        if len(self._triangle_lower):
+            # Many triangles: the pairs (shape, triangle) are first cut by each shape's box
+            # swept over the rows, which also drops the triangles far from every box (one
+            # (n, T) test; a cut by the box around all boxes first would only add calls).
             rows, columns, owners = mesh_contacts(
-                low, high, self._triangle_lower[near], self._triangle_upper[near],
-                self._triangle_owner[near], self._mesh_count)
+                low, high, self._triangle_lower, self._triangle_upper, self._triangle_owner,
+                self._mesh_count, swept=len(self._triangle_lower) > FEW_TRIANGLES or None)
             for row, column, owner in zip(rows.tolist(), columns.tolist(), owners.tolist()):
                 suspects.setdefault(row, []).append((column, -1 - owner))
         pairs = len(self.pairs)
@@ -1212,18 +1393,21 @@ class CTSpace:
                 active = np.flatnonzero(boxes_overlap(
                     low.min(axis=0)[self._pair_column], high.max(axis=0)[self._pair_column],
                     self._pair_swept_lower, self._pair_swept_upper))
-                other_lower = self._pair_lower[frames[:, None], active]
-                other_upper = self._pair_upper[frames[:, None], active]
+                # Two take() calls: several times cheaper than one two-axis fancy index.
+                other_lower = self._pair_lower.take(frames, axis=0).take(active, axis=1)
+                other_upper = self._pair_upper.take(frames, axis=0).take(active, axis=1)
             else:
                 active = np.arange(pairs)
-                other_lower, other_upper = self._pair_lower[frames], self._pair_upper[frames]
+                other_lower = self._pair_lower.take(frames, axis=0)
+                other_upper = self._pair_upper.take(frames, axis=0)
             if len(active):
                 columns = self._pair_column[active]
+                column_of = self._pair_column_list
                 rows, which = np.nonzero(boxes_overlap(
                     low.take(columns, axis=1), high.take(columns, axis=1), other_lower,
                     other_upper))
                 for row, pair in zip(rows.tolist(), active[which].tolist()):
-                    suspects.setdefault(row, []).append((int(self._pair_column[pair]), pair))
+                    suspects.setdefault(row, []).append((column_of[pair], pair))
         return suspects, rotation, centre
 
     def _narrow_phase(self, row: int, frame: int, broad: tuple) -> bool:
@@ -1234,18 +1418,32 @@ class CTSpace:
             return False
         shapes = self.body.shapes
         objects, request = shapes.objects, shapes._request
+        transforms = self._pair_transforms
+        result = self._result
+        posed = -1
         for column, other in pairs:
             if other < 0:
                 target = self._mesh_objects[-1 - other]
             else:
                 target = objects[self._pair_other[other]]
-                target.setTransform(fcl.Transform(self._pair_rotation[frame, other],
-                                                  self._pair_centre[frame, other]))
-            # BodyShapes.collides, inline: this is the innermost loop of every search.
+                key = (frame, other)
+                transform = transforms.get(key)
+                if transform is None:
+                    transform = transforms[key] = fcl.Transform(
+                        self._pair_rotation[frame, other], self._pair_centre[frame, other])
+                target.setTransform(transform)
+                if self._pair_other_checked[other]:
+                    posed = -1  # the target is one of the branch's shapes, now moved
+            # BodyShapes.collides, inline: this is the innermost loop of every search. A row's
+            # successive suspects often share the branch's shape: it is placed when it changes.
             shape = objects[self._checked_list[column]]
-            shape.setTransform(fcl.Transform(rotation[row, column], centre[row, column]))
-            result = fcl.CollisionResult()
-            fcl.collide(shape, target, request, result)
-            if result.is_collision:
+            if column != posed:
+                shape.setTransform(fcl.Transform(rotation[row, column], centre[row, column]))
+                posed = column
+            # collide() returns the number of contacts, > 0 exactly when the shapes touch (FCL's
+            # isCollision); one result object serves every call (a new one costs as much as
+            # the arithmetic around it), emptied when it receives a contact.
+            if fcl.collide(shape, target, request, result):
+                del result.contacts[:]
                 return True
         return False
