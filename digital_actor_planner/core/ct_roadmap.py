@@ -26,7 +26,7 @@ from typing import List, Optional, Tuple
 
 import numpy as np
 
-from digital_actor_planner.core.ct_space import CTSpace
+from .ct_space import CTSpace
 
 
 @dataclass(frozen=True)

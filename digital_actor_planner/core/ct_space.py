@@ -27,7 +27,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import fcl
 import numpy as np
 
-from digital_actor_planner.core.skeleton import axis_rotation, Skeleton
+from .skeleton import axis_rotation, Skeleton
 
 #: Relative slack on the joint speed limits, for rounding in interpolation.
 SPEED_TOLERANCE = 1e-6

@@ -321,7 +321,7 @@ def check_start(environment: 'Environment', start, skeleton) -> None:
         No ground below the start, or the standing actor would be inside an obstacle.
 
     """
-    from digital_actor_planner.core.collision import BodyCollision
+    from .collision import BodyCollision
 
     q = start_configuration(environment, start, skeleton)
     links = BodyCollision(skeleton, environment).links_in_collision(q)

@@ -17,7 +17,7 @@ import fcl
 import numpy as np
 import trimesh
 
-from digital_actor_planner.core.collision import BodyCollision
+from .collision import BodyCollision
 
 FEET = ('left_foot', 'right_foot')
 # A sole corner this close to a surface bears weight (stance), m.

@@ -13,10 +13,10 @@ from typing import Dict, Optional, Tuple
 
 import numpy as np
 
-from digital_actor_planner.core.ct_roadmap import CTRoadmap
-from digital_actor_planner.core.ct_space import (
+from .ct_roadmap import CTRoadmap
+from .ct_space import (
     BodyKinematics, BodyShapes, branch_layout, CTSpace, EnvironmentIndex, TimedBody)
-from digital_actor_planner.core.skeleton import Skeleton
+from .skeleton import Skeleton
 
 #: Shoulder roll that keeps a hanging arm clear of the torso and the thigh, rad.
 ARM_CLEARANCE_ROLL = 0.06
