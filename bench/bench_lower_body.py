@@ -9,8 +9,10 @@ footstep window it also solves the same window exhaustively to compare effort an
 effort ratio <= 1.05, time <= 1/20). CPU time is reported because the machine may be shared.
 
      .venv/bin/python bench/bench_lower_body.py --against ../other-checkout [--rounds 8]
+         [--whole-body]
 
-walks every course with this package and with the one in another checkout in one process,
+walks every course (with --whole-body: the obstacle courses, upper body on) with this package
+and with the one in another checkout in one process,
 course by course in alternating order, checks that both produce the same frames, and reports
 both CPU times per step: on a shared machine whose speed drifts, separate runs differ by more
 than most changes do.
@@ -65,6 +67,14 @@ class ComparingPlanner(FootstepPlanner):
 def _load_other(root):
     """The actor module of the package in another checkout, imported as ``other_dap``."""
     package = os.path.join(os.path.abspath(root), 'digital_actor_planner')
+    # A module that imports its siblings by absolute name would get this package's instead.
+    for name in sorted(os.listdir(os.path.join(package, 'core'))):
+        if not name.endswith('.py'):
+            continue
+        with open(os.path.join(package, 'core', name)) as source:
+            if 'from digital_actor_planner' in source.read():
+                raise SystemExit(f'{root}: core/{name} imports digital_actor_planner by '
+                                 'absolute name; make its imports relative to compare it')
     for name, path in (('other_dap', package), ('other_dap.core', os.path.join(package, 'core'))):
         spec = importlib.util.spec_from_file_location(
             name, os.path.join(path, '__init__.py'), submodule_search_locations=[path])
@@ -74,10 +84,10 @@ def _load_other(root):
     return importlib.import_module('other_dap.core.actor')
 
 
-def _walk(actor_module, sc, commands):
+def _walk(actor_module, sc, commands, upper):
     """CPU time of each walking step (s) and the bytes of all frames of one course."""
     actor = actor_module.Actor(skeleton(), sc.environment,
-                               actor_module.ActorConfig(plan_upper_body=False), start=sc.start)
+                               actor_module.ActorConfig(plan_upper_body=upper), start=sc.start)
     cpu = []
     plan_next = actor.plan_next
 
@@ -95,7 +105,7 @@ def _walk(actor_module, sc, commands):
     return cpu, np.concatenate([b.frames for b in blocks]).tobytes()
 
 
-def compare(courses, other_root, rounds):
+def compare(courses, other_root, rounds, upper=False):
     """Paired CPU times per step of this package and the one at ``other_root``."""
     from digital_actor_planner.core import actor as this_actor
     labels = {'this': this_actor, 'other': _load_other(other_root)}
@@ -112,7 +122,7 @@ def compare(courses, other_root, rounds):
             order = list(labels) if (r + i) % 2 == 0 else list(labels)[::-1]
             frames = {}
             for label in order:
-                times, frames[label] = _walk(labels[label], sc, commands)
+                times, frames[label] = _walk(labels[label], sc, commands, upper)
                 cpu[label] += times
             if frames['this'] != frames['other']:
                 raise SystemExit(f'{name}: the two packages produce different frames')
@@ -141,12 +151,12 @@ def main(argv=None):
                         help='plan the upper body too (default courses: the obstacle courses)')
     parser.add_argument('--against', metavar='CHECKOUT',
                         help='compare with the package in another checkout, paired in one '
-                             'process (lower-body courses)')
+                             'process')
     parser.add_argument('--rounds', type=int, default=8, help='rounds of --against')
     args = parser.parse_args(argv)
     courses = args.courses or (OBSTACLE_COURSES if args.whole_body else COURSES)
     if args.against:
-        compare(args.courses or COURSES, args.against, args.rounds)
+        compare(courses, args.against, args.rounds, args.whole_body)
         return
     upper = args.whole_body
     wall_all, cpu_all = [], []
