@@ -553,9 +553,19 @@ def test_a_scene_reload_racing_a_plan_neither_breaks_the_buffer_nor_drops_the_fi
         def fault(*args):
             raise RuntimeError('fault')
 
+        real_plan, end = node.planner.plan, node.buffer.end_time
         node.planner.plan = fault
         node.plan_once()
         assert 0.0 < node.planning_slack() <= 1.0, 'not tried again soon'
+        # Diagnostics say why; the committed motion is kept.
+        assert node.stats.state == 'stuck'
+        assert node.stats.reason == "internal error: RuntimeError('fault')"
+        assert node.buffer.end_time == end
+        # Once planning works again the actor goes on from where it was.
+        node.planner.plan = real_plan
+        node.plan_once()
+        assert node.stats.state == 'walking', node.stats.reason
+        assert node.buffer.end_time > end
     finally:
         node.stop()
         node.destroy_node()
