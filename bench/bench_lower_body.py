@@ -84,10 +84,8 @@ def _load_other(root):
     return importlib.import_module('other_dap.core.actor')
 
 
-def _walk(actor_module, sc, commands, upper):
-    """CPU time of each walking step (s) and the bytes of all frames of one course."""
-    actor = actor_module.Actor(skeleton(), sc.environment,
-                               actor_module.ActorConfig(plan_upper_body=upper), start=sc.start)
+def _time_steps(actor):
+    """Make ``actor`` record the CPU time of each walking step it plans (s); returns the list."""
     cpu = []
     plan_next = actor.plan_next
 
@@ -99,6 +97,14 @@ def _walk(actor_module, sc, commands, upper):
         return block
 
     actor.plan_next = timed
+    return cpu
+
+
+def _walk(actor_module, sc, commands, upper):
+    """CPU time of each walking step (s) and the bytes of all frames of one course."""
+    actor = actor_module.Actor(skeleton(), sc.environment,
+                               actor_module.ActorConfig(plan_upper_body=upper), start=sc.start)
+    cpu = _time_steps(actor)
     blocks = actor_module.run_commands(actor, [c.time for c in commands],
                                        [c.linear_x for c in commands],
                                        [c.angular_z for c in commands])
@@ -169,17 +175,7 @@ def main(argv=None):
         commands = read_commands(os.path.join(ROOT, 'config', 'scenes', name + '.csv'))
         actor = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=upper),
                       start=sc.start)
-        cpu = []
-        plan_next = actor.plan_next
-
-        def timed():
-            c0 = time.process_time()
-            block = plan_next()
-            if block.status == 'walking':
-                cpu.append(time.process_time() - c0)
-            return block
-
-        actor.plan_next = timed
+        cpu = _time_steps(actor)
         started = time.perf_counter()
         blocks = run_commands(actor, [c.time for c in commands], [c.linear_x for c in commands],
                               [c.angular_z for c in commands])
