@@ -22,6 +22,7 @@ import dataclasses
 import importlib
 import importlib.util
 import os
+import re
 import sys
 import time
 
@@ -68,11 +69,12 @@ def _load_other(root):
     """The actor module of the package in another checkout, imported as ``other_dap``."""
     package = os.path.join(os.path.abspath(root), 'digital_actor_planner')
     # A module that imports its siblings by absolute name would get this package's instead.
+    absolute = re.compile(r'^\s*(from|import)\s+digital_actor_planner\b', re.MULTILINE)
     for name in sorted(os.listdir(os.path.join(package, 'core'))):
         if not name.endswith('.py'):
             continue
         with open(os.path.join(package, 'core', name)) as source:
-            if 'from digital_actor_planner' in source.read():
+            if absolute.search(source.read()):
                 raise SystemExit(f'{root}: core/{name} imports digital_actor_planner by '
                                  'absolute name; make its imports relative to compare it')
     for name, path in (('other_dap', package), ('other_dap.core', os.path.join(package, 'core'))):
