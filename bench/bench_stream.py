@@ -8,8 +8,8 @@ script), with localhost discovery in ROS_DOMAIN_ID 40-59 by default.
 
 * Stream health: one actor walks the obstacle courses in turn (each with its command file; the
   scene parameter is reloaded between them) while a probe records every joint_states message.
-  Jitter is the deviation of the header-stamp interval from the period (the node's publish
-  instants); missed frames are the periods the stream carried no frame for (a late frame is
+  Jitter is the deviation of the header-stamp interval from the period (a stamp is the instant
+  the frame shows: when the node's stream thread woke for it); missed frames are the periods the stream carried no frame for (a late frame is
   jitter). Reported with and without the second after each reload. A frame published a period
   or more late (the node stalled) is stamped at its own tick instead, so stalls show in the
   node's count of ticks published more than 2 ms late (publication lateness p99 <= 2 ms when

@@ -351,19 +351,21 @@ def test_environment_markers_are_built_once_per_scene_and_sent_serialized(monkey
 class _TickRecorder:
     """Stands in for an actor node attached to a StreamTicker: records, per frame, the time it
     was published, the ticks skipped before it, its own instant (None: "now"), its tick and the
-    publishing thread."""
+    publishing thread; and each tick's stamp (ns)."""
 
     def __init__(self, ticker):
         self.ticker = ticker
         self.frames = []
+        self.stamps = {}
 
-    def publish_frame(self, now, skipped, instant=None):
+    def publish_frame(self, now, skipped, instant=None, stamp_ns=None):
         ticker = self.ticker
         # A frame without its own instant is the newest tick (set under the ticker's lock
         # before the actors are called); a caught-up one is known by its instant.
         tick = ticker._published if instant is None else \
             round((instant - ticker._start) / ticker.period)
         self.frames.append((now, skipped, instant, tick, threading.current_thread().name))
+        self.stamps[tick] = stamp_ns
 
     def record(self, frames: int) -> list:
         """Attach to the ticker until ``frames`` frames are published (5 s at most)."""
@@ -436,6 +438,42 @@ def test_stream_catches_up_the_ticks_a_stall_of_every_thread_slept_over():
     assert sum(skipped for _, skipped, _, _, _ in frames) == 2
     assert ticker.caught_up == 3 + 5  # 11 .. 13 with 14; 33 .. 37 with 38
     assert ticker.late_ticks >= 12 and ticker.max_lateness >= 8 * period
+
+
+def test_stream_stamps_stay_on_the_tick_grid_when_a_catch_up_burst_is_interrupted():
+    """Every thread stalls for 4.5 periods; the thread catching up then loses its core again
+    for 1.5 periods in the middle of the burst (the hypervisor, or the planner holding the
+    GIL). Each frame is stamped with the instant it shows, not the moment it got out: the
+    caught-up frames stay one period apart, and the stamps only increase."""
+    from digital_actor_planner.nodes.actor_planner import StreamTicker
+    period, stalled = 0.02, 10
+
+    class Stalling(StreamTicker):
+        def _publish(self, tick, now, backup):
+            if tick == stalled:
+                time.sleep(4.5 * period)
+                now = time.monotonic()
+            super()._publish(tick, now, backup)
+
+    class Preempted(_TickRecorder):
+        def publish_frame(self, now, skipped, instant=None, stamp_ns=None):
+            super().publish_frame(now, skipped, instant, stamp_ns)
+            if self.frames[-1][3] == stalled + 1:  # the second frame of the burst
+                time.sleep(1.5 * period)
+
+    recorder = Preempted(Stalling(period, priority=0))
+    frames = recorder.record(stalled + 12)
+    ticks = [tick for _, _, _, tick, _ in frames]
+    assert ticks == sorted(set(ticks)) and ticks[:stalled + 8] == list(range(stalled + 8)), ticks
+    stamps = 1e-9 * np.array([recorder.stamps[tick] for tick in ticks])
+    intervals = np.diff(stamps)
+    assert np.all(intervals > 0.0), intervals
+    burst = intervals[stalled:stalled + 3]  # ticks 10 .. 13, all shown at their own instants
+    assert np.allclose(burst, period, atol=2e-6), burst
+    # On the wall clock: a stamp is within a few ms of the tick's instant mapped to it.
+    wall = time.time() - time.monotonic()
+    instants = recorder.ticker._start + period * np.array(ticks)
+    assert np.abs(stamps - (instants + wall)).max() < period, stamps - instants - wall
 
 
 def test_planning_scheduler_plans_the_most_urgent_actor_first_and_skips_resting_ones():

@@ -739,6 +739,19 @@ class Housekeeper(NodesThread):
                 node.housekeeping(diagnostics, self)
 
 
+def wall_clock_offset_ns() -> int:
+    """``time.time_ns() - time.monotonic_ns()``, read as a pair: the tightest of three reads
+    (a thread losing its core between two reads would otherwise skew it)."""
+    best = None
+    for _ in range(3):
+        before = time.monotonic_ns()
+        wall = time.time_ns()
+        spread = time.monotonic_ns() - before
+        if best is None or spread < best[0]:
+            best = (spread, wall - before - spread // 2)
+    return best[1]
+
+
 def real_time(priority: int) -> bool:
     """Put the calling thread under SCHED_FIFO at ``priority``; False when not permitted.
 
@@ -842,6 +855,10 @@ class StreamTicker(NodesThread):
             self._published = tick
             if backup:
                 self.backup_publishes += 1
+            # Each frame is stamped with the instant it shows, on the wall clock as it is now:
+            # a thread that loses its core in the middle of a burst still stamps the rest of
+            # the burst on their ticks.
+            wall_offset = wall_clock_offset_ns()
             for late in range(first, tick + 1):
                 instant = self._start + late * self.period
                 lateness = now - instant
@@ -850,12 +867,15 @@ class StreamTicker(NodesThread):
                 self.max_lateness = max(self.max_lateness, lateness)
                 if late < tick:
                     self.caught_up += 1
+                # A frame shows the time its thread woke at, unless that is past the next
+                # tick's instant: then it shows its own tick's. Either way tick k shows an
+                # instant in [instant k, instant k + 1), so the stamps only increase.
+                shown = instant if lateness >= self.period else None
+                stamp_ns = wall_offset + round(1e9 * (now if shown is None else shown))
                 for node in self._nodes:
                     try:
-                        # A frame shows the time it is published at, unless that is past the
-                        # next tick's instant: then it shows its own tick's.
-                        node.publish_frame(now, skipped if late == first else 0,
-                                           instant if lateness >= self.period else None)
+                        node.publish_frame(now, skipped if late == first else 0, shown,
+                                           stamp_ns)
                     except Exception as error:  # noqa: B902 -- one actor must not stop others
                         node.get_logger().error(f'joint_states not published: {error!r}',
                                                 throttle_duration_sec=2.0)
@@ -952,7 +972,6 @@ class ActorPlannerNode(Node):
         self.playback_time = 0.0
         self.underruns = 0
         self.missed_frames = 0
-        self._last_instant = -math.inf
         self.tick_times = collections.deque(maxlen=max(4, int(2 * self.config.publish_rate)))
         self.committed_footsteps = collections.deque(maxlen=PAST_FOOTSTEPS)
         self._latest_block = None
@@ -1174,22 +1193,20 @@ class ActorPlannerNode(Node):
         slowest = max(self._responses, default=0.0)
         return min(MAX_LEAD, max(self.planning_lead, LEAD_SAFETY * slowest))
 
-    def publish_frame(self, now: float, late_ticks: int = 0,
-                      instant: Optional[float] = None) -> None:
+    def publish_frame(self, now: float, late_ticks: int = 0, instant: Optional[float] = None,
+                      stamp_ns: Optional[int] = None) -> None:
         """Publish the frame for monotonic time ``instant`` (default ``now``) at ``now``
         (called by the stream ticker).
 
         ``late_ticks`` ticks were skipped before this one because the tick came too late to
         catch them up. A frame published a period or more after its tick (``instant``) shows
-        the motion at ``instant`` and is stamped with it.
+        the motion at ``instant``. ``stamp_ns`` is the wall-clock time of the instant shown
+        (default: measured now); with ``use_sim_time`` the stamp is the ROS clock's time.
         """
         if self._stop.is_set():
             return
         self.missed_frames += late_ticks
-        # Never back in time: a backup thread's tick may have been published after the next
-        # tick's instant.
-        shown = now if instant is None else max(instant, self._last_instant)
-        self._last_instant = shown
+        shown = now if instant is None else instant
         if self._clock_zero is None:
             self._clock_zero = shown
         play = max(0.0, shown - self._clock_zero)
@@ -1212,7 +1229,8 @@ class ActorPlannerNode(Node):
         if clock.ros_time_is_active:  # use_sim_time: the stamp comes from /clock
             msg.header.stamp = clock.now().to_msg()
         else:  # ROS time is system time; this is about 10 us cheaper per frame
-            nanoseconds = time.time_ns() - int(1e9 * (now - shown))
+            nanoseconds = stamp_ns if stamp_ns is not None else \
+                wall_clock_offset_ns() + round(1e9 * shown)
             msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(nanoseconds, 1_000_000_000)
         # array('d') is taken by the message setters without a per-element type check.
         msg.position = array.array('d', q.tobytes())
