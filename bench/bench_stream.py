@@ -9,12 +9,13 @@ script), with localhost discovery in ROS_DOMAIN_ID 40-59 by default.
 * Stream health: one actor walks the obstacle courses in turn (each with its command file; the
   scene parameter is reloaded between them) while a probe records every joint_states message.
   Jitter is the deviation of the header-stamp interval from the period (a stamp is the instant
-  the frame shows: when the node's stream thread woke for it); missed frames are the periods the stream carried no frame for (a late frame is
-  jitter). Reported with and without the second after each reload. A frame published a period
-  or more late (the node stalled) is stamped at its own tick instead, so stalls show in the
-  node's count of ticks published more than 2 ms late (publication lateness p99 <= 2 ms when
-  that is under 1 % of the ticks) and in the delivery delay, the probe's receipt minus the
-  stamp (which also holds the transport and the probe's own scheduling).
+  the frame shows: when the node's stream thread woke for it); missed frames are the periods
+  the stream carried no frame for (a late frame is jitter). Reported with and without the
+  second after each reload. A frame published a period or more late (the node stalled) is
+  stamped at its own tick instead, so stalls show in the node's count of ticks published more
+  than 2 ms late (publication lateness p99 <= 2 ms when that is under 1 % of the ticks) and in
+  the delivery delay, the probe's receipt minus the stamp (which also holds the transport and
+  the probe's own scheduling).
 * Command latency: from publishing a forward command to the first frame whose root moved, and from
   publishing a zero command to the first frame of a still actor; beside a bare rclpy
   publish -> echo -> receive round trip measured in the same run.
