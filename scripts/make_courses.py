@@ -398,7 +398,8 @@ def course_table():
     return dict(
         description=(f'A table (top 0.78 m) on the left of the path from x = {table_x0} m, '
                      f'near edge at y = {edge_y} m, under the hanging left hand; books and a '
-                     'jar at the edge are in the swinging arm\'s way: the left elbow flexes.'),
+                     'jar at the edge are in the swinging arm\'s way: the left arm must leave '
+                     'its swing (a flexed elbow clears them).'),
         meshes=[('floor', 'stl', slab(-2.0, 11.0), None),
                 ('table', 'obj', table, pose),
                 ('objects', 'glb', objects, pose)],

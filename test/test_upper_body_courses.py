@@ -2,7 +2,8 @@
 
 Collision-freedom of every link on these courses is judged in test_walk_courses.py; here: the
 upper body keeps its motion pattern on open ground, leaves it where the course demands (bend the
-waist under a beam, flex the elbow at a table, turn the waist between pillars) and returns to it.
+waist under a beam, move the left arm at a table, turn the waist between pillars) and returns to
+it.
 """
 import numpy as np
 import pytest
@@ -42,6 +43,27 @@ def test_upper_body_leaves_its_pattern_only_at_the_obstacle_and_returns(name):
     assert dev[near, column].max() > 0.1, f'{expect["deviation"]} never left its pattern'
     assert frames[-1, 0] > x1 + 1.0, 'the actor did not get past the obstacle'
     assert dev[-20:].max() < 1e-3, 'the upper body did not return to its motion pattern'
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason=(
+    'known gap (README, Limitations): past the table the search swings the left arm far back '
+    'and straightens the elbow. Best-first on closeness with a 0.5 s preview takes postures '
+    'that are legal for a while; only a flexed elbow lasts along the whole table'))
+def test_table_is_passed_with_the_left_elbow_flexed_not_the_arm_swung_back():
+    """Issue 3: at the table 'the arm must flex'. Somewhere along the table the left elbow is
+    flexed at least 0.3 rad beyond its pattern, and the shoulder never swings more than 0.5 rad
+    off its own (a flexed elbow at the pattern's swing clears the table and the things on it:
+    test_courses.py::test_table_needs_the_left_elbow_flexed)."""
+    sk = skeleton()
+    _, _, frames, _ = simulate('table')
+    signed = frames - motion_patterns(sk, frames)
+    at_table = (frames[:, 0] > 2.0) & (frames[:, 0] < 3.6)
+    elbow = signed[at_table, sk.index['left_elbow']]
+    shoulder = signed[:, sk.index['left_shoulder_pitch']]
+    assert elbow.max() >= 0.3, f'the left elbow flexed at most {elbow.max():+.2f} rad'
+    assert np.abs(shoulder).max() <= 0.5, \
+        f'the left shoulder swung {np.abs(shoulder).max():.2f} rad off its pattern'
 
 
 @pytest.mark.slow
