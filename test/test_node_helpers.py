@@ -358,7 +358,7 @@ class _TickRecorder:
         self.frames = []
         self.stamps = {}
 
-    def publish_frame(self, now, skipped, instant=None, stamp_ns=None):
+    def publish_frame(self, now, skipped, instant, stamp_ns):
         ticker = self.ticker
         # A frame without its own instant is the newest tick (set under the ticker's lock
         # before the actors are called); a caught-up one is known by its instant.
@@ -456,7 +456,7 @@ def test_stream_stamps_stay_on_the_tick_grid_when_a_catch_up_burst_is_interrupte
             super()._publish(tick, now, backup)
 
     class Preempted(_TickRecorder):
-        def publish_frame(self, now, skipped, instant=None, stamp_ns=None):
+        def publish_frame(self, now, skipped, instant, stamp_ns):
             super().publish_frame(now, skipped, instant, stamp_ns)
             if self.frames[-1][3] == stalled + 1:  # the second frame of the burst
                 time.sleep(1.5 * period)

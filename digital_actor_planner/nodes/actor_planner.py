@@ -1193,15 +1193,15 @@ class ActorPlannerNode(Node):
         slowest = max(self._responses, default=0.0)
         return min(MAX_LEAD, max(self.planning_lead, LEAD_SAFETY * slowest))
 
-    def publish_frame(self, now: float, late_ticks: int = 0, instant: Optional[float] = None,
-                      stamp_ns: Optional[int] = None) -> None:
-        """Publish the frame for monotonic time ``instant`` (default ``now``) at ``now``
+    def publish_frame(self, now: float, late_ticks: int, instant: Optional[float],
+                      stamp_ns: int) -> None:
+        """Publish the frame for monotonic time ``instant`` (None: ``now``) at ``now``
         (called by the stream ticker).
 
         ``late_ticks`` ticks were skipped before this one because the tick came too late to
         catch them up. A frame published a period or more after its tick (``instant``) shows
-        the motion at ``instant``. ``stamp_ns`` is the wall-clock time of the instant shown
-        (default: measured now); with ``use_sim_time`` the stamp is the ROS clock's time.
+        the motion at ``instant``. ``stamp_ns`` is the wall-clock time of the instant shown;
+        with ``use_sim_time`` the stamp is the ROS clock's time instead.
         """
         if self._stop.is_set():
             return
@@ -1229,9 +1229,7 @@ class ActorPlannerNode(Node):
         if clock.ros_time_is_active:  # use_sim_time: the stamp comes from /clock
             msg.header.stamp = clock.now().to_msg()
         else:  # ROS time is system time; this is about 10 us cheaper per frame
-            nanoseconds = stamp_ns if stamp_ns is not None else \
-                wall_clock_offset_ns() + round(1e9 * shown)
-            msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(nanoseconds, 1_000_000_000)
+            msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
         # array('d') is taken by the message setters without a per-element type check.
         msg.position = array.array('d', q.tobytes())
         msg.velocity = array.array('d', v.tobytes())
