@@ -6,9 +6,11 @@ import numpy as np
 
 from digital_actor_planner.cli import read_commands
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
+from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import load_scene
 from digital_actor_planner.core.footsteps import FootstepConfig
 from digital_actor_planner.core.skeleton import Skeleton
+from digital_actor_planner.core.upper_body import UpperBodyConfig, UpperBodyPlanner
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = os.path.join(ROOT, 'config', 'scenes')
@@ -25,14 +27,22 @@ def scene(name):
 
 
 @functools.lru_cache(maxsize=None)
-def simulate(name, window_steps=3, upper_body=True, greedy_restart=True):
-    """Plan course ``name``: (scene, times (k,), frames (k, 22), blocks)."""
+def simulate(name, window_steps=3, upper_body=True, greedy_restart=True, lasting_branches=None):
+    """Plan course ``name``: (scene, times (k,), frames (k, 22), blocks).
+
+    ``lasting_branches``: a tuple overrides the upper-body planner's ``lasting_branches``.
+    """
     sc = scene(name)
     commands = read_commands(os.path.join(SCENES, name + '.csv'))
-    actor = Actor(skeleton(), sc.environment,
-                  ActorConfig(window_steps=window_steps, plan_upper_body=upper_body,
-                              footsteps=FootstepConfig(greedy_restart=greedy_restart)),
-                  start=sc.start)
+    config = ActorConfig(window_steps=window_steps, plan_upper_body=upper_body,
+                         footsteps=FootstepConfig(greedy_restart=greedy_restart))
+    upper = None
+    if lasting_branches is not None:
+        upper = UpperBodyPlanner(
+            skeleton(), BodyCollision(skeleton(), sc.environment),
+            UpperBodyConfig(check_budget=config.upper_body_check_budget,
+                            lasting_branches=lasting_branches), rng=np.random.default_rng(0))
+    actor = Actor(skeleton(), sc.environment, config, start=sc.start, upper_body_planner=upper)
     blocks = run_commands(actor, [c.time for c in commands], [c.linear_x for c in commands],
                           [c.angular_z for c in commands])
     times = np.concatenate([b.times for b in blocks])

@@ -213,3 +213,37 @@ def test_bad_preview_settings_name_the_value(beam_space, preview_from, preview_b
     with pytest.raises(ValueError, match=match):
         roadmap().solve(beam_space, np.zeros(2), preview_from=preview_from,
                         preview_backtracks=preview_backtracks)
+
+
+def test_only_the_deep_bend_lasts_under_the_beam(skeleton, beam_space):
+    horizon = _Horizon(CTRoadmap._objective_free(beam_space, 5), 5)
+    blocked = np.flatnonzero(~horizon.free)
+    assert 100 < blocked[0] < blocked[-1] < beam_space.frame_count - 1
+    targets = np.array([(0.4, 0.0), (-0.4, 0.0), (0.0, 0.3), (0.0, 0.6), (0.0, 0.9), (0, 0)])
+    for here in (blocked[0] - 40, blocked[0] + 10):
+        arrivals = np.full(len(targets), here + 10)
+        lasting = CTRoadmap._lasting(beam_space, horizon, here, targets, arrivals)
+        # Checked on its own: the deep bend, held, is legal all along the beam; the others are
+        # not (the objective is blocked there by definition).
+        frames = np.arange(max(here + 10, blocked[0]), blocked[-1] + 1)
+        for target, lasts in zip(targets, lasting):
+            held = beam_space.valid_rows(beam_space.objective[frames] + target, frames)
+            assert lasts == held.all(), (here, target)
+        if here < blocked[0]:
+            assert lasting.tolist() == [False, False, False, False, True, False]
+    # Past the beam every posture lasts: nothing is blocked ahead.
+    past = blocked[-1] + 1
+    assert CTRoadmap._lasting(beam_space, horizon, past, targets,
+                              np.full(len(targets), past + 5)).all()
+
+
+def test_a_search_preferring_lasting_postures_passes_under_the_beam(beam_space):
+    graph = CTRoadmap(PATTERNS, np.ones(2), radius=0.3, max_nodes=32,
+                      rng=np.random.default_rng(0), prefer_lasting=True)
+    result = graph.solve(beam_space, np.zeros(2))
+    assert result.ok
+    path = result.path
+    assert beam_space.first_invalid(path[1:], np.arange(1, beam_space.frame_count)) == -1
+    speed = np.abs(np.diff(path, axis=0)) / np.diff(beam_space.times)[:, None]
+    assert np.all(speed <= beam_space.speed_limit * (1 + 1e-6))
+    assert np.all(path[:30] == 0.0) and np.abs(path[-10:]).max() < 1e-9

@@ -175,7 +175,8 @@ def test_successive_steps_join_continuously_and_are_deterministic(skeleton):
     ('speed_fraction', 1.5), ('hold_frames', 2.5), ('arm_weights', (1.0, 1.0, 1.0)),
     ('waist_weights', (1.0, -1.0)), ('time_weight', float('nan')), ('max_roadmap_nodes', 3),
     ('time_budget', -1.0), ('check_budget', 0), ('check_budget', 2.5),
-    ('preview_backtracks', -1)])
+    ('preview_backtracks', -1), ('lasting_branches', ('left_arm', 'torso')),
+    ('lasting_branches', 'waist')])
 def test_bad_config_names_the_field(skeleton, field, value):
     config = UpperBodyConfig(**{field: value})
     with pytest.raises(ValueError, match=field):

@@ -13,6 +13,16 @@ in time either it backtracks to an earlier state: the latest one from which a no
 legal at the blocking frame can be reached in time, else the previous one. The goal is any
 legal configuration at the final frame k.
 
+A roadmap may also prefer lasting postures: where the objective is blocked ahead, a neighbour
+that, held, stays legal to the end of the blocked stretch ranks before any that does not, and
+while such a neighbour is legal the others are left for later. Best-first on closeness alone
+takes the closest posture that is legal for now; beside a long obstacle that is often one that
+fails half-way along it, when a motion to a lasting posture can no longer be made in time, so
+the search creeps on through ever larger deviations (an arm swung far back past a table rather
+than a flexed elbow). With the preference, a lasting neighbour whose motion fails sends the
+search back (§5.2's backtracking) to start that motion earlier; only when that finds nothing
+are the other neighbours and growth tried from the state.
+
 A search may also be given a preview: frames past the step's own ones, planned so the posture
 can start to change before an obstacle is reached but not required of the step. Backtracking
 that is blocked inside the preview has its own small budget; when it is spent the search gives
@@ -71,6 +81,9 @@ class _State:
     frame: int
     candidates: Optional[List[Tuple[float, int, np.ndarray]]] = None
     grew: bool = False
+    # Only lasting neighbours were offered from here; ``relaxed``: the others are offered too.
+    lasting_only: bool = False
+    relaxed: bool = False
     failures: List[int] = field(default_factory=list)
     # A sub-goal set by backtracking: until frame ``until`` only nodes legal there are used.
     until: int = -1
@@ -99,6 +112,8 @@ class _Horizon:
 
     def __init__(self, free: np.ndarray, hold_frames: int):
         self.hold_frames = int(hold_frames)
+        # (frame, rounded deviation) -> whether that posture is legal there (see _lasting).
+        self.held: dict = {}
         last = len(free) - 1
         self.last = last
         self.free = free
@@ -137,11 +152,15 @@ class CTRoadmap:
         Neighbours tried per state, the closest to the objective first.
     rng
         Random generator for growth directions.
+    prefer_lasting
+        Rank neighbours that stay legal, held, to the end of the blocked stretch ahead before
+        the others, and try the others only after backtracking for a lasting one failed.
 
     """
 
     def __init__(self, patterns: np.ndarray, weights: np.ndarray, radius: float,
-                 max_nodes: int, rng: np.random.Generator, max_candidates: int = 8):
+                 max_nodes: int, rng: np.random.Generator, max_candidates: int = 8,
+                 prefer_lasting: bool = False):
         patterns = np.atleast_2d(np.asarray(patterns, dtype=float))
         weights = np.asarray(weights, dtype=float)
         if patterns.shape[1] != weights.shape[0]:
@@ -163,6 +182,7 @@ class CTRoadmap:
         self.max_candidates = int(max_candidates)
         self.rng = rng
         self.grown_nodes = np.zeros((0, patterns.shape[1]))
+        self.prefer_lasting = bool(prefer_lasting)
 
     @property
     def nodes(self) -> np.ndarray:
@@ -270,7 +290,7 @@ class CTRoadmap:
                 deepest_blocked = max(deepest_blocked, max(s.frame for s in stack))
                 break
             child = self._advance(space, state, visited, horizon, speed_fraction)
-            if child is None and not state.grew:
+            if child is None and not state.grew and not state.lasting_only:
                 # §5.2: every advance failed; grow a node at distance r.
                 state.grew = True
                 child = self._grow(space, state, speed_fraction, growth_attempts)
@@ -298,6 +318,11 @@ class CTRoadmap:
                 depth, child = jump
                 del stack[depth + 1:]
                 self._push(space, stack, child, hold_frames)
+                continue
+            if state.lasting_only:
+                # No earlier start reaches a lasting posture: offer this state's other
+                # neighbours, and growth, before leaving it.
+                state.lasting_only, state.relaxed, state.candidates = False, True, None
                 continue
             stack.pop()
         path = self._path(space, stack) if stack else np.array(space.objective)
@@ -372,8 +397,10 @@ class CTRoadmap:
         closeness = self.closeness(targets)
         # Equally close: sooner arrival first, except holds and the objective, longest first.
         holds = ~np.any(targets != state.deviation, axis=1)
-        order = np.lexsort((np.where(holds | on_objective, -frames, frames),
-                            np.round(closeness, 6)))
+        lasting = (self._lasting(space, horizon, here, targets, frames)
+                   if self.prefer_lasting and not state.relaxed else None)
+        keys = (np.where(holds | on_objective, -frames, frames), np.round(closeness, 6))
+        order = np.lexsort(keys if lasting is None else keys + (~lasting,))
         # Endpoints in collision cannot start a legal motion: filter them, best first, until
         # enough are legal (holding the current posture is kept whatever its rank).
         motion = None
@@ -386,17 +413,86 @@ class CTRoadmap:
         legal = space.best_valid_rows(space.objective[frames] + targets, frames, order,
                                       self.max_candidates,
                                       also=np.flatnonzero(holds).tolist(), motion=motion)
+        if lasting is not None and (legal & lasting).any() and (legal & ~lasting).any():
+            # Lasting neighbours only, until backtracking for them has failed (see solve).
+            legal &= lasting
+            state.lasting_only = True
         ranked = [(float(closeness[i]), int(frames[i]), targets[i]) for i in order if legal[i]]
         # The neighbours closest to the objective, plus holding the current posture.
         hold = [c for c in ranked[self.max_candidates:]
                 if np.array_equal(c[2], state.deviation)]
         return ranked[:self.max_candidates] + hold
 
+    @staticmethod
+    def _lasting(space: CTSpace, horizon: _Horizon, here: int, targets: np.ndarray,
+                 arrivals: np.ndarray) -> np.ndarray:
+        """Whether each neighbour, held from its arrival, lasts through the blocked stretch ahead.
+
+        The stretch is the first one from ``here`` on where the objective is blocked, to the
+        frame it is legal again (or the last frame). A deviation held from its arrival (from
+        the stretch's start if it arrives earlier) must be legal at the stretch's ends and
+        every ``hold_frames`` frames between them, on a fixed grid so that checks are shared
+        between the states of a search. The objective itself lasts only where it is legal.
+
+        Parameters
+        ----------
+        space
+            The branch's CT-space.
+        horizon
+            The search's horizon (where the objective is legal; caches the checks).
+        here
+            Frame of the state the neighbours leave from.
+        targets
+            (m, d) neighbours as deviations from the objective, rad.
+        arrivals
+            (m,) int: their arrival frames.
+
+        Returns
+        -------
+        numpy.ndarray
+            (m,) bool; all True when the objective is legal from ``here`` to the last frame.
+
+        """
+        lasting = np.ones(len(targets), dtype=bool)
+        blocked = np.flatnonzero(~horizon.free[here:])
+        if not len(blocked):
+            return lasting
+        begin = here + int(blocked[0])
+        end = int(horizon.next_free[begin])
+        spacing = horizon.hold_frames
+        rows, frames, keys = [], [], []
+        for i, (target, arrival) in enumerate(zip(targets, arrivals.tolist())):
+            if arrival > end:
+                continue
+            if not target.any():
+                lasting[i] = bool(horizon.free[arrival:end + 1].all())
+                continue
+            first = max(arrival, begin)
+            grid = [first, end] + list(range(first // spacing * spacing + spacing, end,
+                                             spacing))
+            deviation = tuple(np.round(target, 4).tolist())
+            for frame in grid:
+                known = horizon.held.get((frame, deviation))
+                if known is None:
+                    rows.append(i)
+                    frames.append(frame)
+                    keys.append((frame, deviation))
+                elif not known:
+                    lasting[i] = False
+        if rows:
+            rows, frames = np.array(rows), np.array(frames)
+            legal = space.valid_rows(space.objective[frames] + targets[rows], frames)
+            for key, is_legal, row in zip(keys, legal.tolist(), rows.tolist()):
+                horizon.held[key] = is_legal
+                lasting[row] &= is_legal
+        return lasting
+
     def _advance(self, space: CTSpace, state: _State, visited: set, horizon: _Horizon,
                  speed_fraction: float) -> Optional[_State]:
         """Try the ranked neighbours forward in time; return the first legal one."""
         on_objective = not np.any(state.deviation)
-        if state.candidates is None and not state.followed and on_objective:
+        if (state.candidates is None and not state.followed and on_objective
+                and not state.relaxed):
             if not state.tried_objective:
                 child = self._follow(space, state, horizon)
                 if child is not None:

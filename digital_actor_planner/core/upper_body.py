@@ -125,6 +125,11 @@ class UpperBodyConfig:
         (shoulder pitch, shoulder roll, shoulder yaw, elbow), > 0.
     time_weight
         Weight of time in the CT-space distance, rad/s (>= 0).
+    lasting_branches
+        Branches whose search prefers postures that last through the blocked stretch ahead
+        (:class:`CTRoadmap`, ``prefer_lasting``). The arms by default: beside a table the
+        closest legal arm posture is often one that fails half-way along it. Not the waist:
+        with it, the low beam course leaned the waist back where it had to bend (measured).
 
     """
 
@@ -141,6 +146,7 @@ class UpperBodyConfig:
     waist_weights: Tuple[float, float] = (1.0, 1.0)
     arm_weights: Tuple[float, float, float, float] = (1.0, 1.0, 1.0, 0.5)
     time_weight: float = 1.0
+    lasting_branches: Tuple[str, ...] = ('left_arm', 'right_arm')
 
 
 def validate_upper_body_config(config: UpperBodyConfig) -> UpperBodyConfig:
@@ -175,6 +181,10 @@ def validate_upper_body_config(config: UpperBodyConfig) -> UpperBodyConfig:
     if not (isinstance(config.time_weight, (int, float)) and np.isfinite(config.time_weight)
             and config.time_weight >= 0):
         raise ValueError(f'time_weight must be a finite number >= 0, got {config.time_weight!r}')
+    unknown = [name for name in config.lasting_branches if name not in BRANCH_ORDER]
+    if isinstance(config.lasting_branches, str) or unknown:
+        raise ValueError(f'lasting_branches must name branches of {BRANCH_ORDER}, got '
+                         f'{config.lasting_branches!r}')
     if config.max_roadmap_nodes < len(_waist_patterns()) + 1:
         raise ValueError(f'max_roadmap_nodes must hold the {len(_waist_patterns()) + 1} initial '
                          f'patterns, got {config.max_roadmap_nodes}')
@@ -266,11 +276,13 @@ class UpperBodyPlanner:
         config = self.config
         self.roadmaps = {
             'waist': CTRoadmap(_waist_patterns(), np.array(config.waist_weights),
-                               config.roadmap_radius, config.max_roadmap_nodes, self.rng)}
+                               config.roadmap_radius, config.max_roadmap_nodes, self.rng,
+                               prefer_lasting='waist' in config.lasting_branches)}
         for side in ('left', 'right'):
             self.roadmaps[f'{side}_arm'] = CTRoadmap(
                 _arm_patterns(), np.array(config.arm_weights), config.roadmap_radius,
-                config.max_roadmap_nodes, self.rng)
+                config.max_roadmap_nodes, self.rng,
+                prefer_lasting=f'{side}_arm' in config.lasting_branches)
         self.indices = {name: skeleton.branch(name) for name in BRANCH_ORDER}
         self.upper_indices = np.concatenate([self.indices[name] for name in BRANCH_ORDER])
         self._checked = {'waist': _TRUNK_LINKS, 'left_arm': _ARM_LINKS['left'],
