@@ -15,7 +15,8 @@ legal configuration at the final frame k.
 
 A roadmap may also prefer lasting postures: where the objective is blocked ahead, a neighbour
 that, held, stays legal to the end of the blocked stretch ranks before any that does not, and
-while such a neighbour is legal the others are left for later. Best-first on closeness alone
+from a state before the stretch, while such a neighbour is legal, the others are left for
+later. Best-first on closeness alone
 takes the closest posture that is legal for now; beside a long obstacle that is often one that
 fails half-way along it, when a motion to a lasting posture can no longer be made in time, so
 the search creeps on through ever larger deviations (an arm swung far back past a table rather
@@ -96,6 +97,10 @@ class _State:
     # On the objective: following it to the final frame was tried before the neighbours were
     # ranked (they are ranked only if the search comes back here).
     tried_objective: bool = False
+
+
+#: Every how many grid frames the first pass of the lasting check looks (see _lasting).
+COARSE_STRIDE = 4
 
 
 class _Horizon:
@@ -413,8 +418,11 @@ class CTRoadmap:
         legal = space.best_valid_rows(space.objective[frames] + targets, frames, order,
                                       self.max_candidates,
                                       also=np.flatnonzero(holds).tolist(), motion=motion)
-        if lasting is not None and (legal & lasting).any() and (legal & ~lasting).any():
-            # Lasting neighbours only, until backtracking for them has failed (see solve).
+        if (lasting is not None and horizon.free[here] and (legal & lasting).any()
+                and (legal & ~lasting).any()):
+            # Leaving the objective before a blocked stretch: lasting neighbours only, until
+            # backtracking for them has failed (see solve). Inside the stretch they only rank
+            # first (filtering there too made the arms backtrack ten times between the pillars).
             legal &= lasting
             state.lasting_only = True
         ranked = [(float(closeness[i]), int(frames[i]), targets[i]) for i in order if legal[i]]
@@ -460,31 +468,40 @@ class CTRoadmap:
         begin = here + int(blocked[0])
         end = int(horizon.next_free[begin])
         spacing = horizon.hold_frames
-        rows, frames, keys = [], [], []
+        grids = {}
         for i, (target, arrival) in enumerate(zip(targets, arrivals.tolist())):
             if arrival > end:
                 continue
             if not target.any():
                 lasting[i] = bool(horizon.free[arrival:end + 1].all())
                 continue
+            # The arrival frame itself is checked with the neighbour's endpoint.
             first = max(arrival, begin)
-            grid = [first, end] + list(range(first // spacing * spacing + spacing, end,
-                                             spacing))
-            deviation = tuple(np.round(target, 4).tolist())
-            for frame in grid:
-                known = horizon.held.get((frame, deviation))
-                if known is None:
-                    rows.append(i)
-                    frames.append(frame)
-                    keys.append((frame, deviation))
-                elif not known:
-                    lasting[i] = False
-        if rows:
-            rows, frames = np.array(rows), np.array(frames)
-            legal = space.valid_rows(space.objective[frames] + targets[rows], frames)
-            for key, is_legal, row in zip(keys, legal.tolist(), rows.tolist()):
-                horizon.held[key] = is_legal
-                lasting[row] &= is_legal
+            grid = [begin] if arrival < begin else []
+            grid += list(range(first // spacing * spacing + spacing, end, spacing)) + [end]
+            grids[i] = (tuple(np.round(target, 4).tolist()), grid)
+        # A coarse pass first (most postures that do not last fail it), then the rest of the
+        # grid for the postures left.
+        for coarse in (True, False):
+            rows, frames, keys = [], [], []
+            for i, (deviation, grid) in grids.items():
+                if not lasting[i]:
+                    continue
+                chosen = grid[-1::-COARSE_STRIDE] if coarse else grid
+                for frame in chosen:
+                    known = horizon.held.get((frame, deviation))
+                    if known is None:
+                        rows.append(i)
+                        frames.append(frame)
+                        keys.append((frame, deviation))
+                    elif not known:
+                        lasting[i] = False
+            if rows:
+                rows, frames = np.array(rows), np.array(frames)
+                legal = space.valid_rows(space.objective[frames] + targets[rows], frames)
+                for key, is_legal, row in zip(keys, legal.tolist(), rows.tolist()):
+                    horizon.held[key] = is_legal
+                    lasting[row] &= is_legal
         return lasting
 
     def _advance(self, space: CTSpace, state: _State, visited: set, horizon: _Horizon,
