@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Render the README pictures with `digital-actor simulate --render` (the project draws itself).
 
-Run: .venv/bin/python scripts/make_pictures.py   (writes docs/images/*.png and *.gif)
+Run: .venv/bin/python scripts/make_pictures.py [PICTURE ...]
+     (writes docs/images/*.png and *.gif; with names, e.g. table.gif, only those)
 """
 import os
 import subprocess
@@ -24,15 +25,24 @@ PICTURES = [
     ('low_beam', 'low_beam.png', []),
     ('low_beam', 'low_beam.gif', []),
     ('table', 'table.png', []),
+    ('table', 'table.gif', []),
     ('pillars', 'pillars.png', []),
     ('uneven_beam', 'uneven_beam.png', []),
 ]
 
 
-def main():
+def main(names=()):
+    known = [picture for _, picture, _ in PICTURES]
+    unknown = [name for name in names if name not in known]
+    if unknown:
+        print(f'unknown picture(s) {", ".join(unknown)}; known: {", ".join(known)}',
+              file=sys.stderr)
+        return 2
     os.makedirs(IMAGES, exist_ok=True)
     env = dict(os.environ, MPLBACKEND='Agg')
     for course, picture, extra in PICTURES:
+        if names and picture not in names:
+            continue
         with tempfile.TemporaryDirectory() as tmp:
             command = [sys.executable, '-m', 'digital_actor_planner.cli', 'simulate',
                        '--scene', os.path.join(SCENES, course + '.yaml'),
@@ -47,4 +57,4 @@ def main():
 
 
 if __name__ == '__main__':
-    sys.exit(main())
+    sys.exit(main(sys.argv[1:]))
