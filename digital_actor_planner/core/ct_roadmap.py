@@ -315,10 +315,9 @@ class CTRoadmap:
                 if in_preview > preview_backtracks:
                     gave_up_in_preview = True
                     break
-            if not self._passable(space, blocked):
-                break
-            jump = self._jump_back(space, stack, blocked, speed_fraction, jumps, horizon,
-                                   known)
+            passable = self._passable(space, blocked)
+            jump = None if not passable else self._jump_back(
+                space, stack, blocked, speed_fraction, jumps, horizon, known)
             if jump is not None:
                 depth, child = jump
                 del stack[depth + 1:]
@@ -326,9 +325,12 @@ class CTRoadmap:
                 continue
             if state.lasting_only:
                 # No earlier start reaches a lasting posture: offer this state's other
-                # neighbours, and growth, before leaving it.
+                # neighbours, and growth, before leaving it (even where no node seems to pass
+                # the frame the lasting ones failed at: the others may not go that way).
                 state.lasting_only, state.relaxed, state.candidates = False, True, None
                 continue
+            if not passable:
+                break
             stack.pop()
         path = self._path(space, stack) if stack else np.array(space.objective)
         return SearchResult(False, path, min(deepest_blocked, last), nodes, backtracks, grown,
