@@ -1,0 +1,118 @@
+"""Random furniture beside the path at arm height: the arms with and without lasting postures.
+
+Run: .venv/bin/python bench/bench_arm_obstacles.py [--scenes 40] [--seed 0]
+
+Each scene is flat ground with one box beside the path (left or right, its near side 0.17-0.32 m
+from the path, top 0.65-1.05 m, 0.4-2.0 m long) and, in half of them, a smaller box standing on
+it at the near edge. The actor walks along +x at 0.8 m/s for 8 s with the whole body planned,
+once with the upper-body planner's default (the arms prefer lasting postures,
+``UpperBodyConfig.lasting_branches``) and once with the preference off (``()``: session 10's
+planner, plan for plan). Reported per setting: scenes passed (x >= 6 m), stuck, how far the arm
+on the box's side swung off its pattern at the shoulder (mean, max), in how many scenes its
+elbow flexed >= 0.3 rad beyond the pattern, and the slowest step of each run (p50, p90, max
+over the scenes, wall ms). The same scenes and commands for both settings.
+"""
+import argparse
+import os
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
+
+from course_runs import skeleton  # noqa: E402
+from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
+from digital_actor_planner.core.collision import BodyCollision  # noqa: E402
+from digital_actor_planner.core.environment import Environment  # noqa: E402
+from digital_actor_planner.core.upper_body import (  # noqa: E402
+    motion_patterns, UpperBodyConfig, UpperBodyPlanner)
+from scene_helpers import box  # noqa: E402
+
+SETTINGS = (('lasting arm postures (default)', ('left_arm', 'right_arm')),
+            ('closeness only (session 10)', ()))
+
+
+def random_scene(rng: np.random.Generator):
+    """One scene: (meshes, the arm on the box's side)."""
+    side = 1.0 if rng.random() < 0.5 else -1.0
+    near = rng.uniform(0.17, 0.32)
+    top = rng.uniform(0.65, 1.05)
+    x0, length, depth = rng.uniform(1.5, 2.5), rng.uniform(0.4, 2.0), rng.uniform(0.3, 0.8)
+    low, high = sorted((side * near, side * (near + depth)))
+    meshes = [box([-2.0, -2.0, -0.1], [12.0, 2.0, 0.0]), box([x0, low, 0.0],
+                                                             [x0 + length, high, top])]
+    if rng.random() < 0.5:
+        height, edge = rng.uniform(0.1, 0.3), near + 0.03
+        low, high = sorted((side * edge, side * (edge + 0.1)))
+        x = x0 + rng.uniform(0.0, max(length - 0.2, 0.0))
+        meshes.append(box([x, low, top], [x + 0.15, high, top + height]))
+    return meshes, 'left' if side > 0 else 'right'
+
+
+def walk(environment, lasting_branches):
+    """Blocks of the 8 s walk and the CPU time it took."""
+    sk = skeleton()
+    config = ActorConfig()
+    upper = UpperBodyPlanner(sk, BodyCollision(sk, environment),
+                             UpperBodyConfig(check_budget=config.upper_body_check_budget,
+                                             lasting_branches=lasting_branches),
+                             rng=np.random.default_rng(0))
+    actor = Actor(sk, environment, config, start=(0.0, 0.0, 0.0), upper_body_planner=upper)
+    began = time.process_time()
+    blocks = run_commands(actor, [0.0, 8.0], [0.8, 0.0], [0.0, 0.0])
+    return blocks, time.process_time() - began
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--scenes', type=int, default=40)
+    parser.add_argument('--seed', type=int, default=0)
+    parser.add_argument('--list', action='store_true',
+                        help='print every scene where the settings differ in outcome')
+    args = parser.parse_args(argv)
+    if args.scenes < 1:
+        parser.error(f'--scenes must be >= 1, got {args.scenes}')
+    sk = skeleton()
+    rng = np.random.default_rng(args.seed)
+    results = {name: [] for name, _ in SETTINGS}
+    for index in range(args.scenes):
+        meshes, arm = random_scene(rng)
+        environment = Environment(meshes, resolution=0.02)
+        for name, branches in SETTINGS:
+            blocks, _ = walk(environment, branches)
+            frames = np.vstack([b.frames for b in blocks])
+            off = frames - motion_patterns(sk, frames)
+            results[name].append(dict(
+                passed=frames[-1, 0] >= 6.0, stuck=blocks[-1].status == 'stuck',
+                shoulder=float(np.abs(off[:, sk.index[f'{arm}_shoulder_pitch']]).max()),
+                elbow=float(off[:, sk.index[f'{arm}_elbow']].max()),
+                slowest=1e3 * max(b.planning_time for b in blocks),
+                x=float(frames[-1, 0]), reason=blocks[-1].reason))
+        outcomes = [results[name][-1] for name, _ in SETTINGS]
+        if args.list and len({(r['passed'], r['stuck']) for r in outcomes}) > 1:
+            boxes = '; '.join(f'{np.round(m.bounds[0], 2).tolist()}..'
+                              f'{np.round(m.bounds[1], 2).tolist()}' for m in meshes[1:])
+            print(f'scene {index} ({arm} arm; {boxes}):')
+            for (name, _), r in zip(SETTINGS, outcomes):
+                print(f'  {name}: x {r["x"]:.2f} m, {r["reason"] or "walking"}')
+    print(f'\n{args.scenes} random scenes (seed {args.seed}), 8 s walk at 0.8 m/s each\n')
+    print('| arms | passed | stuck | shoulder off its swing: mean / max rad | elbow flexed '
+          '>= 0.3 rad | slowest step: p50 / p90 / max ms |')
+    print('|---|---:|---:|---:|---:|---:|')
+    for name, rows in results.items():
+        shoulder = np.array([r['shoulder'] for r in rows])
+        slowest = np.array([r['slowest'] for r in rows])
+        print(f'| {name} | {sum(r["passed"] for r in rows)} | {sum(r["stuck"] for r in rows)} '
+              f'| {shoulder.mean():.3f} / {shoulder.max():.2f} '
+              f'| {sum(r["elbow"] >= 0.3 for r in rows)} '
+              f'| {np.percentile(slowest, 50):.1f} / {np.percentile(slowest, 90):.1f} / '
+              f'{slowest.max():.1f} |')
+    load = os.getloadavg()[0] if hasattr(os, 'getloadavg') else float('nan')
+    print(f'\n(command: python bench/bench_arm_obstacles.py --scenes {args.scenes} --seed '
+          f'{args.seed}; load average {load:.1f})')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
