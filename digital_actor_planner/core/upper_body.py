@@ -129,7 +129,8 @@ class UpperBodyConfig:
         Branches whose search prefers postures that last through the blocked stretch ahead
         (:class:`CTRoadmap`, ``prefer_lasting``). The arms by default: beside a table the
         closest legal arm posture is often one that fails half-way along it. Not the waist:
-        with it, the low beam course leaned the waist back where it had to bend (measured).
+        with it the low beam course leaned the waist back instead of bending, and one step took
+        0.58 s to plan (measured).
 
     """
 
