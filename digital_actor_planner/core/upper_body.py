@@ -108,7 +108,10 @@ class UpperBodyConfig:
         Wall time a branch search may take per plan, s, or None (no wall-clock limit; a limit
         makes plans depend on the machine's load).
     max_backtracks
-        Backtracking steps a branch search may take per plan.
+        Backtracking steps a branch search may take per plan. 20: a failing search costs
+        half of what 40 did (beside 200 random tables the slowest step fell from 1.1-1.2 to
+        0.6-0.76 s, as many passed, the courses planned the same;
+        bench/bench_arm_obstacles.py).
     preview_backtracks
         Backtracking steps a branch search may take from a block inside the preview (frames
         past the step's own, see :meth:`UpperBodyPlanner.plan`) before it gives up (>= 0).
@@ -138,7 +141,7 @@ class UpperBodyConfig:
     node_budget: int = 300
     check_budget: int = 15000
     time_budget: Optional[float] = None
-    max_backtracks: int = 40
+    max_backtracks: int = 20
     preview_backtracks: int = 1
     max_roadmap_nodes: int = 64
     hold_frames: int = 5
