@@ -16,13 +16,13 @@ legal configuration at the final frame k.
 A roadmap may also prefer lasting postures: where the objective is blocked ahead, a neighbour
 that, held, stays legal to the end of the blocked stretch ranks before any that does not, and
 from a state before the stretch, while such a neighbour is legal, the others are left for
-later. Best-first on closeness alone
-takes the closest posture that is legal for now; beside a long obstacle that is often one that
-fails half-way along it, when a motion to a lasting posture can no longer be made in time, so
-the search creeps on through ever larger deviations (an arm swung far back past a table rather
-than a flexed elbow). With the preference, a lasting neighbour whose motion fails sends the
-search back (§5.2's backtracking) to start that motion earlier; only when that finds nothing
-are the other neighbours and growth tried from the state.
+later. Best-first on closeness alone takes the closest posture that is legal for now; beside a
+long obstacle that is often one that fails half-way along it, when a motion to a lasting
+posture can no longer be made in time, so the search creeps on through ever larger deviations
+(an arm swung far back past a table rather than a flexed elbow). With the preference, a
+lasting neighbour whose motion fails sends the search back (§5.2's backtracking) to start that
+motion earlier; only when that finds nothing are the other neighbours and growth tried from
+the state.
 
 A search may also be given a preview: frames past the step's own ones, planned so the posture
 can start to change before an obstacle is reached but not required of the step. Backtracking
@@ -440,9 +440,11 @@ class CTRoadmap:
 
         The stretch is the first one from ``here`` on where the objective is blocked, to the
         frame it is legal again (or the last frame). A deviation held from its arrival (from
-        the stretch's start if it arrives earlier) must be legal at the stretch's ends and
-        every ``hold_frames`` frames between them, on a fixed grid so that checks are shared
-        between the states of a search. The objective itself lasts only where it is legal.
+        the stretch's start if it arrives earlier) must be legal at the stretch's end and at
+        every multiple of ``hold_frames`` before it, a fixed grid so that checks are shared
+        between the states of a search (the arrival frame itself is left to the check of the
+        neighbour's endpoint). A coarse pass over every fourth grid frame goes first. The
+        objective itself lasts only where it is legal.
 
         Parameters
         ----------
