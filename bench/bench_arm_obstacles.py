@@ -2,12 +2,13 @@
 
 Run: .venv/bin/python bench/bench_arm_obstacles.py [--scenes 40] [--seed 0]
 
-Each scene is flat ground with one box beside the path (left or right, its near side 0.17-0.32 m
-from the path, top 0.65-1.05 m, 0.4-2.0 m long) and, in half of them, a smaller box standing on
-it at the near edge. The actor walks along +x at 0.8 m/s for 8 s with the whole body planned,
-once with the upper-body planner's default (the arms prefer lasting postures,
-``UpperBodyConfig.lasting_branches``) and once with the preference off (``()``: session 10's
-search, which plans every course exactly as session 10 did). Reported per setting: scenes
+Each scene (test/scene_helpers.py, ``furniture_scene``) is flat ground with one box beside the
+path (left or right, its near side 0.17-0.32 m from the path, top 0.65-1.05 m, 0.4-2.0 m long)
+and, in half of them, a smaller box standing on it at the near edge. The actor walks along +x
+at 0.8 m/s for 8 s with the whole body planned, once with the upper-body planner's default (the
+arms prefer lasting postures, ``UpperBodyConfig.lasting_branches``) and once with the
+preference off (``()``: session 10's search, which plans every course exactly as session 10
+did). Reported per setting: scenes
 passed (x >= 6 m), stuck, how far the arm on the box's side swung off its pattern at the
 shoulder (mean, max), in how many scenes its elbow flexed >= 0.3 rad beyond the pattern, and
 the slowest step of each run (p50, p90, max over the scenes, wall ms). The same scenes and
@@ -28,27 +29,10 @@ from digital_actor_planner.core.collision import BodyCollision  # noqa: E402
 from digital_actor_planner.core.environment import Environment  # noqa: E402
 from digital_actor_planner.core.upper_body import (  # noqa: E402
     motion_patterns, UpperBodyConfig, UpperBodyPlanner)
-from scene_helpers import box  # noqa: E402
+from scene_helpers import furniture_scene  # noqa: E402
 
 SETTINGS = (('lasting arm postures (default)', ('left_arm', 'right_arm')),
             ('closeness only', ()))
-
-
-def random_scene(rng: np.random.Generator):
-    """One scene: (meshes, the arm on the box's side)."""
-    side = 1.0 if rng.random() < 0.5 else -1.0
-    near = rng.uniform(0.17, 0.32)
-    top = rng.uniform(0.65, 1.05)
-    x0, length, depth = rng.uniform(1.5, 2.5), rng.uniform(0.4, 2.0), rng.uniform(0.3, 0.8)
-    low, high = sorted((side * near, side * (near + depth)))
-    meshes = [box([-2.0, -2.0, -0.1], [12.0, 2.0, 0.0]), box([x0, low, 0.0],
-                                                             [x0 + length, high, top])]
-    if rng.random() < 0.5:
-        height, edge = rng.uniform(0.1, 0.3), near + 0.03
-        low, high = sorted((side * edge, side * (edge + 0.1)))
-        x = x0 + rng.uniform(0.0, max(length - 0.2, 0.0))
-        meshes.append(box([x, low, top], [x + 0.15, high, top + height]))
-    return meshes, 'left' if side > 0 else 'right'
 
 
 def walk(environment, lasting_branches):
@@ -78,7 +62,7 @@ def main(argv=None):
     rng = np.random.default_rng(args.seed)
     results = {name: [] for name, _ in SETTINGS}
     for index in range(args.scenes):
-        meshes, arm = random_scene(rng)
+        meshes, arm = furniture_scene(rng)
         environment = Environment(meshes, resolution=0.02)
         for name, branches in SETTINGS:
             blocks, _ = walk(environment, branches)

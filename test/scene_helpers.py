@@ -17,6 +17,29 @@ def box(lower, upper):
     return mesh
 
 
+def furniture_scene(rng):
+    """Flat ground and a box beside the path at arm height, sometimes with a thing on it.
+
+    The box is left or right of the x axis, its near side 0.17-0.32 m from it, its top
+    0.65-1.05 m high, 0.4-2.0 m long from x = 1.5-2.5 m; in half of the scenes a 0.15 x 0.1 m
+    box 0.1-0.3 m tall stands on it at the near edge. Returns (meshes, 'left' or 'right': the
+    arm on the box's side).
+    """
+    side = 1.0 if rng.random() < 0.5 else -1.0
+    near = rng.uniform(0.17, 0.32)
+    top = rng.uniform(0.65, 1.05)
+    x0, length, depth = rng.uniform(1.5, 2.5), rng.uniform(0.4, 2.0), rng.uniform(0.3, 0.8)
+    low, high = sorted((side * near, side * (near + depth)))
+    meshes = [box([-2.0, -2.0, -0.1], [12.0, 2.0, 0.0]), box([x0, low, 0.0],
+                                                             [x0 + length, high, top])]
+    if rng.random() < 0.5:
+        height, edge = rng.uniform(0.1, 0.3), near + 0.03
+        low, high = sorted((side * edge, side * (edge + 0.1)))
+        x = x0 + rng.uniform(0.0, max(length - 0.2, 0.0))
+        meshes.append(box([x, low, top], [x + 0.15, high, top + height]))
+    return meshes, 'left' if side > 0 else 'right'
+
+
 def walk(skeleton, k, x0=-1.0, speed=0.9, swing_legs=True):
     """Times (k,) s and frames (k, 22) at RATE Hz: the pelvis along +x at ``speed`` m/s from
     ``x0``, root_z 0.92, the legs swinging (or straight), the upper body in its motion patterns."""
