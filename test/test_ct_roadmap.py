@@ -215,7 +215,7 @@ def test_bad_preview_settings_name_the_value(beam_space, preview_from, preview_b
                         preview_backtracks=preview_backtracks)
 
 
-def test_only_the_deep_bend_lasts_under_the_beam(skeleton, beam_space):
+def test_only_the_deep_bend_lasts_under_the_beam(beam_space):
     horizon = _Horizon(CTRoadmap._objective_free(beam_space, 5), 5)
     blocked = np.flatnonzero(~horizon.free)
     assert 100 < blocked[0] < blocked[-1] < beam_space.frame_count - 1
