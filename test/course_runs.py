@@ -36,18 +36,27 @@ def simulate(name, window_steps=3, upper_body=True, greedy_restart=True, lasting
     commands = read_commands(os.path.join(SCENES, name + '.csv'))
     config = ActorConfig(window_steps=window_steps, plan_upper_body=upper_body,
                          footsteps=FootstepConfig(greedy_restart=greedy_restart))
-    upper = None
-    if lasting_branches is not None:
-        upper = UpperBodyPlanner(
-            skeleton(), BodyCollision(skeleton(), sc.environment),
-            UpperBodyConfig(check_budget=config.upper_body_check_budget,
-                            lasting_branches=lasting_branches), rng=np.random.default_rng(0))
-    actor = Actor(skeleton(), sc.environment, config, start=sc.start, upper_body_planner=upper)
+    if lasting_branches is None:
+        actor = Actor(skeleton(), sc.environment, config, start=sc.start)
+    else:
+        actor = actor_with_lasting_branches(sc.environment, sc.start, lasting_branches, config)
     blocks = run_commands(actor, [c.time for c in commands], [c.linear_x for c in commands],
                           [c.angular_z for c in commands])
     times = np.concatenate([b.times for b in blocks])
     frames = np.vstack([b.frames for b in blocks])
     return sc, times, frames, tuple(blocks)
+
+
+def actor_with_lasting_branches(environment, start, lasting_branches, config=ActorConfig()):
+    """An Actor built as its constructor builds one, but with the upper-body planner's
+    ``lasting_branches`` set (``()``: no branch prefers lasting postures)."""
+    collision = BodyCollision(skeleton(), environment)
+    upper = UpperBodyPlanner(skeleton(), collision,
+                             UpperBodyConfig(check_budget=int(config.upper_body_check_budget),
+                                             lasting_branches=tuple(lasting_branches)),
+                             rng=np.random.default_rng(0))
+    return Actor(skeleton(), environment, config, start=start, upper_body_planner=upper,
+                 body_collision=collision)
 
 
 def course_names():

@@ -176,7 +176,7 @@ def test_successive_steps_join_continuously_and_are_deterministic(skeleton):
     ('waist_weights', (1.0, -1.0)), ('time_weight', float('nan')), ('max_roadmap_nodes', 3),
     ('time_budget', -1.0), ('check_budget', 0), ('check_budget', 2.5),
     ('preview_backtracks', -1), ('lasting_branches', ('left_arm', 'torso')),
-    ('lasting_branches', 'waist')])
+    ('lasting_branches', 'waist'), ('lasting_branches', None)])
 def test_bad_config_names_the_field(skeleton, field, value):
     config = UpperBodyConfig(**{field: value})
     with pytest.raises(ValueError, match=field):

@@ -185,8 +185,9 @@ def validate_upper_body_config(config: UpperBodyConfig) -> UpperBodyConfig:
     if not (isinstance(config.time_weight, (int, float)) and np.isfinite(config.time_weight)
             and config.time_weight >= 0):
         raise ValueError(f'time_weight must be a finite number >= 0, got {config.time_weight!r}')
-    unknown = [name for name in config.lasting_branches if name not in BRANCH_ORDER]
-    if isinstance(config.lasting_branches, str) or unknown:
+    branches = config.lasting_branches
+    if not isinstance(branches, (tuple, list)) or any(name not in BRANCH_ORDER
+                                                      for name in branches):
         raise ValueError(f'lasting_branches must name branches of {BRANCH_ORDER}, got '
                          f'{config.lasting_branches!r}')
     if config.max_roadmap_nodes < len(_waist_patterns()) + 1:
