@@ -257,28 +257,30 @@ class FootstepPlanner:
         s = np.asarray(s, dtype=float)
         count = s.shape[0]
         side = np.asarray(side, dtype=int)
+        samples = profile.samples
         i0 = np.floor((s - leg.heel - profile.s0) / profile.ds).astype(int)
         i1 = np.ceil((s + leg.toe - profile.s0) / profile.ds).astype(int)
-        inside = (i0 >= 0) & (i1 < profile.samples)
+        inside = (i0 >= 0) & (i1 < samples)
         width = i1 - i0 + 1
         # The samples under a sole run down the rows, the soles across the columns: (W, N).
         # A reduction over a sole's samples is then one elementwise pass per row, where along
         # a short last axis it paid a loop per sole. The float sums keep their order: they are
         # taken along the rows of an (N, W) copy, as before.
         span = np.arange(int(width.max()) if count else 0)[:, None]
-        index = i0 + span
         mask = span < width
-        index = np.minimum(np.maximum(index, 0), profile.samples - 1)
-        # One flat index into the (2, K) tracks for all three gathers.
-        flat = side * profile.samples + index
-        high = profile.height.take(flat)
-        low = profile.low.take(flat)
-        room = np.where(mask, profile.headroom.take(flat), np.inf)
-        missing = np.isnan(high)
-        usable = inside & ~(mask & missing).any(axis=0)
-        usable &= room.min(axis=0) >= cfg.min_headroom
-        high = np.where(mask & ~missing, high, 0.0)
-        low = np.where(mask & ~np.isnan(low), low, 0.0)
+        # Rows past a sole's end repeat its last sample: that changes no maximum or minimum
+        # and no first minimum (argmin), so only the sums and the support count need ``mask``.
+        index = i0 + np.minimum(span, width - 1)
+        # One flat index into the (2, K) tracks for all three gathers. Clipping only moves
+        # soles that reach past the profile's ends, which are not usable anyway.
+        flat = side * samples + index
+        high = profile.height.take(flat, mode='clip')
+        low = profile.low.take(flat, mode='clip')
+        room = profile.headroom.take(flat, mode='clip')
+        # A missing sample (NaN: both the highest and the lowest ground across the sole are
+        # missing there) makes the sole unusable; its NaN then only reaches its own columns,
+        # whose results are replaced at the end.
+        usable = inside & ~np.isnan(high).any(axis=0) & (room.min(axis=0) >= cfg.min_headroom)
         x = profile.s0 + profile.ds * index - s
         mean = np.where(mask, x, 0.0).T.copy().sum(axis=1) / width
         centred = np.where(mask, x - mean, 0.0)
@@ -290,22 +292,23 @@ class FootstepPlanner:
                               where=width > 2)
         pitch = np.arctan(slope)
         plane = slope * x
-        lift = np.where(mask, high - plane, -np.inf).max(axis=0)
-        dip = np.where(mask, low - plane, np.inf).min(axis=0)
+        lift = (high - plane).max(axis=0)
+        dip = (low - plane).min(axis=0)
         steady = np.abs(pitch) <= cfg.max_foot_pitch
         flat = usable & steady & (lift - dip <= cfg.flatness_tolerance)
         # At an edge a flat sole may overhang lower ground.
-        top = np.where(mask, high, -np.inf).max(axis=0)
+        top = high.max(axis=0)
         level = top - cfg.flatness_tolerance
-        supported = mask & (high >= level) & (low >= level)
-        ankle = np.where(mask, np.abs(x), np.inf).argmin(axis=0)
+        supported = (high >= level) & (low >= level)
+        ankle = np.abs(x).argmin(axis=0)
         # The ankle's sample and its neighbours must be supported; past either end of the sole
-        # there is nothing to ask (a True border row on each side). One gather of the three.
+        # there is nothing to ask (a True border row on each side; a repeated last row asks
+        # the ankle's own sample again). One gather of the three.
         padded = np.ones((span.size + 2, count), dtype=bool)
-        padded[1:-1] = supported | ~mask
+        padded[1:-1] = supported
         near = padded.take((ankle + _AROUND) * count + np.arange(count))
         around = near.all(axis=0)
-        fraction = supported.sum(axis=0) / width
+        fraction = (supported & mask).sum(axis=0) / width
         edge = usable & steady & ~flat & around & (fraction >= cfg.min_support_fraction)
         ok = flat | edge
         height = np.where(flat, lift, np.where(edge, top, np.nan))
