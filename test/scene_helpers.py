@@ -1,9 +1,13 @@
 """Small builders shared by the planner tests."""
+import os
+
 import numpy as np
 import trimesh
+import yaml
 
 from digital_actor_planner.core.ct_space import (
     BodyKinematics, BodyShapes, EnvironmentIndex, TimedBody)
+from digital_actor_planner.core.environment import load_scene
 from digital_actor_planner.core.upper_body import motion_patterns
 
 RATE = 100.0
@@ -38,6 +42,24 @@ def furniture_scene(rng):
         x = x0 + rng.uniform(0.0, max(length - 0.2, 0.0))
         meshes.append(box([x, low, top], [x + 0.15, high, top + height]))
     return meshes, 'left' if side > 0 else 'right'
+
+
+def pillars_moved_sideways(scenes, directory, centre, shift, skeleton=None):
+    """The pillars course (``scenes``/pillars.yaml) with its two pillars ``centre`` m either
+    side of a line ``shift`` m to the left of the actor's path (the course: 0.37 and 0), as a
+    scene YAML written to ``directory``; returns the loaded Scene. The pillars stand at x = 3 m
+    (radius 0.12 m)."""
+    source = os.path.join(scenes, 'pillars.yaml')
+    with open(source) as stream:
+        data = yaml.safe_load(stream)
+    for entry in data['meshes']:
+        entry['file'] = os.path.join(scenes, entry['file'])
+    data['meshes'][1]['pose'] = [3.0, centre + shift, 0.0, 0.0, 0.0, 0.0]
+    data['meshes'][2]['pose'] = [3.0, -centre + shift, 0.0, 0.0, 0.0, 0.0]
+    path = os.path.join(os.fspath(directory), f'pillars_{centre:.3f}_{shift:+.3f}.yaml')
+    with open(path, 'w') as stream:
+        yaml.safe_dump(data, stream)
+    return load_scene(path, skeleton)
 
 
 def walk(skeleton, k, x0=-1.0, speed=0.9, swing_legs=True):

@@ -80,10 +80,15 @@ def test_bad_configuration_names_the_field(field, value):
 
 
 class BlockedUpperBody:
-    """An upper-body planner that is always blocked at a chosen frame; it counts its calls."""
+    """An upper-body planner that is always blocked at a chosen frame; it counts its calls.
 
-    def __init__(self, blocked_at_end):
+    ``blocked_at_end``: blocked at the last frame (in the preview when there is one), else at
+    frame 5; ``after_step``: with a preview, blocked this many frames after the step's end.
+    """
+
+    def __init__(self, blocked_at_end, after_step=None):
         self.blocked_at_end = blocked_at_end
+        self.after_step = after_step
         self.calls = []
         self.previews = []
 
@@ -91,6 +96,8 @@ class BlockedUpperBody:
         self.calls.append(len(times))
         self.previews.append(preview_from)
         frame = len(times) - 1 if self.blocked_at_end else 5
+        if self.after_step is not None and preview_from is not None:
+            frame = preview_from + self.after_step
         return UpperBodyPlan(frames=frames, ok=False, reason=f'waist blocked at frame {frame}',
                              deviation=0.0, planning_time=0.0, per_branch={},
                              blocked_frame=frame)
@@ -115,3 +122,30 @@ def test_plan_without_preview_only_when_the_preview_blocked(blocked_at_end):
     else:
         # Blocked within the step's own frames: without the preview it meets the same block.
         assert len(upper.calls) == 2, 'one plan per footstep tried'
+
+
+@pytest.mark.parametrize('margin, plans_alone', [(0.1, False), (0.0, True), (0.02, True)])
+def test_a_block_just_after_the_step_is_not_walked_into(margin, plans_alone):
+    # Blocked 3 frames (0.03 s) after the step's end: taking the step would leave the upper
+    # body where the next step cannot go on (an arm between a pillar and the body). Within the
+    # margin the footstep fails as if blocked in the step; outside it the step alone is tried.
+    sc = scene('flat')
+    upper = BlockedUpperBody(blocked_at_end=False, after_step=3)
+    actor = Actor(skeleton(), sc.environment,
+                  ActorConfig(upper_body_attempts=2, upper_body_preview_margin=margin),
+                  start=sc.start, upper_body_planner=upper)
+    actor.set_command(0.6, 0.0)
+    block = actor.plan_next()
+    assert block.status == 'stuck' and 'upper body blocked' in block.reason
+    if plans_alone:
+        assert upper.previews == [upper.calls[1], None, upper.calls[3], None]
+        assert 'just after the step' not in block.reason
+    else:
+        assert all(p is not None for p in upper.previews) and len(upper.calls) == 2
+        assert block.reason.endswith('just after the step')
+
+
+@pytest.mark.parametrize('value', [-0.1, float('nan')])
+def test_bad_preview_margin_names_the_field(value):
+    with pytest.raises(ValueError, match='upper_body_preview_margin'):
+        validate(ActorConfig(upper_body_preview_margin=value))

@@ -8,12 +8,12 @@ it.
 import numpy as np
 import pytest
 
-from course_runs import scene, simulate, skeleton
+from course_runs import scene, SCENES, simulate, skeleton
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.trajectory_check import check_trajectory
 from digital_actor_planner.core.upper_body import motion_patterns
-from scene_helpers import furniture_scene
+from scene_helpers import furniture_scene, pillars_moved_sideways
 
 COURSES = ['low_beam', 'table', 'pillars', 'uneven_beam']
 
@@ -135,3 +135,43 @@ def test_random_furniture_beside_the_path_is_passed_without_a_touch():
         off = frames - motion_patterns(sk, frames)
         arms_off_their_swing += np.abs(off[:, sk.branch(f'{arm}_arm')]).max() > 0.1
     assert arms_off_their_swing >= 8, 'the furniture should make most arms leave their swing'
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize('centre', [0.35, 0.37])
+def test_pillars_off_the_path_are_passed_or_met_in_front_never_between(tmp_path, centre):
+    """Pillars 3 cm to the left of the path (the right arm passes 3 cm closer to its pillar).
+    The actor either gets through or stops in front of the pillars, where steering away
+    frees it; it never takes a step whose upper body is blocked just after it (ActorConfig.
+    upper_body_preview_margin): such a step left the right arm between its pillar and the
+    turned body, blocked 0.02-0.12 s into every next step. The walk is judged by the
+    independent checker."""
+    sk = skeleton()
+    sc = pillars_moved_sideways(SCENES, tmp_path, centre, 0.03, sk)
+    actor = Actor(sk, sc.environment, ActorConfig(), start=sc.start)
+    blocks = run_commands(actor, [0.0, 9.0], [0.8, 0.0], [0.0, 0.0])
+    times = np.concatenate([b.times for b in blocks])
+    frames = np.vstack([b.frames for b in blocks])
+    report = check_trajectory(sk, sc.environment, times, frames)
+    assert report.ok, '; '.join(report.failures()[:4])
+    # The pillars (radius 0.12 m) stand at x = 3.0 m; the chest reaches 0.15 m ahead of the
+    # pelvis.
+    stopped = [b for b in blocks if b.status == 'stuck']
+    passed = frames[-1, 0] > 4.5
+    assert passed or (stopped and frames[-1, 0] < 3.0 - 0.12 - 0.15), (
+        f'stopped at x = {frames[-1, 0]:.2f} m: {blocks[-1].reason}')
+
+
+@pytest.mark.slow
+def test_without_the_preview_margin_the_actor_steps_between_the_pillars_and_is_held(tmp_path):
+    """What upper_body_preview_margin changes: without it, a step whose preview was blocked
+    0.03 s after its end is taken (the plan without the preview passes), and every next step
+    finds the right arm blocked within 0.12 s."""
+    sk = skeleton()
+    sc = pillars_moved_sideways(SCENES, tmp_path, 0.37, 0.03, sk)
+    actor = Actor(sk, sc.environment, ActorConfig(upper_body_preview_margin=0.0),
+                  start=sc.start)
+    blocks = run_commands(actor, [0.0, 9.0], [0.8, 0.0], [0.0, 0.0])
+    frames = blocks[-1].frames
+    assert blocks[-1].status == 'stuck' and 'right_arm' in blocks[-1].reason
+    assert 2.9 < frames[-1, 0] < 3.3, 'held between the pillars'

@@ -41,6 +41,11 @@ class ActorConfig:
     verify_collisions: bool = True
     plan_upper_body: bool = True
     upper_body_preview: float = 0.5
+    # A step whose upper body is blocked in the preview less than this after the step's end
+    # is not taken: it would leave an arm or the waist where the next step cannot go on
+    # (between two pillars, with the pelvis carrying it into one). Another footstep is tried,
+    # or the actor stops before the obstacle instead of in it.
+    upper_body_preview_margin: float = 0.1
     upper_body_check_budget: int = 15000
     upper_body_attempts: int = 6
     footsteps: FootstepConfig = field(default_factory=FootstepConfig)
@@ -74,6 +79,9 @@ def validate(config: ActorConfig) -> None:
         raise ValueError(f'hold_time must be in (0, 1] s, got {config.hold_time}')
     if config.max_attempts < 1:
         raise ValueError(f'max_attempts must be >= 1, got {config.max_attempts}')
+    if config.upper_body_preview_margin < 0:
+        raise ValueError(f'upper_body_preview_margin must be >= 0 s, got '
+                         f'{config.upper_body_preview_margin}')
     if config.upper_body_check_budget < 1:
         raise ValueError(f'upper_body_check_budget must be >= 1, got '
                          f'{config.upper_body_check_budget}')
@@ -314,6 +322,11 @@ class Actor:
         plan = None
         if preview is not None:
             plan = self._upper.plan(*preview, preview_from=k)
+            margin = int(round(self.config.upper_body_preview_margin * self.config.frame_rate))
+            if not plan.ok and k <= plan.blocked_frame < k + margin:
+                # Blocked right after the step: the step's end is most likely a dead end (the
+                # plan without the preview would take the step into it).
+                return frames, False, f'{plan.reason}, just after the step'
         # Blocked within the step's own frames, the plan without the preview meets the same
         # obstacle there: only a block in the preview leaves it a chance.
         if plan is None or (not plan.ok and not 0 <= plan.blocked_frame < k):

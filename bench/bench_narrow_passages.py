@@ -1,0 +1,89 @@
+"""Two pillars narrower than the shoulders, moved off the path: passed, met in front, or held
+between them.
+
+Run: .venv/bin/python bench/bench_narrow_passages.py [--centres 0.35 0.36 0.37]
+     [--shifts -0.04 -0.03 ... 0.04] [--margins 0.1 0.0]
+
+The pillars course (config/scenes/pillars.yaml: round pillars of radius 0.12 m at x = 3 m, their
+centres 0.37 m either side of the path, a 0.50 m gap where the shoulders are 0.52 m wide) with
+the pillars' centres ``--centres`` m either side of a line ``--shifts`` m to the left of the path
+(test/scene_helpers.py, ``pillars_moved_sideways``). The actor walks along +x at 0.8 m/s for 9 s,
+whole body planned, once per ``ActorConfig.upper_body_preview_margin`` in ``--margins`` (0.1 s:
+the default; 0: every step whose preview is blocked after its end is taken when the step alone
+passes). Outcome of each walk: passed (x > 4.5 m), stopped in front (stuck before the chest
+reaches the pillars) or held between them (stuck with the body among the pillars); and the
+slowest step (wall ms).
+"""
+import argparse
+import os
+import sys
+import tempfile
+
+import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
+
+from course_runs import SCENES, skeleton  # noqa: E402
+from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
+from scene_helpers import pillars_moved_sideways  # noqa: E402
+
+#: Pelvis x beyond which the chest (0.15 m ahead of it) reaches the pillars' front (x 2.88 m).
+IN_FRONT = 3.0 - 0.12 - 0.15
+
+
+def outcome(blocks) -> str:
+    x = blocks[-1].frames[-1, 0]
+    if x > 4.5:
+        return 'passed'
+    if blocks[-1].status == 'stuck' and x < IN_FRONT:
+        return 'stopped in front'
+    return 'held between' if blocks[-1].status == 'stuck' else 'short'
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--centres', type=float, nargs='+', default=[0.35, 0.36, 0.37])
+    parser.add_argument('--shifts', type=float, nargs='+',
+                        default=[round(0.01 * i, 2) for i in range(-4, 5)])
+    parser.add_argument('--margins', type=float, nargs='+', default=[0.1, 0.0])
+    parser.add_argument('--list', action='store_true', help='print every walk')
+    args = parser.parse_args(argv)
+    sk = skeleton()
+    labels = ('passed', 'stopped in front', 'held between', 'short')
+    counts = {m: dict.fromkeys(labels, 0) for m in args.margins}
+    slowest = {m: [] for m in args.margins}
+    with tempfile.TemporaryDirectory() as directory:
+        for centre in args.centres:
+            for shift in args.shifts:
+                sc = pillars_moved_sideways(SCENES, directory, centre, shift, sk)
+                for margin in args.margins:
+                    actor = Actor(sk, sc.environment,
+                                  ActorConfig(upper_body_preview_margin=margin), start=sc.start)
+                    blocks = run_commands(actor, [0.0, 9.0], [0.8, 0.0], [0.0, 0.0])
+                    result = outcome(blocks)
+                    counts[margin][result] += 1
+                    slowest[margin].append(1e3 * max(b.planning_time for b in blocks))
+                    if args.list:
+                        print(f'centre {centre:.3f} shift {shift:+.3f} margin {margin:.2f}: '
+                              f'{result} at x {blocks[-1].frames[-1, 0]:.2f} m '
+                              f'{blocks[-1].reason}', flush=True)
+    walks = len(args.centres) * len(args.shifts)
+    print(f'\n{walks} pillar placements (centres {args.centres} m, shifts {args.shifts} m), '
+          '9 s at 0.8 m/s each\n')
+    print('| upper_body_preview_margin | passed | stopped in front | held between | '
+          'slowest step: p50 / p90 / max ms |')
+    print('|---:|---:|---:|---:|---:|')
+    for margin in args.margins:
+        c, s = counts[margin], np.array(slowest[margin])
+        short = f' (+{c["short"]} short of the end, not stuck)' if c['short'] else ''
+        print(f'| {margin:.2f} s | {c["passed"]} | {c["stopped in front"]} | '
+              f'{c["held between"]}{short} | {np.percentile(s, 50):.0f} / '
+              f'{np.percentile(s, 90):.0f} / {s.max():.0f} |')
+    load = os.getloadavg()[0] if hasattr(os, 'getloadavg') else float('nan')
+    print(f'\n(command: python bench/bench_narrow_passages.py {" ".join(argv or sys.argv[1:])}; '
+          f'load average {load:.1f})')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
