@@ -2,17 +2,19 @@
 between them.
 
 Run: .venv/bin/python bench/bench_narrow_passages.py [--centres 0.35 0.36 0.37]
-     [--shifts -0.04 -0.03 ... 0.04] [--margins 0.1 0.0]
+     [--shifts -0.04 -0.03 ... 0.04] [--list]
 
 The pillars course (config/scenes/pillars.yaml: round pillars of radius 0.12 m at x = 3 m, their
 centres 0.37 m either side of the path, a 0.50 m gap where the shoulders are 0.52 m wide) with
 the pillars' centres ``--centres`` m either side of a line ``--shifts`` m to the left of the path
 (test/scene_helpers.py, ``pillars_moved_sideways``). The actor walks along +x at 0.8 m/s for 9 s,
-whole body planned, once per ``ActorConfig.upper_body_preview_margin`` in ``--margins`` (0.1 s:
-the default; 0: every step whose preview is blocked after its end is taken when the step alone
-passes). Outcome of each walk: passed (x > 4.5 m), stopped in front (stuck before the chest
-reaches the pillars) or held between them (stuck with the body among the pillars); and the
-slowest step (wall ms).
+whole body planned, with three settings of ``ActorConfig``: the defaults
+(``upper_body_preview_margin`` 0.1 s: a footstep whose upper body is blocked in the preview
+less than that after the step is refused; ``upper_body_pause`` 0.2 s: when the upper body
+refused every footstep, the first is tried once more after standing that long), the margin
+without the pause, and neither (session 11). Outcome of each walk: passed (x > 4.5 m),
+stopped in front (stuck before the chest reaches the pillars) or held between them (stuck
+with the body among the pillars); and the slowest step (wall ms).
 """
 import argparse
 import os
@@ -26,6 +28,11 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..'
 from course_runs import SCENES, skeleton  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 from scene_helpers import pillars_moved_sideways  # noqa: E402
+
+#: Label -> (upper_body_preview_margin s, upper_body_pause s).
+SETTINGS = {'defaults (margin 0.1 s, pause 0.2 s)': (0.1, 0.2),
+            'margin, no pause': (0.1, 0.0),
+            'neither (session 11)': (0.0, 0.0)}
 
 #: Pelvis x beyond which the chest (0.15 m ahead of it) reaches the pillars' front (x 2.88 m).
 IN_FRONT = 3.0 - 0.12 - 0.15
@@ -45,38 +52,38 @@ def main(argv=None):
     parser.add_argument('--centres', type=float, nargs='+', default=[0.35, 0.36, 0.37])
     parser.add_argument('--shifts', type=float, nargs='+',
                         default=[round(0.01 * i, 2) for i in range(-4, 5)])
-    parser.add_argument('--margins', type=float, nargs='+', default=[0.1, 0.0])
     parser.add_argument('--list', action='store_true', help='print every walk')
     args = parser.parse_args(argv)
     sk = skeleton()
     labels = ('passed', 'stopped in front', 'held between', 'short')
-    counts = {m: dict.fromkeys(labels, 0) for m in args.margins}
-    slowest = {m: [] for m in args.margins}
+    counts = {setting: dict.fromkeys(labels, 0) for setting in SETTINGS}
+    slowest = {setting: [] for setting in SETTINGS}
     with tempfile.TemporaryDirectory() as directory:
         for centre in args.centres:
             for shift in args.shifts:
                 sc = pillars_moved_sideways(SCENES, directory, centre, shift, sk)
-                for margin in args.margins:
-                    actor = Actor(sk, sc.environment,
-                                  ActorConfig(upper_body_preview_margin=margin), start=sc.start)
+                for setting, (margin, pause) in SETTINGS.items():
+                    config = ActorConfig(upper_body_preview_margin=margin,
+                                         upper_body_pause=pause)
+                    actor = Actor(sk, sc.environment, config, start=sc.start)
                     blocks = run_commands(actor, [0.0, 9.0], [0.8, 0.0], [0.0, 0.0])
                     result = outcome(blocks)
-                    counts[margin][result] += 1
-                    slowest[margin].append(1e3 * max(b.planning_time for b in blocks))
+                    counts[setting][result] += 1
+                    slowest[setting].append(1e3 * max(b.planning_time for b in blocks))
                     if args.list:
-                        print(f'centre {centre:.3f} shift {shift:+.3f} margin {margin:.2f}: '
+                        print(f'centre {centre:.3f} shift {shift:+.3f} {setting}: '
                               f'{result} at x {blocks[-1].frames[-1, 0]:.2f} m '
                               f'{blocks[-1].reason}', flush=True)
     walks = len(args.centres) * len(args.shifts)
     print(f'\n{walks} pillar placements (centres {args.centres} m, shifts {args.shifts} m), '
           '9 s at 0.8 m/s each\n')
-    print('| upper_body_preview_margin | passed | stopped in front | held between | '
+    print('| setting | passed | stopped in front | held between | '
           'slowest step: p50 / p90 / max ms |')
-    print('|---:|---:|---:|---:|---:|')
-    for margin in args.margins:
-        c, s = counts[margin], np.array(slowest[margin])
+    print('|---|---:|---:|---:|---:|')
+    for setting in SETTINGS:
+        c, s = counts[setting], np.array(slowest[setting])
         short = f' (+{c["short"]} short of the end, not stuck)' if c['short'] else ''
-        print(f'| {margin:.2f} s | {c["passed"]} | {c["stopped in front"]} | '
+        print(f'| {setting} | {c["passed"]} | {c["stopped in front"]} | '
               f'{c["held between"]}{short} | {np.percentile(s, 50):.0f} / '
               f'{np.percentile(s, 90):.0f} / {s.max():.0f} |')
     load = os.getloadavg()[0] if hasattr(os, 'getloadavg') else float('nan')

@@ -49,6 +49,7 @@ def pillars_moved_sideways(scenes, directory, centre, shift, skeleton=None):
     side of a line ``shift`` m to the left of the actor's path (the course: 0.37 and 0), as a
     scene YAML written to ``directory``; returns the loaded Scene. The pillars stand at x = 3 m
     (radius 0.12 m)."""
+    centre, shift = float(centre), float(shift)
     source = os.path.join(scenes, 'pillars.yaml')
     with open(source) as stream:
         data = yaml.safe_load(stream)

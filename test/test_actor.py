@@ -107,7 +107,9 @@ class BlockedUpperBody:
 def test_plan_without_preview_only_when_the_preview_blocked(blocked_at_end):
     sc = scene('flat')
     upper = BlockedUpperBody(blocked_at_end)
-    actor = Actor(skeleton(), sc.environment, ActorConfig(upper_body_attempts=2),
+    # No pause-and-retry (upper_body_pause): only the footsteps tried count here.
+    actor = Actor(skeleton(), sc.environment,
+                  ActorConfig(upper_body_attempts=2, upper_body_pause=0.0),
                   start=sc.start, upper_body_planner=upper)
     actor.set_command(0.6, 0.0)
     block = actor.plan_next()
@@ -132,7 +134,8 @@ def test_a_block_just_after_the_step_is_not_walked_into(margin, plans_alone):
     sc = scene('flat')
     upper = BlockedUpperBody(blocked_at_end=False, after_step=3)
     actor = Actor(skeleton(), sc.environment,
-                  ActorConfig(upper_body_attempts=2, upper_body_preview_margin=margin),
+                  ActorConfig(upper_body_attempts=2, upper_body_preview_margin=margin,
+                              upper_body_pause=0.0),
                   start=sc.start, upper_body_planner=upper)
     actor.set_command(0.6, 0.0)
     block = actor.plan_next()
@@ -149,3 +152,51 @@ def test_a_block_just_after_the_step_is_not_walked_into(margin, plans_alone):
 def test_bad_preview_margin_names_the_field(value):
     with pytest.raises(ValueError, match='upper_body_preview_margin'):
         validate(ActorConfig(upper_body_preview_margin=value))
+
+
+class NeedsAPause:
+    """An upper-body planner that passes a block only when the pelvis first stands still for
+    ``frames`` frames (an arm that must get clear before the body moves)."""
+
+    def __init__(self, frames):
+        self.frames = frames
+        self.calls = 0
+
+    def plan(self, times, frames, preview_from=None):
+        self.calls += 1
+        root = frames[:self.frames + 1, :4]
+        still = np.all(root == root[0])
+        blocked = -1 if still else 3
+        return UpperBodyPlan(frames=frames, ok=still, reason='' if still else
+                             'right_arm blocked at frame 3', deviation=0.0, planning_time=0.0,
+                             per_branch={}, blocked_frame=blocked)
+
+
+def test_a_footstep_the_upper_body_cannot_take_is_taken_after_a_pause():
+    sc = scene('flat')
+    upper = NeedsAPause(20)
+    actor = Actor(skeleton(), sc.environment, ActorConfig(upper_body_attempts=2),
+                  start=sc.start, upper_body_planner=upper)
+    actor.set_command(0.6, 0.0)
+    before = actor.configuration.copy()
+    block = actor.plan_next()
+    assert block.status == 'walking', block.reason
+    # The block opens with 0.2 s of the body standing where it was, then the step, continuous
+    # and at the frame rate.
+    assert np.all(block.frames[:20] == before)
+    assert not np.array_equal(block.frames[-1, :4], before[:4]), 'then it steps'
+    assert np.allclose(np.diff(block.times), 0.01)
+    # Two footsteps failed, then the first one was tried again after the pause.
+    assert upper.calls >= 3
+    # Without the pause the actor stops.
+    stopped = Actor(skeleton(), sc.environment,
+                    ActorConfig(upper_body_attempts=2, upper_body_pause=0.0), start=sc.start,
+                    upper_body_planner=NeedsAPause(20))
+    stopped.set_command(0.6, 0.0)
+    assert stopped.plan_next().status == 'stuck'
+
+
+@pytest.mark.parametrize('value', [-0.1, 2.5])
+def test_bad_pause_names_the_field(value):
+    with pytest.raises(ValueError, match='upper_body_pause'):
+        validate(ActorConfig(upper_body_pause=value))

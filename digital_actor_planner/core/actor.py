@@ -46,6 +46,10 @@ class ActorConfig:
     # (between two pillars, with the pelvis carrying it into one). Another footstep is tried,
     # or the actor stops before the obstacle instead of in it.
     upper_body_preview_margin: float = 0.1
+    # When every footstep tried failed for the upper body, the first of them is tried once more
+    # from a standstill after a pause this long (s, 0: never): with the pelvis still, an arm can
+    # get clear before the step moves the body (an arm between a pillar and the turned body).
+    upper_body_pause: float = 0.2
     upper_body_check_budget: int = 15000
     upper_body_attempts: int = 6
     footsteps: FootstepConfig = field(default_factory=FootstepConfig)
@@ -82,6 +86,8 @@ def validate(config: ActorConfig) -> None:
     if config.upper_body_preview_margin < 0:
         raise ValueError(f'upper_body_preview_margin must be >= 0 s, got '
                          f'{config.upper_body_preview_margin}')
+    if not 0 <= config.upper_body_pause <= 2.0:
+        raise ValueError(f'upper_body_pause must be in [0, 2] s, got {config.upper_body_pause}')
     if config.upper_body_check_budget < 1:
         raise ValueError(f'upper_body_check_budget must be >= 1, got '
                          f'{config.upper_body_check_budget}')
@@ -390,6 +396,7 @@ class Actor:
         if max_length < fcfg.step_length_min:
             max_length = fcfg.step_length_min
         banned, reason, upper_failures = [], 'no collision-free footstep window', 0
+        first_blocked = None  # the first footstep the upper body could not take
         for _ in range(cfg.max_attempts):
             window = self._planner.plan(profile, stance.stance_side, stance_s, stance_foot.sole,
                                         swing_s, swing_foot.sole, s_init, self._previous_length,
@@ -416,6 +423,8 @@ class Actor:
                 # §3.2: the step is not taken; another footstep may leave the upper body time.
                 reason = f'upper body blocked: {upper_reason}'
                 upper_failures += 1
+                if first_blocked is None:
+                    first_blocked = (window, footsteps)
                 if upper_failures >= cfg.upper_body_attempts:
                     break
                 banned.append(window.indices[0])
@@ -425,8 +434,41 @@ class Actor:
             self._previous_length = float(window.lengths[0])
             return self._commit('walking', '', motion.times, frames, motion.stance, footsteps,
                                 path_points, started, motion.category)
+        if first_blocked is not None and cfg.upper_body_pause > 0:
+            block = self._paused_step(stance, path, v, w, first_blocked, path_points, started)
+            if block is not None:
+                return block
         self._failure = ((self._steps, v, w), reason)
         return self._stuck(reason, started, np.zeros((0, 4)), path_points)
+
+    def _paused_step(self, stance: Stance, path, v: float, w: float, blocked, path_points,
+                     started: float) -> Optional[StepBlock]:
+        """The footstep the upper body could not take, from a standstill after a pause.
+
+        The step is generated again from rest (the pelvis eases in, as after a stop) and
+        preceded by ``upper_body_pause`` s of the current configuration, during which the upper
+        body may move while the rest of the body stands (§5's planner over the whole block).
+        None when the upper body cannot take it this way either.
+        """
+        cfg = self.config
+        window, footsteps = blocked
+        try:
+            motion = self._generate(with_at_rest(stance, True), path, window, v)
+        except GaitError:
+            return None
+        if self._verify(motion.frames) is not None:
+            return None
+        count = max(1, int(round(cfg.upper_body_pause * cfg.frame_rate)))
+        pause = np.repeat(self._configuration[None, :], count, axis=0)
+        times = np.concatenate([np.arange(1, count + 1) / cfg.frame_rate,
+                                motion.times + count / cfg.frame_rate])
+        frames, ok, _ = self._upper_body(times, np.vstack([pause, motion.frames]))
+        if not ok:
+            return None
+        self._window, self._window_command = window, (v, w)
+        self._previous_length = float(window.lengths[0])
+        return self._commit('walking', '', times, frames, motion.stance, footsteps,
+                            path_points, started, motion.category)
 
     def _stuck(self, reason: str, started: float, footsteps, path_points) -> StepBlock:
         self._window = None
