@@ -11,8 +11,9 @@ the pillars' centres ``--centres`` m either side of a line ``--shifts`` m to the
 whole body planned, with three settings of ``ActorConfig``: the defaults
 (``upper_body_preview_margin`` 0.1 s: a footstep whose upper body is blocked in the preview
 less than that after the step is refused; ``upper_body_pause`` 0.2 s: when the upper body
-refused every footstep, the first is tried once more after standing that long), the margin
-without the pause, and neither (session 11). Outcome of each walk: passed (x > 4.5 m),
+refused every footstep, the first is tried once more after standing that long;
+``upper_body_preview_distance`` 0.5 m: the preview covers at least that), the margin without
+the pause, and none of the three (session 11). Outcome of each walk: passed (x > 4.5 m),
 stopped in front (stuck before the chest reaches the pillars) or held between them (stuck
 with the body among the pillars); and the slowest step (wall ms).
 """
@@ -29,10 +30,10 @@ from course_runs import SCENES, skeleton  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 from scene_helpers import pillars_moved_sideways  # noqa: E402
 
-#: Label -> (upper_body_preview_margin s, upper_body_pause s).
-SETTINGS = {'defaults (margin 0.1 s, pause 0.2 s)': (0.1, 0.2),
-            'margin, no pause': (0.1, 0.0),
-            'neither (session 11)': (0.0, 0.0)}
+#: Label -> (upper_body_preview_margin s, upper_body_pause s, upper_body_preview_distance m).
+SETTINGS = {'defaults (margin 0.1 s, pause 0.2 s, preview >= 0.5 m)': (0.1, 0.2, 0.5),
+            'margin, no pause': (0.1, 0.0, 0.5),
+            'none of them (session 11)': (0.0, 0.0, 0.0)}
 
 #: Pelvis x beyond which the chest (0.15 m ahead of it) reaches the pillars' front (x 2.88 m).
 IN_FRONT = 3.0 - 0.12 - 0.15
@@ -62,9 +63,10 @@ def main(argv=None):
         for centre in args.centres:
             for shift in args.shifts:
                 sc = pillars_moved_sideways(SCENES, directory, centre, shift, sk)
-                for setting, (margin, pause) in SETTINGS.items():
+                for setting, (margin, pause, distance) in SETTINGS.items():
                     config = ActorConfig(upper_body_preview_margin=margin,
-                                         upper_body_pause=pause)
+                                         upper_body_pause=pause,
+                                         upper_body_preview_distance=distance)
                     actor = Actor(sk, sc.environment, config, start=sc.start)
                     blocks = run_commands(actor, [0.0, 9.0], [0.8, 0.0], [0.0, 0.0])
                     result = outcome(blocks)

@@ -200,3 +200,8 @@ def test_a_footstep_the_upper_body_cannot_take_is_taken_after_a_pause():
 def test_bad_pause_names_the_field(value):
     with pytest.raises(ValueError, match='upper_body_pause'):
         validate(ActorConfig(upper_body_pause=value))
+
+
+def test_bad_preview_distance_names_the_field():
+    with pytest.raises(ValueError, match='upper_body_preview_distance'):
+        validate(ActorConfig(upper_body_preview_distance=-0.5))

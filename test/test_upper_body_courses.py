@@ -187,3 +187,27 @@ def test_what_the_preview_margin_and_the_pause_change_at_the_pillars(
     assert got == outcome, f'x = {x:.2f} m: {blocks[-1].reason}'
     if outcome == 'held between':
         assert 'right_arm' in blocks[-1].reason
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize('name', ['low_beam', 'uneven_beam'])
+def test_a_slow_walk_bends_under_the_beam_in_time(name):
+    """At 0.4 m/s the 0.5 s preview sees only 0.2 m ahead: the waist must start bending when
+    the head is farther from the beam than that. The preview covers at least 0.5 m
+    (ActorConfig.upper_body_preview_distance); without that the actor stops in front of both
+    beams (session 11). The walk is judged by the independent checker."""
+    sk = skeleton()
+    sc = scene(name)
+    for distance, passes in ((0.5, True), (0.0, False)):
+        actor = Actor(sk, sc.environment, ActorConfig(upper_body_preview_distance=distance),
+                      start=sc.start)
+        blocks = run_commands(actor, [0.0, 17.5], [0.4, 0.0], [0.0, 0.0])
+        frames = np.vstack([b.frames for b in blocks])
+        passed = frames[-1, 0] > sc.expect['obstacle_x'][1] + 1.0
+        assert passed == passes, (distance, frames[-1, 0], blocks[-1].reason)
+        if passes:
+            times = np.concatenate([b.times for b in blocks])
+            report = check_trajectory(sk, sc.environment, times, frames)
+            assert report.ok, '; '.join(report.failures()[:4])
+        else:
+            assert blocks[-1].status == 'stuck' and 'waist' in blocks[-1].reason

@@ -45,6 +45,8 @@ class ActorConfig:
     # is not taken: it would leave an arm or the waist where the next step cannot go on
     # (between two pillars, with the pelvis carrying it into one). Another footstep is tried,
     # or the actor stops before the obstacle instead of in it.
+    # The preview covers at least this distance of the pelvis moving on (m; see _preview).
+    upper_body_preview_distance: float = 0.5
     upper_body_preview_margin: float = 0.1
     # When every footstep tried failed for the upper body, the first of them is tried once more
     # from a standstill after a pause this long (s, 0: never): with the pelvis still, an arm can
@@ -83,6 +85,9 @@ def validate(config: ActorConfig) -> None:
         raise ValueError(f'hold_time must be in (0, 1] s, got {config.hold_time}')
     if config.max_attempts < 1:
         raise ValueError(f'max_attempts must be >= 1, got {config.max_attempts}')
+    if config.upper_body_preview_distance < 0:
+        raise ValueError(f'upper_body_preview_distance must be >= 0 m, got '
+                         f'{config.upper_body_preview_distance}')
     if config.upper_body_preview_margin < 0:
         raise ValueError(f'upper_body_preview_margin must be >= 0 s, got '
                          f'{config.upper_body_preview_margin}')
@@ -342,16 +347,24 @@ class Actor:
         return plan.frames[1:k], True, ''
 
     def _preview(self, times: np.ndarray, frames: np.ndarray):
-        """Extend a step's frames by ``upper_body_preview`` s of the pelvis moving on."""
+        """Extend a step's frames by ``upper_body_preview`` s of the pelvis moving on (longer
+        when that covers less than ``upper_body_preview_distance``, up to three times as long).
+        """
         duration = self.config.upper_body_preview
         if duration <= 0 or frames.shape[0] < 3:
             return None
         dt = 1.0 / self.config.frame_rate
-        count = int(round(duration * self.config.frame_rate))
         root = self.skeleton.branch('root')
         span = min(frames.shape[0] - 1, int(round(0.2 * self.config.frame_rate)))
         velocity = (frames[-1, root] - frames[-1 - span, root]) / (span * dt)
         velocity[2] = 0.0
+        # A slow walk sees less ground ahead in the same time: the waist bending under a low
+        # beam must start when the head is still some way from it, whatever the speed.
+        speed = float(np.hypot(velocity[0], velocity[1]))
+        distance = self.config.upper_body_preview_distance
+        if speed * duration < distance:
+            duration = min(distance / max(speed, 1e-6), 3.0 * duration)
+        count = int(round(duration * self.config.frame_rate))
         steps = np.arange(1, count + 1)[:, None] * dt
         extra = np.repeat(frames[-1:], count, axis=0)
         extra[:, root] = frames[-1, root] + velocity * steps

@@ -1,0 +1,81 @@
+"""The obstacle courses walked at other speeds than their command files: passed or stopped.
+
+Run: .venv/bin/python bench/bench_walk_speeds.py [--speeds 0.3 0.4 0.5 0.6 0.7 0.9 1.1]
+     [--distances 0.5 0.0] [--list]
+
+Each upper-body course (low_beam, table, pillars, uneven_beam) is walked straight along +x at
+each speed for the time 7 m takes (at 0.7 m/s at least: faster commands do not make the steps
+much faster than that), with the whole body planned, once per
+``ActorConfig.upper_body_preview_distance`` in ``--distances`` (0.5 m: the default, the upper
+body's preview covers at least that far; 0: a fixed 0.5 s, which at 0.4 m/s sees 0.2 m ahead,
+session 11). A walk passes when it ends within 0.3 m of the course's ``reach_x``; every walk is
+judged by the independent checker (``check_trajectory``: every link against the meshes, a foot
+always down, limits, no jumps). Reported per setting: walks passed, stopped, failing the checker,
+and the slowest step (wall ms).
+"""
+import argparse
+import os
+import sys
+
+import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
+
+from course_runs import scene, skeleton  # noqa: E402
+from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
+from digital_actor_planner.core.trajectory_check import check_trajectory  # noqa: E402
+
+COURSES = ('low_beam', 'table', 'pillars', 'uneven_beam')
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--speeds', type=float, nargs='+',
+                        default=[0.3, 0.4, 0.5, 0.6, 0.7, 0.9, 1.1])
+    parser.add_argument('--distances', type=float, nargs='+', default=[0.5, 0.0])
+    parser.add_argument('--list', action='store_true', help='print every walk')
+    args = parser.parse_args(argv)
+    if any(not 0.05 <= v <= 1.2 for v in args.speeds):
+        parser.error(f'--speeds must lie in [0.05, 1.2] m/s, got {args.speeds}')
+    sk = skeleton()
+    rows = {d: [] for d in args.distances}
+    for name in COURSES:
+        sc = scene(name)
+        reach = sc.expect.get('reach_x', 5.0)
+        for speed in args.speeds:
+            for distance in args.distances:
+                actor = Actor(sk, sc.environment,
+                              ActorConfig(upper_body_preview_distance=distance), start=sc.start)
+                blocks = run_commands(actor, [0.0, 7.0 / min(speed, 0.7)], [speed, 0.0],
+                                      [0.0, 0.0])
+                times = np.concatenate([b.times for b in blocks])
+                frames = np.vstack([b.frames for b in blocks])
+                judged = check_trajectory(sk, sc.environment, times, frames).ok
+                passed = frames[-1, 0] >= reach - 0.3
+                slowest = 1e3 * max(b.planning_time for b in blocks)
+                rows[distance].append((passed, judged, slowest))
+                if args.list:
+                    print(f'{name} {speed:.2f} m/s, preview >= {distance:.2f} m: '
+                          f'{"passed" if passed else "stopped"} at x {frames[-1, 0]:.2f} m, '
+                          f'checker {"ok" if judged else "FAILED"}, slowest step '
+                          f'{slowest:.0f} ms {blocks[-1].reason}', flush=True)
+    walks = len(COURSES) * len(args.speeds)
+    print(f'\n{walks} walks: courses {", ".join(COURSES)} at {args.speeds} m/s\n')
+    print('| upper_body_preview_distance | passed | stopped | checker failures | '
+          'slowest step: p50 / p90 / max ms |')
+    print('|---:|---:|---:|---:|---:|')
+    for distance, results in rows.items():
+        passed = sum(r[0] for r in results)
+        failed = sum(not r[1] for r in results)
+        slowest = np.array([r[2] for r in results])
+        print(f'| {distance:.2f} m | {passed} | {len(results) - passed} | {failed} | '
+              f'{np.percentile(slowest, 50):.0f} / {np.percentile(slowest, 90):.0f} / '
+              f'{slowest.max():.0f} |')
+    load = os.getloadavg()[0] if hasattr(os, 'getloadavg') else float('nan')
+    print(f'\n(command: python bench/bench_walk_speeds.py {" ".join(argv or sys.argv[1:])}; '
+          f'load average {load:.1f})')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
