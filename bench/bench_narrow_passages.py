@@ -22,10 +22,9 @@ import os
 import sys
 import tempfile
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
+from bench_common import print_command, spread  # noqa: E402
 from course_runs import SCENES, skeleton  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 from scene_helpers import pillars_moved_sideways  # noqa: E402
@@ -83,14 +82,11 @@ def main(argv=None):
           'slowest step: p50 / p90 / max ms |')
     print('|---|---:|---:|---:|---:|')
     for setting in SETTINGS:
-        c, s = counts[setting], np.array(slowest[setting])
+        c = counts[setting]
         short = f' (+{c["short"]} short of the end, not stuck)' if c['short'] else ''
         print(f'| {setting} | {c["passed"]} | {c["stopped in front"]} | '
-              f'{c["held between"]}{short} | {np.percentile(s, 50):.0f} / '
-              f'{np.percentile(s, 90):.0f} / {s.max():.0f} |')
-    load = os.getloadavg()[0] if hasattr(os, 'getloadavg') else float('nan')
-    print(f'\n(command: python bench/bench_narrow_passages.py {" ".join(argv or sys.argv[1:])}; '
-          f'load average {load:.1f})')
+              f'{c["held between"]}{short} | {spread(slowest[setting])} |')
+    print_command(__file__, argv)
     return 0
 
 

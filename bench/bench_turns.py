@@ -17,6 +17,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
+from bench_common import print_command  # noqa: E402
 from course_runs import scene, skeleton  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 from digital_actor_planner.core.trajectory_check import check_trajectory  # noqa: E402
@@ -56,9 +57,7 @@ def main(argv=None):
           f'{np.percentile(slips, 90):.1f} / {slips.max():.1f} |')
     for speed, rate, reasons in failures:
         print(f'- {speed:.2f} m/s, {rate:+.2f} rad/s: {"; ".join(reasons[:2])}')
-    load = os.getloadavg()[0] if hasattr(os, 'getloadavg') else float('nan')
-    print(f'\n(command: python bench/bench_turns.py {" ".join(argv or sys.argv[1:])}; '
-          f'load average {load:.1f})')
+    print_command(__file__, argv)
     return 0
 
 

@@ -21,6 +21,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
+from bench_common import print_command, spread  # noqa: E402
 from course_runs import scene, skeleton  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 from digital_actor_planner.core.trajectory_check import check_trajectory  # noqa: E402
@@ -67,13 +68,9 @@ def main(argv=None):
     for distance, results in rows.items():
         passed = sum(r[0] for r in results)
         failed = sum(not r[1] for r in results)
-        slowest = np.array([r[2] for r in results])
         print(f'| {distance:.2f} m | {passed} | {len(results) - passed} | {failed} | '
-              f'{np.percentile(slowest, 50):.0f} / {np.percentile(slowest, 90):.0f} / '
-              f'{slowest.max():.0f} |')
-    load = os.getloadavg()[0] if hasattr(os, 'getloadavg') else float('nan')
-    print(f'\n(command: python bench/bench_walk_speeds.py {" ".join(argv or sys.argv[1:])}; '
-          f'load average {load:.1f})')
+              f'{spread([r[2] for r in results])} |')
+    print_command(__file__, argv)
     return 0
 
 
