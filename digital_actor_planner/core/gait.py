@@ -263,6 +263,9 @@ class _StepTiming:
     samples, bezier_terms
         Frames the swing clearance is tested at and their Bezier terms (see
         :meth:`WalkGenerator._bezier_terms`).
+    pinned
+        How fully the swing foot's plane turns through the foot instead of moving with the hip:
+        1 near lift-off and touchdown, 0 in mid-swing.
 
     """
 
@@ -278,6 +281,7 @@ class _StepTiming:
     fade: np.ndarray
     samples: np.ndarray
     bezier_terms: tuple
+    pinned: np.ndarray
 
 
 def _columns(indices: np.ndarray):
@@ -376,11 +380,13 @@ class WalkGenerator:
             weight={'uphill': uphill, 'downhill': downhill, 'level': level},
             fade=np.minimum(1.0, 6.0 * (1 - tau)),
             samples=samples,
-            bezier_terms=self._bezier_terms(bezier, samples))
+            bezier_terms=self._bezier_terms(bezier, samples),
+            pinned=np.maximum(1.0 - smoothstep((bezier - 0.04) / 0.12),
+                              smoothstep((bezier - 0.84) / 0.12)))
         # Shared by every step of k frames: nothing may change them in place.
         _read_only((timing.tau, timing.ease, timing.turn, timing.bezier, timing.lift,
                     timing.plane_turn, timing.pitch_release, timing.pitch_take, timing.weight,
-                    timing.fade, timing.samples, timing.bezier_terms))
+                    timing.fade, timing.samples, timing.bezier_terms, timing.pinned))
         self._timings[k] = timing
         return timing
 
@@ -481,6 +487,21 @@ class WalkGenerator:
         direction = np.empty((k, 2))
         direction[:, 0] = np.cos(plane_yaw)
         direction[:, 1] = np.sin(plane_yaw)
+        # Near lift-off and touchdown the sole is within millimetres of the ground: there the
+        # leg's plane turns through the foot (hip yaw) rather than carrying it sideways with the
+        # hip, which in a turn moves across the foot's own plane (2-DOF hip, no hip roll).
+        toward = wanted_xy - swing_hip_xy
+        length = np.hypot(toward[:, 0], toward[:, 1])
+        sign = np.where(toward[:, 0] * direction[:, 0] + toward[:, 1] * direction[:, 1] < 0,
+                        -1.0, 1.0)
+        through = toward * (sign / np.maximum(length, 1e-9))[:, None]
+        # Turning the plane swings the sole about the ankle: that moves its ends less than
+        # carrying it sideways only where the foot is farther from the hip than they are from
+        # the ankle.
+        pinned = (timing.pinned * np.minimum(np.maximum((length - 0.15) / 0.1, 0.0), 1.0))[:, None]
+        direction = direction + pinned * (through - direction)
+        direction /= np.hypot(direction[:, 0], direction[:, 1])[:, None]
+        plane_yaw = np.arctan2(direction[:, 1], direction[:, 0])
         # A two-term dot product written out (a reduction over an axis of 2 is slow).
         reach_xy = wanted_xy - swing_hip_xy
         forward = reach_xy[:, 0] * direction[:, 0] + reach_xy[:, 1] * direction[:, 1]
