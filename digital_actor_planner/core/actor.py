@@ -41,12 +41,12 @@ class ActorConfig:
     verify_collisions: bool = True
     plan_upper_body: bool = True
     upper_body_preview: float = 0.5
+    # The preview covers at least this distance of the pelvis moving on (m; see _preview).
+    upper_body_preview_distance: float = 0.5
     # A step whose upper body is blocked in the preview less than this after the step's end
     # is not taken: it would leave an arm or the waist where the next step cannot go on
     # (between two pillars, with the pelvis carrying it into one). Another footstep is tried,
     # or the actor stops before the obstacle instead of in it.
-    # The preview covers at least this distance of the pelvis moving on (m; see _preview).
-    upper_body_preview_distance: float = 0.5
     upper_body_preview_margin: float = 0.1
     # When every footstep tried failed for the upper body, the first of them is tried once more
     # from a standstill after a pause this long (s, 0: never): with the pelvis still, an arm can
@@ -437,7 +437,7 @@ class Actor:
                 reason = f'upper body blocked: {upper_reason}'
                 upper_failures += 1
                 if first_blocked is None:
-                    first_blocked = (window, footsteps)
+                    first_blocked = (window, footsteps, motion)
                 if upper_failures >= cfg.upper_body_attempts:
                     break
                 banned.append(window.indices[0])
@@ -464,13 +464,15 @@ class Actor:
         None when the upper body cannot take it this way either.
         """
         cfg = self.config
-        window, footsteps = blocked
-        try:
-            motion = self._generate(with_at_rest(stance, True), path, window, v)
-        except GaitError:
-            return None
-        if self._verify(motion.frames) is not None:
-            return None
+        window, footsteps, motion = blocked
+        if not stance.at_rest:
+            # From rest the pelvis eases in: another motion, generated and checked again.
+            try:
+                motion = self._generate(with_at_rest(stance, True), path, window, v)
+            except GaitError:
+                return None
+            if self._verify(motion.frames) is not None:
+                return None
         count = max(1, int(round(cfg.upper_body_pause * cfg.frame_rate)))
         pause = np.repeat(self._configuration[None, :], count, axis=0)
         times = np.concatenate([np.arange(1, count + 1) / cfg.frame_rate,

@@ -489,19 +489,23 @@ class WalkGenerator:
         direction[:, 1] = np.sin(plane_yaw)
         # Near lift-off and touchdown the sole is within millimetres of the ground: there the
         # leg's plane turns through the foot (hip yaw) rather than carrying it sideways with the
-        # hip, which in a turn moves across the foot's own plane (2-DOF hip, no hip roll).
-        toward = wanted_xy - swing_hip_xy
-        length = np.hypot(toward[:, 0], toward[:, 1])
-        sign = np.where(toward[:, 0] * direction[:, 0] + toward[:, 1] * direction[:, 1] < 0,
-                        -1.0, 1.0)
-        through = toward * (sign / np.maximum(length, 1e-9))[:, None]
-        # Turning the plane swings the sole about the ankle: that moves its ends less than
-        # carrying it sideways only where the foot is farther from the hip than they are from
-        # the ankle.
-        pinned = (timing.pinned * np.minimum(np.maximum((length - 0.15) / 0.1, 0.0), 1.0))[:, None]
-        direction = direction + pinned * (through - direction)
-        direction /= np.hypot(direction[:, 0], direction[:, 1])[:, None]
-        plane_yaw = np.arctan2(direction[:, 1], direction[:, 0])
+        # hip, which in a turn moves across the foot's own plane (2-DOF hip, no hip roll). Where
+        # both feet, the landing and the pelvis share one heading the hip moves along that
+        # plane and nothing changes: straight walking skips it.
+        if max(abs(_wrap(other - foot_w.yaw))
+               for other in (landing.yaw, foot_s.yaw, yaw0, yaw1)) > 1e-9:
+            toward = wanted_xy - swing_hip_xy
+            length = np.hypot(toward[:, 0], toward[:, 1])
+            sign = np.where(toward[:, 0] * direction[:, 0] + toward[:, 1] * direction[:, 1] < 0,
+                            -1.0, 1.0)
+            through = toward * (sign / np.maximum(length, 1e-9))[:, None]
+            # Turning the plane swings the sole about the ankle: that moves its ends less than
+            # carrying it sideways only where the foot is farther from the hip than they are
+            # from the ankle.
+            pinned = timing.pinned * np.minimum(np.maximum((length - 0.15) / 0.1, 0.0), 1.0)
+            direction = direction + pinned[:, None] * (through - direction)
+            direction /= np.hypot(direction[:, 0], direction[:, 1])[:, None]
+            plane_yaw = np.arctan2(direction[:, 1], direction[:, 0])
         # A two-term dot product written out (a reduction over an axis of 2 is slow).
         reach_xy = wanted_xy - swing_hip_xy
         forward = reach_xy[:, 0] * direction[:, 0] + reach_xy[:, 1] * direction[:, 1]
