@@ -148,6 +148,13 @@ def test_time_shapes_shared_by_steps_of_one_length_match_the_formulas(skeleton):
     np.testing.assert_array_equal(timing.tau, tau)
     np.testing.assert_array_equal(timing.bezier, bezier)
     np.testing.assert_array_equal(timing.ease[(True, False)], _ease(tau, True, False))
+    # Easing fully in or out through the turn ease's shapes is the rest ease itself.
+    np.testing.assert_allclose(tau + timing.ease_in, _ease(tau, True, False), atol=1e-15)
+    np.testing.assert_allclose(tau + timing.ease_out, _ease(tau, False, True), atol=1e-15)
+    np.testing.assert_allclose(tau + timing.ease_in + timing.ease_out, _ease(tau, True, True),
+                               atol=1e-15)
+    with pytest.raises(ValueError):
+        timing.ease_in[0] = 1.0
     np.testing.assert_array_equal(timing.lift[0.12], smoothstep((bezier - 0.12) / (0.88 - 0.12)))
     np.testing.assert_array_equal(timing.weight['downhill'], smoothstep((tau - 0.3) / 0.65))
     np.testing.assert_array_equal(timing.fade, np.minimum(1.0, 6.0 * (1 - tau)))
@@ -159,3 +166,61 @@ def test_time_shapes_shared_by_steps_of_one_length_match_the_formulas(skeleton):
         timing.turn[0] = 1.0
     with pytest.raises(ValueError):
         timing.turn.base[0, 0] = 1.0
+
+
+def steady_turn(skeleton, turn, config=GaitConfig(), steps=4, length=0.3, speed=0.8):
+    """Frames of ``steps`` steps turning the pelvis ``turn`` rad each on flat ground; every
+    foot lands pointing the pelvis's new heading, so the feet differ by ``turn`` at each
+    step's start and end. Returns the frames and the number of frames of the first step."""
+    walker = WalkGenerator(skeleton, config)
+    leg = skeleton.leg
+    stance = standing_stance(skeleton, 0.0, 0.0, 0.0, 0.0, stance_side=RIGHT)
+    frames = []
+    for i in range(steps):
+        yaw0, x0, y0 = stance.pelvis[3], stance.pelvis[0], stance.pelvis[1]
+        yaw1 = yaw0 + turn
+        middle = yaw0 + turn / 2
+        target = np.array([x0 + length / 2 * np.cos(middle), y0 + length / 2 * np.sin(middle),
+                           yaw1])
+        side = leg.hip_half_width if stance.stance_side == RIGHT else -leg.hip_half_width
+        landing = (target[:2] + length / 2 * np.array([np.cos(yaw1), np.sin(yaw1)])
+                   + side * np.array([-np.sin(yaw1), np.cos(yaw1)]))
+        motion = walker.step(stance, landing, yaw1, 0.0, 0.0, target,
+                             walker.step_duration(length, speed, 0.0), flat(),
+                             to_rest=i == steps - 1)
+        frames.append(motion.frames)
+        stance = motion.stance
+    return np.vstack(frames), len(frames[0])
+
+
+def test_in_a_turn_the_pelvis_slows_towards_lift_off_and_steps_join_at_one_speed(skeleton):
+    """With 2-DOF hips a pelvis travelling between feet that point different ways drags the
+    lifting foot across its own plane; the pelvis eases towards each step's start and end in
+    proportion to the angle between the feet (full rest at ``turn_ease_heading``), and the
+    next step starts at the speed the last one ended with. Straight walking is unchanged."""
+    def speeds(frames):
+        return np.hypot(*np.diff(frames[:, :2], axis=0).T)
+
+    straight, _ = steady_turn(skeleton, 0.0)
+    np.testing.assert_array_equal(
+        straight, steady_turn(skeleton, 0.0, GaitConfig(turn_ease_heading=0.0))[0])
+    for config, slow in ((GaitConfig(), (0.3, 0.7)), (GaitConfig(turn_ease_heading=0.0),
+                                                      (0.75, 1.3))):
+        frames, k = steady_turn(skeleton, 0.25, config)
+        v = speeds(frames)
+        mean = v[:3 * k].mean()
+        # Around the boundary between the second and third steps (both mid-walk).
+        boundary = 2 * k - 1
+        assert slow[0] * mean < v[boundary - 1] < slow[1] * mean, (v[boundary - 1], mean)
+        if config.turn_ease_heading:
+            assert abs(v[boundary] - v[boundary - 1]) < 0.2 * mean
+    # Feet twice as far apart in heading: the pelvis all but stops between the steps.
+    frames, k = steady_turn(skeleton, 0.5)
+    v = speeds(frames)
+    assert v[2 * k - 1] < 0.1 * v[:3 * k].mean()
+
+
+def test_turn_ease_must_be_a_finite_non_negative_angle():
+    for bad in (-0.1, float('nan'), float('inf')):
+        with pytest.raises(ValueError, match='turn_ease_heading'):
+            validate_gait_config(GaitConfig(turn_ease_heading=bad))

@@ -44,6 +44,7 @@ class GaitConfig:
     time_per_rise: float = 1.5
     min_turn_speed: float = 0.25
     max_heading_change: float = 0.5
+    turn_ease_heading: float = 0.5
 
 
 def validate_gait_config(config: GaitConfig) -> None:
@@ -246,6 +247,10 @@ class _StepTiming:
         Normalised time of each frame, (1..k) / k.
     ease
         Pelvis progress per (from_rest, to_rest), see :func:`_ease`.
+    ease_in, ease_out
+        What easing fully in or out adds to constant-speed progress: ``tau + a * ease_in +
+        b * ease_out`` starts at ``1 - a`` and ends at ``1 - b`` times the mean speed (a = b = 1
+        are the rest eases of ``ease``).
     turn
         Pelvis yaw progress (it turns once the swing foot is off the ground).
     bezier
@@ -271,6 +276,8 @@ class _StepTiming:
 
     tau: np.ndarray
     ease: dict
+    ease_in: np.ndarray
+    ease_out: np.ndarray
     turn: np.ndarray
     bezier: np.ndarray
     lift: dict
@@ -371,6 +378,8 @@ class WalkGenerator:
             tau=tau,
             ease={(False, False): tau, (False, True): _ease(tau, False, True),
                   (True, False): _ease(tau, True, False), (True, True): level},
+            ease_in=-tau * (1.0 - tau) ** 2,
+            ease_out=tau * tau * (1.0 - tau),
             turn=turn,
             bezier=bezier,
             lift={0.0: lift_now, 0.12: lift_late},
@@ -384,11 +393,19 @@ class WalkGenerator:
             pinned=np.maximum(1.0 - smoothstep((bezier - 0.04) / 0.12),
                               smoothstep((bezier - 0.84) / 0.12)))
         # Shared by every step of k frames: nothing may change them in place.
-        _read_only((timing.tau, timing.ease, timing.turn, timing.bezier, timing.lift,
-                    timing.plane_turn, timing.pitch_release, timing.pitch_take, timing.weight,
-                    timing.fade, timing.samples, timing.bezier_terms, timing.pinned))
+        _read_only((timing.tau, timing.ease, timing.ease_in, timing.ease_out, timing.turn,
+                    timing.bezier, timing.lift, timing.plane_turn, timing.pitch_release,
+                    timing.pitch_take, timing.weight, timing.fade, timing.samples,
+                    timing.bezier_terms, timing.pinned))
         self._timings[k] = timing
         return timing
+
+    def _turn_ease(self, heading_difference: float) -> float:
+        """How far the pelvis eases to rest where the feet differ by ``heading_difference``."""
+        full = self.config.turn_ease_heading
+        if full <= 0.0:
+            return 0.0
+        return min(abs(_wrap(heading_difference)) / full, 1.0)
 
     def step_duration(self, length: float, speed: float, rise: float) -> float:
         """Duration of a step of ``length`` m at ``speed`` m/s changing height by ``rise`` m."""
@@ -450,7 +467,18 @@ class WalkGenerator:
         lam0 = float(np.dot(hip0 - foot_s.xy, d_s))
         hip1 = pelvis_target[:2] + _lateral(yaw1, w_s)
         lam1 = float(np.dot(hip1 - foot_s.xy, d_s))
-        progress = timing.ease[(bool(stance.at_rest), bool(to_rest))]
+        # In a turn the feet point different ways and a 2-DOF hip cannot keep both legs'
+        # planes on their feet while the pelvis travels: the swing hip drifts across its
+        # foot's plane as fast as the pelvis moves times the sine of the angle between the
+        # feet. So the pelvis slows towards the moments a foot leaves or meets the ground, in
+        # proportion to that angle (to rest at turn_ease_heading); the next step starts
+        # from the same two feet, so its start speed matches this step's end.
+        ease_start = 1.0 if stance.at_rest else self._turn_ease(foot_w.yaw - foot_s.yaw)
+        ease_end = 1.0 if to_rest else self._turn_ease(landing_yaw - foot_s.yaw)
+        if ease_start in (0.0, 1.0) and ease_end in (0.0, 1.0):
+            progress = timing.ease[(ease_start == 1.0, ease_end == 1.0)]
+        else:
+            progress = tau + ease_start * timing.ease_in + ease_end * timing.ease_out
         # The pelvis turns once the swing foot is off the ground: turning it moves the swing
         # hip's plane sideways, which would drag a foot still on the ground.
         yaw = yaw0 + (yaw1 - yaw0) * timing.turn
