@@ -224,3 +224,26 @@ def test_turn_ease_must_be_a_finite_non_negative_angle():
     for bad in (-0.1, float('nan'), float('inf')):
         with pytest.raises(ValueError, match='turn_ease_heading'):
             validate_gait_config(GaitConfig(turn_ease_heading=bad))
+
+
+def test_a_large_turn_keeps_the_swing_hip_yaw_in_range_in_mid_swing(skeleton, walker):
+    """After a zigzag the feet point 0.87 rad apart and the next step turns the swing foot
+    1.77 rad (a stance captured from such a walk). The hip yaw starts (-0.44) and ends (0.45)
+    inside its +-0.6 rad range, but the foot's and the pelvis's turns follow different ramps:
+    the swing foot lags in the air instead of the step failing at 0.61 rad."""
+    from digital_actor_planner.core.gait import FootPose, Stance
+    left = FootPose(np.array([3.0423, -1.2923]), 0.0883, -1.4752, -0.0926, 0.0)
+    right = FootPose(np.array([3.2916, -1.7415]), 0.072, -0.6062, 0.0, 0.0)
+    stance = Stance(np.array([2.9726, -1.4210, 0.7457, -1.0407]), (left, right), RIGHT, True)
+    motion = walker.step(stance, np.array([3.3061, -1.4029]), 0.2938, 0.0, 0.0,
+                         np.array([3.3141, -1.5107, -0.1562]), 0.6, flat())
+    hip_yaw = motion.frames[:, skeleton.index['left_hip_yaw']]
+    limit = skeleton.upper[skeleton.index['left_hip_yaw']]
+    assert np.all(np.abs(hip_yaw) <= limit) and hip_yaw.max() > limit - 0.02, hip_yaw.max()
+    assert np.all(skeleton.within_limits(motion.frames))
+    # It lands as planned: heading and place.
+    landed = motion.stance.feet[LEFT]
+    assert landed.yaw == pytest.approx(0.2938, abs=1e-9)
+    foot = skeleton.forward_kinematics(motion.frames[-1:])[0, skeleton.link_index['left_foot']]
+    assert np.arctan2(foot[1, 0], foot[0, 0]) == pytest.approx(0.2938, abs=1e-6)
+    np.testing.assert_allclose(foot[:2, 3], landed.xy, atol=1e-6)

@@ -124,3 +124,31 @@ def test_without_the_turn_ease_the_sharpest_turn_slides_a_foot():
     plain, heading = turning_walk(0.8, 1.0, GaitConfig(turn_ease_heading=0.0))
     assert heading > 1.0, 'it turned'
     assert max(plain.slip.values()) > 0.010 > 0.005 > max(eased.slip.values())
+
+
+def test_after_a_zigzag_to_the_floor_edge_the_actor_turns_away_when_steered():
+    """Mouse steering that zigzags left and right leaves the feet pointing up to 0.9 rad apart.
+    Here it walks the actor to the floor's edge, where it stops (stuck); the user then steers
+    it away on the spot and it goes on. Before the swing hip yaw was held in range in
+    mid-swing (gait), every step of that turn was refused at 0.61 rad and it stayed put."""
+    from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
+    sc = scene('flat')
+    zigzag = [(0.0, 0.97, 0.79), (0.45, 0.23, -0.82), (1.15, 0.91, 0.98), (2.81, 0.57, -0.51),
+              (4.1, 0.29, 0.91), (4.56, 0.86, -1.05), (5.6, 1.13, 0.12), (6.71, 0.0, -1.02),
+              (7.28, 0.83, 0.47)]
+    away = 8.93
+    commands = zigzag + [(away, 0.0, 1.0), (12.9, 0.0, 0.0)]
+    actor = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False),
+                  start=sc.start)
+    blocks = run_commands(actor, *zip(*commands))
+    before = [b for b in blocks if b.times[0] < away]
+    after = [b for b in blocks if b.times[0] >= away]
+    assert before[-1].status == 'stuck', 'it stopped at the edge'
+    assert sum(b.status == 'walking' for b in after) >= 3
+    assert not any(b.status == 'stuck' for b in after)
+    times = np.concatenate([b.times for b in blocks])
+    frames = np.vstack([b.frames for b in blocks])
+    report = check_trajectory(skeleton(), sc.environment, times, frames)
+    assert report.ok, report.failures()
+    # It turned back towards the middle of the floor (the edge is at y = -2 m).
+    assert frames[-1, 1] > before[-1].frames[-1, 1]

@@ -1,0 +1,110 @@
+"""Zigzag mouse steering on the courses: every walk judged, every stop steered away from.
+
+Run: .venv/bin/python bench/bench_steer_away.py [--courses flat rough ...] [--seeds 8] [--list]
+
+A mouse user does not drive straight. Each walk here (seeded, 12 s) holds a command for 0.3-2 s
+at a time: linear 0.2-1.2 m/s (0 one time in seven: the mouse stands still) and a turn of up
+to 1.2 rad/s that alternates left and right, so the actor weaves along the course, into its
+obstacles and, as often, to the edge of its floor (2 m either side of the start line). The
+whole body is planned and the independent checker judges the whole walk (every link against the
+meshes, a foot always down, limits, no jumps, stance slip <= 1 cm).
+
+Where a walk first stops (stuck), the walk is replayed to 0.3 s after the stop and the user
+then steers away with each of five commands for 4 s: turn on the spot left and right (0, +-1),
+walk a tight arc left and right (0.3 m/s, +-0.8 rad/s), and walk slowly on (0.5 m/s). The stop
+counts as *left* when one of them takes at least two steps; otherwise the actor is *trapped*
+there (issue 2: "a later command that turns it away lets it go on").
+"""
+import argparse
+import os
+import sys
+
+import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
+
+from bench_common import print_command  # noqa: E402
+from course_runs import scene, skeleton  # noqa: E402
+from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
+from digital_actor_planner.core.trajectory_check import check_trajectory  # noqa: E402
+
+COURSES = ('flat', 'rough', 'blocks', 'stairs_up', 'gap', 'low_beam', 'table', 'pillars')
+AWAY = ((0.0, 1.0), (0.0, -1.0), (0.3, 0.8), (0.3, -0.8), (0.5, 0.0))
+
+
+def zigzag(seed: int, duration: float = 12.0):
+    """(times, linear, angular) of one seeded weaving walk, ending with a stop."""
+    rng = np.random.default_rng(seed)
+    times = [0.0]
+    while times[-1] < duration:
+        times.append(times[-1] + rng.uniform(0.3, 2.0))
+    count = len(times)
+    linear = np.where(rng.random(count) < 0.15, 0.0, rng.uniform(0.2, 1.2, count))
+    angular = rng.uniform(0.0, 1.2, count) * (-1.0) ** np.arange(count)
+    linear[-1] = angular[-1] = 0.0
+    return times, linear.tolist(), angular.tolist()
+
+
+def walk(sk, sc, times, linear, angular):
+    actor = Actor(sk, sc.environment, ActorConfig(), start=sc.start)
+    return run_commands(actor, times, linear, angular)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--courses', nargs='+', default=list(COURSES))
+    parser.add_argument('--seeds', type=int, default=8)
+    parser.add_argument('--list', action='store_true', help='print every stop')
+    args = parser.parse_args(argv)
+    sk = skeleton()
+    walks = failures = stops = trapped = 0
+    walked = stuck_time = total_time = 0.0
+    for name in args.courses:
+        sc = scene(name)
+        for seed in range(args.seeds):
+            times, linear, angular = zigzag(seed)
+            blocks = walk(sk, sc, times, linear, angular)
+            t = np.concatenate([b.times for b in blocks])
+            frames = np.vstack([b.frames for b in blocks])
+            report = check_trajectory(sk, sc.environment, t, frames)
+            walks += 1
+            if not report.ok:
+                failures += 1
+                print(f'{name} seed {seed}: checker: {"; ".join(report.failures()[:2])}',
+                      flush=True)
+            walked += float(np.hypot(*np.diff(frames[:, :2], axis=0).T).sum())
+            stuck_time += sum(b.times[-1] - b.times[0] for b in blocks if b.status == 'stuck')
+            total_time += float(t[-1])
+            first = next((b for b in blocks if b.status == 'stuck'), None)
+            if first is None:
+                continue
+            stops += 1
+            at = float(first.times[0]) + 0.3
+            kept = [i for i, time in enumerate(times) if time < at]
+            taken = []
+            for v, w in AWAY:
+                replay = walk(sk, sc, [times[i] for i in kept] + [at, at + 4.0],
+                              [linear[i] for i in kept] + [v, 0.0],
+                              [angular[i] for i in kept] + [w, 0.0])
+                taken.append(sum(b.status == 'walking' for b in replay if b.times[0] > at))
+            left = max(taken) >= 2
+            trapped += not left
+            if args.list or not left:
+                x, y, _, yaw = first.frames[-1, :4]
+                print(f'{name} seed {seed}: stopped at t = {first.times[0]:.2f} s, '
+                      f'({x:.2f}, {y:.2f}) heading {yaw:+.2f} rad ({first.reason}); steps '
+                      f'taken steering away {taken}: {"left" if left else "TRAPPED"}',
+                      flush=True)
+    print(f'\n{walks} weaving walks ({len(args.courses)} courses x {args.seeds} seeds, 12 s '
+          'each, whole body)\n')
+    print('| walks | checker failures | walked m | time stopped | stops | stops left by '
+          'steering away | trapped |')
+    print('|---:|---:|---:|---:|---:|---:|---:|')
+    print(f'| {walks} | {failures} | {walked:.0f} | {100 * stuck_time / total_time:.0f} % | '
+          f'{stops} | {stops - trapped} | {trapped} |')
+    print_command(__file__, argv)
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
