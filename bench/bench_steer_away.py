@@ -14,6 +14,10 @@ then steers away with each of five commands for 4 s: turn on the spot left and r
 walk a tight arc left and right (0.3 m/s, +-0.8 rad/s), and walk slowly on (0.5 m/s). The stop
 counts as *left* when one of them takes at least two steps; otherwise the actor is *trapped*
 there (issue 2: "a later command that turns it away lets it go on").
+
+A second table turns on the spot at the floor's edge (flat, gap and blocks courses): standing
+0.4-0.7 m from the edge facing it at 60, 90 or 120 degrees, told (0, +-1) for 4 s, with and
+without ``ActorConfig.pivot_turn``; a turn counts when the heading changed by more than 1 rad.
 """
 import argparse
 import os
@@ -102,8 +106,31 @@ def main(argv=None):
     print('|---:|---:|---:|---:|---:|---:|---:|')
     print(f'| {walks} | {failures} | {walked:.0f} | {100 * stuck_time / total_time:.0f} % | '
           f'{stops} | {stops - trapped} | {trapped} |')
+    print('\n| turns on the spot at the edge | turned | stuck in place | checker failures |')
+    print('|---|---:|---:|---:|')
+    for label, pivot in (('pivot (default)', ActorConfig().pivot_turn), ('no pivot', 0.0)):
+        turned, failures = edge_turns(sk, pivot)
+        print(f'| {label} | {turned.sum()} of {turned.size} | {(~turned).sum()} | {failures} |')
     print_command(__file__, argv)
     return 0
+
+
+def edge_turns(sk, pivot):
+    """(turned (N,) bool, checker failures) of the turns on the spot at the floor's edge."""
+    turned, failures = [], 0
+    for name in ('flat', 'gap', 'blocks'):
+        sc = scene(name)
+        for distance in (0.4, 0.5, 0.6, 0.7):
+            for facing in (np.pi / 3, np.pi / 2, 2 * np.pi / 3):
+                for rate in (1.0, -1.0):
+                    actor = Actor(sk, sc.environment, ActorConfig(pivot_turn=pivot),
+                                  start=(1.0, 2.0 - distance, facing))
+                    blocks = run_commands(actor, [0.0, 4.0], [0.0, 0.0], [rate, 0.0])
+                    t = np.concatenate([b.times for b in blocks])
+                    frames = np.vstack([b.frames for b in blocks])
+                    failures += not check_trajectory(sk, sc.environment, t, frames).ok
+                    turned.append(abs(frames[-1, 3] - facing) > 1.0)
+    return np.array(turned), failures
 
 
 if __name__ == '__main__':

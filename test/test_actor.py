@@ -205,3 +205,50 @@ def test_bad_pause_names_the_field(value):
 def test_bad_preview_distance_names_the_field():
     with pytest.raises(ValueError, match='upper_body_preview_distance'):
         validate(ActorConfig(upper_body_preview_distance=-0.5))
+
+
+@pytest.mark.parametrize('value', [-0.1, 1.5, float('nan')])
+def test_bad_pivot_turn_names_the_field(value):
+    with pytest.raises(ValueError, match='pivot_turn'):
+        validate(ActorConfig(pivot_turn=value))
+
+
+def turn_on_the_spot(rate, config, start=(1.0, 1.5, np.pi / 3), speed=0.0, seconds=4.0):
+    """The actor 0.5 m from the flat floor's edge (y = 2 m), facing 60 degrees to it, told to
+    turn at ``rate`` (towards the edge first when positive). Returns blocks and report."""
+    from digital_actor_planner.core.trajectory_check import check_trajectory
+    sc = scene('flat')
+    actor = Actor(skeleton(), sc.environment, config, start=start)
+    blocks = run_commands(actor, [0.0, seconds], [speed, 0.0], [rate, 0.0])
+    times = np.concatenate([b.times for b in blocks])
+    frames = np.vstack([b.frames for b in blocks])
+    return blocks, check_trajectory(skeleton(), sc.environment, times, frames)
+
+
+def test_a_turn_on_the_spot_facing_an_edge_pivots_instead_of_stopping():
+    """The tight arc of a turn on the spot reaches over the floor's edge and is refused; the
+    actor pivots about its stance hip until the arc is clear, then walks its turn."""
+    blocks, report = turn_on_the_spot(1.0, ActorConfig(plan_upper_body=False))
+    assert report.ok, report.failures()
+    assert any(b.category == 'pivot' for b in blocks)
+    turned = blocks[-1].frames[-1, 3] - np.pi / 3
+    assert turned > 2.0, turned
+    assert not any(b.status == 'stuck' for b in blocks)
+    # Without the pivot the same command leaves it standing there, stuck.
+    plain, _ = turn_on_the_spot(1.0, ActorConfig(plan_upper_body=False, pivot_turn=0.0))
+    assert plain[-1].status == 'stuck' and abs(plain[-1].frames[-1, 3] - np.pi / 3) < 1e-9
+    assert not any(b.status == 'walking' for b in plain)
+
+
+def test_a_pivot_turns_no_faster_than_asked_and_only_on_the_spot():
+    blocks, report = turn_on_the_spot(0.3, ActorConfig(plan_upper_body=False))
+    assert report.ok, report.failures()
+    pivots = [b for b in blocks if b.category == 'pivot']
+    assert pivots
+    for block in pivots:
+        turn = block.frames[-1, 3] - block.frames[0, 3]
+        duration = block.times[-1] - block.times[0] + 0.01
+        assert 0 < turn <= 0.3 * duration * 1.05, (turn, duration)
+    # Walking on (0.3 m/s is above the gait's min_turn_speed) is not a turn on the spot.
+    walking, _ = turn_on_the_spot(1.0, ActorConfig(plan_upper_body=False), speed=0.3)
+    assert not any(b.category == 'pivot' for b in walking)

@@ -52,6 +52,11 @@ class ActorConfig:
     # from a standstill after a pause this long (s, 0: never): with the pelvis still, an arm can
     # get clear before the step moves the body (an arm between a pillar and the turned body).
     upper_body_pause: float = 0.2
+    # When a turn on the spot (|w| >= 0.2 rad/s, v below the gait's min_turn_speed) finds no
+    # footstep along its tight arc (facing an edge, the arc's footholds reach over it), the
+    # actor pivots instead: the swing foot lands beside the stance foot, turned up to this far
+    # (rad) towards the turn, and the pelvis turns half as far about the stance hip (0: never).
+    pivot_turn: float = 0.8
     upper_body_check_budget: int = 15000
     upper_body_attempts: int = 6
     footsteps: FootstepConfig = field(default_factory=FootstepConfig)
@@ -93,6 +98,8 @@ def validate(config: ActorConfig) -> None:
                          f'{config.upper_body_preview_margin}')
     if not 0 <= config.upper_body_pause <= 2.0:
         raise ValueError(f'upper_body_pause must be in [0, 2] s, got {config.upper_body_pause}')
+    if not 0 <= config.pivot_turn <= 1.0:
+        raise ValueError(f'pivot_turn must be in [0, 1] rad, got {config.pivot_turn}')
     if config.upper_body_check_budget < 1:
         raise ValueError(f'upper_body_check_budget must be >= 1, got '
                          f'{config.upper_body_check_budget}')
@@ -451,8 +458,66 @@ class Actor:
             block = self._paused_step(stance, path, v, w, first_blocked, path_points, started)
             if block is not None:
                 return block
+        block = self._pivot_step(stance, v, w, started)
+        if block is not None:
+            return block
         self._failure = ((self._steps, v, w), reason)
         return self._stuck(reason, started, np.zeros((0, 4)), path_points)
+
+    def _pivot_step(self, stance: Stance, v: float, w: float,
+                    started: float) -> Optional[StepBlock]:
+        """A step turning the actor about its stance hip (see ``ActorConfig.pivot_turn``).
+
+        The swing foot lands under its hip, the stance hip stays over the stance ankle and the
+        pelvis turns to halfway between the feet. A foot on the turn's side (the left one in a
+        left turn) lands turned from the stance foot, toes out, by ``pivot_turn`` or less (no
+        faster than ``w``); the other comes in parallel to the stance foot (toes turned in, the
+        two would meet). None when the command is not a turn on the spot or the step cannot
+        be taken.
+        """
+        cfg, leg = self.config, self.skeleton.leg
+        if cfg.pivot_turn <= 0 or abs(w) < 0.2 or v >= cfg.gait.min_turn_speed:
+            return None
+        foot = stance.feet[stance.stance_side]
+        if abs(foot.pitch) > 0.05:
+            return None
+        swing_side = 1 - stance.stance_side
+        toes_out = (swing_side == LEFT) == (w > 0)
+        duration = self._walk.step_duration(0.3, 0.6, 0.0)
+        # No faster than asked: the pelvis turns half the angle between the feet per step.
+        spread = min(cfg.pivot_turn, 2.0 * abs(w) * duration)
+        landing_yaw = foot.yaw + (float(np.sign(w)) * spread if toes_out else 0.0)
+        pelvis_yaw = 0.5 * (foot.yaw + landing_yaw)
+        across = np.array([-np.sin(pelvis_yaw), np.cos(pelvis_yaw)])
+        offset = leg.hip_half_width if stance.stance_side == LEFT else -leg.hip_half_width
+        pelvis_xy = foot.xy - offset * across
+        landing_xy = pelvis_xy - offset * across
+        # The whole sole on level support at the stance foot's height: its centre line and
+        # corners (the 3D check below only looks for collisions).
+        along = np.array([np.cos(landing_yaw), np.sin(landing_yaw)])
+        side = np.array([-along[1], along[0]])
+        points = np.array([landing_xy + a * along + b * side
+                           for a in (-leg.heel, 0.5 * (leg.toe - leg.heel), leg.toe)
+                           for b in (-0.5 * leg.foot_width, 0.0, 0.5 * leg.foot_width)])
+        ground, _ = self.environment.ground_height(points, foot.sole + 0.05)
+        if np.isnan(ground).any() or np.abs(ground - foot.sole).max() > 0.01:
+            return None
+        target = np.array([pelvis_xy[0], pelvis_xy[1], pelvis_yaw])
+        try:
+            motion = self._timed_step(stance, landing_xy, landing_yaw, foot.sole, 0.0, target,
+                                      duration, to_rest=True)
+        except GaitError:
+            return None
+        if self._verify(motion.frames) is not None:
+            return None
+        frames, ok, _ = self._upper_body(motion.times, motion.frames)
+        if not ok:
+            return None
+        self._window = None
+        self._previous_length = 0.0
+        return self._commit('walking', '', motion.times, frames,
+                            with_at_rest(motion.stance, True), np.zeros((0, 4)),
+                            np.zeros((0, 3)), started, 'pivot')
 
     def _paused_step(self, stance: Stance, path, v: float, w: float, blocked, path_points,
                      started: float) -> Optional[StepBlock]:
