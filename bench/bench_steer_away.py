@@ -13,7 +13,9 @@ Where a walk first stops (stuck), the walk is replayed to 0.3 s after the stop a
 then steers away with each of five commands for 4 s: turn on the spot left and right (0, +-1),
 walk a tight arc left and right (0.3 m/s, +-0.8 rad/s), and walk slowly on (0.5 m/s). The stop
 counts as *left* when one of them takes at least two steps; otherwise the actor is *trapped*
-there (issue 2: "a later command that turns it away lets it go on").
+there (issue 2: "a later command that turns it away lets it go on"). Also counted: steps in
+which the two feet's collision boxes interpenetrate (the checker does not judge the body
+against itself).
 
 A second table turns on the spot at the floor's edge (flat, gap and blocks courses): standing
 0.4-0.7 m from the edge facing it at 60, 90 or 120 degrees, told (0, +-1) for 4 s, with and
@@ -23,6 +25,7 @@ import argparse
 import os
 import sys
 
+import fcl
 import numpy as np
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
@@ -49,6 +52,32 @@ def zigzag(seed: int, duration: float = 12.0):
     return times, linear.tolist(), angular.tolist()
 
 
+class FeetOverlap:
+    """Whether the two feet's collision boxes interpenetrate (the checker judges links against
+    the meshes only, not against each other)."""
+
+    def __init__(self, sk):
+        self.sk = sk
+        self.shapes = [next(i for i, shape in enumerate(sk.collision_shapes)
+                            if shape.link == link and shape.kind == 'box')
+                       for link in ('left_foot', 'right_foot')]
+        self.boxes = [fcl.CollisionObject(fcl.Box(*sk.collision_shapes[i].size), fcl.Transform())
+                      for i in self.shapes]
+
+    def depth(self, frames) -> float:
+        """Deepest interpenetration of the feet over ``frames``, m (0 when apart)."""
+        transforms = self.sk.shape_transforms_at(frames, self.shapes)
+        worst = 0.0
+        for pair in transforms:
+            for box, transform in zip(self.boxes, pair):
+                box.setTransform(fcl.Transform(transform[:3, :3], transform[:3, 3]))
+            request = fcl.CollisionRequest(num_max_contacts=4, enable_contact=True)
+            result = fcl.CollisionResult()
+            if fcl.collide(self.boxes[0], self.boxes[1], request, result):
+                worst = max([worst] + [c.penetration_depth for c in result.contacts])
+        return worst
+
+
 def walk(sk, sc, times, linear, angular):
     actor = Actor(sk, sc.environment, ActorConfig(), start=sc.start)
     return run_commands(actor, times, linear, angular)
@@ -62,6 +91,9 @@ def main(argv=None):
     args = parser.parse_args(argv)
     sk = skeleton()
     walks = failures = stops = trapped = 0
+    feet = FeetOverlap(sk)
+    steps = overlapping = 0
+    deepest = 0.0
     walked = stuck_time = total_time = 0.0
     for name in args.courses:
         sc = scene(name)
@@ -77,6 +109,12 @@ def main(argv=None):
                 print(f'{name} seed {seed}: checker: {"; ".join(report.failures()[:2])}',
                       flush=True)
             walked += float(np.hypot(*np.diff(frames[:, :2], axis=0).T).sum())
+            for block in blocks:
+                if block.category:  # a step (holds have none)
+                    steps += 1
+                    depth = feet.depth(block.frames)
+                    overlapping += depth > 0
+                    deepest = max(deepest, depth)
             stuck_time += sum(b.times[-1] - b.times[0] for b in blocks if b.status == 'stuck')
             total_time += float(t[-1])
             first = next((b for b in blocks if b.status == 'stuck'), None)
@@ -106,6 +144,8 @@ def main(argv=None):
     print('|---:|---:|---:|---:|---:|---:|---:|')
     print(f'| {walks} | {failures} | {walked:.0f} | {100 * stuck_time / total_time:.0f} % | '
           f'{stops} | {stops - trapped} | {trapped} |')
+    print(f'\nSteps with the feet interpenetrating: {overlapping} of {steps} '
+          f'(deepest {1e3 * deepest:.0f} mm).')
     print('\n| turns on the spot at the edge | turned | stuck in place | checker failures |')
     print('|---|---:|---:|---:|')
     for label, pivot in (('pivot (default)', ActorConfig().pivot_turn), ('no pivot', 0.0)):
