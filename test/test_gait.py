@@ -214,8 +214,9 @@ def test_in_a_turn_the_pelvis_slows_towards_lift_off_and_steps_join_at_one_speed
         assert slow[0] * mean < v[boundary - 1] < slow[1] * mean, (v[boundary - 1], mean)
         if config.turn_ease_heading:
             assert abs(v[boundary] - v[boundary - 1]) < 0.2 * mean
-    # Feet twice as far apart in heading: the pelvis all but stops between the steps.
-    frames, k = steady_turn(skeleton, 0.5)
+    # Feet as far apart in heading as turn_ease_heading: the pelvis all but stops between the
+    # steps.
+    frames, k = steady_turn(skeleton, 0.25, GaitConfig(turn_ease_heading=0.25))
     v = speeds(frames)
     assert v[2 * k - 1] < 0.1 * v[:3 * k].mean()
 
@@ -247,3 +248,28 @@ def test_a_large_turn_keeps_the_swing_hip_yaw_in_range_in_mid_swing(skeleton, wa
     foot = skeleton.forward_kinematics(motion.frames[-1:])[0, skeleton.link_index['left_foot']]
     assert np.arctan2(foot[1, 0], foot[0, 0]) == pytest.approx(0.2938, abs=1e-6)
     np.testing.assert_allclose(foot[:2, 3], landed.xy, atol=1e-6)
+
+
+def test_a_foot_turned_in_onto_the_other_is_refused_one_turned_out_is_clear(
+        skeleton, walker):
+    """The walk generator refuses a step whose swinging foot would pass into the stance foot
+    (seen from above, wherever it is not above the other's top); a step it takes keeps the
+    feet's collision boxes apart in every frame (FCL, the URDF's own boxes)."""
+    import fcl
+    stance = standing_stance(skeleton, 0.0, 0.0, 0.0, 0.0, stance_side=RIGHT)
+
+    def short_step(yaw):
+        return walker.step(stance, np.array([0.05, -0.05]), yaw, 0.0, 0.0,
+                           np.array([0.025, 0.0, yaw / 2]), 0.6, flat())
+
+    with pytest.raises(GaitError, match='pass into the stance foot'):
+        short_step(-0.7)  # the left foot's toes turned in across the right foot
+    motion = short_step(0.5)  # toes out
+    shapes = [next(i for i, s in enumerate(skeleton.collision_shapes)
+                   if s.link == link and s.kind == 'box') for link in ('left_foot', 'right_foot')]
+    boxes = [fcl.CollisionObject(fcl.Box(*skeleton.collision_shapes[i].size), fcl.Transform())
+             for i in shapes]
+    for pair in skeleton.shape_transforms_at(motion.frames, shapes):
+        for box, transform in zip(boxes, pair):
+            box.setTransform(fcl.Transform(transform[:3, :3], transform[:3, 3]))
+        assert not fcl.collide(boxes[0], boxes[1], fcl.CollisionRequest(), fcl.CollisionResult())

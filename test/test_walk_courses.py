@@ -150,5 +150,6 @@ def test_after_a_zigzag_to_the_floor_edge_the_actor_turns_away_when_steered():
     frames = np.vstack([b.frames for b in blocks])
     report = check_trajectory(skeleton(), sc.environment, times, frames)
     assert report.ok, report.failures()
-    # It turned back towards the middle of the floor (the edge is at y = -2 m).
-    assert frames[-1, 1] > before[-1].frames[-1, 1]
+    # It turned left, away from the edge it faced (the edge is at y = -2 m, the actor faced
+    # -1.03 rad).
+    assert frames[-1, 3] - before[-1].frames[-1, 3] > 1.0

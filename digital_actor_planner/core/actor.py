@@ -15,7 +15,7 @@ import numpy as np
 
 from .footsteps import (FootstepConfig, FootstepPlanner, FootstepWindow, LEFT, RIGHT,
                         sample_ground_profile, validate_footstep_config)
-from .gait import (GaitConfig, GaitError, hold_frames, Stance, standing_stance,
+from .gait import (GaitConfig, GaitError, hold_frames, Stance, standing_stance, StepMotion,
                    validate_gait_config, WalkGenerator, with_at_rest)
 from .path import predict_path
 from .skeleton import Skeleton
@@ -52,10 +52,11 @@ class ActorConfig:
     # from a standstill after a pause this long (s, 0: never): with the pelvis still, an arm can
     # get clear before the step moves the body (an arm between a pillar and the turned body).
     upper_body_pause: float = 0.2
-    # When a turn on the spot (|w| >= 0.2 rad/s, v below the gait's min_turn_speed) finds no
-    # footstep along its tight arc (facing an edge, the arc's footholds reach over it), the
-    # actor pivots instead: the swing foot lands beside the stance foot, turned up to this far
-    # (rad) towards the turn, and the pelvis turns half as far about the stance hip (0: never).
+    # When a tight turn (|w| >= 0.2 rad/s, radius v / |w| under PIVOT_RADIUS, a turn on the
+    # spot too) finds no footstep along its arc (facing an edge the arc's footholds reach over
+    # it; the inner foot would meet the outer one), the actor pivots instead: the swing foot
+    # lands beside the stance foot, turned up to this far (rad) towards the turn, and the
+    # pelvis turns half as far about the stance hip (0: never).
     pivot_turn: float = 0.8
     upper_body_check_budget: int = 15000
     upper_body_attempts: int = 6
@@ -105,6 +106,10 @@ def validate(config: ActorConfig) -> None:
                          f'{config.upper_body_check_budget}')
     validate_footstep_config(config.footstep_config())
     validate_gait_config(config.gait_config())
+
+
+#: Turns tighter than this radius (m) pivot where their arc is refused (see ``pivot_turn``).
+PIVOT_RADIUS = 0.5
 
 
 @dataclass(frozen=True)
@@ -472,11 +477,11 @@ class Actor:
         pelvis turns to halfway between the feet. A foot on the turn's side (the left one in a
         left turn) lands turned from the stance foot, toes out, by ``pivot_turn`` or less (no
         faster than ``w``); the other comes in parallel to the stance foot (toes turned in, the
-        two would meet). None when the command is not a turn on the spot or the step cannot
-        be taken.
+        two would meet). None when the command is not a tight turn or the step cannot be
+        taken.
         """
         cfg, leg = self.config, self.skeleton.leg
-        if cfg.pivot_turn <= 0 or abs(w) < 0.2 or v >= cfg.gait.min_turn_speed:
+        if cfg.pivot_turn <= 0 or abs(w) < 0.2 or v >= PIVOT_RADIUS * abs(w):
             return None
         foot = stance.feet[stance.stance_side]
         if abs(foot.pitch) > 0.05:
@@ -486,27 +491,19 @@ class Actor:
         duration = self._walk.step_duration(0.3, 0.6, 0.0)
         # No faster than asked: the pelvis turns half the angle between the feet per step.
         spread = min(cfg.pivot_turn, 2.0 * abs(w) * duration)
-        landing_yaw = foot.yaw + (float(np.sign(w)) * spread if toes_out else 0.0)
-        pelvis_yaw = 0.5 * (foot.yaw + landing_yaw)
-        across = np.array([-np.sin(pelvis_yaw), np.cos(pelvis_yaw)])
+        if toes_out:
+            turns = (float(np.sign(w)) * spread, 0.5 * float(np.sign(w)) * spread)
+        else:
+            # From feet already apart (a V after an arc), coming all the way in parallel can
+            # sweep the turning foot into the other: half-way, or keep its heading.
+            now = float(stance.feet[swing_side].yaw - foot.yaw)
+            turns = (0.0, 0.5 * now, now)
         offset = leg.hip_half_width if stance.stance_side == LEFT else -leg.hip_half_width
-        pelvis_xy = foot.xy - offset * across
-        landing_xy = pelvis_xy - offset * across
-        # The whole sole on level support at the stance foot's height: its centre line and
-        # corners (the 3D check below only looks for collisions).
-        along = np.array([np.cos(landing_yaw), np.sin(landing_yaw)])
-        side = np.array([-along[1], along[0]])
-        points = np.array([landing_xy + a * along + b * side
-                           for a in (-leg.heel, 0.5 * (leg.toe - leg.heel), leg.toe)
-                           for b in (-0.5 * leg.foot_width, 0.0, 0.5 * leg.foot_width)])
-        ground, _ = self.environment.ground_height(points, foot.sole + 0.05)
-        if np.isnan(ground).any() or np.abs(ground - foot.sole).max() > 0.01:
-            return None
-        target = np.array([pelvis_xy[0], pelvis_xy[1], pelvis_yaw])
-        try:
-            motion = self._timed_step(stance, landing_xy, landing_yaw, foot.sole, 0.0, target,
-                                      duration, to_rest=True)
-        except GaitError:
+        for turn in turns:
+            motion = self._pivot_motion(stance, foot, turn, offset, duration, np.sign(w))
+            if motion is not None:
+                break
+        else:
             return None
         if self._verify(motion.frames) is not None:
             return None
@@ -518,6 +515,36 @@ class Actor:
         return self._commit('walking', '', motion.times, frames,
                             with_at_rest(motion.stance, True), np.zeros((0, 4)),
                             np.zeros((0, 3)), started, 'pivot')
+
+    def _pivot_motion(self, stance: Stance, foot, turn: float, offset: float,
+                      duration: float, direction: float) -> Optional[StepMotion]:
+        """The pivot's leg motion landing the swing foot ``turn`` rad from the stance foot's
+        heading, or None where the pelvis would turn against ``direction`` (+-1), the sole
+        would not rest level or the step cannot be made."""
+        leg = self.skeleton.leg
+        landing_yaw = foot.yaw + turn
+        pelvis_yaw = 0.5 * (foot.yaw + landing_yaw)
+        if (pelvis_yaw - stance.pelvis[3]) * direction < -1e-3:
+            return None  # it would turn back (not turning at all hands over to the other foot)
+        across = np.array([-np.sin(pelvis_yaw), np.cos(pelvis_yaw)])
+        pelvis_xy = foot.xy - offset * across
+        landing_xy = pelvis_xy - offset * across
+        # The whole sole on level support at the stance foot's height: its centre line and
+        # corners (the 3D check after this only looks for collisions).
+        along = np.array([np.cos(landing_yaw), np.sin(landing_yaw)])
+        side = np.array([-along[1], along[0]])
+        points = np.array([landing_xy + a * along + b * side
+                           for a in (-leg.heel, 0.5 * (leg.toe - leg.heel), leg.toe)
+                           for b in (-0.5 * leg.foot_width, 0.0, 0.5 * leg.foot_width)])
+        ground, _ = self.environment.ground_height(points, foot.sole + 0.05)
+        if np.isnan(ground).any() or np.abs(ground - foot.sole).max() > 0.01:
+            return None
+        target = np.array([pelvis_xy[0], pelvis_xy[1], pelvis_yaw])
+        try:
+            return self._timed_step(stance, landing_xy, landing_yaw, foot.sole, 0.0, target,
+                                    duration, to_rest=True)
+        except GaitError:
+            return None
 
     def _paused_step(self, stance: Stance, path, v: float, w: float, blocked, path_points,
                      started: float) -> Optional[StepBlock]:

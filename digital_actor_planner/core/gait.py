@@ -606,6 +606,7 @@ class WalkGenerator:
                 break
             swing_pitch = swing_pitch + correction
 
+        self._check_feet_apart(foot_s, swing_xy, direction, swing_z)
         foot_end = [None, None]
         foot_end[stance_side] = foot_s
         frames = np.zeros((k, len(self.skeleton.joint_names)))
@@ -659,6 +660,39 @@ class WalkGenerator:
                      (feet[0], feet[1]), swing_side, to_rest)
         return StepMotion(times=tau * duration, frames=frames, stance=end, category=category,
                           swing_lift=lift, lateral_error=lateral_error)
+
+    def _check_feet_apart(self, stance_foot: FootPose, swing_xy: np.ndarray,
+                          direction: np.ndarray, swing_z: np.ndarray) -> None:
+        """Raise GaitError if the swinging foot would pass into the stance foot.
+
+        The feet are the soles' boxes seen from above, wherever the swinging one is not above
+        the other's top (its ankle): a separating-axis test per such frame. In a tight arc or
+        where a turn reverses, a footstep can otherwise land on the other foot or sweep
+        through it.
+        """
+        leg = self.leg
+        low = swing_z < stance_foot.z + leg.ankle_height
+        if not low.any():
+            return
+        shift = 0.5 * (leg.toe - leg.heel)  # ankle -> middle of the sole
+        half_length = 0.5 * (leg.heel + leg.toe)
+        half_width = 0.5 * leg.foot_width
+        ux, uy = math.cos(stance_foot.yaw), math.sin(stance_foot.yaw)
+        dx, dy = direction[low, 0], direction[low, 1]
+        gap_x = swing_xy[low, 0] + shift * dx - (stance_foot.xy[0] + shift * ux)
+        gap_y = swing_xy[low, 1] + shift * dy - (stance_foot.xy[1] + shift * uy)
+        # |cos| and |sin| of the angle between the feet: the projections of one sole's axes
+        # (along, across) on the other's.
+        along = np.abs(dx * ux + dy * uy)
+        across = np.abs(dy * ux - dx * uy)
+        long_reach = half_length + half_length * along + half_width * across
+        wide_reach = half_width + half_length * across + half_width * along
+        apart = ((np.abs(gap_x * ux + gap_y * uy) > long_reach)
+                 | (np.abs(gap_y * ux - gap_x * uy) > wide_reach)
+                 | (np.abs(gap_x * dx + gap_y * dy) > long_reach)
+                 | (np.abs(gap_y * dx - gap_x * dy) > wide_reach))
+        if not apart.all():
+            raise GaitError('the swing foot would pass into the stance foot')
 
     def _check_leg(self, side: int, joints: np.ndarray, reach: np.ndarray) -> None:
         """Raise GaitError if a leg's (k, 4) joints leave their limits or it is out of reach."""
