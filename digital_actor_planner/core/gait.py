@@ -681,6 +681,12 @@ class WalkGenerator:
         dx, dy = direction[low, 0], direction[low, 1]
         gap_x = swing_xy[low, 0] + shift * dx - (stance_foot.xy[0] + shift * ux)
         gap_y = swing_xy[low, 1] + shift * dy - (stance_foot.xy[1] + shift * uy)
+        # Soles whose middles are farther apart than two half-diagonals cannot meet (most
+        # frames of most steps): only the others are tested.
+        near = gap_x * gap_x + gap_y * gap_y < 4.0 * (half_length ** 2 + half_width ** 2)
+        if not near.any():
+            return
+        dx, dy, gap_x, gap_y = dx[near], dy[near], gap_x[near], gap_y[near]
         # |cos| and |sin| of the angle between the feet: the projections of one sole's axes
         # (along, across) on the other's.
         along = np.abs(dx * ux + dy * uy)
