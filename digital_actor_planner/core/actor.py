@@ -505,6 +505,12 @@ class Actor:
                 break
         else:
             return None
+        return self._checked_step_to_rest(motion, started, 'walking', '', 'pivot')
+
+    def _checked_step_to_rest(self, motion: StepMotion, started: float, status: str,
+                              reason: str, category: str) -> Optional[StepBlock]:
+        """Commit a step that ends at rest off the footstep window (a pivot, a closing step)
+        once it is 3D-checked and its upper body planned; None when either fails."""
         if self._verify(motion.frames) is not None:
             return None
         frames, ok, _ = self._upper_body(motion.times, motion.frames)
@@ -512,9 +518,9 @@ class Actor:
             return None
         self._window = None
         self._previous_length = 0.0
-        return self._commit('walking', '', motion.times, frames,
+        return self._commit(status, reason, motion.times, frames,
                             with_at_rest(motion.stance, True), np.zeros((0, 4)),
-                            np.zeros((0, 3)), started, 'pivot')
+                            np.zeros((0, 3)), started, category)
 
     def _pivot_motion(self, stance: Stance, foot, turn: float, offset: float,
                       duration: float, direction: float) -> Optional[StepMotion]:
@@ -647,16 +653,7 @@ class Actor:
                                       to_rest=True)
         except GaitError:
             return None
-        if self._verify(motion.frames) is not None:
-            return None
-        frames, ok, _ = self._upper_body(motion.times, motion.frames)
-        if not ok:
-            return None
-        self._window = None
-        self._previous_length = 0.0
-        return self._commit('idle', 'stopping', motion.times, frames,
-                            with_at_rest(motion.stance, True), np.zeros((0, 4)),
-                            np.zeros((0, 3)), started, 'closing')
+        return self._checked_step_to_rest(motion, started, 'idle', 'stopping', 'closing')
 
     def _obstacles(self, xy: np.ndarray, z_ref: float) -> np.ndarray:
         """Heights a swinging sole must clear at ``xy`` (NaN over empty space)."""
