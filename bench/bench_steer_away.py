@@ -31,9 +31,8 @@ import numpy as np
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
 from bench_common import print_command  # noqa: E402
-from course_runs import scene, skeleton  # noqa: E402
+from course_runs import judged, scene, skeleton  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
-from digital_actor_planner.core.trajectory_check import check_trajectory  # noqa: E402
 
 COURSES = ('flat', 'rough', 'blocks', 'stairs_up', 'gap', 'low_beam', 'table', 'pillars')
 AWAY = ((0.0, 1.0), (0.0, -1.0), (0.3, 0.8), (0.3, -0.8), (0.5, 0.0))
@@ -100,9 +99,7 @@ def main(argv=None):
         for seed in range(args.seeds):
             times, linear, angular = zigzag(seed)
             blocks = walk(sk, sc, times, linear, angular)
-            t = np.concatenate([b.times for b in blocks])
-            frames = np.vstack([b.frames for b in blocks])
-            report = check_trajectory(sk, sc.environment, t, frames)
+            t, frames, report = judged(blocks, sc.environment)
             walks += 1
             if not report.ok:
                 failures += 1
@@ -166,9 +163,8 @@ def edge_turns(sk, pivot):
                     actor = Actor(sk, sc.environment, ActorConfig(pivot_turn=pivot),
                                   start=(1.0, 2.0 - distance, facing))
                     blocks = run_commands(actor, [0.0, 4.0], [0.0, 0.0], [rate, 0.0])
-                    t = np.concatenate([b.times for b in blocks])
-                    frames = np.vstack([b.frames for b in blocks])
-                    failures += not check_trajectory(sk, sc.environment, t, frames).ok
+                    _, frames, report = judged(blocks, sc.environment)
+                    failures += not report.ok
                     turned.append(abs(frames[-1, 3] - facing) > 1.0)
     return np.array(turned), failures
 

@@ -10,6 +10,7 @@ from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import load_scene
 from digital_actor_planner.core.footsteps import FootstepConfig
 from digital_actor_planner.core.skeleton import Skeleton
+from digital_actor_planner.core.trajectory_check import check_trajectory
 from digital_actor_planner.core.upper_body import UpperBodyConfig, UpperBodyPlanner
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -24,6 +25,14 @@ def skeleton():
 @functools.lru_cache(maxsize=None)
 def scene(name):
     return load_scene(os.path.join(SCENES, name + '.yaml'), skeleton())
+
+
+def judged(blocks, environment):
+    """(times, frames, report): a walk's blocks stacked and judged by the independent
+    checker against ``environment``."""
+    times = np.concatenate([b.times for b in blocks])
+    frames = np.vstack([b.frames for b in blocks])
+    return times, frames, check_trajectory(skeleton(), environment, times, frames)
 
 
 @functools.lru_cache(maxsize=None)

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from course_runs import scene, skeleton
+from course_runs import judged, scene, skeleton
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands, validate
 from digital_actor_planner.core.upper_body import UpperBodyPlan
 
@@ -216,13 +216,10 @@ def test_bad_pivot_turn_names_the_field(value):
 def turn_on_the_spot(rate, config, start=(1.0, 1.5, np.pi / 3), speed=0.0, seconds=4.0):
     """The actor 0.5 m from the flat floor's edge (y = 2 m), facing 60 degrees to it, told to
     turn at ``rate`` (towards the edge first when positive). Returns blocks and report."""
-    from digital_actor_planner.core.trajectory_check import check_trajectory
     sc = scene('flat')
     actor = Actor(skeleton(), sc.environment, config, start=start)
     blocks = run_commands(actor, [0.0, seconds], [speed, 0.0], [rate, 0.0])
-    times = np.concatenate([b.times for b in blocks])
-    frames = np.vstack([b.frames for b in blocks])
-    return blocks, check_trajectory(skeleton(), sc.environment, times, frames)
+    return blocks, judged(blocks, sc.environment)[2]
 
 
 def test_a_turn_on_the_spot_facing_an_edge_pivots_instead_of_stopping():

@@ -7,7 +7,7 @@ limits hold, no NaN or jumps, a stance foot slides <= 1 cm.
 import numpy as np
 import pytest
 
-from course_runs import course_names, scene, simulate, skeleton
+from course_runs import course_names, judged, scene, simulate, skeleton
 from digital_actor_planner.core.gait import GaitConfig
 from digital_actor_planner.core.trajectory_check import check_trajectory
 
@@ -101,9 +101,8 @@ def turning_walk(speed, rate, gait=None):
     config = ActorConfig(plan_upper_body=False, gait=gait or GaitConfig())
     actor = Actor(skeleton(), sc.environment, config, start=sc.start)
     blocks = run_commands(actor, [0.0, 1.5, 7.0], [speed, speed, 0.0], [0.0, rate, 0.0])
-    times = np.concatenate([b.times for b in blocks])
-    frames = np.vstack([b.frames for b in blocks])
-    return check_trajectory(skeleton(), sc.environment, times, frames), frames[-1, 3]
+    _, frames, report = judged(blocks, sc.environment)
+    return report, frames[-1, 3]
 
 
 @pytest.mark.parametrize('speed, rate', [(1.1, 0.7), (0.8, 0.7), (1.1, 0.5), (0.5, 1.0),
@@ -146,9 +145,7 @@ def test_after_a_zigzag_to_the_floor_edge_the_actor_turns_away_when_steered():
     assert before[-1].status == 'stuck', 'it stopped at the edge'
     assert sum(b.status == 'walking' for b in after) >= 3
     assert not any(b.status == 'stuck' for b in after)
-    times = np.concatenate([b.times for b in blocks])
-    frames = np.vstack([b.frames for b in blocks])
-    report = check_trajectory(skeleton(), sc.environment, times, frames)
+    _, frames, report = judged(blocks, sc.environment)
     assert report.ok, report.failures()
     # It turned left, away from the edge it faced (the edge is at y = -2 m, the actor faced
     # -1.03 rad).

@@ -133,7 +133,7 @@ class StepBlock:
     planning_time
         Wall time spent planning this block, s.
     category
-        'level', 'uphill', 'downhill', 'closing' or '' for hold blocks.
+        'level', 'uphill', 'downhill', 'closing', 'pivot' or '' for hold blocks.
 
     """
 
@@ -476,9 +476,9 @@ class Actor:
         The swing foot lands under its hip, the stance hip stays over the stance ankle and the
         pelvis turns to halfway between the feet. A foot on the turn's side (the left one in a
         left turn) lands turned from the stance foot, toes out, by ``pivot_turn`` or less (no
-        faster than ``w``); the other comes in parallel to the stance foot (toes turned in, the
-        two would meet). None when the command is not a tight turn or the step cannot be
-        taken.
+        faster than ``w``), else by half that; the other comes in parallel to the stance foot
+        (turned in, the two would meet), else half-way or keeping its heading. None when the
+        command is not a tight turn or no such step can be taken.
         """
         cfg, leg = self.config, self.skeleton.leg
         if cfg.pivot_turn <= 0 or abs(w) < 0.2 or v >= PIVOT_RADIUS * abs(w):

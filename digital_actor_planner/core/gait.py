@@ -353,9 +353,8 @@ class WalkGenerator:
         self._leg_bounds = {s: (self._leg_lower[s] - 1e-9, self._leg_upper[s] + 1e-9)
                             for s in (LEFT, RIGHT)}
         # The hip yaw range a swinging foot's heading is held to, 0.01 rad inside the limits.
-        self._swing_yaw_range = {
-            s: (float(skeleton.lower[self._leg_index[s][0]]) + 0.01,
-                float(skeleton.upper[self._leg_index[s][0]]) - 0.01) for s in (LEFT, RIGHT)}
+        self._swing_yaw_range = {s: (float(self._leg_lower[s][0]) + 0.01,
+                                     float(self._leg_upper[s][0]) - 0.01) for s in (LEFT, RIGHT)}
         # Where the swing clearance looks under the sole: 9 points heel..toe, 2 across, m.
         self._sole_along = np.linspace(-self.leg.heel, self.leg.toe, 9)
         self._sole_across = np.array([-0.5, 0.5]) * self.leg.foot_width
