@@ -250,3 +250,51 @@ def test_a_pivot_turns_no_faster_than_asked_and_only_in_tight_turns():
     # stops; it does not pivot.
     walking, _ = turn_on_the_spot(1.0, ActorConfig(plan_upper_body=False), speed=0.6)
     assert not any(b.category == 'pivot' for b in walking)
+
+
+@pytest.mark.parametrize('value', [-0.1, 1.5, float('nan')])
+def test_bad_max_toe_in_names_the_field(value):
+    with pytest.raises(ValueError, match='max_toe_in'):
+        validate(ActorConfig(max_toe_in=value))
+
+
+def _feet_toe_in(skeleton, frames):
+    """(k,) how far the feet point towards each other, rad (negative: toes out)."""
+    transforms = skeleton.forward_kinematics(frames)
+    left = transforms[:, skeleton.link_index['left_foot']]
+    right = transforms[:, skeleton.link_index['right_foot']]
+    turn = np.arctan2(right[:, 1, 0], right[:, 0, 0]) - np.arctan2(left[:, 1, 0], left[:, 0, 0])
+    return (turn + np.pi) % (2 * np.pi) - np.pi
+
+
+def test_weaving_lands_the_feet_toed_in_no_more_than_max_toe_in_and_keeps_walking():
+    """A mouse weaving left and right (seed 25 of bench_steer_away.py's walks) reverses the turn
+    every second or so. Each landing foot may turn in towards the other by at most
+    ``max_toe_in``; the walk's steps end with the feet no more pigeon-toed than that, and the
+    checker (which judges the legs against each other) passes. With the bound as wide as
+    outwards (0.9 rad) the feet land further in; a next step's thighs would then meet as the
+    knees pass, the generator refuses such steps and the actor stands still instead."""
+    sc = scene('flat')
+    commands = [(0.0, 0.27, 0.76), (0.57, 0.0, -0.91), (0.87, 0.6, 0.7), (1.54, 0.39, -0.46),
+                (2.47, 0.92, 1.03), (2.77, 0.87, -0.35), (3.4, 0.97, 0.22), (5.38, 0.22, -0.66),
+                (7.02, 0.0, 0.15), (7.53, 0.44, -0.1), (8.21, 0.74, 1.13), (9.82, 0.28, -0.57),
+                (11.67, 1.13, 0.27), (12.58, 0.0, 0.0)]
+
+    def walk(config):
+        actor = Actor(skeleton(), sc.environment, config, start=sc.start)
+        return run_commands(actor, *zip(*commands))
+
+    config = ActorConfig(plan_upper_body=False)
+    blocks = walk(config)
+    ends = np.array([b.frames[-1] for b in blocks if b.category])
+    assert len(ends) >= 18
+    assert not any(b.status == 'stuck' for b in blocks)
+    assert _feet_toe_in(skeleton(), ends).max() <= config.max_toe_in + 1e-6
+    _, _, report = judged(blocks, sc.environment)
+    assert report.ok and report.leg_contacts == (), report.failures()
+    wide = walk(ActorConfig(plan_upper_body=False, max_toe_in=0.9))
+    refused = [b for b in wide if b.status == 'stuck' and 'legs would pass' in b.reason]
+    assert len(refused) >= 10
+    assert sum(b.category != '' for b in wide) < 0.7 * len(ends)
+    ends = np.array([b.frames[-1] for b in wide if b.category])
+    assert _feet_toe_in(skeleton(), ends).max() > 0.4

@@ -228,14 +228,16 @@ def test_turn_ease_must_be_a_finite_non_negative_angle():
 
 
 def test_a_large_turn_keeps_the_swing_hip_yaw_in_range_in_mid_swing(skeleton, walker):
-    """After a zigzag the feet point 0.87 rad apart and the next step turns the swing foot
-    1.77 rad (a stance captured from such a walk). The hip yaw starts (-0.44) and ends (0.45)
-    inside its +-0.6 rad range, but the foot's and the pelvis's turns follow different ramps:
-    the swing foot lags in the air instead of the step failing at 0.61 rad."""
+    """After a zigzag the feet point 0.35 rad in (as far as ``ActorConfig.max_toe_in`` lets a
+    landing turn in) and the next step turns the swing foot 1.25 rad, to 0.9 rad out (a stance
+    captured from such a walk, its left foot and pelvis turned to those bounds; it was 0.87 rad
+    in before the bound, where the thighs meet). The hip yaw starts and ends inside its +-0.6
+    rad range, but the foot's and the pelvis's turns follow different ramps: the swing foot
+    lags in the air instead of the step failing at the hip's limit."""
     from digital_actor_planner.core.gait import FootPose, Stance
-    left = FootPose(np.array([3.0423, -1.2923]), 0.0883, -1.4752, -0.0926, 0.0)
+    left = FootPose(np.array([3.0423, -1.2923]), 0.0883, -0.9562, -0.0926, 0.0)
     right = FootPose(np.array([3.2916, -1.7415]), 0.072, -0.6062, 0.0, 0.0)
-    stance = Stance(np.array([2.9726, -1.4210, 0.7457, -1.0407]), (left, right), RIGHT, True)
+    stance = Stance(np.array([2.9726, -1.4210, 0.7457, -0.78]), (left, right), RIGHT, True)
     motion = walker.step(stance, np.array([3.3061, -1.4029]), 0.2938, 0.0, 0.0,
                          np.array([3.3141, -1.5107, -0.1562]), 0.6, flat())
     hip_yaw = motion.frames[:, skeleton.index['left_hip_yaw']]
@@ -273,3 +275,59 @@ def test_a_foot_turned_in_onto_the_other_is_refused_one_turned_out_is_clear(
         for box, transform in zip(boxes, pair):
             box.setTransform(fcl.Transform(transform[:3, :3], transform[:3, 3]))
         assert not fcl.collide(boxes[0], boxes[1], fcl.CollisionRequest(), fcl.CollisionResult())
+
+
+def _legs_touch(skeleton, frames):
+    """Whether a thigh or shank of one leg touches one of the other's (FCL, URDF cylinders)."""
+    import fcl
+    links = [f'{side}_{part}' for side in ('left', 'right') for part in ('thigh', 'shank')]
+    shapes = [next(i for i, s in enumerate(skeleton.collision_shapes) if s.link == link)
+              for link in links]
+    objects = [fcl.CollisionObject(fcl.Cylinder(*skeleton.collision_shapes[i].size),
+                                   fcl.Transform()) for i in shapes]
+    for placed in skeleton.shape_transforms_at(frames, shapes):
+        for obj, transform in zip(objects, placed):
+            obj.setTransform(fcl.Transform(transform[:3, :3], transform[:3, 3]))
+        for a in (0, 1):
+            for b in (2, 3):
+                if fcl.collide(objects[a], objects[b], fcl.CollisionRequest(),
+                               fcl.CollisionResult()):
+                    return True
+    return False
+
+
+def test_with_the_feet_toed_in_the_swinging_foot_turns_out_so_the_thighs_pass(
+        skeleton, walker):
+    """A stance captured from a weaving walk: the feet point 0.35 rad towards each other (as far
+    as a landing may turn in, ``ActorConfig.max_toe_in``), and the next step keeps the left
+    foot's heading. Both thighs are turned in; as the swinging knee passes the stance knee
+    with both hips flexed they would meet, and the generator refuses such a step
+    (``swing_toe_in`` 10 rad: not bounded). By default the foot points at most
+    ``swing_toe_in`` in while it is in the air, lands as planned, and no thigh or shank
+    touches the other leg's (FCL, the URDF's cylinders)."""
+    from dataclasses import replace
+    from digital_actor_planner.core.gait import FootPose, Stance
+    left = FootPose(np.array([1.6705, 0.5454]), 0.072, 1.039, 0.0, 0.0)
+    right = FootPose(np.array([1.9718, 0.8566]), 0.072, 1.389, 0.0, 0.0)
+    stance = Stance(np.array([1.8477, 0.6718, 0.8711, 1.214]), (left, right), RIGHT, False)
+
+    def step(generator):
+        return generator.step(stance, np.array([2.2772, 1.3388]), 1.039, 0.0, 0.0,
+                              np.array([2.1127, 1.0899, 1.214]), 0.5, flat())
+
+    unbounded = WalkGenerator(skeleton, replace(GaitConfig(), swing_toe_in=10.0))
+    with pytest.raises(GaitError, match='legs would pass through each other'):
+        step(unbounded)
+    motion = step(walker)
+    assert not _legs_touch(skeleton, motion.frames)
+    transforms = skeleton.forward_kinematics(motion.frames)
+    foot = transforms[:, skeleton.link_index['left_foot']]
+    heading = np.arctan2(foot[:, 1, 0], foot[:, 0, 0])
+    # Toes in for the left foot: pointing right of the right foot's 1.389 rad. It turns out
+    # after lift-off and back in before touchdown; over the middle half of the swing, when the
+    # knees pass, it points no more than swing_toe_in in.
+    lifted = np.flatnonzero(foot[:, 2, 3] > 0.072 + 0.005)
+    middle = heading[lifted[0] + len(lifted) // 4:lifted[-1] - len(lifted) // 4]
+    assert len(middle) > 10
+    assert np.all(1.389 - middle <= GaitConfig().swing_toe_in + 1e-6)
+    assert heading[-1] == pytest.approx(1.039, abs=1e-6)

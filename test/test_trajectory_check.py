@@ -187,3 +187,35 @@ def test_a_link_wholly_inside_a_solid_is_found(skeleton, standing):
     assert report.penetration['right_foot'] == 0.0
     assert any(f.startswith('left_foot penetrates the environment by 198.0 mm')
                for f in report.failures())
+
+
+def test_legs_passing_through_each_other_fail_naming_the_links(skeleton, floor_world,
+                                                               standing):
+    """Knock-kneed: both thighs turned in and flexed until the knees meet. The checker judges
+    each leg's thigh, shank and foot against the other leg's (their URDF shapes, FCL)."""
+    times, frames = _hold(standing, 0.2)
+    assert check_trajectory(skeleton, floor_world, times, frames).leg_contacts == ()
+    index = skeleton.index
+    crossed = frames.copy()
+    for side, yaw in (('left', -0.6), ('right', 0.6)):
+        crossed[:, index[f'{side}_hip_yaw']] = yaw
+        crossed[:, index[f'{side}_hip_pitch']] = 0.8
+        crossed[:, index[f'{side}_knee']] = 0.8
+    report = check_trajectory(skeleton, floor_world, times, crossed)
+    pairs = {(a, b) for a, b, _, _ in report.leg_contacts}
+    assert ('left_thigh', 'right_thigh') in pairs
+    assert all(count == len(times) for _, _, _, count in report.leg_contacts)
+    assert any(f.startswith('left_thigh and right_thigh pass into each other (by more than '
+                            '3.0 mm) at t = 0.000 s') for f in report.failures())
+    # Turned in 0.084 rad the thighs' cylinders overlap by 1.8 mm (their axes 128.2 mm
+    # apart): within the default 3 mm, not within 1 mm.
+    touching = frames.copy()
+    for side, yaw in (('left', -0.084), ('right', 0.084)):
+        touching[:, index[f'{side}_hip_yaw']] = yaw
+        touching[:, index[f'{side}_hip_pitch']] = 0.8
+        touching[:, index[f'{side}_knee']] = 0.8
+    assert check_trajectory(skeleton, floor_world, times, touching).leg_contacts == ()
+    strict = check_trajectory(skeleton, floor_world, times, touching, leg_contact_tol=0.001)
+    assert {(a, b) for a, b, _, _ in strict.leg_contacts} >= {('left_thigh', 'right_thigh')}
+    with pytest.raises(ValueError, match='leg_contact_tol'):
+        check_trajectory(skeleton, floor_world, times, frames, leg_contact_tol=-0.001)

@@ -58,6 +58,11 @@ class ActorConfig:
     # lands beside the stance foot, turned up to this far (rad) towards the turn, and the
     # pelvis turns half as far about the stance hip (0: never).
     pivot_turn: float = 0.8
+    # The landing foot may point at most this far (rad) towards the stance foot's side (toes
+    # in), against hip_yaw_limit x 1.5 outwards: pigeon-toed feet turn both thighs in, and with
+    # the hips flexed the knees meet (a turn reversed mid-walk made them pass through each
+    # other). The path's heading is caught up by the next steps, whose feet may toe out.
+    max_toe_in: float = 0.35
     upper_body_check_budget: int = 15000
     upper_body_attempts: int = 6
     footsteps: FootstepConfig = field(default_factory=FootstepConfig)
@@ -101,6 +106,8 @@ def validate(config: ActorConfig) -> None:
         raise ValueError(f'upper_body_pause must be in [0, 2] s, got {config.upper_body_pause}')
     if not 0 <= config.pivot_turn <= 1.0:
         raise ValueError(f'pivot_turn must be in [0, 1] rad, got {config.pivot_turn}')
+    if not 0 <= config.max_toe_in <= 1.0:
+        raise ValueError(f'max_toe_in must be in [0, 1] rad, got {config.max_toe_in}')
     if config.upper_body_check_budget < 1:
         raise ValueError(f'upper_body_check_budget must be >= 1, got '
                          f'{config.upper_body_check_budget}')
@@ -599,11 +606,14 @@ class Actor:
         landing_xy = poses[0, :2]
         middle = poses[1]
         # The hip yaw range bounds how far the feet may point apart (a turn reversed mid-walk):
-        # the new foot turns at most that far from the stance foot; the path catches up.
+        # the new foot turns at most that far from the stance foot, and much less towards it
+        # (max_toe_in); the path catches up.
         stance_yaw = stance.feet[stance.stance_side].yaw
         limit = 1.5 * float(self.skeleton.upper[self.skeleton.index['left_hip_yaw']])
+        toe_in = min(self.config.max_toe_in, limit)
+        low, high = (-toe_in, limit) if side == LEFT else (-limit, toe_in)
         turn = float(min(max((landing_yaw - stance_yaw + np.pi) % (2 * np.pi) - np.pi,
-                             -limit), limit))
+                             low), high))
         landing_yaw = stance_yaw + turn
         middle[2] = stance_yaw + 0.5 * turn
         rise = float(window.heights[0]) - stance.feet[stance.stance_side].sole

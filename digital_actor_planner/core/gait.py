@@ -25,6 +25,14 @@ from .skeleton import LegGeometry, Skeleton
 SOLE_CLEARANCE = 0.002  # a resting sole floats this far above the surface, m
 
 
+#: Gap the legs' collision cylinders keep at the end of a step, beyond touching, m.
+LEGS_LANDING_MARGIN = 0.01
+#: Points along a stance sole, ankle to toe tip, as fractions of its toe length, that must rest
+#: within _TOE_SUPPORT_TOLERANCE (m) of support for its heel to lift about its toe tip.
+_TOE_SAMPLES = np.linspace(1.0 / 6.0, 1.0, 6)
+_TOE_SUPPORT_TOLERANCE = 0.015
+
+
 class GaitError(Exception):
     """A step cannot be realised (out of reach, joint limit, swing cannot clear the ground)."""
 
@@ -45,6 +53,7 @@ class GaitConfig:
     min_turn_speed: float = 0.25
     max_heading_change: float = 0.5
     turn_ease_heading: float = 0.5
+    swing_toe_in: float = 0.15
 
 
 def validate_gait_config(config: GaitConfig) -> None:
@@ -221,6 +230,47 @@ def _sagittal_leg(leg: LegGeometry, forward: np.ndarray, down: np.ndarray,
     joints[:, 2] = knee
     joints[:, 3] = foot_pitch - (hip_pitch - knee)
     return reach
+
+
+def _segment_gaps(a0: np.ndarray, a1: np.ndarray, b0: np.ndarray,
+                  b1: np.ndarray) -> np.ndarray:
+    """Shortest distances (n,) between segments a0-a1 and b0-b1, all (3, n) (x, y, z rows), m.
+    """
+    u, v, r = a1 - a0, b1 - b0, a0 - b0
+    # Dot products of (3, n) rows written out (a reduction over an axis of 3 is slow).
+    uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2]
+    vv = v[0] * v[0] + v[1] * v[1] + v[2] * v[2]
+    uv = u[0] * v[0] + u[1] * v[1] + u[2] * v[2]
+    ur = u[0] * r[0] + u[1] * r[1] + u[2] * r[2]
+    vr = v[0] * r[0] + v[1] * r[1] + v[2] * r[2]
+    # Closest points of the lines, then each parameter clamped and the other re-solved
+    # (segments of non-zero length; parallel ones take s = 0).
+    denominator = uu * vv - uv * uv
+    s = np.where(denominator > 1e-12, (uv * vr - ur * vv) / np.maximum(denominator, 1e-12), 0.0)
+    s = np.minimum(np.maximum(s, 0.0), 1.0)
+    t = np.minimum(np.maximum((uv * s + vr) / vv, 0.0), 1.0)
+    s = np.minimum(np.maximum((uv * t - ur) / uu, 0.0), 1.0)
+    gap = r + u * s - v * t
+    return np.sqrt(gap[0] * gap[0] + gap[1] * gap[1] + gap[2] * gap[2])
+
+
+def _leg_segments(leg: LegGeometry, hip: np.ndarray, plane_yaw, joints: np.ndarray):
+    """(knee, ankle) points, each (3, k) (x, y, z rows), of a leg whose (k, 4) joints hang
+    from ``hip`` (3, k) in the vertical plane of heading ``plane_yaw`` (scalar or (k,))."""
+    cos_p, sin_p = np.cos(plane_yaw), np.sin(plane_yaw)
+    thigh = joints[:, 1]
+    shank = thigh - joints[:, 2]
+    forward_knee = leg.thigh * np.sin(thigh)
+    knee = np.empty_like(hip)
+    knee[0] = hip[0] + forward_knee * cos_p
+    knee[1] = hip[1] + forward_knee * sin_p
+    knee[2] = hip[2] - leg.thigh * np.cos(thigh)
+    forward_ankle = leg.shank * np.sin(shank)
+    ankle = np.empty_like(hip)
+    ankle[0] = knee[0] + forward_ankle * cos_p
+    ankle[1] = knee[1] + forward_ankle * sin_p
+    ankle[2] = knee[2] - leg.shank * np.cos(shank)
+    return knee, ankle
 
 
 def _ease(tau: np.ndarray, from_rest: bool, to_rest: bool) -> np.ndarray:
@@ -523,8 +573,9 @@ class WalkGenerator:
         # hip, which in a turn moves across the foot's own plane (2-DOF hip, no hip roll). Where
         # both feet, the landing and the pelvis share one heading the hip moves along that
         # plane and nothing changes: straight walking skips it.
-        if max(abs(_wrap(other - foot_w.yaw))
-               for other in (landing.yaw, foot_s.yaw, yaw0, yaw1)) > 1e-9:
+        turning = max(abs(_wrap(other - foot_w.yaw))
+                      for other in (landing.yaw, foot_s.yaw, yaw0, yaw1)) > 1e-9
+        if turning:
             toward = wanted_xy - swing_hip_xy
             length = np.hypot(toward[:, 0], toward[:, 1])
             sign = np.where(toward[:, 0] * direction[:, 0] + toward[:, 1] * direction[:, 1] < 0,
@@ -542,6 +593,15 @@ class WalkGenerator:
             # inside it (after a zigzag, 0.44 -> 0.74 -> 0.45 rad was seen). In the air the
             # foot may lag: it points as far as the hip allows. Not near the ground (where
             # the plane turns through the foot), so it still leaves and lands as planned.
+            # Toes in, both thighs turn in, and as the swinging knee passes the stance knee
+            # with both hips flexed the two would meet: in the air the swinging foot points
+            # at most swing_toe_in towards the stance foot (it turns further in as it lands).
+            inward = 1.0 if swing_side == RIGHT else -1.0
+            excess = inward * _wrap(plane_yaw - foot_s.yaw) - cfg.swing_toe_in
+            if excess.max() > 0.0:
+                plane_yaw = plane_yaw - inward * np.maximum(excess, 0.0) * (1.0 - timing.pinned)
+                direction[:, 0] = np.cos(plane_yaw)
+                direction[:, 1] = np.sin(plane_yaw)
             hip_yaw = _wrap(plane_yaw - yaw)
             low, high = self._swing_yaw_range[swing_side]
             if hip_yaw.min() < low or hip_yaw.max() > high:
@@ -629,10 +689,12 @@ class WalkGenerator:
         if (joints[:, 3] > limit).any():
             # Heel-off: the stance foot rolls about its toe instead of over-flexing the ankle.
             joints, foot_s_end = self._heel_off(leg, _points(stance_hip_xy, z), foot_s, yaw,
-                                                joints, limit)
+                                                joints, limit,
+                                                self._supported_toe(foot_s, swing_profile))
             foot_end[stance_side] = foot_s_end
         self._check_leg(stance_side, joints, reach)
         frames[:, self._leg_columns[stance_side]] = joints
+        stance_joints = joints
         lateral_error = max(lateral_error, abs(stance_lateral))
 
         if swing_solution is not None:
@@ -651,6 +713,11 @@ class WalkGenerator:
                             self._leg_upper[swing_side][3] - 0.02)
         joints[:, 3] += (wanted - joints[:, 3]) * fade
         self._check_leg(swing_side, joints, reach)
+        if turning:
+            # Legs in parallel planes a hip width apart cannot meet: only turns are tested.
+            self._check_legs_apart(1.0 if stance_side == LEFT else -1.0,
+                                   np.vstack([stance_hip_xy.T, z]), foot_s.yaw, stance_joints,
+                                   np.vstack([swing_hip_xy.T, z]), plane_yaw, joints)
         frames[:, self._leg_columns[swing_side]] = joints
         lateral_error = max(lateral_error, abs(swing_lateral))
         feet = foot_end
@@ -699,6 +766,50 @@ class WalkGenerator:
         if not apart.all():
             raise GaitError('the swing foot would pass into the stance foot')
 
+    def _check_legs_apart(self, stance_outward: float, stance_hip: np.ndarray, stance_plane,
+                          stance_joints: np.ndarray, swing_hip: np.ndarray, swing_plane,
+                          swing_joints: np.ndarray) -> None:
+        """Raise GaitError if a thigh or shank would pass into the other leg's.
+
+        ``stance_outward`` is +1 when the stance leg is the left one, else -1; the hips are
+        (3, k) (x, y, z rows), the joints (k, 4), a plane a heading (rad) or (k,).
+
+        With the feet pointing towards each other (a turn reversed mid-step) both thighs turn
+        in, and with the hips flexed the knees meet. The segments are the cylinders' axes
+        (hip-knee, knee-ankle); two of them are apart when their distance is at least the sum
+        of the radii.
+        """
+        leg = self.leg
+        # Seen from the front, in the pelvis's frame (the hip yaw is the leg's plane there):
+        # legs whose points stay a cylinder's width apart across need no more (most turns).
+        inner = []
+        for joints, outward in ((stance_joints, stance_outward), (swing_joints, -stance_outward)):
+            across = outward * np.sin(joints[:, 0])
+            knee = leg.thigh * np.sin(joints[:, 1]) * across
+            ankle = knee + leg.shank * np.sin(joints[:, 1] - joints[:, 2]) * across
+            inner.append(min(float(knee.min()), float(ankle.min()), 0.0))
+        if 2 * leg.hip_half_width + inner[0] + inner[1] >= (
+                2 * max(leg.thigh_radius, leg.shank_radius) + LEGS_LANDING_MARGIN):
+            return
+        stance_knee, stance_ankle = _leg_segments(leg, stance_hip, stance_plane, stance_joints)
+        swing_knee, swing_ankle = _leg_segments(leg, swing_hip, swing_plane, swing_joints)
+        k = stance_hip.shape[1]
+        # thigh-thigh, thigh-shank, shank-thigh, shank-shank in one call.
+        a0 = np.concatenate([stance_hip, stance_hip, stance_knee, stance_knee], axis=1)
+        a1 = np.concatenate([stance_knee, stance_knee, stance_ankle, stance_ankle], axis=1)
+        b0 = np.concatenate([swing_hip, swing_knee, swing_hip, swing_knee], axis=1)
+        b1 = np.concatenate([swing_knee, swing_ankle, swing_knee, swing_ankle], axis=1)
+        need = np.repeat([2 * leg.thigh_radius, leg.thigh_radius + leg.shank_radius,
+                          leg.thigh_radius + leg.shank_radius, 2 * leg.shank_radius], k)
+        # The next step starts where this one ends: it ends with room to move (a stance with
+        # the thighs just touching left every next step refused at its first frames).
+        need[k - 1::k] += LEGS_LANDING_MARGIN
+        short = _segment_gaps(a0, a1, b0, b1) < need
+        if short.any():
+            which = ('thighs', 'thigh and shank', 'shank and thigh', 'shanks')[
+                int(short.nonzero()[0][0]) // k]
+            raise GaitError(f'the legs would pass through each other ({which})')
+
     def _check_leg(self, side: int, joints: np.ndarray, reach: np.ndarray) -> None:
         """Raise GaitError if a leg's (k, 4) joints leave their limits or it is out of reach."""
         if reach.max() > 1.0 + 1e-9:
@@ -711,17 +822,38 @@ class WalkGenerator:
             value = joints[np.any(bad, axis=1)][0, column]
             raise GaitError(f'{name} would reach {value:.2f} rad, outside its limits')
 
+    def _supported_toe(self, foot: FootPose, ground) -> float:
+        """How far ahead of the ankle a resting sole has support all the way, m (its toe
+        length where the toes rest on the ground; less where they overhang an edge).
+
+        ``ground`` is the step's swing profile (xy (N, 2), z_ref) -> (N,) heights.
+        """
+        leg = self.leg
+        p0 = foot.pitch
+        distance = leg.toe * _TOE_SAMPLES
+        direction = np.array([np.cos(foot.yaw), np.sin(foot.yaw)])
+        points = foot.xy + (distance * np.cos(p0) + leg.ankle_height * np.sin(p0))[:, None] \
+            * direction
+        sole_z = foot.z + distance * np.sin(p0) - leg.ankle_height * np.cos(p0)
+        under = ground(points, float(sole_z.max()) + 0.02)
+        missing = ~(under >= sole_z - _TOE_SUPPORT_TOLERANCE)
+        if not missing.any():
+            return leg.toe
+        first = int(missing.argmax())
+        return float(distance[first - 1]) if first else 0.0
+
     @staticmethod
     def _heel_off(leg: LegGeometry, hip: np.ndarray, foot: FootPose, pelvis_yaw: np.ndarray,
-                  joints: np.ndarray, limit: float):
-        """Roll a stance foot about its toe tip where the ankle would pass ``limit``.
+                  joints: np.ndarray, limit: float, toe: float):
+        """Roll a stance foot about the front of its support, ``toe`` m ahead of the ankle
+        (its toe tip, or an edge its toes overhang), where the ankle would pass ``limit``.
 
         Returns the corrected (k, 4) leg joints and the foot pose at the last frame.
         """
         direction = np.array([np.cos(foot.yaw), np.sin(foot.yaw)])
         p0 = foot.pitch
-        toe_xy = foot.xy + (leg.toe * np.cos(p0) + leg.ankle_height * np.sin(p0)) * direction
-        toe_z = foot.z + leg.toe * np.sin(p0) - leg.ankle_height * np.cos(p0)
+        toe_xy = foot.xy + (toe * np.cos(p0) + leg.ankle_height * np.sin(p0)) * direction
+        toe_z = foot.z + toe * np.sin(p0) - leg.ankle_height * np.cos(p0)
         over = joints[:, 3] > limit
         pitch = np.full(joints.shape[0], p0)
         shank = joints[over, 1] - joints[over, 2]
@@ -730,8 +862,8 @@ class WalkGenerator:
         for _ in range(5):
             p = np.minimum(limit + shank, p0)
             ankle = np.column_stack([
-                toe_xy - (leg.toe * np.cos(p) + leg.ankle_height * np.sin(p))[:, None] * direction,
-                toe_z - (leg.toe * np.sin(p) - leg.ankle_height * np.cos(p))])
+                toe_xy - (toe * np.cos(p) + leg.ankle_height * np.sin(p))[:, None] * direction,
+                toe_z - (toe * np.sin(p) - leg.ankle_height * np.cos(p))])
             solved, _, _ = leg_inverse_kinematics(leg, hip[over], ankle, plane,
                                                   pelvis_yaw[over], p)
             shank = solved[:, 1] - solved[:, 2]

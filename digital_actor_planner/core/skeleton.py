@@ -103,6 +103,9 @@ class LegGeometry:
     heel: float
     toe: float
     foot_width: float
+    # Radii of the thigh's and the shank's collision cylinders (0 where the URDF gives none).
+    thigh_radius: float = 0.0
+    shank_radius: float = 0.0
 
     @property
     def max_reach(self) -> float:
@@ -360,11 +363,17 @@ class Skeleton:
         foot = feet[0]
         length, width, height = foot.size
         centre = foot.origin[:3, 3]
+
+        def radius(link):
+            return max((float(s.size[0]) for s in self.collision_shapes
+                        if s.link == link and s.kind == 'cylinder'), default=0.0)
+
         return LegGeometry(hip_half_width=float(abs(hip[1])), thigh=float(np.linalg.norm(knee)),
                            shank=float(np.linalg.norm(ankle)),
                            ankle_height=float(-(centre[2] - height / 2)),
                            heel=float(length / 2 - centre[0]), toe=float(length / 2 + centre[0]),
-                           foot_width=float(width))
+                           foot_width=float(width), thigh_radius=radius('left_thigh'),
+                           shank_radius=radius('left_shank'))
 
     # -- configurations ------------------------------------------------------------------
     def indices(self, *names: str) -> np.ndarray:

@@ -2,9 +2,10 @@
 
 The courses' tests use this to decide whether a walk "works" (issue criteria): no link deeper
 in the environment than a few millimetres, a foot always down, joint limits, no NaN, no jumps,
-no sliding stance foot. It deliberately shares nothing with the planners' shortcuts (the
-ground height map, the sagittal leg model): geometry is the URDF's collision shapes placed by
-the skeleton's forward kinematics and tested with FCL against the meshes, every frame (or every
+no sliding stance foot, the two legs not in each other. It deliberately shares nothing with
+the planners' shortcuts (the ground height map, the sagittal leg model): geometry is the URDF's
+collision shapes placed by the skeleton's forward kinematics and tested with FCL against the
+meshes and each other, every frame (or every
 ``stride``-th frame for the geometric criteria).
 """
 from __future__ import annotations
@@ -20,6 +21,9 @@ import trimesh
 from .collision import BodyCollision
 
 FEET = ('left_foot', 'right_foot')
+# The links of each leg judged against the other leg's (a hip width apart, the hips' own
+# shapes cannot meet).
+LEGS = (('left_thigh', 'left_shank', 'left_foot'), ('right_thigh', 'right_shank', 'right_foot'))
 # A sole corner this close to a surface bears weight (stance), m.
 STANCE_GAP = 0.010
 # Thickness of the slab standing for the sole when measuring its gap to the ground, m.
@@ -38,6 +42,8 @@ class CheckReport:
     (joint, time, value, allowed) tuples, the worst per joint. ``non_finite_times`` lists frames
     with NaN/inf. ``slip`` maps each foot to its largest horizontal stance slip (m), at
     ``slip_time``. ``max_jump_ratio`` is the largest per-frame change over velocity limit x dt.
+    ``leg_contacts`` holds (left link, right link, first time, frames) for each pair of links of
+    the two legs that interpenetrate by more than ``leg_contact_tol`` on some checked frame.
     """
 
     frames: int
@@ -54,6 +60,7 @@ class CheckReport:
     slip: Dict[str, float]
     slip_time: Dict[str, float]
     tolerances: Dict[str, float] = field(default_factory=dict)
+    leg_contacts: Tuple[Tuple[str, str, float, int], ...] = ()
 
     @property
     def non_finite(self) -> bool:
@@ -96,6 +103,10 @@ class CheckReport:
                 out.append(f'stance foot {foot} slides {slip * 1000:.1f} mm ending at '
                            f't = {self.slip_time[foot]:.3f} s (allowed '
                            f'{tol["slip_tol"] * 1000:.1f} mm)')
+        for left, right, time, count in self.leg_contacts:
+            out.append(f'{left} and {right} pass into each other (by more than '
+                       f'{tol["leg_contact_tol"] * 1000:.1f} mm) at t = {time:.3f} s and on '
+                       f'{count - 1} more checked frame(s)')
         return out
 
 
@@ -190,6 +201,57 @@ class _Soles:
         return out
 
 
+def _eroded(shape, depth: float):
+    """An FCL geometry of ``shape`` shrunk by ``depth`` (m) on every side."""
+    if shape.kind == 'box':
+        return fcl.Box(*(max(float(size) - 2 * depth, 1e-6) for size in shape.size))
+    if shape.kind == 'cylinder':
+        return fcl.Cylinder(max(float(shape.size[0]) - depth, 1e-6),
+                            max(float(shape.size[1]) - 2 * depth, 1e-6))
+    return fcl.Sphere(max(float(shape.size[0]) - depth, 1e-6))
+
+
+def _bounding_radius(shape) -> float:
+    """Radius of a sphere about the shape's centre that holds it, m."""
+    if shape.kind == 'box':
+        return 0.5 * math.sqrt(sum(float(size) ** 2 for size in shape.size))
+    if shape.kind == 'cylinder':
+        return math.hypot(float(shape.size[0]), 0.5 * float(shape.size[1]))
+    return float(shape.size[0])
+
+
+def _leg_contacts(skeleton, transforms: np.ndarray, times: np.ndarray,
+                  tol: float) -> Tuple[Tuple[str, str, float, int], ...]:
+    """Pairs of links of the two legs interpenetrating by more than ``tol`` (m): each shape
+    is shrunk by half of it and tested with FCL where the bounding spheres overlap.
+
+    ``transforms`` (k, S, 4, 4) places every collision shape at the checked frames, whose
+    times are ``times`` (k,).
+    """
+    shapes = skeleton.collision_shapes
+    sides = [[i for i, shape in enumerate(shapes) if shape.link in links] for links in LEGS]
+    objects = {i: fcl.CollisionObject(_eroded(shapes[i], tol / 2), fcl.Transform())
+               for i in sides[0] + sides[1]}
+    request = fcl.CollisionRequest()
+    out = []
+    for a in sides[0]:
+        for b in sides[1]:
+            reach = _bounding_radius(shapes[a]) + _bounding_radius(shapes[b])
+            gap = np.linalg.norm(transforms[:, a, :3, 3] - transforms[:, b, :3, 3], axis=1)
+            first, count = None, 0
+            for row in np.flatnonzero(gap < reach):
+                objects[a].setTransform(fcl.Transform(transforms[row, a, :3, :3],
+                                                      transforms[row, a, :3, 3]))
+                objects[b].setTransform(fcl.Transform(transforms[row, b, :3, :3],
+                                                      transforms[row, b, :3, 3]))
+                if fcl.collide(objects[a], objects[b], request, fcl.CollisionResult()):
+                    count += 1
+                    first = float(times[row]) if first is None else first
+            if count:
+                out.append((shapes[a].link, shapes[b].link, first, count))
+    return tuple(out)
+
+
 def _buried_depths(skeleton, environment, transforms: np.ndarray) -> np.ndarray:
     """How deep each shape's centre is buried inside a solid: (k, S) m, 0 where it is not.
 
@@ -233,7 +295,8 @@ def _buried_depths(skeleton, environment, transforms: np.ndarray) -> np.ndarray:
 
 def check_trajectory(skeleton, environment, times, frames, *, penetration_tol: float = 0.003,
                      foot_rest_tol: float = 0.015, foot_down_tol: float = 0.025,
-                     slip_tol: float = 0.01, stride: int = 1,
+                     slip_tol: float = 0.01, leg_contact_tol: float = 0.003,
+                     stride: int = 1,
                      links: Optional[Iterable[str]] = None) -> CheckReport:
     """Judge a timed trajectory: collisions, a foot down, limits, NaN, jumps, stance slip.
 
@@ -256,6 +319,9 @@ def check_trajectory(skeleton, environment, times, frames, *, penetration_tol: f
     slip_tol
         Largest horizontal motion of a sole corner while it bears weight (within 10 mm of a
         surface over a run of frames), m.
+    leg_contact_tol
+        Largest allowed interpenetration of a thigh, shank or foot with a link of the other
+        leg, m (each shape shrunk by half of it must not touch the other).
     stride
         Check the geometric criteria on every ``stride``-th frame (and the last one); limits,
         speeds, jumps and NaN are always checked on every frame.
@@ -287,7 +353,8 @@ def check_trajectory(skeleton, environment, times, frames, *, penetration_tol: f
     tolerances = {'penetration_tol': _positive('penetration_tol', penetration_tol),
                   'foot_rest_tol': _positive('foot_rest_tol', foot_rest_tol),
                   'foot_down_tol': _positive('foot_down_tol', foot_down_tol),
-                  'slip_tol': _positive('slip_tol', slip_tol)}
+                  'slip_tol': _positive('slip_tol', slip_tol),
+                  'leg_contact_tol': _positive('leg_contact_tol', leg_contact_tol)}
     names = skeleton.joint_names
 
     finite = np.all(np.isfinite(frames), axis=1)
@@ -361,12 +428,15 @@ def check_trajectory(skeleton, environment, times, frames, *, penetration_tol: f
             if gap > foot_down_gap:
                 foot_down_gap, foot_down_time = gap, t
 
+    leg_contacts = _leg_contacts(skeleton, shape_transforms, times[checked],
+                                 tolerances['leg_contact_tol'])
     return CheckReport(frames=len(times), frames_checked=len(checked), penetration=penetration,
                        penetration_time=penetration_time, foot_down_gap=float(foot_down_gap),
                        foot_down_time=foot_down_time, position_violations=position_violations,
                        velocity_violations=velocity_violations, jumps=jumps,
                        max_jump_ratio=max_jump_ratio, non_finite_times=non_finite_times,
-                       slip=slip, slip_time=slip_time, tolerances=tolerances)
+                       slip=slip, slip_time=slip_time, tolerances=tolerances,
+                       leg_contacts=leg_contacts)
 
 
 def _track_slip(foot: str, soles: _Soles, transform: np.ndarray, stance: bool, time: float,
