@@ -298,3 +298,29 @@ def test_weaving_lands_the_feet_toed_in_no_more_than_max_toe_in_and_keeps_walkin
     assert sum(b.category != '' for b in wide) < 0.7 * len(ends)
     ends = np.array([b.frames[-1] for b in wide if b.category])
     assert _feet_toe_in(skeleton(), ends).max() > 0.4
+
+
+def test_on_bumpy_ground_the_actor_stands_on_it_and_turns_on_the_spot():
+    """Started on the rough course's bumps, each foot rests on the ground under it at its own
+    height and pitch. (Both used to stand level on the lowest ground under them, one 27 mm in
+    a bump at x = 4 m, so every first step collided and the actor could not move.) Told to
+    turn on the spot it turns, its pivots landing on the bumps' slopes too (a pivot needed
+    level ground within 1 cm), and the checker passes."""
+    sc = scene('rough')
+    for x, rate in ((4.0, -1.0), (5.0, 1.0)):
+        actor = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False),
+                      start=(x, 0.3, 0.0))
+        feet = actor.stance.feet
+        assert max(abs(foot.pitch) for foot in feet) > 0.01
+        blocks = run_commands(actor, [0.0, 4.0], [0.0, 0.0], [rate, 0.0])
+        _, frames, report = judged(blocks, sc.environment)
+        assert report.ok, report.failures()
+        assert not any(b.status == 'stuck' for b in blocks)
+        assert abs(frames[-1, 3]) > 2.0
+        pivots = [b for b in blocks if b.category == 'pivot']
+        assert pivots
+        transforms = skeleton().forward_kinematics(np.array([b.frames[-1] for b in pivots]))
+        soles = transforms[:, [skeleton().link_index['left_foot'],
+                               skeleton().link_index['right_foot']]]
+        pitch = np.arcsin(np.clip(-soles[..., 2, 0], -1.0, 1.0))
+        assert np.abs(pitch).max() > 0.01

@@ -1,5 +1,6 @@
 """Environment: scene loading, its errors, and the layered walkable-ground map."""
 import math
+import os
 
 import numpy as np
 import pytest
@@ -8,6 +9,9 @@ import trimesh
 from digital_actor_planner.core.environment import (check_start, Environment, load_scene,
                                                     SceneError, start_configuration)
 from digital_actor_planner.core.skeleton import Skeleton
+
+SCENES = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'config',
+                      'scenes')
 
 
 def _box(low, high):
@@ -258,6 +262,19 @@ def test_start_configuration_stands_on_the_ground(world):
     assert q[skeleton.index['root_yaw']] == pytest.approx(0.4)
     check_start(world, (3.5, 1.0, 0.4), skeleton)
     check_start(world, (2.7, 0.0, 0.0), skeleton)
+
+
+def test_a_start_on_bumpy_ground_is_accepted():
+    """On the rough course's bumps (up to 4 cm) the feet rest on the ground under them, each at
+    its own height and pitch; placed level on the lowest ground they were inside the bumps and
+    the start was refused as inside an obstacle."""
+    skeleton = Skeleton()
+    scene = load_scene(os.path.join(SCENES, 'rough.yaml'), skeleton)
+    for x in (3.0, 4.0, 5.0, 6.0, 7.0, 8.0):
+        check_start(scene.environment, (x, 0.3, 0.0), skeleton)
+    q = start_configuration(scene.environment, (4.0, 0.3, 0.0), skeleton)
+    from digital_actor_planner.core.collision import BodyCollision
+    assert BodyCollision(skeleton, scene.environment).links_in_collision(q)
 
 
 def test_start_inside_an_obstacle_or_without_ground_is_rejected(world):

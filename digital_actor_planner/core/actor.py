@@ -15,8 +15,8 @@ import numpy as np
 
 from .footsteps import (FootstepConfig, FootstepPlanner, FootstepWindow, LEFT, RIGHT,
                         sample_ground_profile, validate_footstep_config)
-from .gait import (GaitConfig, GaitError, hold_frames, Stance, standing_stance, StepMotion,
-                   validate_gait_config, WalkGenerator, with_at_rest)
+from .gait import (foot_pose_on, GaitConfig, GaitError, hold_frames, Stance, standing_stance,
+                   StepMotion, validate_gait_config, WalkGenerator, with_at_rest)
 from .path import predict_path
 from .skeleton import Skeleton
 
@@ -204,8 +204,8 @@ class Actor:
         self._upper = upper_body_planner
         q = start_configuration(environment, start, skeleton)
         sole = q[skeleton.index['root_z']] - skeleton.leg.standing_height - 0.002
-        self._stance = standing_stance(skeleton, float(start[0]), float(start[1]),
-                                       float(start[2]), float(sole))
+        self._stance = self._start_stance(float(start[0]), float(start[1]), float(start[2]),
+                                          float(sole))
         self._configuration = self._standing_configuration()
         self._time = 0.0
         self._command = (0.0, 0.0)
@@ -282,6 +282,22 @@ class Actor:
         if self._failure is not None and self._failure[0] == (self._steps, v, w):
             return self._stuck(self._failure[1], started, np.zeros((0, 4)), np.zeros((0, 3)))
         return self._walk_step(v, w, started)
+
+    def _start_stance(self, x: float, y: float, yaw: float, sole: float) -> Stance:
+        """Standing at (x, y, yaw): each foot resting on the ground under it, at its own
+        height and pitch (``_sole_rest``), where both can; else both level at sole height
+        ``sole`` (the lowest ground under them: a start in an obstacle collides there and
+        ``check_start`` says so)."""
+        level = standing_stance(self.skeleton, x, y, yaw, sole)
+        leg = self.skeleton.leg
+        feet = []
+        for foot in level.feet:
+            rest = self._sole_rest(foot.xy, foot.yaw, sole)
+            if rest is None:
+                return level
+            feet.append(foot_pose_on(foot.xy, foot.yaw, rest[0], rest[1], leg))
+        z = min(foot.z for foot in feet) + leg.thigh + leg.shank - 0.03
+        return Stance(np.array([x, y, z, yaw]), (feet[0], feet[1]), level.stance_side, True)
 
     def _standing_configuration(self) -> np.ndarray:
         """Configuration of the initial stance (neutral legs, arms in their pattern)."""
@@ -533,8 +549,7 @@ class Actor:
                       duration: float, direction: float) -> Optional[StepMotion]:
         """The pivot's leg motion landing the swing foot ``turn`` rad from the stance foot's
         heading, or None where the pelvis would turn against ``direction`` (+-1), the sole
-        would not rest level or the step cannot be made."""
-        leg = self.skeleton.leg
+        would not rest (``_sole_rest``) or the step cannot be made."""
         landing_yaw = foot.yaw + turn
         pelvis_yaw = 0.5 * (foot.yaw + landing_yaw)
         if (pelvis_yaw - stance.pelvis[3]) * direction < -1e-3:
@@ -542,22 +557,49 @@ class Actor:
         across = np.array([-np.sin(pelvis_yaw), np.cos(pelvis_yaw)])
         pelvis_xy = foot.xy - offset * across
         landing_xy = pelvis_xy - offset * across
-        # The whole sole on level support at the stance foot's height: its centre line and
-        # corners (the 3D check after this only looks for collisions).
-        along = np.array([np.cos(landing_yaw), np.sin(landing_yaw)])
-        side = np.array([-along[1], along[0]])
-        points = np.array([landing_xy + a * along + b * side
-                           for a in (-leg.heel, 0.5 * (leg.toe - leg.heel), leg.toe)
-                           for b in (-0.5 * leg.foot_width, 0.0, 0.5 * leg.foot_width)])
-        ground, _ = self.environment.ground_height(points, foot.sole + 0.05)
-        if np.isnan(ground).any() or np.abs(ground - foot.sole).max() > 0.01:
+        rest = self._sole_rest(landing_xy, landing_yaw, foot.sole)
+        if rest is None:
             return None
+        sole, pitch = rest
         target = np.array([pelvis_xy[0], pelvis_xy[1], pelvis_yaw])
         try:
-            return self._timed_step(stance, landing_xy, landing_yaw, foot.sole, 0.0, target,
+            return self._timed_step(stance, landing_xy, landing_yaw, sole, pitch, target,
                                     duration, to_rest=True)
         except GaitError:
             return None
+
+    def _sole_rest(self, xy: np.ndarray, yaw: float, near: float):
+        """(sole height under the ankle m, pitch rad) of a foot put down at ankle ``xy``
+        heading ``yaw`` within 5 cm of sole height ``near``, or None where it cannot rest.
+
+        The ground under the sole's centre line and edges (heel, middle, toe): across the foot
+        it rests on the highest point and must be flat within the footstep planner's
+        ``flatness_tolerance``; along it a plane is fitted (no steeper than ``max_foot_pitch``)
+        whose highest point it rests on, with no dip under it deeper than that tolerance. The
+        3D check after this only looks for collisions.
+        """
+        leg, fcfg = self.skeleton.leg, self._footstep_config
+        along = np.array([np.cos(yaw), np.sin(yaw)])
+        side = np.array([-along[1], along[0]])
+        lengths = np.array([-leg.heel, 0.5 * (leg.toe - leg.heel), leg.toe])
+        points = (xy + lengths[:, None, None] * along
+                  + np.array([-0.5, 0.0, 0.5])[None, :, None] * leg.foot_width * side)
+        ground, _ = self.environment.ground_height(points.reshape(-1, 2), near + 0.05)
+        if np.isnan(ground).any():
+            return None
+        ground = ground.reshape(3, 3)
+        top = ground.max(axis=1)
+        if (top - ground.min(axis=1)).max() > fcfg.flatness_tolerance:
+            return None
+        centred = lengths - lengths.mean()
+        slope = float(centred @ top / (centred @ centred))
+        if abs(np.arctan(slope)) > fcfg.max_foot_pitch:
+            return None
+        height = top - slope * lengths
+        sole = float(height.max())
+        if sole - float(height.min()) > fcfg.flatness_tolerance or abs(sole - near) > 0.05:
+            return None
+        return sole, float(np.arctan(slope))
 
     def _paused_step(self, stance: Stance, path, v: float, w: float, blocked, path_points,
                      started: float) -> Optional[StepBlock]:

@@ -312,8 +312,10 @@ def start_configuration(environment: 'Environment', start, skeleton) -> np.ndarr
 def check_start(environment: 'Environment', start, skeleton) -> None:
     """Check the actor can stand at a start pose.
 
-    Places :func:`start_configuration` and tests it against the environment with
-    :class:`collision.BodyCollision`.
+    Places the configuration an :class:`actor.Actor` starts in there (each foot resting on the
+    ground under it where it can, else both level on the lowest ground under them, as
+    :func:`start_configuration`) 2 mm up, so that a foot resting on a surface does not touch
+    it, and tests it against the environment with :class:`collision.BodyCollision`.
 
     Raises
     ------
@@ -321,10 +323,15 @@ def check_start(environment: 'Environment', start, skeleton) -> None:
         No ground below the start, or the standing actor would be inside an obstacle.
 
     """
+    from .actor import Actor, ActorConfig
     from .collision import BodyCollision
 
-    q = start_configuration(environment, start, skeleton)
-    links = BodyCollision(skeleton, environment).links_in_collision(q)
+    body = BodyCollision(skeleton, environment)
+    actor = Actor(skeleton, environment, ActorConfig(plan_upper_body=False), start=start,
+                  body_collision=body)
+    q = actor.configuration
+    q[skeleton.index['root_z']] += 0.002
+    links = body.links_in_collision(q)
     if links:
         x, y, yaw = (float(v) for v in start)
         raise SceneError(f'start pose ({x:g}, {y:g}, yaw {yaw:g}) is inside an obstacle: '
