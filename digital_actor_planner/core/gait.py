@@ -836,7 +836,9 @@ class WalkGenerator:
             * direction
         sole_z = foot.z + distance * np.sin(p0) - leg.ankle_height * np.cos(p0)
         under = ground(points, float(sole_z.max()) + 0.02)
-        missing = ~(under >= sole_z - _TOE_SUPPORT_TOLERANCE)
+        # Ground well below is no support, nor is a surface over the toes (the profile reports
+        # what is overhead where there is no ground).
+        missing = ~(np.abs(under - sole_z) <= _TOE_SUPPORT_TOLERANCE)
         if not missing.any():
             return leg.toe
         first = int(missing.argmax())
