@@ -21,6 +21,7 @@ the time stopped because a step would have.
 A second table turns on the spot at the floor's edge (flat, gap and blocks courses): standing
 0.4-0.7 m from the edge facing it at 60, 90 or 120 degrees, told (0, +-1) for 4 s, with and
 without ``ActorConfig.pivot_turn``; a turn counts when the heading changed by more than 1 rad.
+Last, turns on the spot (0, 1) for 3 s started on the rough course's bumps.
 """
 import argparse
 import os
@@ -135,6 +136,11 @@ def main(argv=None):
             turned, failures = edge_turns(sk, pivot)
             print(f'| {label} | {turned.sum()} of {turned.size} | {(~turned).sum()} | '
                   f'{failures} |')
+        turned, failures, pitched = bump_turns(sk)
+        print(f'\nTurns on the spot on the rough course\'s bumps ({turned.size} starts, 3 s at '
+              f'1 rad/s): {turned.sum()} turned more than 1 rad ({turned[pitched].sum()} of the '
+              f'{pitched.sum()} whose feet stand pitched over 0.05 rad); checker failures: '
+              f'{failures}.')
     print_command(__file__, argv)
     return 0
 
@@ -154,6 +160,24 @@ def edge_turns(sk, pivot):
                     failures += not report.ok
                     turned.append(abs(frames[-1, 3] - facing) > 1.0)
     return np.array(turned), failures
+
+
+def bump_turns(sk):
+    """(turned (N,) bool, checker failures, pitched (N,) bool) of turns on the spot started on
+    the rough course's bumps (x 2-8 m, y -0.6 / 0 / 0.6 m, facing 0 or 1.5 rad)."""
+    sc = scene('rough')
+    turned, pitched, failures = [], [], 0
+    for x in np.arange(2.0, 8.01, 0.5):
+        for y in (-0.6, 0.0, 0.6):
+            for facing in (0.0, 1.5):
+                actor = Actor(sk, sc.environment, ActorConfig(plan_upper_body=False),
+                              start=(float(x), y, facing))
+                pitched.append(max(abs(foot.pitch) for foot in actor.stance.feet) > 0.05)
+                blocks = run_commands(actor, [0.0, 3.0], [0.0, 0.0], [1.0, 0.0])
+                _, frames, report = judged(blocks, sc.environment)
+                failures += not report.ok
+                turned.append(frames[-1, 3] - facing > 1.0)
+    return np.array(turned), failures, np.array(pitched)
 
 
 if __name__ == '__main__':

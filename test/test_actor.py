@@ -305,13 +305,15 @@ def test_on_bumpy_ground_the_actor_stands_on_it_and_turns_on_the_spot():
     height and pitch. (Both used to stand level on the lowest ground under them, one 27 mm in
     a bump at x = 4 m, so every first step collided and the actor could not move.) Told to
     turn on the spot it turns, its pivots landing on the bumps' slopes too (a pivot needed
-    level ground within 1 cm), and the checker passes."""
+    level ground within 1 cm), also from a stance foot pitched 0.09 rad (a pivot needed it
+    within 0.05 rad of level: standing at x = 8 m it stayed put), and the checker passes."""
     sc = scene('rough')
-    for x, rate in ((4.0, -1.0), (5.0, 1.0)):
+    for x, y, rate, pitched in ((4.0, 0.3, -1.0, 0.01), (5.0, 0.3, 1.0, 0.01),
+                                (8.0, 0.0, 1.0, 0.09)):
         actor = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False),
-                      start=(x, 0.3, 0.0))
+                      start=(x, y, 0.0))
         feet = actor.stance.feet
-        assert max(abs(foot.pitch) for foot in feet) > 0.01
+        assert max(abs(foot.pitch) for foot in feet) > pitched
         blocks = run_commands(actor, [0.0, 4.0], [0.0, 0.0], [rate, 0.0])
         _, frames, report = judged(blocks, sc.environment)
         assert report.ok, report.failures()

@@ -507,7 +507,7 @@ class Actor:
         if cfg.pivot_turn <= 0 or abs(w) < 0.2 or v >= PIVOT_RADIUS * abs(w):
             return None
         foot = stance.feet[stance.stance_side]
-        if abs(foot.pitch) > 0.05:
+        if abs(foot.pitch) > self._footstep_config.max_foot_pitch:
             return None
         swing_side = 1 - stance.stance_side
         toes_out = (swing_side == LEFT) == (w > 0)
