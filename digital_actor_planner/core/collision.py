@@ -84,6 +84,33 @@ def _rodrigues(axis: Sequence[float], angle: float) -> Tuple[float, ...]:
             t * x * z - s * y, t * y * z + s * x, t * z * z + c)
 
 
+def shape_geometry(shape, padding: float = 0.0):
+    """FCL geometry of one URDF shape grown by ``padding`` (m; negative shrinks it, to no less
+    than a micrometre), and its (kind, half extents)."""
+    if shape.kind == 'box':
+        size = np.maximum(np.asarray(shape.size, dtype=float) + 2 * padding, 1e-6)
+        return fcl.Box(*size), ('box', size / 2)
+    if shape.kind == 'cylinder':
+        radius = max(shape.size[0] + padding, 1e-6)
+        length = max(shape.size[1] + 2 * padding, 1e-6)
+        return fcl.Cylinder(radius, length), ('cylinder', np.array([radius, length / 2]))
+    if shape.kind == 'sphere':
+        radius = max(shape.size[0] + padding, 1e-6)
+        return fcl.Sphere(radius), ('sphere', np.array([radius]))
+    raise ValueError(f'link {shape.link}: unsupported collision shape {shape.kind!r}')
+
+
+def shape_reach(half) -> float:
+    """Radius of the sphere about a shape's centre that holds it, from ``shape_geometry``'s
+    (kind, half extents), m."""
+    kind, extent = half
+    if kind == 'box':
+        return float(np.linalg.norm(extent))
+    if kind == 'cylinder':
+        return float(math.hypot(*extent))
+    return float(extent[0])
+
+
 class BodyCollision:
     """The actor's collision shapes as FCL objects, tested against an environment.
 
@@ -120,13 +147,11 @@ class BodyCollision:
         self.shapes = tuple(skeleton.collision_shapes)
         self._geometries, self._objects, self._half_extent = [], [], []
         for shape in self.shapes:
-            geometry, half = self._geometry(shape, self.padding)
+            geometry, half = shape_geometry(shape, self.padding)
             self._geometries.append(geometry)
             self._objects.append(fcl.CollisionObject(geometry, fcl.Transform()))
             self._half_extent.append(half)
-        self._reach = [float(np.linalg.norm(h[1])) if h[0] == 'box' else
-                       float(math.hypot(*h[1])) if h[0] == 'cylinder' else float(h[1][0])
-                       for h in self._half_extent]
+        self._reach = [shape_reach(half) for half in self._half_extent]
         self._mesh_boxes = [(i, tuple(float(v) for v in m.bounds.ravel()))
                             for i, m in enumerate(environment.meshes)]
         self._mesh_low = np.array([m.bounds[0] for m in environment.meshes], dtype=float)
@@ -152,20 +177,6 @@ class BodyCollision:
         self._free_end: Optional[tuple] = None
 
     # -- construction --------------------------------------------------------------------
-    @staticmethod
-    def _geometry(shape, padding: float):
-        """FCL geometry of one URDF shape, inflated by ``padding``, and its (3,) half extents."""
-        if shape.kind == 'box':
-            size = np.asarray(shape.size, dtype=float) + 2 * padding
-            return fcl.Box(*size), ('box', size / 2)
-        if shape.kind == 'cylinder':
-            radius, length = shape.size[0] + padding, shape.size[1] + 2 * padding
-            return fcl.Cylinder(radius, length), ('cylinder', np.array([radius, length / 2]))
-        if shape.kind == 'sphere':
-            radius = shape.size[0] + padding
-            return fcl.Sphere(radius), ('sphere', np.array([radius]))
-        raise ValueError(f'link {shape.link}: unsupported collision shape {shape.kind!r}')
-
     def _prepare_kinematics(self) -> None:
         """Joint data as plain floats for a fast single-configuration forward kinematics."""
         skeleton = self.skeleton

@@ -18,7 +18,7 @@ import fcl
 import numpy as np
 import trimesh
 
-from .collision import BodyCollision
+from .collision import BodyCollision, shape_geometry, shape_reach
 
 FEET = ('left_foot', 'right_foot')
 # The links of each leg judged against the other leg's (a hip width apart, the hips' own
@@ -201,25 +201,6 @@ class _Soles:
         return out
 
 
-def _eroded(shape, depth: float):
-    """An FCL geometry of ``shape`` shrunk by ``depth`` (m) on every side."""
-    if shape.kind == 'box':
-        return fcl.Box(*(max(float(size) - 2 * depth, 1e-6) for size in shape.size))
-    if shape.kind == 'cylinder':
-        return fcl.Cylinder(max(float(shape.size[0]) - depth, 1e-6),
-                            max(float(shape.size[1]) - 2 * depth, 1e-6))
-    return fcl.Sphere(max(float(shape.size[0]) - depth, 1e-6))
-
-
-def _bounding_radius(shape) -> float:
-    """Radius of a sphere about the shape's centre that holds it, m."""
-    if shape.kind == 'box':
-        return 0.5 * math.sqrt(sum(float(size) ** 2 for size in shape.size))
-    if shape.kind == 'cylinder':
-        return math.hypot(float(shape.size[0]), 0.5 * float(shape.size[1]))
-    return float(shape.size[0])
-
-
 def _leg_contacts(skeleton, transforms: np.ndarray, times: np.ndarray,
                   tol: float) -> Tuple[Tuple[str, str, float, int], ...]:
     """Pairs of links of the two legs interpenetrating by more than ``tol`` (m): each shape
@@ -230,13 +211,14 @@ def _leg_contacts(skeleton, transforms: np.ndarray, times: np.ndarray,
     """
     shapes = skeleton.collision_shapes
     sides = [[i for i, shape in enumerate(shapes) if shape.link in links] for links in LEGS]
-    objects = {i: fcl.CollisionObject(_eroded(shapes[i], tol / 2), fcl.Transform())
+    objects = {i: fcl.CollisionObject(shape_geometry(shapes[i], -tol / 2)[0], fcl.Transform())
                for i in sides[0] + sides[1]}
     request = fcl.CollisionRequest()
     out = []
     for a in sides[0]:
         for b in sides[1]:
-            reach = _bounding_radius(shapes[a]) + _bounding_radius(shapes[b])
+            reach = (shape_reach(shape_geometry(shapes[a])[1])
+                     + shape_reach(shape_geometry(shapes[b])[1]))
             gap = np.linalg.norm(transforms[:, a, :3, 3] - transforms[:, b, :3, 3], axis=1)
             first, count = None, 0
             for row in np.flatnonzero(gap < reach):
