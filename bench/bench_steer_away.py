@@ -69,7 +69,7 @@ def main(argv=None):
     parser.add_argument('--max-toe-in', type=float, default=ActorConfig().max_toe_in,
                         help='ActorConfig.max_toe_in, rad')
     parser.add_argument('--no-edge-turns', action='store_true',
-                        help='skip the second table (turns on the spot at the edge)')
+                        help='skip the turns on the spot (at the edge and on the bumps)')
     args = parser.parse_args(argv)
     config = ActorConfig(max_toe_in=args.max_toe_in)
     sk = skeleton()

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import (check_start, Environment, load_scene,
                                                     SceneError, start_configuration)
 from digital_actor_planner.core.skeleton import Skeleton
@@ -273,7 +274,6 @@ def test_a_start_on_bumpy_ground_is_accepted():
     for x in (3.0, 4.0, 5.0, 6.0, 7.0, 8.0):
         check_start(scene.environment, (x, 0.3, 0.0), skeleton)
     q = start_configuration(scene.environment, (4.0, 0.3, 0.0), skeleton)
-    from digital_actor_planner.core.collision import BodyCollision
     assert BodyCollision(skeleton, scene.environment).links_in_collision(q)
 
 

@@ -305,7 +305,6 @@ def test_with_the_feet_toed_in_the_swinging_foot_turns_out_so_the_thighs_pass(
     (``swing_toe_in`` 10 rad: not bounded). By default the foot points at most
     ``swing_toe_in`` in while it is in the air, lands as planned, and no thigh or shank
     touches the other leg's (FCL, the URDF's cylinders)."""
-    from dataclasses import replace
     from digital_actor_planner.core.gait import FootPose, Stance
     left = FootPose(np.array([1.6705, 0.5454]), 0.072, 1.039, 0.0, 0.0)
     right = FootPose(np.array([1.9718, 0.8566]), 0.072, 1.389, 0.0, 0.0)
@@ -315,7 +314,7 @@ def test_with_the_feet_toed_in_the_swinging_foot_turns_out_so_the_thighs_pass(
         return generator.step(stance, np.array([2.2772, 1.3388]), 1.039, 0.0, 0.0,
                               np.array([2.1127, 1.0899, 1.214]), 0.5, flat())
 
-    unbounded = WalkGenerator(skeleton, replace(GaitConfig(), swing_toe_in=10.0))
+    unbounded = WalkGenerator(skeleton, GaitConfig(swing_toe_in=10.0))
     with pytest.raises(GaitError, match='legs would pass through each other'):
         step(unbounded)
     motion = step(walker)
