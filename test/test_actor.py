@@ -3,6 +3,7 @@ import numpy as np
 import pytest
 
 from course_runs import judged, scene, skeleton
+from digital_actor_planner.core import actor as actor_module
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands, validate
 from digital_actor_planner.core.upper_body import UpperBodyPlan
 
@@ -250,6 +251,112 @@ def test_a_pivot_turns_no_faster_than_asked_and_only_in_tight_turns():
     # stops; it does not pivot.
     walking, _ = turn_on_the_spot(1.0, ActorConfig(plan_upper_body=False), speed=0.6)
     assert not any(b.category == 'pivot' for b in walking)
+
+
+def test_a_turn_reversed_at_low_speed_squares_the_feet_instead_of_stopping():
+    """Walking a left arc, then told to turn right slowly (0.31 m/s, -1 rad/s: seed 2 of
+    bench_steer_away.py's walks, which stopped here on every course): the right foot is down,
+    pointing 0.35 rad further left than the left one, and the left foot must step first. On
+    the arc it would pass into the right foot; a pivot keeping its heading turns the legs in
+    until the thighs meet, and squaring it up to the right foot turns the pelvis back (left).
+    The actor squares the feet, the pelvis turning back a little, rather than stand still
+    until the mouse moves; its next steps turn right."""
+    sc = scene('flat')
+    actor = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False),
+                  start=sc.start)
+    blocks = run_commands(actor, [0.0, 0.74, 3.0], [0.89, 0.31, 0.0], [0.74, -1.0, 0.0])
+    _, _, report = judged(blocks, sc.environment)
+    assert report.ok, report.failures()
+    assert not any(b.status == 'stuck' for b in blocks)
+    turning = [b for b in blocks if b.category and b.times[0] > 0.74]
+    pivot = turning[0]
+    assert pivot.category == 'pivot'
+    back = pivot.frames[-1, 3] - pivot.frames[0, 3]
+    assert 0.0 < back < 0.2, back
+    heading = max(b.frames[-1, 3] for b in turning)
+    assert blocks[-1].frames[-1, 3] < heading - 0.5
+
+
+def test_a_turn_on_the_spot_with_the_feet_on_two_levels_pivots_on_either_level():
+    """Weaving onto the stairs (seed 9 of bench_steer_away.py's walks, rounded), the last step
+    puts one foot on the first tread's nosing, the other stays on the floor, facing the flight
+    at 0.95 rad. Told to turn on the spot, the floor foot cannot land beside the tread foot on
+    the tread's level (that is across the riser); it lands on the floor, its own level, and
+    so on: each foot pivots on its level. (A pivot had to land within 5 cm of the stance
+    foot's height: the actor stood there, and turning either way left it there, trapped.)"""
+    sc = scene('stairs_up')
+    commands = [(0.0, 0.0, 0.85), (1.78, 0.5, -0.67), (2.57, 0.94, 1.11), (3.89, 0.0, -0.11),
+                (5.51, 0.0, 0.44), (9.0, 0.0, 0.0)]
+    actor = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False),
+                  start=sc.start)
+    blocks = run_commands(actor, *zip(*commands))
+    _, _, report = judged(blocks, sc.environment)
+    assert report.ok, report.failures()
+    assert not any(b.status == 'stuck' for b in blocks)
+    turning = [b for b in blocks if b.times[0] > 5.51 and b.category]
+    assert len(turning) >= 4 and all(b.category == 'pivot' for b in turning)
+    assert turning[-1].frames[-1, 3] - turning[0].frames[0, 3] > 0.7
+    # The first pivot starts with the feet 0.15 m apart in height.
+    first = skeleton().forward_kinematics(turning[0].frames[0])
+    index = skeleton().link_index
+    heights = [first[index[f'{side}_foot'], 2, 3] for side in ('left', 'right')]
+    assert abs(heights[0] - heights[1]) > 0.1, heights
+
+
+def test_a_pivot_at_a_stair_nosing_lands_on_the_tread_and_never_steps_on_the_spot(monkeypatch):
+    """Standing on the first tread with the heels over its nosing, told to turn on the spot:
+    beside the stance foot the turned foot would land across the riser, so it lands 10 cm
+    ahead or behind (``PIVOT_SHIFTS``), on the tread, and the actor turns. Where no landing
+    turns it any further, it stops rather than step on the spot: two pivots in a row turn the
+    pelvis on by ``PIVOT_MIN_TURN`` at least."""
+    sc = scene('stairs_up')
+
+    def turn():
+        actor = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False),
+                      start=(1.55, 0.0, 0.0))
+        return run_commands(actor, [0.0, 4.0], [0.0, 0.0], [1.0, 0.0])
+
+    blocks = turn()
+    _, frames, report = judged(blocks, sc.environment)
+    assert report.ok, report.failures()
+    assert frames[-1, 3] > 0.5
+    pivots = [b.frames[-1, 3] - b.frames[0, 3] for b in blocks if b.category == 'pivot']
+    assert len(pivots) >= 2
+    for first, second in zip(pivots[:-1], pivots[1:]):
+        assert first + second > actor_module.PIVOT_MIN_TURN - 1e-9, pivots
+    assert blocks[-1].status == 'stuck'
+    # Landing only beside the stance foot, it does not turn at all.
+    monkeypatch.setattr(actor_module, 'PIVOT_SHIFTS', (0.0,))
+    plain = turn()
+    assert not any(b.category for b in plain)
+
+
+def test_beside_the_table_a_pivot_whose_thigh_meets_it_leaves_other_landings_to_try(
+        monkeypatch):
+    """Weaving beside the table (seed 5 of bench_steer_away.py's walks), the actor stops
+    beside its corner, the pelvis 0.04 m from the line of its near edge: every step puts the
+    left thigh into the table's edge. Told to
+    turn away on the spot, the pivots beside the right foot meet it too (the 3D check refuses
+    them, and those 10 cm ahead); the next landings are tried, and one 10 cm behind clears it.
+    (The first refused pivot ended the attempt: the actor was trapped there.)"""
+    sc = scene('table')
+    commands = [(0.0, 1.07, 0.179), (1.669, 0.427, -0.838), (3.342, 1.095, 0.538),
+                (3.65, 0.0, -1.0), (7.65, 0.0, 0.0)]
+
+    def walk():
+        actor = Actor(skeleton(), sc.environment, ActorConfig(), start=sc.start)
+        return run_commands(actor, *zip(*commands))
+
+    blocks = walk()
+    stop = next(b for b in blocks if b.status == 'stuck')
+    assert 3.3 < stop.times[0] < 3.65 and 'left_thigh' in stop.reason
+    away = [b for b in blocks if b.times[0] > 3.65 and b.category]
+    assert away[0].category == 'pivot' and len(away) >= 4
+    assert away[-1].frames[-1, 3] < stop.frames[-1, 3] - 1.5
+    _, _, report = judged(blocks, sc.environment)
+    assert report.ok, report.failures()
+    monkeypatch.setattr(actor_module, 'PIVOT_SHIFTS', (0.0,))
+    assert not any(b.times[0] > 3.65 and b.category for b in walk())
 
 
 @pytest.mark.parametrize('value', [-0.1, 1.5, float('nan')])

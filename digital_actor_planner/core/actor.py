@@ -117,6 +117,11 @@ def validate(config: ActorConfig) -> None:
 
 #: Turns tighter than this radius (m) pivot where their arc is refused (see ``pivot_turn``).
 PIVOT_RADIUS = 0.5
+#: Where a pivot's landing foot may go along the pelvis's heading from beside the stance foot,
+#: in the order tried, m.
+PIVOT_SHIFTS = (0.0, 0.1, -0.1, 0.2)
+#: How far two pivots in a row must turn the pelvis in the commanded direction, rad.
+PIVOT_MIN_TURN = 0.05
 
 
 @dataclass(frozen=True)
@@ -216,6 +221,8 @@ class Actor:
         self.reason = ''
         self._failure = None
         self._steps = 0
+        # (step count after the last pivot, pelvis heading before it, rad).
+        self._last_pivot = None
 
     # -- state ---------------------------------------------------------------------------
     @property
@@ -522,13 +529,38 @@ class Actor:
             now = float(stance.feet[swing_side].yaw - foot.yaw)
             turns = (0.0, 0.5 * now, now)
         offset = leg.hip_half_width if stance.stance_side == LEFT else -leg.hip_half_width
-        for turn in turns:
-            motion = self._pivot_motion(stance, foot, turn, offset, duration, np.sign(w))
-            if motion is not None:
-                break
-        else:
-            return None
-        return self._checked_step_to_rest(motion, started, 'walking', '', 'pivot')
+        # How far the pelvis, halfway between the feet, would turn with the command.
+        direction = float(np.sign(w))
+        heading = stance.pelvis[3]
+        ahead = {turn: direction * (foot.yaw + 0.5 * turn - heading) for turn in turns}
+        tries = [turn for turn in turns if ahead[turn] >= -1e-3]
+        if not toes_out:
+            # Feet in a V opened against the turn (a turn reversed mid-walk): keeping the
+            # swing foot's heading turns the legs in, and squaring the feet turns the pelvis
+            # back. Squaring them up is what lets the next step, the other foot's, turn toes
+            # out: if nothing else can be taken the pelvis may turn back, least first.
+            tries += sorted((turn for turn in turns if ahead[turn] < -1e-3),
+                            key=lambda turn: -ahead[turn])
+        if self._last_pivot is not None and self._last_pivot[0] == self._steps:
+            # Two pivots in a row must turn the pelvis on: feet that can land only where the
+            # heading stays (beside a stair's nosing) would otherwise step on the spot for ever.
+            before = self._last_pivot[1]
+            tries = [turn for turn in tries
+                     if direction * (foot.yaw + 0.5 * turn - before) > PIVOT_MIN_TURN]
+        # Beside the stance foot first; then a little ahead or behind it (beside a foot at a
+        # stair's nosing, the other lands on the tread, not across the riser).
+        for shift in PIVOT_SHIFTS:
+            for turn in tries:
+                motion = self._pivot_motion(stance, foot, turn, offset, duration, shift)
+                if motion is None:
+                    continue
+                # A landing the 3D check or the upper body refuses (a thigh under a table's
+                # edge) leaves the other landings to try.
+                block = self._checked_step_to_rest(motion, started, 'walking', '', 'pivot')
+                if block is not None:
+                    self._last_pivot = (self._steps, heading)
+                    return block
+        return None
 
     def _checked_step_to_rest(self, motion: StepMotion, started: float, status: str,
                               reason: str, category: str) -> Optional[StepBlock]:
@@ -546,22 +578,28 @@ class Actor:
                             np.zeros((0, 3)), started, category)
 
     def _pivot_motion(self, stance: Stance, foot, turn: float, offset: float,
-                      duration: float, direction: float) -> Optional[StepMotion]:
+                      duration: float, shift: float = 0.0) -> Optional[StepMotion]:
         """The pivot's leg motion landing the swing foot ``turn`` rad from the stance foot's
-        heading, or None where the pelvis would turn against ``direction`` (+-1), the sole
-        would not rest (``_sole_rest``) or the step cannot be made."""
+        heading and ``shift`` m ahead of it along the pelvis's new heading (the pelvis ends
+        halfway), or None where the sole would not rest (``_sole_rest``) or the step cannot be
+        made."""
         landing_yaw = foot.yaw + turn
         pelvis_yaw = 0.5 * (foot.yaw + landing_yaw)
-        if (pelvis_yaw - stance.pelvis[3]) * direction < -1e-3:
-            return None  # it would turn back (not turning at all hands over to the other foot)
         across = np.array([-np.sin(pelvis_yaw), np.cos(pelvis_yaw)])
-        pelvis_xy = foot.xy - offset * across
-        landing_xy = pelvis_xy - offset * across
+        ahead = np.array([np.cos(pelvis_yaw), np.sin(pelvis_yaw)])
+        pelvis_xy = foot.xy - offset * across + 0.5 * shift * ahead
+        landing_xy = pelvis_xy - offset * across + 0.5 * shift * ahead
         rest = self._sole_rest(landing_xy, landing_yaw, foot.sole)
+        swing_sole = stance.feet[1 - stance.stance_side].sole
+        if rest is None and abs(swing_sole - foot.sole) > 0.05:
+            # Or on the level the swinging foot stands on (feet on two treads).
+            rest = self._sole_rest(landing_xy, landing_yaw, swing_sole)
         if rest is None:
             return None
         sole, pitch = rest
         target = np.array([pelvis_xy[0], pelvis_xy[1], pelvis_yaw])
+        if abs(sole - foot.sole) > 0.05:
+            duration = self._walk.step_duration(0.3, 0.6, sole - foot.sole)
         try:
             return self._timed_step(stance, landing_xy, landing_yaw, sole, pitch, target,
                                     duration, to_rest=True)
