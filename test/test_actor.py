@@ -359,6 +359,38 @@ def test_beside_the_table_a_pivot_whose_thigh_meets_it_leaves_other_landings_to_
     assert not any(b.times[0] > 3.65 and b.category for b in walk())
 
 
+def test_a_foot_behind_the_other_beside_the_table_turns_where_it_stands(monkeypatch):
+    """Seed 7 of bench_steer_away.py's walks stops beside the table's far end, the left foot
+    0.43 m behind the right: any step of the left leg swings its thigh forward into the
+    table's edge, wherever it lands beside the right foot. Told to turn away on the spot, the
+    left foot turns where it stands (the last of ``PIVOT_SHIFTS``), and the actor walks its
+    turn from there. Without that landing it stayed, trapped."""
+    sc = scene('table')
+    commands = [(0.0, 0.36, 0.014), (1.363, 0.813, -0.231), (3.188, 0.244, 0.83),
+                (4.807, 0.236, -0.241), (5.489, 0.715, 0.443), (6.3, 0.666, -0.004),
+                (8.085, 1.117, 0.996), (8.394, 0.829, -0.185), (8.6, 0.0, -1.0),
+                (12.6, 0.0, 0.0)]
+
+    def walk():
+        actor = Actor(skeleton(), sc.environment, ActorConfig(), start=sc.start)
+        return run_commands(actor, *zip(*commands))
+
+    blocks = walk()
+    stop = next(b for b in blocks if b.status == 'stuck')
+    assert 8.2 < stop.times[0] < 8.6
+    away = [b for b in blocks if b.times[0] > 8.6 and b.category]
+    assert away[0].category == 'pivot' and len(away) >= 4
+    pivot = away[0].frames
+    index = skeleton().link_index['left_foot']
+    feet = skeleton().forward_kinematics(pivot[[0, -1]])[:, index, :2, 3]
+    assert np.hypot(*(feet[1] - feet[0])) < 0.05
+    assert away[-1].frames[-1, 3] < stop.frames[-1, 3] - 1.5
+    _, _, report = judged(blocks, sc.environment)
+    assert report.ok, report.failures()
+    monkeypatch.setattr(actor_module, 'PIVOT_SHIFTS', actor_module.PIVOT_SHIFTS[:-1])
+    assert not any(b.times[0] > 8.6 and b.category for b in walk())
+
+
 @pytest.mark.parametrize('value', [-0.1, 1.5, float('nan')])
 def test_bad_max_toe_in_names_the_field(value):
     with pytest.raises(ValueError, match='max_toe_in'):

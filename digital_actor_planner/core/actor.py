@@ -118,8 +118,9 @@ def validate(config: ActorConfig) -> None:
 #: Turns tighter than this radius (m) pivot where their arc is refused (see ``pivot_turn``).
 PIVOT_RADIUS = 0.5
 #: Where a pivot's landing foot may go along the pelvis's heading from beside the stance foot,
-#: in the order tried, m.
-PIVOT_SHIFTS = (0.0, 0.1, -0.1, 0.2)
+#: in the order tried, m; None: where the swinging foot stands (it turns in place: a foot behind
+#: the other need not swing forward).
+PIVOT_SHIFTS = (0.0, 0.1, -0.1, 0.2, None)
 #: How far two pivots in a row must turn the pelvis in the commanded direction, rad.
 PIVOT_MIN_TURN = 0.05
 
@@ -548,7 +549,9 @@ class Actor:
             tries = [turn for turn in tries
                      if direction * (foot.yaw + 0.5 * turn - before) > PIVOT_MIN_TURN]
         # Beside the stance foot first; then a little ahead or behind it (beside a foot at a
-        # stair's nosing, the other lands on the tread, not across the riser).
+        # stair's nosing, the other lands on the tread, not across the riser); last, turning
+        # where it stands (a foot behind the other beside a table: its thigh need not swing
+        # forward under the edge).
         for shift in PIVOT_SHIFTS:
             for turn in tries:
                 motion = self._pivot_motion(stance, foot, turn, offset, duration, shift)
@@ -578,15 +581,18 @@ class Actor:
                             np.zeros((0, 3)), started, category)
 
     def _pivot_motion(self, stance: Stance, foot, turn: float, offset: float,
-                      duration: float, shift: float = 0.0) -> Optional[StepMotion]:
+                      duration: float, shift: Optional[float] = 0.0) -> Optional[StepMotion]:
         """The pivot's leg motion landing the swing foot ``turn`` rad from the stance foot's
-        heading and ``shift`` m ahead of it along the pelvis's new heading (the pelvis ends
-        halfway), or None where the sole would not rest (``_sole_rest``) or the step cannot be
-        made."""
+        heading and ``shift`` m ahead of it along the pelvis's new heading (None: as far ahead
+        as the swinging foot stands; the pelvis ends halfway), or None where the sole would not
+        rest (``_sole_rest``) or the step cannot be made."""
         landing_yaw = foot.yaw + turn
         pelvis_yaw = 0.5 * (foot.yaw + landing_yaw)
         across = np.array([-np.sin(pelvis_yaw), np.cos(pelvis_yaw)])
         ahead = np.array([np.cos(pelvis_yaw), np.sin(pelvis_yaw)])
+        if shift is None:
+            beside = foot.xy - 2.0 * offset * across
+            shift = float((stance.feet[1 - stance.stance_side].xy - beside) @ ahead)
         pelvis_xy = foot.xy - offset * across + 0.5 * shift * ahead
         landing_xy = pelvis_xy - offset * across + 0.5 * shift * ahead
         rest = self._sole_rest(landing_xy, landing_yaw, foot.sole)
