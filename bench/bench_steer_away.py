@@ -1,6 +1,7 @@
 """Zigzag mouse steering on the courses: every walk judged, every stop steered away from.
 
-Run: .venv/bin/python bench/bench_steer_away.py [--courses flat rough ...] [--seeds 8] [--list]
+Run: .venv/bin/python bench/bench_steer_away.py [--courses flat rough ...] [--seeds 8]
+         [--first-seed 0] [--list]
          [--max-toe-in 0.35] [--no-edge-turns]
 
 A mouse user does not drive straight. Each walk here (seeded, 12 s) holds a command for 0.3-2 s
@@ -65,6 +66,8 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('--courses', nargs='+', default=list(COURSES))
     parser.add_argument('--seeds', type=int, default=8)
+    parser.add_argument('--first-seed', type=int, default=0,
+                        help='walk seeds first-seed .. first-seed + seeds - 1')
     parser.add_argument('--list', action='store_true', help='print every stop')
     parser.add_argument('--max-toe-in', type=float, default=ActorConfig().max_toe_in,
                         help='ActorConfig.max_toe_in, rad')
@@ -80,7 +83,7 @@ def main(argv=None):
         sc = scene(name)
         sides = np.vstack([mesh.vertices for mesh in sc.environment.meshes])[:, 1]
         inner = (float(sides.min()) + EDGE, float(sides.max()) - EDGE)
-        for seed in range(args.seeds):
+        for seed in range(args.first_seed, args.first_seed + args.seeds):
             times, linear, angular = zigzag(seed)
             blocks = walk(sk, sc, times, linear, angular, config)
             t, frames, report = judged(blocks, sc.environment)
@@ -119,7 +122,8 @@ def main(argv=None):
                       f'({x:.2f}, {y:.2f}) heading {yaw:+.2f} rad ({first.reason}); steps '
                       f'taken steering away {taken}: {"left" if left else "TRAPPED"}',
                       flush=True)
-    print(f'\n{walks} weaving walks ({len(args.courses)} courses x {args.seeds} seeds, 12 s '
+    print(f'\n{walks} weaving walks ({len(args.courses)} courses x {args.seeds} seeds from '
+          f'{args.first_seed}, 12 s '
           'each, whole body)\n')
     print(f'| walks | checker failures | walked m | time stopped | of it over {EDGE} m from '
           'the floor\'s sides | stops | stops left by steering away | trapped |')

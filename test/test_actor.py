@@ -391,6 +391,26 @@ def test_a_foot_behind_the_other_beside_the_table_turns_where_it_stands(monkeypa
     assert not any(b.times[0] > 8.6 and b.category for b in walk())
 
 
+def test_a_foot_that_lands_away_from_its_foothold_must_rest_where_it_lands():
+    """Weaving on the blocks course (seed 58 of bench_steer_away.py's walks, rounded): in a
+    tight right turn the left foot's heading is bounded (``max_toe_in``), so its hip's plane
+    puts it 0.19 m from the foothold planned on the 0.2 m block, beside the block, where it
+    came down at the block's height over the floor; the next lift-off then left no foot down
+    (36.9 mm). A landing that far from its foothold must now rest on the ground where it is;
+    this one is refused, the actor does something else, and the checker passes."""
+    sc = scene('blocks')
+    commands = [(0.0, 1.043, 0.588), (0.825, 0.354, -0.765), (2.621, 0.663, 0.259),
+                (3.334, 0.236, -0.63), (3.989, 0.591, 0.568), (5.726, 0.566, -1.049),
+                (6.265, 0.338, 0.566), (7.085, 0.472, -0.986), (7.62, 0.633, 0.899),
+                (8.815, 0.0, -1.034), (10.688, 0.0, 0.0)]
+    actor = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False),
+                  start=sc.start)
+    blocks = run_commands(actor, *zip(*commands))
+    _, _, report = judged(blocks, sc.environment)
+    assert report.ok, report.failures()
+    assert sum(1 for b in blocks if b.category) >= 14
+
+
 @pytest.mark.parametrize('value', [-0.1, 1.5, float('nan')])
 def test_bad_max_toe_in_names_the_field(value):
     with pytest.raises(ValueError, match='max_toe_in'):

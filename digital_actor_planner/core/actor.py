@@ -123,6 +123,8 @@ PIVOT_RADIUS = 0.5
 PIVOT_SHIFTS = (0.0, 0.1, -0.1, 0.2, None)
 #: How far two pivots in a row must turn the pelvis in the commanded direction, rad.
 PIVOT_MIN_TURN = 0.05
+#: How far a foot may land from its planned foothold before its support is judged again, m.
+LANDING_DRIFT = 0.02
 
 
 @dataclass(frozen=True)
@@ -508,8 +510,12 @@ class Actor:
         pelvis turns to halfway between the feet. A foot on the turn's side (the left one in a
         left turn) lands turned from the stance foot, toes out, by ``pivot_turn`` or less (no
         faster than ``w``), else by half that; the other comes in parallel to the stance foot
-        (turned in, the two would meet), else half-way or keeping its heading. None when the
-        command is not a tight turn or no such step can be taken.
+        (turned in, the two would meet), else half-way or keeping its heading, and where only
+        those turning the pelvis back are left, they are tried too, least first. Each landing is
+        tried beside the stance foot, then along ``PIVOT_SHIFTS``, on the stance foot's level
+        or the swinging foot's; the first the 3D check and the upper body accept is taken. Two
+        pivots in a row turn the pelvis at least ``PIVOT_MIN_TURN`` on. None when the command
+        is not a tight turn or no such step can be taken.
         """
         cfg, leg = self.config, self.skeleton.leg
         if cfg.pivot_turn <= 0 or abs(w) < 0.2 or v >= PIVOT_RADIUS * abs(w):
@@ -533,15 +539,15 @@ class Actor:
         # How far the pelvis, halfway between the feet, would turn with the command.
         direction = float(np.sign(w))
         heading = stance.pelvis[3]
-        ahead = {turn: direction * (foot.yaw + 0.5 * turn - heading) for turn in turns}
-        tries = [turn for turn in turns if ahead[turn] >= -1e-3]
+        onward = {turn: direction * (foot.yaw + 0.5 * turn - heading) for turn in turns}
+        tries = [turn for turn in turns if onward[turn] >= -1e-3]
         if not toes_out:
             # Feet in a V opened against the turn (a turn reversed mid-walk): keeping the
             # swing foot's heading turns the legs in, and squaring the feet turns the pelvis
             # back. Squaring them up is what lets the next step, the other foot's, turn toes
             # out: if nothing else can be taken the pelvis may turn back, least first.
-            tries += sorted((turn for turn in turns if ahead[turn] < -1e-3),
-                            key=lambda turn: -ahead[turn])
+            tries += sorted((turn for turn in turns if onward[turn] < -1e-3),
+                            key=lambda turn: -onward[turn])
         if self._last_pivot is not None and self._last_pivot[0] == self._steps:
             # Two pivots in a row must turn the pelvis on: feet that can land only where the
             # heading stays (beside a stair's nosing) would otherwise step on the spot for ever.
@@ -581,7 +587,7 @@ class Actor:
                             np.zeros((0, 3)), started, category)
 
     def _pivot_motion(self, stance: Stance, foot, turn: float, offset: float,
-                      duration: float, shift: Optional[float] = 0.0) -> Optional[StepMotion]:
+                      duration: float, shift: Optional[float]) -> Optional[StepMotion]:
         """The pivot's leg motion landing the swing foot ``turn`` rad from the stance foot's
         heading and ``shift`` m ahead of it along the pelvis's new heading (None: as far ahead
         as the swinging foot stands; the pelvis ends halfway), or None where the sole would not
@@ -720,9 +726,40 @@ class Actor:
             speed = np.abs(frames[1:] - frames[:-1]) * rate / self._lower_velocity_limit
             ratio = float(speed.max())
             if ratio <= 0.95:
+                self._check_landing(motion.stance.feet[1 - stance.stance_side], landing_xy)
                 return motion
             duration = np.ceil(duration * ratio / 0.85 * rate) / rate
         raise GaitError(f'step needs joint speeds {ratio:.2f} x the limits')
+
+    def _check_landing(self, foot, planned_xy: np.ndarray) -> None:
+        """Raise GaitError if a foot that landed away from its planned foothold is not resting.
+
+        Without hip roll a foot lands where its hip's plane allows: in a tight turn whose
+        landing heading is bounded (``max_toe_in``) that can be tens of centimetres from the
+        foothold the footstep planner judged, and off a block's side it landed at the block's
+        height over the floor, with no foot down at the next lift-off. A landing more than
+        ``LANDING_DRIFT`` from its foothold is judged again where it is, by the footstep
+        planner's rule for a sole at an edge: ground within ``flatness_tolerance`` under the
+        ankle and under ``min_support_fraction`` of the sole (points 3 across, 7 along; higher
+        ground is left to the 3D check).
+        """
+        if float(np.hypot(*(foot.xy - planned_xy))) <= LANDING_DRIFT:
+            return
+        leg, fcfg = self.skeleton.leg, self._footstep_config
+        along = np.array([np.cos(foot.yaw), np.sin(foot.yaw)])
+        side = np.array([-along[1], along[0]])
+        lengths = np.linspace(-leg.heel, leg.toe, 7)
+        points = (foot.xy + lengths[:, None, None] * along
+                  + np.array([-0.5, 0.0, 0.5])[None, :, None] * leg.foot_width * side)
+        sole = foot.sole + lengths * np.tan(foot.pitch)
+        ground, _ = self.environment.ground_height(points.reshape(-1, 2), foot.sole + 0.05)
+        with np.errstate(invalid='ignore'):
+            # NaN (no ground there) supports nothing.
+            supported = ground.reshape(7, 3) >= sole[:, None] - fcfg.flatness_tolerance
+        ankle = int(np.abs(lengths).argmin())
+        if not supported[ankle, 1] or supported.mean() < fcfg.min_support_fraction:
+            raise GaitError('the landing foot would not rest on the ground where its hip '
+                            'puts it')
 
     def _closing_step(self, started: float) -> Optional[StepBlock]:
         """Bring the feet side by side when the command stops (the actor stops within a step)."""
