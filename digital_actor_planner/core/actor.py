@@ -618,6 +618,14 @@ class Actor:
         except GaitError:
             return None
 
+    def _sole_points(self, xy: np.ndarray, yaw: float, lengths: np.ndarray) -> np.ndarray:
+        """Points under a sole at ankle ``xy`` heading ``yaw``: at ``lengths`` (m, heel < 0)
+        along it, each at its two edges and on its centre line: (len(lengths), 3, 2), m."""
+        along = np.array([np.cos(yaw), np.sin(yaw)])
+        side = np.array([-along[1], along[0]])
+        return (xy + lengths[:, None, None] * along
+                + np.array([-0.5, 0.0, 0.5])[None, :, None] * self.skeleton.leg.foot_width * side)
+
     def _sole_rest(self, xy: np.ndarray, yaw: float, near: float):
         """(sole height under the ankle m, pitch rad) of a foot put down at ankle ``xy``
         heading ``yaw`` within 5 cm of sole height ``near``, or None where it cannot rest.
@@ -629,11 +637,8 @@ class Actor:
         3D check after this only looks for collisions.
         """
         leg, fcfg = self.skeleton.leg, self._footstep_config
-        along = np.array([np.cos(yaw), np.sin(yaw)])
-        side = np.array([-along[1], along[0]])
         lengths = np.array([-leg.heel, 0.5 * (leg.toe - leg.heel), leg.toe])
-        points = (xy + lengths[:, None, None] * along
-                  + np.array([-0.5, 0.0, 0.5])[None, :, None] * leg.foot_width * side)
+        points = self._sole_points(xy, yaw, lengths)
         ground, _ = self.environment.ground_height(points.reshape(-1, 2), near + 0.05)
         if np.isnan(ground).any():
             return None
@@ -746,11 +751,8 @@ class Actor:
         if float(np.hypot(*(foot.xy - planned_xy))) <= LANDING_DRIFT:
             return
         leg, fcfg = self.skeleton.leg, self._footstep_config
-        along = np.array([np.cos(foot.yaw), np.sin(foot.yaw)])
-        side = np.array([-along[1], along[0]])
         lengths = np.linspace(-leg.heel, leg.toe, 7)
-        points = (foot.xy + lengths[:, None, None] * along
-                  + np.array([-0.5, 0.0, 0.5])[None, :, None] * leg.foot_width * side)
+        points = self._sole_points(foot.xy, foot.yaw, lengths)
         sole = foot.sole + lengths * np.tan(foot.pitch)
         ground, _ = self.environment.ground_height(points.reshape(-1, 2), foot.sole + 0.05)
         with np.errstate(invalid='ignore'):
