@@ -551,9 +551,8 @@ class Actor:
         if self._last_pivot is not None and self._last_pivot[0] == self._steps:
             # Two pivots in a row must turn the pelvis on: feet that can land only where the
             # heading stays (beside a stair's nosing) would otherwise step on the spot for ever.
-            before = self._last_pivot[1]
-            tries = [turn for turn in tries
-                     if direction * (foot.yaw + 0.5 * turn - before) > PIVOT_MIN_TURN]
+            already = direction * (heading - self._last_pivot[1])
+            tries = [turn for turn in tries if already + onward[turn] > PIVOT_MIN_TURN]
         # Beside the stance foot first; then a little ahead or behind it (beside a foot at a
         # stair's nosing, the other lands on the tread, not across the riser); last, turning
         # where it stands (a foot behind the other beside a table: its thigh need not swing
