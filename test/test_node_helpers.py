@@ -608,3 +608,34 @@ def test_a_scene_reload_racing_a_plan_neither_breaks_the_buffer_nor_drops_the_fi
         node.stop()
         node.destroy_node()
         rclpy.try_shutdown(context=context)
+
+
+class _Executor:
+    """spin_once stand-in: on call ``fail_on`` sets the context's validity to ``valid_after``
+    and fails as rclpy does when the context is gone while it builds its wait set."""
+
+    def __init__(self, context, fail_on, valid_after):
+        self.context, self.fail_on, self.valid_after, self.calls = context, fail_on, valid_after, 0
+
+    def spin_once(self, timeout_sec=None):
+        self.calls += 1
+        if self.calls == self.fail_on:
+            self.context['ok'] = self.valid_after
+            raise RuntimeError('failed to initialize wait set: the given context is not valid')
+
+
+@pytest.mark.parametrize('shut_down', [True, False])
+def test_spin_ends_quietly_when_ctrl_c_shuts_the_context_down_mid_spin(shut_down):
+    """Ctrl-C shuts the context down from rclpy's signal handler; landing between the loop's
+    ok() check and spin_once building its wait set, spin_once raises RCLError (a RuntimeError).
+    That is the shutdown asked for: the node returns (it exited 1 with a traceback). The same
+    error with the context still valid is a real failure and is raised."""
+    from digital_actor_planner.nodes.actor_planner import spin_until_shutdown
+    context = {'ok': True}
+    executor = _Executor(context, fail_on=3, valid_after=not shut_down)
+    if shut_down:
+        spin_until_shutdown(executor, ok=lambda: context['ok'])
+        assert executor.calls == 3
+    else:
+        with pytest.raises(RuntimeError, match='context is not valid'):
+            spin_until_shutdown(executor, ok=lambda: context['ok'])

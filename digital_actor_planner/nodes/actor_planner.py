@@ -1456,6 +1456,23 @@ def _terminated(signum, frame):
     raise KeyboardInterrupt(f'signal {signum}')
 
 
+def spin_until_shutdown(executor, ok=rclpy.ok) -> None:
+    """Spin ``executor`` until the context is shut down (``ok()`` false).
+
+    Bounded waits, so that the SIGTERM handler (Python code, run by the main thread) gets its
+    turn even when no message arrives. Ctrl-C shuts the context down from rclpy's signal
+    handler, which can land between ``ok()`` and ``spin_once`` building its wait set (RCLError,
+    a RuntimeError: "the given context is not valid"): that is the shutdown asked for, not a
+    failure (the node exited with status 1 and a traceback, one CI run in many).
+    """
+    while ok():
+        try:
+            executor.spin_once(timeout_sec=SIGNAL_CHECK)
+        except RuntimeError:
+            if ok():
+                raise
+
+
 def main(args=None) -> int:
     """Run the node(s) until interrupted; exit status 2 on a bad configuration."""
     # The executor and planning threads hold the GIL at times; a short switch interval bounds
@@ -1514,8 +1531,7 @@ def main(args=None) -> int:
     try:
         # Bounded waits, so that the SIGTERM handler (Python code, run by the main thread)
         # gets its turn even when no message arrives.
-        while rclpy.ok():
-            executor.spin_once(timeout_sec=SIGNAL_CHECK)
+        spin_until_shutdown(executor)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
