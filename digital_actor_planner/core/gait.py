@@ -30,9 +30,11 @@ SOLE_CLEARANCE = 0.002  # a resting sole floats this far above the surface, m
 #: with the rear one 0.25 m behind that closed a 1 cm gap in 4 frames, and every step and pivot
 #: from there was refused (bench_steer_away seed 33, facing the floor's edge: trapped).
 LEGS_LANDING_MARGIN = 0.02
-#: Points along a stance sole, ankle to toe tip, as fractions of its toe length, that must rest
-#: within _TOE_SUPPORT_TOLERANCE (m) of support for its heel to lift about its toe tip.
-_TOE_SAMPLES = np.linspace(1.0 / 6.0, 1.0, 6)
+#: Points along a stance sole, ankle to toe tip, as fractions of its toe length (1 cm apart on
+#: the model's 18 cm toe), on its middle line and its two long edges: a point within
+#: _TOE_SUPPORT_TOLERANCE (m) of the ground under it rests on support.
+_TOE_SAMPLES = np.linspace(1.0 / 18.0, 1.0, 18)
+_TOE_ACROSS = np.array([0.0, -0.5, 0.5])
 _TOE_SUPPORT_TOLERANCE = 0.015
 
 
@@ -826,26 +828,38 @@ class WalkGenerator:
             raise GaitError(f'{name} would reach {value:.2f} rad, outside its limits')
 
     def _supported_toe(self, foot: FootPose, ground) -> float:
-        """How far ahead of the ankle a resting sole has support all the way, m (its toe
-        length where the toes rest on the ground; less where they overhang an edge).
+        """How far ahead of the ankle a stance sole's heel lifts about, m: its toe tip where its
+        toes rest on the ground, else the first sampled point past the end of its support.
+
+        Rolling about a line, the sole behind it rises and the sole ahead of it sinks; so no
+        support may lie ahead of the line. Where the toes overhang an edge the line is therefore
+        past the edge (by under 1 cm of sampling and the ground map's cell; the sole then rises
+        off the edge by that times the sine of its pitch), and the edge is looked for across the
+        sole's width: an edge the foot meets at an angle ends the support under one side of
+        the sole centimetres later than under its middle. Rolling about the last supported point
+        of the middle line instead sank the sole into a block's or a step's edge (5-15 mm), and
+        the step was refused.
 
         ``ground`` is the step's swing profile (xy (N, 2), z_ref) -> (N,) heights.
         """
         leg = self.leg
         p0 = foot.pitch
         distance = leg.toe * _TOE_SAMPLES
-        direction = np.array([np.cos(foot.yaw), np.sin(foot.yaw)])
-        points = foot.xy + (distance * np.cos(p0) + leg.ankle_height * np.sin(p0))[:, None] \
-            * direction
+        along = distance * np.cos(p0) + leg.ankle_height * np.sin(p0)
+        cos_yaw, sin_yaw = math.cos(foot.yaw), math.sin(foot.yaw)
+        across = _TOE_ACROSS * leg.foot_width
+        # (3, n) points: the sole's middle line and edges, each from the ankle to the toe tip.
+        x = foot.xy[0] + along * cos_yaw - across[:, None] * sin_yaw
+        y = foot.xy[1] + along * sin_yaw + across[:, None] * cos_yaw
         sole_z = foot.z + distance * np.sin(p0) - leg.ankle_height * np.cos(p0)
-        under = ground(points, float(sole_z.max()) + 0.02)
+        under = ground(np.column_stack([x.ravel(), y.ravel()]), float(sole_z.max()) + 0.02)
         # Ground well below is no support, nor is a surface over the toes (the profile reports
         # what is overhead where there is no ground).
-        missing = ~(np.abs(under - sole_z) <= _TOE_SUPPORT_TOLERANCE)
-        if not missing.any():
+        resting = (np.abs(under.reshape(x.shape) - sole_z) <= _TOE_SUPPORT_TOLERANCE).any(axis=0)
+        if resting[-1]:
             return leg.toe
-        first = int(missing.argmax())
-        return float(distance[first - 1]) if first else 0.0
+        supported = np.flatnonzero(resting)
+        return float(distance[supported[-1] + 1 if len(supported) else 0])
 
     @staticmethod
     def _heel_off(leg: LegGeometry, hip: np.ndarray, foot: FootPose, pelvis_yaw: np.ndarray,
