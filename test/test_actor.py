@@ -3,9 +3,11 @@ import numpy as np
 import pytest
 
 from course_runs import judged, scene, skeleton
+from scene_helpers import box
 from digital_actor_planner.core import actor as actor_module
 from digital_actor_planner.core import gait as gait_module
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands, validate
+from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.upper_body import UpperBodyPlan
 
 
@@ -410,6 +412,28 @@ def test_a_foot_that_lands_away_from_its_foothold_must_rest_where_it_lands():
     _, _, report = judged(blocks, sc.environment)
     assert report.ok, report.failures()
     assert sum(1 for b in blocks if b.category) >= 14
+
+
+def test_walking_straight_over_a_block_the_rear_foot_clears_its_near_face():
+    """A block 0.5 m long and 0.18 or 0.21 m high across the path, 1.6-2.0 m ahead, walked
+    straight at 0.8 or 1.0 m/s. The footsteps often put the front foot on the block with the
+    rear toe a few centimetres from its face; a cubic swing curve cannot rise that steeply and
+    stay up over the block, so every step was refused and the actor stopped there for good
+    (16 of these 20 walks). The swing then takes a flat-topped curve (degree 5): every walk
+    crosses, and the checker passes each."""
+    for height in (0.18, 0.21):
+        for x in (1.6, 1.7, 1.8, 1.9, 2.0):
+            environment = Environment([box([-1, -1, -0.1], [5, 1, 0]),
+                                       box([x, -1, -0.1], [x + 0.5, 1, height])],
+                                      resolution=0.02)
+            for speed in (0.8, 1.0):
+                actor = Actor(skeleton(), environment, ActorConfig(plan_upper_body=False),
+                              start=(0.0, 0.0, 0.0))
+                blocks = run_commands(actor, [0.0, 8.0], [speed, 0.0], [0.0, 0.0])
+                assert actor.stance.pelvis[0] > x + 1.0, (height, x, speed, [
+                    b.reason for b in blocks if b.status == 'stuck'][:1])
+                _, _, report = judged(blocks, environment)
+                assert report.ok, (height, x, speed, report.failures())
 
 
 def test_weaving_to_the_floors_edge_ends_where_turning_away_frees_the_actor(monkeypatch):

@@ -969,6 +969,8 @@ class WalkGenerator:
         h1 = cfg.swing_lift * (2.0 if lift_foot.pitch < -0.05 else 1.0) + max(0.0, z1 - z0)
         h2 = cfg.swing_lift + 0.5 * max(0.0, z0 - z1)
         start, end = basis_0 * z0, basis_3 * z1
+        cap = cfg.max_swing_lift + abs(z1 - z0)
+        first = (h1, h2)
         for _ in range(12):
             curve = start + basis_1 * (z0 + h1) + basis_2 * (z1 + h2) + end
             short = need - curve - slack
@@ -983,12 +985,55 @@ class WalkGenerator:
             else:
                 h2 += raise_by
                 h1 += 0.5 * raise_by
-            if max(h1, h2) > cfg.max_swing_lift + max(abs(z1 - z0), 0.0):
-                raise GaitError('swing foot cannot clear the terrain')
+            if max(h1, h2) > cap:
+                break
         else:
-            raise GaitError('swing foot cannot clear the terrain')
+            h1 = cap + 1.0
+        if max(h1, h2) > cap:
+            # Raising the control points ran into the limit. Over a block whose face is close
+            # ahead of the lifting toe (or behind the landing heel) the foot must rise steeply
+            # and stay up: a Bezier of degree 5 whose inner control points are paired, (h1, h1,
+            # h2, h2), rises about half as fast again and is flat on top. The lowest pair that
+            # clears every sample, if any.
+            return self._flat_topped_swing(tau, b, z0, z1, need - slack, first, cap)
         z = frames[0] * z0 + frames[1] * (z0 + h1) + frames[2] * (z1 + h2) + frames[3] * z1
         return z, float(max(h1, h2))
+
+    @staticmethod
+    def _flat_topped_swing(tau: np.ndarray, sampled_tau: np.ndarray, z0: float, z1: float,
+                           need: np.ndarray, least: Tuple[float, float], cap: float):
+        """Ankle heights of a swing over a degree-5 Bezier with control heights (z0, z0 + h1,
+        z0 + h1, z1 + h2, z1 + h2, z1), h1 and h2 the lowest pair (on a 5 mm grid, each at least
+        ``least`` and at most ``cap``) whose curve is above ``need`` at the sampled curve
+        parameters ``sampled_tau``. Returns (heights (k,), the larger control height), like
+        :meth:`_swing_heights`.
+
+        Raises
+        ------
+        GaitError
+            When no such pair exists.
+
+        """
+        def weights(u):
+            # Bernstein polynomials of degree 5: the end points and the two inner pairs.
+            v = 1.0 - u
+            return (v ** 5, 5 * u * v ** 4 + 10 * u * u * v ** 3,
+                    10 * u ** 3 * v * v + 5 * u ** 4 * v, u ** 5)
+
+        w0, w1, w2, w3 = weights(sampled_tau)
+        required = need - 1e-4 - (w0 + w1) * z0 - (w2 + w3) * z1
+        h1 = np.arange(least[0], cap + 1e-9, 0.005)[:, None]
+        # Where the second pair's weight is ~0 (at lift-off) the first pair alone must do.
+        alone = w2 < 1e-9
+        h2 = np.where(alone, -np.inf, (required - w1 * h1) / np.where(alone, 1.0, w2))
+        h2 = np.maximum(h2.max(axis=1), least[1])
+        feasible = (h2 <= cap) & (w1[alone] * h1 >= required[alone]).all(axis=1)
+        if not feasible.any():
+            raise GaitError('swing foot cannot clear the terrain')
+        best = int(np.where(feasible, np.maximum(h1[:, 0], h2), np.inf).argmin())
+        h1, h2 = float(h1[best, 0]), float(h2[best])
+        w0, w1, w2, w3 = weights(tau)
+        return w0 * z0 + w1 * (z0 + h1) + w2 * (z1 + h2) + w3 * z1, max(h1, h2)
 
 
 def hold_frames(configuration: np.ndarray, start_time: float, duration: float,
