@@ -326,6 +326,8 @@ class _StepTiming:
     pinned
         How fully the swing foot's plane turns through the foot instead of moving with the hip:
         1 near lift-off and touchdown, 0 in mid-swing.
+    hump
+        A smooth bump over the swing, 0 at lift-off and touchdown, 1 in its middle.
 
     """
 
@@ -344,6 +346,7 @@ class _StepTiming:
     samples: np.ndarray
     bezier_terms: tuple
     pinned: np.ndarray
+    hump: np.ndarray
 
 
 def _columns(indices: np.ndarray):
@@ -449,12 +452,13 @@ class WalkGenerator:
             samples=samples,
             bezier_terms=self._bezier_terms(bezier, samples),
             pinned=np.maximum(1.0 - smoothstep((bezier - 0.04) / 0.12),
-                              smoothstep((bezier - 0.84) / 0.12)))
+                              smoothstep((bezier - 0.84) / 0.12)),
+            hump=np.sin(np.pi * bezier) ** 2)
         # Shared by every step of k frames: nothing may change them in place.
         _read_only((timing.tau, timing.ease, timing.ease_in, timing.ease_out, timing.turn,
                     timing.bezier, timing.lift, timing.plane_turn, timing.pitch_release,
                     timing.pitch_take, timing.weight, timing.fade, timing.samples,
-                    timing.bezier_terms, timing.pinned))
+                    timing.bezier_terms, timing.pinned, timing.hump))
         self._timings[k] = timing
         return timing
 
@@ -657,9 +661,26 @@ class WalkGenerator:
         cos_end, sin_end = direction[-1].tolist()
         swing_lateral = float(swing_x[-1]) * -sin_end + float(swing_y[-1]) * cos_end
         swing_hip_yaw = _wrap(plane_yaw - yaw)
+        # The swinging knee bends at most to its limit (less a margin), so an ankle lifted
+        # close under the hip holds the hip up, as far as the stance leg reaches: up steep
+        # stairs the rear foot passes over the front foot's tread in mid-swing while the pelvis
+        # rises late (Figure 4), and the knee would pass its limit.
+        knee_limit = self._leg_upper[swing_side][2] - 0.02
+        closest = math.sqrt(leg.thigh ** 2 + leg.shank ** 2
+                            + 2.0 * leg.thigh * leg.shank * math.cos(knee_limit))
+        hip_over_ankle = np.sqrt(np.maximum(closest * closest - swing_forward * swing_forward,
+                                            0.0))
         for _ in range(5):
             swing_z, lift = self._swing_heights(bezier, foot_w, landing, swing_pitch, footprint)
             z = np.minimum(z_bound, swing_z + swing_reach)
+            short = swing_z + hip_over_ankle - z
+            if short.max() > 0.0:
+                # Raised by a smooth hump over the swing, scaled to cover the shortfall (a
+                # frame-by-frame maximum jerked the pelvis up, and the arms swinging with the
+                # hips past their speed limit).
+                hump = timing.hump
+                scale = float((short / np.maximum(hump, 1e-3)).max())
+                z = np.minimum(z + scale * hump, np.maximum(z, stance_bound))
             joints = np.empty((k, 4))
             joints[:, 0] = swing_hip_yaw
             reach = _sagittal_leg(leg, swing_forward, -(swing_z - z), swing_pitch, joints)
