@@ -275,12 +275,15 @@ def course_gap():
 
 
 def course_figure8_trap():
-    height, pit_x0, pit_length = 0.33, 2.0, 0.35
+    # 0.5 m: a pit a sole can be placed before, toes over its edge, and stridden over from
+    # there only if that foothold is chosen ahead (0.35 m, stridden over from any toe-over-edge
+    # foothold, let a one-step window past it from some start positions).
+    height, pit_x0, pit_length = 0.33, 2.0, 0.5
     half = 0.6
     walkway = merge(box(-2.0, pit_x0, -half, half, -0.1, height),
                     box(pit_x0 + pit_length, 11.0, -half, half, -0.1, height))
     return dict(
-        description=('Paper Figure 8: a walkway 0.33 m high with a pit 0.35 m long down to the '
+        description=('Paper Figure 8: a walkway 0.33 m high with a pit 0.5 m long down to the '
                      'ground at x = 2.0 m. Stepping down into it is allowed (<= 0.35 m), '
                      'climbing out is not (> 0.30 m): a one-step window gets stuck, n = 3 '
                      'strides over.'),

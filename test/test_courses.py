@@ -203,7 +203,7 @@ def test_walking_courses_have_the_designed_heights():
     assert treads == pytest.approx([0.0, 0.15, 0.30, 0.45, 0.60, 0.75], abs=1e-6)
     world = World('figure8_trap')
     trap = read_scene('figure8_trap')['expect']['trap_x']
-    assert trap[1] - trap[0] == pytest.approx(0.35)
+    assert trap[1] - trap[0] == pytest.approx(0.5)
     assert world.ground(trap[0] - 0.1, 0.0) == pytest.approx(0.33)
     assert world.ground(sum(trap) / 2, 0.0) == pytest.approx(0.0)
     assert world.ground(trap[1] + 0.1, 0.0) == pytest.approx(0.33)

@@ -138,8 +138,9 @@ def test_config_validation_names_the_field(leg):
 def _reference_foothold(config, leg, profile, side, s):
     """One sole evaluated on its own with slices: (ok, height, pitch), the rules of
     :meth:`FootstepPlanner.footholds` written out sole by sole."""
-    i0 = int(np.floor((s - leg.heel - profile.s0) / profile.ds))
-    i1 = int(np.ceil((s + leg.toe - profile.s0) / profile.ds))
+    # The samples under the sole, heel to toe (none beyond its ends).
+    i0 = int(np.ceil((s - leg.heel - profile.s0) / profile.ds - 1e-9))
+    i1 = int(np.floor((s + leg.toe - profile.s0) / profile.ds + 1e-9))
     if i0 < 0 or i1 >= profile.samples:
         return False, np.nan, 0.0
     high = profile.height[side, i0:i1 + 1]
@@ -150,11 +151,11 @@ def _reference_foothold(config, leg, profile, side, s):
     xc = x - x.mean()
     slope = float(np.dot(xc, high) / np.dot(xc, xc)) if x.size > 2 else 0.0
     pitch = float(np.arctan(slope))
-    if abs(pitch) > config.max_foot_pitch:
-        return False, np.nan, pitch
     lift = float(np.max(high - slope * x))
-    if lift - float(np.min(low - slope * x)) <= config.flatness_tolerance:
+    if (abs(pitch) <= config.max_foot_pitch
+            and lift - float(np.min(low - slope * x)) <= config.flatness_tolerance):
         return True, lift, pitch
+    # An edge: the sole rests level on the top, whatever the plane through all its samples.
     top = float(np.max(high))
     level = top - config.flatness_tolerance
     supported = (high >= level) & (low >= level)

@@ -123,6 +123,9 @@ PIVOT_RADIUS = 0.5
 PIVOT_SHIFTS = (0.0, 0.1, -0.1, 0.2, None)
 #: How far two pivots in a row must turn the pelvis in the commanded direction, rad.
 PIVOT_MIN_TURN = 0.05
+#: Where no pivot of the foot due to swing can be taken, whether the foot that landed last may
+#: pivot instead (both feet are down between steps).
+PIVOT_EITHER_FOOT = True
 #: How far a foot may land from its planned foothold before its support is judged again, m.
 LANDING_DRIFT = 0.02
 
@@ -497,6 +500,11 @@ class Actor:
             if block is not None:
                 return block
         block = self._pivot_step(stance, v, w, started)
+        if block is None and PIVOT_EITHER_FOOT:
+            # Both feet are down: the foot that landed last may swing instead (beside a
+            # table's corner every move of the other leg swings its thigh into the edge).
+            block = self._pivot_step(replace(stance, stance_side=1 - stance.stance_side), v, w,
+                                     started)
         if block is not None:
             return block
         self._failure = ((self._steps, v, w), reason)

@@ -235,7 +235,12 @@ class FootstepPlanner:
         headroom. It rests on the highest point above the fitted plane and must not bridge a dip
         deeper than the tolerance anywhere under it (neither across nor along the foot). At an
         edge (a stair nosing, a block, a ditch) a flat sole may overhang lower ground, as long
-        as the ankle is over the support and most of the sole is supported.
+        as the ankle is over the support and most of the sole is supported, however far below
+        the overhung ground lies (the plane through all the samples does not count there: the
+        sole rests level on the top). A sole is judged on the samples between its heel and its
+        toe, none beyond them: with the ground map's own conservative cell at a riser, one
+        more sample past the toe kept it 4 cm from the next riser, where a 26 cm tread left a
+        2 cm window for the ankle.
 
         Parameters
         ----------
@@ -258,8 +263,8 @@ class FootstepPlanner:
         count = s.shape[0]
         side = np.asarray(side, dtype=int)
         samples = profile.samples
-        i0 = np.floor((s - leg.heel - profile.s0) / profile.ds).astype(int)
-        i1 = np.ceil((s + leg.toe - profile.s0) / profile.ds).astype(int)
+        i0 = np.ceil((s - leg.heel - profile.s0) / profile.ds - 1e-9).astype(int)
+        i1 = np.floor((s + leg.toe - profile.s0) / profile.ds + 1e-9).astype(int)
         inside = (i0 >= 0) & (i1 < samples)
         width = i1 - i0 + 1
         # The samples under a sole run down the rows, the soles across the columns: (W, N).
@@ -309,7 +314,9 @@ class FootstepPlanner:
         near = padded.take((ankle + _AROUND) * count + np.arange(count))
         around = near.all(axis=0)
         fraction = (supported & mask).sum(axis=0) / width
-        edge = usable & steady & ~flat & around & (fraction >= cfg.min_support_fraction)
+        # Not ``steady``: that is the pitch of the plane through the overhung ground too (a
+        # heel over a stair's nosing, 0.2 m lower, tilted it past the limit).
+        edge = usable & ~flat & around & (fraction >= cfg.min_support_fraction)
         ok = flat | edge
         height = np.where(flat, lift, np.where(edge, top, np.nan))
         pitch = np.where(edge, 0.0, np.where(usable, pitch, 0.0))
