@@ -287,14 +287,15 @@ class FootstepPlanner:
         # whose results are replaced at the end.
         usable = inside & ~np.isnan(high).any(axis=0) & (room.min(axis=0) >= cfg.min_headroom)
         x = profile.s0 + profile.ds * index - s
-        mean = np.where(mask, x, 0.0).T.copy().sum(axis=1) / width
-        centred = np.where(mask, x - mean, 0.0)
-        # Two samples or fewer fit no slope: 0 there. A sole clamped past the profile's end
-        # (not usable) may divide zero by zero.
-        with np.errstate(invalid='ignore', divide='ignore'):
-            slope = np.divide((centred * high).T.copy().sum(axis=1),
-                              (centred * centred).T.copy().sum(axis=1), out=np.zeros(count),
-                              where=width > 2)
+        # The least-squares slope through the sole's samples, which are evenly spaced: their
+        # mean is the middle of the first and the last, and the squares of their distances
+        # from it sum to ds^2 W (W^2 - 1) / 12 (closed forms: one reduction instead of three).
+        # Two samples or fewer fit no slope: 0 there. A NaN sample (not usable) gives NaN.
+        middle = profile.s0 + (0.5 * profile.ds) * (i0 + i1) - s
+        centred = np.where(mask, x - middle, 0.0)
+        spread = (profile.ds * profile.ds / 12.0) * width * (width * width - 1)
+        slope = np.where(width > 2, (centred * high).sum(axis=0) / np.maximum(spread, 1e-30),
+                         0.0)
         pitch = np.arctan(slope)
         plane = slope * x
         lift = (high - plane).max(axis=0)
@@ -305,7 +306,9 @@ class FootstepPlanner:
         top = high.max(axis=0)
         level = top - cfg.flatness_tolerance
         supported = (high >= level) & (low >= level)
-        ankle = np.abs(x).argmin(axis=0)
+        # The sample nearest the ankle (the lower of two as near), relative to the sole's first.
+        ankle = np.minimum(np.maximum(np.ceil((s - profile.s0) / profile.ds - 0.5), i0), i1) - i0
+        ankle = ankle.astype(int)
         # The ankle's sample and its neighbours must be supported; past either end of the sole
         # there is nothing to ask (a True border row on each side; a repeated last row asks
         # the ankle's own sample again). One gather of the three.
@@ -519,10 +522,10 @@ class FootstepPlanner:
         m = cfg.step_intervals
         up, down = cfg.max_step_up, cfg.max_step_down
         seed, cumulative, height_before, length_before = [], 0, stance_height, previous_length
-        step_effort = self._step_effort
+        w_length, w_height, w_pitch, w_smooth, span, up_range, pitch_range = self._effort_terms
         for i in range(cfg.window_steps):
             ok, height, pitch = memo.ok[i], memo.height[i], memo.pitch[i]
-            best, best_cost = None, np.inf
+            best, best_cost = None, math.inf
             for j in range(m + 1):
                 c = cumulative + j
                 if not ok[c] or j in banned_lengths or (i == 0 and j in banned_first):
@@ -530,7 +533,13 @@ class FootstepPlanner:
                 rise = height[c] - height_before
                 if rise > up or -rise > down:
                     continue
-                cost = step_effort(lengths[j], rise, pitch[c], length_before, s_init)
+                # _step_effort written out (the same terms in the same order): 14 footsteps
+                # a row, a method call each cost a fifth of the search in easy windows.
+                length = lengths[j]
+                cost = (w_length * ((length - s_init) / span) ** 2
+                        + w_height * (rise / up_range) ** 2
+                        + w_pitch * (pitch[c] / pitch_range) ** 2
+                        + w_smooth * ((length - length_before) / span) ** 2)
                 if cost < best_cost:
                     best, best_cost = j, cost
             if best is None:
