@@ -441,6 +441,36 @@ def test_walking_straight_over_a_block_the_rear_foot_clears_its_near_face():
                 assert report.ok, (height, x, speed, report.failures())
 
 
+def test_walking_straight_up_and_down_a_steep_flight():
+    """Four steps, 0.2 m rise and 0.26 m treads (a sole is 0.25 m), from three distances at
+    two speeds, up and then down. Going up, a heel must overhang the tread's nosing (the plane
+    fitted through the lower tread under it was too steep for an edge placement, and the
+    sample past the toe read the next riser) and the swinging knee would pass its limit over the
+    tread in between; going down, a toe overhangs each nosing. Session 15's code stopped in
+    front of or on the flight in 12 of these 24 walks; every one now gets to the top or the
+    bottom, and the checker passes each."""
+    rise, tread, steps = 0.2, 0.26, 4
+    for going_up in (True, False):
+        for x in (1.6, 1.75, 1.9):
+            tops = [rise * (i + 1) for i in range(steps)]
+            if not going_up:
+                tops = tops[::-1][1:] + [0.0]
+            end = x + steps * tread
+            meshes = ([box([-1, -1, -0.1], [x, 1, 0.0 if going_up else rise * steps])]
+                      + [box([x + i * tread, -1, -0.1], [x + (i + 1) * tread, 1, top])
+                         for i, top in enumerate(tops)]
+                      + [box([end, -1, -0.1], [end + 3, 1, tops[-1]])])
+            environment = Environment(meshes, resolution=0.02)
+            for speed in (0.5, 0.8):
+                actor = Actor(skeleton(), environment, ActorConfig(plan_upper_body=False),
+                              start=(0.0, 0.0, 0.0))
+                blocks = run_commands(actor, [0.0, 9.0], [speed, 0.0], [0.0, 0.0])
+                assert actor.stance.pelvis[0] > end + 0.5, (going_up, x, speed, [
+                    b.reason for b in blocks if b.status == 'stuck'][:1])
+                _, _, report = judged(blocks, environment)
+                assert report.ok, (going_up, x, speed, report.failures())
+
+
 def test_weaving_to_the_floors_edge_ends_where_turning_away_frees_the_actor(monkeypatch):
     """Seed 33 of bench_steer_away.py's walks (rounded) weaves to the floor's edge. With a step
     ending only 1 cm short of the legs touching, it stopped 0.37 m from the edge facing it,
