@@ -94,6 +94,7 @@ def simulate(args) -> int:
     """Run ``digital-actor simulate``."""
     from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands, validate
     from digital_actor_planner.core.environment import load_scene, SceneError
+    from digital_actor_planner.core.footsteps import FootstepConfig
     from digital_actor_planner.core.skeleton import Skeleton
 
     skeleton = Skeleton()
@@ -103,7 +104,8 @@ def simulate(args) -> int:
         config = ActorConfig(window_steps=args.window_steps, step_intervals=args.step_intervals,
                              step_length_min=args.step_length_min,
                              step_length_max=args.step_length_max, frame_rate=args.rate,
-                             plan_upper_body=not args.no_upper_body)
+                             plan_upper_body=not args.no_upper_body,
+                             footsteps=FootstepConfig(greedy_restart=not args.paper_search))
         validate(config)
     except (InputError, SceneError, ValueError) as error:
         print(f'digital-actor simulate: error: {error}', file=sys.stderr)
@@ -151,6 +153,7 @@ def simulate(args) -> int:
         'final_pose': {n: float(v) for n, v in zip(skeleton.joint_names[:4],
                                                    actor.configuration[:4])},
         'window_steps': config.window_steps, 'step_intervals': config.step_intervals,
+        'greedy_restart': config.footsteps.greedy_restart,
     }
     if args.summary:
         temporary = _atomic_writer(args.summary)
@@ -239,6 +242,9 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument('--rate', type=float, default=100.0, help='frames per second')
     sim.add_argument('--no-upper-body', action='store_true',
                      help='keep the motion patterns, skip upper-body planning')
+    sim.add_argument('--paper-search', action='store_true',
+                     help="footstep search as in the paper's section 4.2 alone (breadth-first, "
+                          'then hill-climbing), without the second climb from a greedy start')
     sub.add_parser('demo', help='the interactive demo (browser viewer + planner node)',
                    add_help=False)
     sub.add_parser('view', help='attach a browser viewer to a running planner', add_help=False)

@@ -16,8 +16,10 @@ IMAGES = os.path.join(ROOT, 'docs', 'images')
 PICTURES = [
     ('stairs_up', 'stairs_up.png', []),
     ('stairs_down', 'stairs_down.gif', []),
-    ('figure8_trap', 'figure8_n3.png', ['--window-steps', '3']),
-    ('figure8_trap', 'figure8_n1.png', ['--window-steps', '1']),
+    # Figure 8 is about the window of the paper's search (with one footstep in the window the
+    # greedy second climb is the exhaustive choice of that footstep).
+    ('figure8_trap', 'figure8_n3.png', ['--window-steps', '3', '--paper-search']),
+    ('figure8_trap', 'figure8_n1.png', ['--window-steps', '1', '--paper-search']),
     ('blocks', 'blocks.png', []),
     ('rough', 'rough.png', []),
     ('turn', 'turn.png', []),

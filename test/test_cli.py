@@ -85,6 +85,19 @@ def test_wall_reports_stuck_in_the_summary(tmp_path):
     assert summary['stuck_events'] and 'footstep' in summary['stuck_events'][0]['reason']
 
 
+def test_paper_search_reproduces_figure_8_with_a_one_step_window(tmp_path):
+    """`--paper-search` runs the paper's footstep search alone (the summary says so): with one
+    footstep in the window the actor steps into the Figure 8 pit and is stuck there."""
+    result = run_cli('simulate', '--scene', os.path.join(SCENES, 'figure8_trap.yaml'),
+                     '--commands', os.path.join(SCENES, 'figure8_trap.csv'),
+                     '--out', str(tmp_path / 't.csv'), '--summary', str(tmp_path / 's.json'),
+                     '--window-steps', '1', '--paper-search')
+    assert result.returncode == 0, result.stderr
+    summary = json.loads((tmp_path / 's.json').read_text())
+    assert summary['greedy_restart'] is False and summary['window_steps'] == 1
+    assert summary['final_status'] == 'stuck' and summary['final_pose']['root_x'] < 2.6
+
+
 def test_a_bare_mesh_file_is_a_scene(tmp_path):
     floor = trimesh.creation.box(extents=(8.0, 3.0, 0.2))
     floor.apply_translation((3.0, 0.0, -0.1))
