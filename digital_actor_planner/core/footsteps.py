@@ -283,9 +283,10 @@ class FootstepPlanner:
         low = profile.low.take(flat, mode='clip')
         room = profile.headroom.take(flat, mode='clip')
         # A missing sample (NaN: both the highest and the lowest ground across the sole are
-        # missing there) makes the sole unusable; its NaN then only reaches its own columns,
-        # whose results are replaced at the end.
-        usable = inside & ~np.isnan(high).any(axis=0) & (room.min(axis=0) >= cfg.min_headroom)
+        # missing there) needs no test of its own: it makes the sole's slope, lift and top
+        # NaN, so the sole is neither flat nor supported at an edge (and the profile gives it
+        # no headroom). Its NaN only reaches its own columns.
+        usable = inside & (room.min(axis=0) >= cfg.min_headroom)
         x = profile.s0 + profile.ds * index - s
         # The least-squares slope through the sole's samples, which are evenly spaced: their
         # mean is the middle of the first and the last, and the squares of their distances
