@@ -17,7 +17,7 @@ one seeded speed (0.4-1.1 m/s) by a user who steers back to the course's centre 
 rate -1.2 y - 1.5 yaw, at most 0.4 rad/s, in steps of 0.1 as a mouse stream changes). A course
 is *passed* when the pelvis gets within 2 m of its far end; a stop the user does not steer out
 of (the command stays as it is) fails it. Lower body only (the upper-body courses have their
-own benches).
+own benches) unless ``--upper-body``.
 """
 import argparse
 import collections
@@ -188,10 +188,10 @@ def first_stop(blocks):
     return reasons[0] if reasons else 'too slow'
 
 
-def sweep(kinds, listing):
+def sweep(kinds, listing, upper_body=False):
     """The single-feature table; returns the number of checker failures."""
     sk = skeleton()
-    config = ActorConfig(plan_upper_body=False)
+    config = ActorConfig(plan_upper_body=upper_body)
     failures, why = 0, collections.Counter()
     print('| feature | settings | walks | passed |')
     print('|---|---|---:|---:|')
@@ -225,10 +225,10 @@ def sweep(kinds, listing):
     return failures
 
 
-def random_courses(count, first_seed, listing):
+def random_courses(count, first_seed, listing, upper_body=False):
     """The random-course table; returns the number of checker failures."""
     sk = skeleton()
-    config = ActorConfig(plan_upper_body=False)
+    config = ActorConfig(plan_upper_body=upper_body)
     passed = failures = 0
     why = collections.Counter()
     for seed in range(first_seed, first_seed + count):
@@ -265,15 +265,17 @@ def main(argv=None):
     parser.add_argument('--first-seed', type=int, default=0)
     parser.add_argument('--list', action='store_true', help='print every walk that stopped')
     parser.add_argument('--no-sweep', action='store_true', help='random courses only')
+    parser.add_argument('--upper-body', action='store_true',
+                        help='plan the upper body too (the node default)')
     args = parser.parse_args(argv)
     if args.random < 0:
         parser.error(f'--random must be >= 0, got {args.random}')
     started = time.perf_counter()
     failures = 0
     if not args.no_sweep:
-        failures += sweep(args.features, args.list)
+        failures += sweep(args.features, args.list, args.upper_body)
     if args.random:
-        failures += random_courses(args.random, args.first_seed, args.list)
+        failures += random_courses(args.random, args.first_seed, args.list, args.upper_body)
     print(f'\n({time.perf_counter() - started:.0f} s)')
     print_command(__file__)
     return 1 if failures else 0
