@@ -419,6 +419,18 @@ def test_a_foot_that_lands_away_from_its_foothold_must_rest_where_it_lands():
     assert sum(1 for b in blocks if b.category) >= 14
 
 
+def walk_straight_past(environment, speed, seconds, x, case):
+    """Walk straight along +x from the origin (lower body) and assert that the pelvis gets past
+    ``x`` and the checker passes the walk; ``case`` labels a failure."""
+    actor = Actor(skeleton(), environment, ActorConfig(plan_upper_body=False),
+                  start=(0.0, 0.0, 0.0))
+    blocks = run_commands(actor, [0.0, seconds], [speed, 0.0], [0.0, 0.0])
+    stops = [b.reason for b in blocks if b.status == 'stuck']
+    assert actor.stance.pelvis[0] > x, (case, stops[:1])
+    _, _, report = judged(blocks, environment)
+    assert report.ok, (case, report.failures())
+
+
 def test_walking_straight_over_a_block_the_rear_foot_clears_its_near_face():
     """A block 0.5 m long and 0.18 or 0.21 m high across the path, 1.6-2.0 m ahead, walked
     straight at 0.8 or 1.0 m/s. The footsteps often put the front foot on the block with the
@@ -432,13 +444,7 @@ def test_walking_straight_over_a_block_the_rear_foot_clears_its_near_face():
                                        box([x, -1, -0.1], [x + 0.5, 1, height])],
                                       resolution=0.02)
             for speed in (0.8, 1.0):
-                actor = Actor(skeleton(), environment, ActorConfig(plan_upper_body=False),
-                              start=(0.0, 0.0, 0.0))
-                blocks = run_commands(actor, [0.0, 8.0], [speed, 0.0], [0.0, 0.0])
-                assert actor.stance.pelvis[0] > x + 1.0, (height, x, speed, [
-                    b.reason for b in blocks if b.status == 'stuck'][:1])
-                _, _, report = judged(blocks, environment)
-                assert report.ok, (height, x, speed, report.failures())
+                walk_straight_past(environment, speed, 8.0, x + 1.0, (height, x, speed))
 
 
 def test_walking_straight_up_and_down_a_steep_flight():
@@ -462,13 +468,7 @@ def test_walking_straight_up_and_down_a_steep_flight():
                       + [box([end, -1, -0.1], [end + 3, 1, tops[-1]])])
             environment = Environment(meshes, resolution=0.02)
             for speed in (0.5, 0.8):
-                actor = Actor(skeleton(), environment, ActorConfig(plan_upper_body=False),
-                              start=(0.0, 0.0, 0.0))
-                blocks = run_commands(actor, [0.0, 9.0], [speed, 0.0], [0.0, 0.0])
-                assert actor.stance.pelvis[0] > end + 0.5, (going_up, x, speed, [
-                    b.reason for b in blocks if b.status == 'stuck'][:1])
-                _, _, report = judged(blocks, environment)
-                assert report.ok, (going_up, x, speed, report.failures())
+                walk_straight_past(environment, speed, 9.0, end + 0.5, (going_up, x, speed))
 
 
 def test_weaving_to_the_floors_edge_ends_where_turning_away_frees_the_actor(monkeypatch):
