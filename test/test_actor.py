@@ -471,6 +471,34 @@ def test_walking_straight_up_and_down_a_steep_flight():
                 walk_straight_past(environment, speed, 9.0, end + 0.5, (going_up, x, speed))
 
 
+def test_no_step_ends_with_a_knee_too_bent_for_the_next_one(monkeypatch):
+    """Weaving on the blocks (seed 32 of bench_steer_away.py's walks, rounded): stepping down off
+    the 0.2 m block's far edge, the right foot left on the block with its heel up and the knee
+    at 2.27 rad, 0.03 from its limit. Every next step, pivot and turn then bent that knee past
+    the limit: the actor stopped there and was trapped. A step may not end with a knee within
+    ``END_KNEE_MARGIN`` of its limit; another footstep is taken, and the walk and both turns
+    on the spot after it go on."""
+    sc = scene('blocks')
+    commands = [(0.0, 0.433, 0.392), (0.572, 0.808, -0.439), (1.845, 1.105, 0.71),
+                (2.786, 0.209, -0.056), (3.635, 0.659, 1.109), (5.103, 1.013, -0.797),
+                (7.055, 1.162, 0.643)]
+
+    def steps_turning(turn):
+        actor = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False),
+                      start=sc.start)
+        blocks = run_commands(actor, *zip(*(commands + [(8.9, 0.0, turn), (12.9, 0.0, 0.0)])))
+        _, _, report = judged(blocks, sc.environment)
+        assert report.ok, report.failures()
+        stopped = any(b.status == 'stuck' for b in blocks if b.times[0] < 8.9)
+        return stopped, sum(1 for b in blocks if b.times[0] > 8.9 and b.category)
+
+    for turn in (1.0, -1.0):
+        stopped, steps = steps_turning(turn)
+        assert not stopped and steps >= 3, (turn, stopped, steps)
+    monkeypatch.setattr(gait_module, 'END_KNEE_MARGIN', -1.0)
+    assert steps_turning(1.0) == (True, 0) and steps_turning(-1.0) == (True, 0)
+
+
 def test_weaving_to_the_floors_edge_ends_where_turning_away_frees_the_actor(monkeypatch):
     """Seed 33 of bench_steer_away.py's walks (rounded) weaves to the floor's edge. With a step
     ending only 1 cm short of the legs touching, it stopped 0.37 m from the edge facing it,

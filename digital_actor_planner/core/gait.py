@@ -30,6 +30,10 @@ SOLE_CLEARANCE = 0.002  # a resting sole floats this far above the surface, m
 #: with the rear one 0.25 m behind that closed a 1 cm gap in 4 frames, and every step and pivot
 #: from there was refused (bench_steer_away seed 33, facing the floor's edge: trapped).
 LEGS_LANDING_MARGIN = 0.02
+#: A step ends with both knees at least this far below their limit, rad: the next step bends
+#: one of them further. A rear foot left on a block's far edge, the knee at 2.27 rad, could not
+#: lift: every next step passed 2.30 (bench_steer_away seed 32 on the blocks: trapped).
+END_KNEE_MARGIN = 0.1
 #: Points along a stance sole, ankle to toe tip, as fractions of its toe length (1 cm apart on
 #: the model's 18 cm toe), on its middle line and its two long edges: a point within
 #: _TOE_SUPPORT_TOLERANCE (m) of the ground under it rests on support.
@@ -745,6 +749,12 @@ class WalkGenerator:
                                    np.vstack([stance_hip_xy.T, z]), foot_s.yaw, stance_joints,
                                    np.vstack([swing_hip_xy.T, z]), plane_yaw, joints)
         frames[:, self._leg_columns[swing_side]] = joints
+        for side in (LEFT, RIGHT):
+            knee = float(frames[-1, self._leg_columns[side]][2])
+            if knee > self._leg_upper[side][2] - END_KNEE_MARGIN:
+                name = 'left' if side == LEFT else 'right'
+                raise GaitError(f'{name}_knee would end the step at {knee:.2f} rad, too bent '
+                                'for the next step')
         lateral_error = max(lateral_error, abs(swing_lateral))
         feet = foot_end
         feet[swing_side] = landing
