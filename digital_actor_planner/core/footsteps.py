@@ -523,10 +523,10 @@ class FootstepPlanner:
         m = cfg.step_intervals
         up, down = cfg.max_step_up, cfg.max_step_down
         seed, cumulative, height_before, length_before = [], 0, stance_height, previous_length
-        w_length, w_height, w_pitch, w_smooth, span, up_range, pitch_range = self._effort_terms
+        step_effort = self._step_effort
         for i in range(cfg.window_steps):
             ok, height, pitch = memo.ok[i], memo.height[i], memo.pitch[i]
-            best, best_cost = None, math.inf
+            best, best_cost = None, np.inf
             for j in range(m + 1):
                 c = cumulative + j
                 if not ok[c] or j in banned_lengths or (i == 0 and j in banned_first):
@@ -534,13 +534,7 @@ class FootstepPlanner:
                 rise = height[c] - height_before
                 if rise > up or -rise > down:
                     continue
-                # _step_effort written out (the same terms in the same order): 14 footsteps
-                # a row, a method call each cost a fifth of the search in easy windows.
-                length = lengths[j]
-                cost = (w_length * ((length - s_init) / span) ** 2
-                        + w_height * (rise / up_range) ** 2
-                        + w_pitch * (pitch[c] / pitch_range) ** 2
-                        + w_smooth * ((length - length_before) / span) ** 2)
+                cost = step_effort(lengths[j], rise, pitch[c], length_before, s_init)
                 if cost < best_cost:
                     best, best_cost = j, cost
             if best is None:
