@@ -1002,11 +1002,13 @@ class WalkGenerator:
         start, end = basis_0 * z0, basis_3 * z1
         cap = cfg.max_swing_lift + abs(z1 - z0)
         first = (h1, h2)
+        cleared = False
         for _ in range(12):
             curve = start + basis_1 * (z0 + h1) + basis_2 * (z1 + h2) + end
             short = need - curve - slack
             worst = int(short.argmax())
             if short[worst] <= 1e-4:
+                cleared = True
                 break
             weight = basis_1[worst] + basis_2[worst]
             raise_by = min(short[worst] / max(weight, 0.05), 0.15) + 0.005
@@ -1018,14 +1020,12 @@ class WalkGenerator:
                 h1 += 0.5 * raise_by
             if max(h1, h2) > cap:
                 break
-        else:
-            h1 = cap + 1.0
-        if max(h1, h2) > cap:
-            # Raising the control points ran into the limit. Over a block whose face is close
-            # ahead of the lifting toe (or behind the landing heel) the foot must rise steeply
-            # and stay up: a Bezier of degree 5 whose inner control points are paired, (h1, h1,
-            # h2, h2), rises about half as fast again and is flat on top. The lowest pair that
-            # clears every sample, if any.
+        if not cleared:
+            # Raising the control points ran into the limit (or did not converge). Over a
+            # block whose face is close ahead of the lifting toe (or behind the landing heel)
+            # the foot must rise steeply and stay up: a Bezier of degree 5 whose inner control
+            # points are paired, (h1, h1, h2, h2), rises about half as fast again and is flat on
+            # top. The lowest pair that clears every sample, if any.
             return self._flat_topped_swing(tau, b, z0, z1, need - slack, first, cap)
         z = frames[0] * z0 + frames[1] * (z0 + h1) + frames[2] * (z1 + h2) + frames[3] * z1
         return z, float(max(h1, h2))
