@@ -36,15 +36,18 @@ def judged(blocks, environment):
 
 
 @functools.lru_cache(maxsize=None)
-def simulate(name, window_steps=3, upper_body=True, greedy_restart=True, lasting_branches=None):
+def simulate(name, window_steps=3, upper_body=True, greedy_restart=True, lasting_branches=None,
+             upper_body_seed=True):
     """Plan course ``name``: (scene, times (k,), frames (k, 22), blocks).
 
     ``lasting_branches``: a tuple overrides the upper-body planner's ``lasting_branches``.
+    ``upper_body_seed``: ``ActorConfig.upper_body_seed``.
     """
     sc = scene(name)
     commands = read_commands(os.path.join(SCENES, name + '.csv'))
     config = ActorConfig(window_steps=window_steps, plan_upper_body=upper_body,
-                         footsteps=FootstepConfig(greedy_restart=greedy_restart))
+                         footsteps=FootstepConfig(greedy_restart=greedy_restart),
+                         upper_body_seed=upper_body_seed)
     if lasting_branches is None:
         actor = Actor(skeleton(), sc.environment, config, start=sc.start)
     else:

@@ -247,3 +247,54 @@ def test_a_search_preferring_lasting_postures_passes_under_the_beam(beam_space):
     speed = np.abs(np.diff(path, axis=0)) / np.diff(beam_space.times)[:, None]
     assert np.all(speed <= beam_space.speed_limit * (1 + 1e-6))
     assert np.all(path[:30] == 0.0) and np.abs(path[-10:]).max() < 1e-9
+
+
+def test_a_search_seeded_with_a_legal_plan_follows_it_and_checks_far_less(beam_space):
+    # Receding horizon: the previous step's plan, from where this step starts, is its seed.
+    space = beam_space
+    before = space.checks
+    plain = roadmap(seed=3).solve(space, np.zeros(2))
+    plain_checks, before = space.checks - before, space.checks
+    seeded = roadmap(seed=3).solve(space, np.zeros(2), seed=plain.path - space.objective)
+    seeded_checks = space.checks - before
+    assert plain.ok and seeded.ok and plain.seeded == 0
+    # Followed to the end of the blocked stretch under the beam, then on to the goal.
+    blocked = np.flatnonzero(~_Horizon(CTRoadmap._objective_free(space, 5), 5).free)
+    assert seeded.seeded > blocked[-1]
+    assert seeded.backtracks == 0 and seeded_checks < plain_checks / 3
+    path = seeded.path
+    assert space.first_invalid(path[1:], np.arange(1, space.frame_count)) == -1
+    speed = np.abs(np.diff(path, axis=0)) / np.diff(space.times)[:, None]
+    assert np.all(speed <= space.speed_limit * (1 + 1e-6))
+    assert np.abs(path[:seeded.seeded + 1] - plain.path[:seeded.seeded + 1]).max() < 0.05
+    assert np.abs(path[-10:]).max() < 1e-9, 'back on the objective after the beam'
+
+
+def test_a_seed_that_becomes_illegal_is_followed_only_while_it_is_legal(beam_space):
+    # Upright all the way: legal until the head meets the beam, not after.
+    space = beam_space
+    blocked = np.flatnonzero(~_Horizon(CTRoadmap._objective_free(space, 5), 5).free)
+    result = roadmap(seed=3).solve(space, np.zeros(2), seed=np.zeros_like(space.objective))
+    assert result.ok and 0 < result.seeded < blocked[0]
+    assert space.first_invalid(result.path[1:], np.arange(1, space.frame_count)) == -1
+
+
+def test_a_seed_is_not_followed_where_the_objective_is_free(skeleton):
+    # Nothing blocks the objective: a seed held off it (the last plan's deviation) is left,
+    # the search returns to the objective as it would without one.
+    space = waist_space(skeleton, None)
+    held = np.tile([0.0, 0.3], (space.frame_count, 1))
+    start = space.objective[0] + held[0]
+    plain = roadmap().solve(space, start)
+    seeded = roadmap().solve(space, start, seed=held)
+    assert seeded.ok and seeded.seeded == 0
+    assert np.array_equal(seeded.path, plain.path)
+    assert np.abs(seeded.path[-10:] - space.objective[-10:]).max() < 1e-9
+
+
+@pytest.mark.parametrize('seed, match', [
+    (np.zeros((10, 3)), r'shape \(s, 2\)'), (np.zeros((0, 2)), r'shape \(s, 2\)'),
+    (np.full((10, 2), np.nan), 'NaN')])
+def test_bad_seeds_name_the_value(beam_space, seed, match):
+    with pytest.raises(ValueError, match=match):
+        roadmap().solve(beam_space, np.zeros(2), seed=seed)

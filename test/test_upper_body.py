@@ -297,3 +297,50 @@ def test_a_branch_blocked_in_the_preview_is_reported_there(skeleton):
         '(in the preview)')
     with pytest.raises(ValueError, match='preview_from'):
         planner.plan(times, frames, preview_from=len(times))
+
+
+def test_steps_seeded_with_the_last_plan_go_on_along_it_and_check_less(skeleton):
+    # Receding horizon as the actor plans it: each step (60 frames) plus a preview (40), the
+    # next step starting at the last one's end with the rest of its plan as the seed.
+    beam = box([0.3, -1.0, 1.60], [0.5, 1.0, 1.80])
+    times, frames = walk(skeleton, 301)
+    waist = skeleton.branch('waist')
+    runs = {}
+    for seeded in (False, True):
+        planner, collision = planner_for(skeleton, beam)
+        planned, checks, followed, seeds = frames.copy(), [], [], {}
+        for begin in range(0, 200, 60):
+            window = slice(begin, begin + 101)
+            block = planned[window].copy()
+            plan = planner.plan(times[window] - times[begin], block, preview_from=61,
+                                seeds=seeds if seeded else None)
+            assert plan.ok, plan.reason
+            planned[begin:begin + 61] = plan.frames[:61]
+            checks.append(sum(r.get('checks', 0) for r in plan.per_branch.values()))
+            followed.append(plan.per_branch['waist'].get('seeded', 0))
+            # The rest of the plan as deviations from the motion pattern (``frames``).
+            rest = plan.frames[60:] - frames[begin + 60:begin + 101]
+            seeds = {name: rest[:, skeleton.branch(name)]
+                     for name, record in plan.per_branch.items() if not record['fast']}
+        runs[seeded] = (planned[:241], checks, followed)
+        assert_collision_free(collision, planned[:241])
+        assert_limits_and_speeds(skeleton, times[:241], planned[:241])
+        assert planned[:241, waist[1]].max() > 0.7, 'bent under the beam'
+    plain, seeded = runs[False], runs[True]
+    assert max(plain[2]) == 0 and max(seeded[2]) > 0, 'a later step went on along its seed'
+    # The first step that meets the beam is planned alike; the next one checks far less.
+    first = next(i for i, c in enumerate(plain[1]) if c)
+    assert seeded[1][first] == plain[1][first]
+    assert seeded[1][first + 1] < 0.5 * plain[1][first + 1]
+
+
+@pytest.mark.parametrize('seeds, match', [
+    ({'torso': np.zeros((5, 2))}, "unknown branch 'torso'"),
+    ({'waist': np.zeros((5, 3))}, r'waist seed must have shape \(s, 2\)'),
+    ({'left_arm': np.zeros((40, 4))}, r'left_arm seed must have shape \(s, 4\) with 1 <= s <= 30'),
+    ({'waist': np.zeros((0, 2))}, r'got \(0, 2\)')])
+def test_bad_seeds_name_the_branch_and_the_shape(skeleton, seeds, match):
+    planner, _ = planner_for(skeleton)
+    times, frames = walk(skeleton, 30)
+    with pytest.raises(ValueError, match=match):
+        planner.plan(times, frames, seeds=seeds)

@@ -5,10 +5,13 @@ upper body keeps its motion pattern on open ground, leaves it where the course d
 waist under a beam, move the left arm at a table, turn the waist between pillars) and returns to
 it.
 """
+import os
+
 import numpy as np
 import pytest
 
 from course_runs import scene, SCENES, simulate, skeleton
+from digital_actor_planner.cli import read_commands
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.trajectory_check import check_trajectory
@@ -73,9 +76,11 @@ def test_table_is_passed_with_the_left_elbow_flexed_not_the_arm_swung_back():
 def test_without_lasting_postures_the_arm_swings_back_past_the_table():
     """What the arms' preference for lasting postures changes (UpperBodyConfig.lasting_branches):
     without it, best-first on closeness takes the arm held in (legal for a while), and past the
-    table's near end only swinging the arm far back is left; the course is still passed."""
+    table's near end only swinging the arm far back is left; the course is still passed. The
+    search alone, each step afresh: a step seeded with the last plan (ActorConfig.upper_body_seed)
+    goes on along the posture the first step at the table found, whichever it was."""
     sk = skeleton()
-    _, _, frames, blocks = simulate('table', lasting_branches=())
+    _, _, frames, blocks = simulate('table', lasting_branches=(), upper_body_seed=False)
     signed = frames - motion_patterns(sk, frames)
     at_table = (frames[:, 0] > 2.0) & (frames[:, 0] < 3.6)
     assert blocks[-1].status == 'walking' and frames[-1, 0] > 4.6
@@ -211,3 +216,39 @@ def test_a_slow_walk_bends_under_the_beam_in_time(name):
             assert report.ok, '; '.join(report.failures()[:4])
         else:
             assert blocks[-1].status == 'stuck' and 'waist' in blocks[-1].reason
+
+
+@pytest.mark.slow
+def test_the_steps_after_the_first_under_the_beam_go_on_along_the_last_plan():
+    """Receding horizon (ActorConfig.upper_body_seed): the first step that meets the beam
+    searches; the next ones start along the rest of its plan and check far fewer
+    configurations, and the walk is the same kind of walk (under the beam, back on the
+    pattern, to the end)."""
+    sc = scene('low_beam')
+    commands = read_commands(os.path.join(SCENES, 'low_beam.csv'))
+    runs = {}
+    for seeded in (False, True):
+        actor = Actor(skeleton(), sc.environment, ActorConfig(upper_body_seed=seeded),
+                      start=sc.start)
+        checks, followed = [], []
+        plan = actor._upper.plan
+
+        def recording(*args, **kwargs):
+            result = plan(*args, **kwargs)
+            checks.append(sum(r.get('checks', 0) for r in result.per_branch.values()))
+            followed.append(max(r.get('seeded', 0) for r in result.per_branch.values()))
+            return result
+
+        actor._upper.plan = recording
+        blocks = run_commands(actor, [c.time for c in commands], [c.linear_x for c in commands],
+                              [c.angular_z for c in commands])
+        frames = np.vstack([b.frames for b in blocks])
+        assert blocks[-1].status == 'walking' and frames[-1, 0] > 8.0
+        dev, _ = deviation(frames)
+        assert dev[-20:].max() < 1e-3
+        runs[seeded] = (checks, followed)
+    (plain, plain_followed), (seeded, seeded_followed) = runs[False], runs[True]
+    first = next(i for i, c in enumerate(plain) if c)
+    assert seeded[first] == plain[first], 'the first step at the beam has nothing to go on'
+    assert max(plain_followed) == 0 and max(seeded_followed[first + 1:]) > 0
+    assert sum(seeded[first + 1:]) < 0.6 * sum(plain[first + 1:])

@@ -48,6 +48,10 @@ class ActorConfig:
     # (between two pillars, with the pelvis carrying it into one). Another footstep is tried,
     # or the actor stops before the obstacle instead of in it.
     upper_body_preview_margin: float = 0.1
+    # Receding horizon: a branch that left its motion pattern in the last step's plan starts
+    # its search along that plan's preview, where it still applies (see _seeds): the steps
+    # after the first one at an obstacle mostly find their way there at once.
+    upper_body_seed: bool = True
     # When every footstep tried failed for the upper body, the first of them is tried once more
     # from a standstill after a pause this long (s, 0: never): with the pelvis still, an arm can
     # get clear before the step moves the body (an arm between a pillar and the turned body).
@@ -227,6 +231,12 @@ class Actor:
         self.reason = ''
         self._failure = None
         self._steps = 0
+        # Receding horizon: (step count, times (s,) s, {branch: (s, d) deviations from the
+        # motion pattern, rad}) of the last committed step's upper-body plan from where the
+        # next step starts, for the branches that searched; and the same of the latest plan
+        # (kept when its step is committed).
+        self._upper_seed = None
+        self._preview_plan = None
         # (step count after the last pivot, pelvis heading before it, rad).
         self._last_pivot = None
 
@@ -378,9 +388,26 @@ class Actor:
         # Receding horizon: plan over this step plus a preview of the pelvis carrying on, so
         # the waist starts to bend before an obstacle is reached; commit only this step.
         preview = self._preview(full_times, full)
+        seeds = self._seeds(full_times if preview is None else preview[0])
+        # Only passed when there are any (a planner given to the constructor may not take them).
+        seeded = {'seeds': seeds} if seeds else {}
+        self._preview_plan = None
         plan = None
         if preview is not None:
-            plan = self._upper.plan(*preview, preview_from=k)
+            plan = self._upper.plan(*preview, preview_from=k, **seeded)
+            if plan.ok:
+                # The next step starts at this one's last frame: this plan's rest seeds it, for
+                # the branches that left their motion pattern (the others' preview holds the
+                # pattern of legs that stop).
+                searched = {}
+                for name, record in plan.per_branch.items():
+                    if not record['fast']:
+                        columns = self.skeleton.branch(name)
+                        searched[name] = (plan.frames[k - 1:, columns]
+                                          - preview[1][k - 1:, columns])
+                if searched:
+                    self._preview_plan = (self._steps + 1,
+                                          preview[0][k - 1:] - preview[0][k - 1], searched)
             margin = int(round(self.config.upper_body_preview_margin * self.config.frame_rate))
             if not plan.ok and k <= plan.blocked_frame < k + margin:
                 # Blocked right after the step: the step's end is most likely a dead end (the
@@ -389,10 +416,33 @@ class Actor:
         # Blocked within the step's own frames, the plan without the preview meets the same
         # obstacle there: only a block in the preview leaves it a chance.
         if plan is None or (not plan.ok and not 0 <= plan.blocked_frame < k):
-            plan = self._upper.plan(full_times, full)
+            if seeds:
+                seeded = {'seeds': {name: seed[:k] for name, seed in seeds.items()}}
+            plan = self._upper.plan(full_times, full, **seeded)
         if not plan.ok:
             return frames, False, plan.reason
         return plan.frames[1:k], True, ''
+
+    def _seeds(self, times: np.ndarray) -> dict:
+        """The previous step's plan from where this step starts, where it still applies.
+
+        It applies when this step directly follows that one (nothing else was committed in
+        between) with the same frame times.
+
+        Returns
+        -------
+        dict
+            Branch name -> (s, d) deviations from the motion pattern, rad, s <= len(times).
+
+        """
+        if self._upper_seed is None or not self.config.upper_body_seed:
+            return {}
+        steps, seed_times, seeds = self._upper_seed
+        count = min(len(seed_times), len(times))
+        if (steps != self._steps or count < 2
+                or not np.allclose(seed_times[:count], times[:count], rtol=0.0, atol=1e-9)):
+            return {}
+        return {name: seed[:count] for name, seed in seeds.items()}
 
     def _preview(self, times: np.ndarray, frames: np.ndarray):
         """Extend a step's frames by ``upper_body_preview`` s of the pelvis moving on (longer
@@ -493,6 +543,7 @@ class Actor:
                 continue
             self._window, self._window_command = window, (v, w)
             self._previous_length = float(window.lengths[0])
+            self._upper_seed = self._preview_plan
             return self._commit('walking', '', motion.times, frames, motion.stance, footsteps,
                                 path_points, started, motion.category)
         if first_blocked is not None and cfg.upper_body_pause > 0:

@@ -63,6 +63,9 @@ class SearchResult:
         Backtracking steps taken from a block inside the preview.
     gave_up_in_preview
         Whether the search stopped because its preview backtracking budget was spent.
+    seeded
+        Last frame the search reached along its seed before it searched on (0: no seed, or
+        the seed's first motion was illegal).
 
     """
 
@@ -74,6 +77,7 @@ class SearchResult:
     grown: int
     preview_backtracks: int = 0
     gave_up_in_preview: bool = False
+    seeded: int = 0
 
 
 @dataclass
@@ -224,7 +228,8 @@ class CTRoadmap:
               deadline: Optional[float] = None,
               check_budget: Optional[int] = None,
               preview_from: Optional[int] = None,
-              preview_backtracks: int = 2) -> SearchResult:
+              preview_backtracks: int = 2,
+              seed: Optional[np.ndarray] = None) -> SearchResult:
         """Search forward in time from ``start`` at frame 0 to any legal state at frame k-1.
 
         Parameters
@@ -252,6 +257,12 @@ class CTRoadmap:
         preview_backtracks
             Backtracking steps the search may take from a block at a frame >= ``preview_from``
             before it gives up; they also count towards ``max_backtracks``.
+        seed
+            (s, d) deviations from the objective at frames 0..s-1, rad: a motion likely to be
+            legal (the rest of the previous step's plan, receding horizon; row 0 is not used,
+            the motion starts at ``start``). The search first goes along it, in states
+            ``hold_frames`` apart, as far as it is legal, and searches on from there; it can
+            backtrack into it like into any of its states.
 
         Returns
         -------
@@ -268,6 +279,9 @@ class CTRoadmap:
         checks_limit = None if check_budget is None else space.checks + check_budget
         start_state = _State(np.asarray(start, dtype=float) - space.objective[0], 0)
         stack = [start_state]
+        seeded = 0
+        if seed is not None:
+            seeded = self._follow_seed(space, stack, seed, hold_frames, horizon)
         visited = set()
         jumps = set()
         known = {}
@@ -286,7 +300,7 @@ class CTRoadmap:
                 continue
             if state.frame >= last:
                 return SearchResult(True, self._path(space, stack), -1, nodes, backtracks,
-                                    grown, in_preview)
+                                    grown, in_preview, seeded=seeded)
             nodes += 1
             if nodes > node_budget or backtracks > max_backtracks or (
                     checks_limit is not None and space.checks > checks_limit) or (
@@ -334,7 +348,41 @@ class CTRoadmap:
             stack.pop()
         path = self._path(space, stack) if stack else np.array(space.objective)
         return SearchResult(False, path, min(deepest_blocked, last), nodes, backtracks, grown,
-                            in_preview, gave_up_in_preview)
+                            in_preview, gave_up_in_preview, seeded)
+
+    def _follow_seed(self, space: CTSpace, stack: List[_State], seed: np.ndarray,
+                     spacing: int, horizon: _Horizon) -> int:
+        """Push states every ``spacing`` frames along a seed motion, as far as it is legal.
+
+        The seed is followed only to the end of the last stretch within it where the objective
+        is blocked (not at all if there is none): past it the search itself returns to the
+        objective as soon as it can, where a seed held off it would be followed into every
+        later step (each step's seed is the previous plan, whose return to the objective lay
+        in its preview). The motions between the states (deviation interpolated linearly) are
+        checked in one batch. Returns the frame of the last state pushed (0: none).
+        """
+        seed = np.asarray(seed, dtype=float)
+        d = len(stack[0].deviation)
+        if seed.ndim != 2 or seed.shape[1] != d or len(seed) < 1:
+            raise ValueError(f'seed must have shape (s, {d}), got {seed.shape}')
+        if not np.all(np.isfinite(seed)):
+            raise ValueError('seed contains NaN or infinite values')
+        end = min(len(seed), space.frame_count) - 1
+        blocked = np.flatnonzero(~horizon.free[:end + 1])
+        if not len(blocked):
+            return 0
+        end = min(end, int(horizon.next_free[blocked[-1]]))
+        if end < 1:
+            return 0
+        frames = list(range(spacing, end, spacing)) + [end]
+        objective = space.objective
+        waypoints = [(objective[0] + stack[0].deviation, 0)] + [
+            (objective[frame] + seed[frame], frame) for frame in frames]
+        bad = space.first_invalid_path(waypoints)
+        kept = [frame for frame in frames if bad < 0 or frame < bad]
+        for frame in kept:
+            stack.append(_State(seed[frame].copy(), frame))
+        return kept[-1] if kept else 0
 
     @staticmethod
     def _objective_free(space: CTSpace, spacing: int) -> np.ndarray:

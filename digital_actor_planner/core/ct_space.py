@@ -1126,6 +1126,39 @@ class CTSpace:
                     return len(failures) - 1, failures
         return -1, failures
 
+    def first_invalid_path(self, waypoints: Sequence[Tuple[np.ndarray, int]]) -> int:
+        """First illegal frame along a chain of motions through ``waypoints``, or -1.
+
+        Each motion is checked as :meth:`first_invalid_motion` checks it (forward in time,
+        speeds, collisions at every frame after its start), all of them in one broad phase;
+        the narrow phase goes motion by motion and stops at the first illegal frame.
+
+        Parameters
+        ----------
+        waypoints
+            (q (d,) rad, frame index) pairs, frames strictly increasing; the first one is taken
+            as legal (the chain's start).
+
+        """
+        if len(waypoints) < 2:
+            return -1
+        batch = [self._motion_rows(qa, ia, qb, ib)
+                 for (qa, ia), (qb, ib) in zip(waypoints[:-1], waypoints[1:])]
+        lengths = np.array([len(rows) for rows, _ in batch])
+        if not lengths.all():
+            # A motion that does not go forward in time is illegal where it starts.
+            return int(waypoints[int(np.flatnonzero(lengths == 0)[0])][1])
+        ends = np.cumsum(lengths)
+        segments = list(zip((ends - lengths).tolist(), ends.tolist()))
+        q = np.concatenate([rows for rows, _ in batch])
+        frames = np.concatenate([np.arange(ia + 1, ia + 1 + n)
+                                 for (_, ia), n in zip(waypoints[:-1], lengths.tolist())])
+        for bad in self._check_segments(q, frames, segments, [late for _, late in batch],
+                                        stop_at_legal=False):
+            if bad >= 0:
+                return bad
+        return -1
+
     def _motion_rows(self, qa: np.ndarray, ia: int, qb: np.ndarray,
                      ib: int) -> Tuple[np.ndarray, int]:
         """Configurations at frames ia+1.. of the motion to (qb, ib) that keep to the speed

@@ -213,7 +213,8 @@ class UpperBodyPlan:
     planning_time
         Wall time of the plan, s.
     per_branch
-        Branch name -> dict(time s, ok, fast bool, nodes, backtracks, grown, deviation rad).
+        Branch name -> dict(time s, ok, fast bool, nodes, backtracks, grown, deviation rad;
+        a branch that searched also: checks, preview_backtracks, seeded frame).
     blocked_frame
         When not ok, the index of the frame the blocked branch could not get past (0 when its
         start is in collision); -1 when ok.
@@ -326,7 +327,8 @@ class UpperBodyPlanner:
                              f'{skeleton.upper[upper[column]]}]')
 
     def plan(self, times: np.ndarray, frames: np.ndarray,
-             preview_from: Optional[int] = None) -> UpperBodyPlan:
+             preview_from: Optional[int] = None,
+             seeds: Optional[Dict[str, np.ndarray]] = None) -> UpperBodyPlan:
         """Plan the upper body over one step (§5), optionally with a preview after it.
 
         Parameters
@@ -341,6 +343,11 @@ class UpperBodyPlanner:
             the step (a receding-horizon aid, not part of §5's goal), a branch search blocked
             there backtracks at most ``config.preview_backtracks`` times, then gives up with
             ``blocked_frame >= preview_from``; None: every frame is the step's own.
+        seeds
+            Branch name -> (s, d) deviations of the branch from its objective at frames 0..s-1
+            (s <= k), rad: a motion likely to be legal, such as the rest of the previous plan
+            from where this step starts (receding horizon; row 0 is not used). A branch with a
+            seed that must search first goes along it (see :meth:`CTRoadmap.solve`).
 
         Returns
         -------
@@ -355,6 +362,15 @@ class UpperBodyPlanner:
         if preview_from is not None and not 0 < preview_from < len(times):
             raise ValueError(f'preview_from must be in (0, {len(times) - 1}], got '
                              f'{preview_from}')
+        seeds = dict(seeds or {})
+        for name, seed in seeds.items():
+            if name not in self.indices:
+                raise ValueError(f'seed for unknown branch {name!r}; branches: {BRANCH_ORDER}')
+            seed = seeds[name] = np.asarray(seed, dtype=float)
+            d = len(self.indices[name])
+            if seed.ndim != 2 or seed.shape[1] != d or not 1 <= len(seed) <= len(times):
+                raise ValueError(f'{name} seed must have shape (s, {d}) with 1 <= s <= '
+                                 f'{len(times)}, got {seed.shape}')
         config = self.config
         body = TimedBody(self.kinematics, self.shapes, self.environment, frames)
         out = frames.copy()
@@ -401,11 +417,13 @@ class UpperBodyPlanner:
                     node_budget=config.node_budget, max_backtracks=config.max_backtracks,
                     check_budget=config.check_budget, preview_from=preview_from,
                     preview_backtracks=config.preview_backtracks,
+                    seed=seeds.get(name),
                     deadline=None if config.time_budget is None
                     else time.perf_counter() + config.time_budget)
                 record.update(nodes=result.nodes, backtracks=result.backtracks,
                               grown=result.grown, ok=result.ok,
-                              preview_backtracks=result.preview_backtracks)
+                              preview_backtracks=result.preview_backtracks,
+                              seeded=result.seeded)
                 path = result.path
                 steps, checks = space.steps, space.checks
                 if not result.ok:
