@@ -298,3 +298,39 @@ def test_a_seed_is_not_followed_where_the_objective_is_free(skeleton):
 def test_bad_seeds_name_the_value(beam_space, seed, match):
     with pytest.raises(ValueError, match=match):
         roadmap().solve(beam_space, np.zeros(2), seed=seed)
+
+
+def test_a_start_off_the_objective_goes_back_to_it_in_one_check_where_it_is_free(
+        skeleton, monkeypatch):
+    # The start of a step after an obstacle is still off the pattern: best-first's first path
+    # (back to the objective, then along it) is checked in one batch, without ranking.
+    space = waist_space(skeleton, None, frame_count=100)
+    start = space.objective[0] + np.array([0.0, 0.5])
+    before = space.checks
+    direct = roadmap().solve(space, start)
+    direct_checks, before = space.checks - before, space.checks
+    monkeypatch.setattr(CTRoadmap, '_return_directly', lambda *args: False)
+    searched = roadmap().solve(space, start)
+    searched_checks = space.checks - before
+    assert direct.ok and searched.ok
+    assert direct.nodes == 0 and searched.nodes > 0
+    assert np.allclose(direct.path, searched.path, atol=1e-12), 'the same path'
+    assert direct_checks < searched_checks
+    # Back on the objective as soon as the search's speed (0.8 of the limit) allows.
+    step = space.times[1] - space.times[0]
+    arrival = int(np.ceil(0.5 / (0.8 * space.speed_limit[1]) / step - 1e-9))
+    off = np.flatnonzero(np.abs(direct.path - space.objective).max(axis=1) > 1e-9)
+    assert off[-1] == arrival - 1
+
+
+def test_a_start_off_the_objective_is_searched_from_as_before_where_the_objective_is_blocked(
+        beam_space, monkeypatch):
+    start = beam_space.objective[0] + np.array([0.0, 0.5])
+    before = beam_space.checks
+    plain = roadmap().solve(beam_space, start)
+    plain_checks, before = beam_space.checks - before, beam_space.checks
+    monkeypatch.setattr(CTRoadmap, '_return_directly', lambda *args: False)
+    searched = roadmap().solve(beam_space, start)
+    assert plain.ok and plain.nodes == searched.nodes and plain_checks == (
+        beam_space.checks - before)
+    assert np.array_equal(plain.path, searched.path)

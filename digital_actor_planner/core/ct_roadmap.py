@@ -279,19 +279,20 @@ class CTRoadmap:
         checks_limit = None if check_budget is None else space.checks + check_budget
         start_state = _State(np.asarray(start, dtype=float) - space.objective[0], 0)
         stack = [start_state]
+        if preview_from is not None and not 0 < preview_from <= last:
+            raise ValueError(f'preview_from must be in (0, {last}], got {preview_from}')
+        if preview_backtracks < 0:
+            raise ValueError(f'preview_backtracks must be >= 0, got {preview_backtracks}')
         seeded = 0
         if seed is not None:
             seeded = self._follow_seed(space, stack, seed, hold_frames, horizon)
+        self._return_directly(space, stack, horizon, speed_fraction)
         visited = set()
         jumps = set()
         known = {}
         nodes = backtracks = grown = in_preview = 0
         deepest_blocked = 0
         gave_up_in_preview = False
-        if preview_from is not None and not 0 < preview_from <= last:
-            raise ValueError(f'preview_from must be in (0, {last}], got {preview_from}')
-        if preview_backtracks < 0:
-            raise ValueError(f'preview_backtracks must be >= 0, got {preview_backtracks}')
         while stack:
             state = stack[-1]
             if state.relay:
@@ -349,6 +350,34 @@ class CTRoadmap:
         path = self._path(space, stack) if stack else np.array(space.objective)
         return SearchResult(False, path, min(deepest_blocked, last), nodes, backtracks, grown,
                             in_preview, gave_up_in_preview, seeded)
+
+    def _return_directly(self, space: CTSpace, stack: List[_State], horizon: _Horizon,
+                         speed_fraction: float) -> bool:
+        """From a state off the objective with the objective free from where it can be
+        reached on, go back to it and follow it to the final frame, if that is legal.
+
+        This is the path best-first search takes first there (the objective is the closest
+        neighbour, and following it to the final frame the best advance from it), checked in
+        one batch without ranking the neighbours: the step after an obstacle, whose start is
+        still off the pattern, mostly needs nothing else. Pushes the two states and returns
+        True when legal; otherwise leaves the stack as it was.
+        """
+        state = stack[-1]
+        if not state.deviation.any():
+            return False
+        last = space.frame_count - 1
+        here = state.frame
+        arrival = here + self._travel_frames(space, here, state.deviation, speed_fraction)
+        if arrival >= last or not horizon.free[arrival:].all():
+            return False
+        objective = space.objective
+        if space.first_invalid_path([(objective[here] + state.deviation, here),
+                                     (objective[arrival], arrival),
+                                     (objective[last], last)]) >= 0:
+            return False
+        zero = np.zeros_like(state.deviation)
+        stack.extend([_State(zero, arrival), _State(zero.copy(), last)])
+        return True
 
     def _follow_seed(self, space: CTSpace, stack: List[_State], seed: np.ndarray,
                      spacing: int, horizon: _Horizon) -> int:
