@@ -334,3 +334,40 @@ def test_a_start_off_the_objective_is_searched_from_as_before_where_the_objectiv
     assert plain.ok and plain.nodes == searched.nodes and plain_checks == (
         beam_space.checks - before)
     assert np.array_equal(plain.path, searched.path)
+
+
+def test_a_lasting_posture_is_held_up_to_the_blocked_stretch_in_one_advance(beam_space):
+    # Bent deep enough to pass the beam: a search preferring lasting postures keeps the bend
+    # (the objective does not last under the beam) and gets to the beam in one advance, not
+    # hold_frames at a time re-ranking the same neighbours.
+    space = beam_space
+    blocked = np.flatnonzero(~_Horizon(CTRoadmap._objective_free(space, 5), 5).free)
+    advances = []
+    advance = CTRoadmap._advance
+
+    def recording(self, space, state, *args):
+        child = advance(self, space, state, *args)
+        advances.append((state.frame, None if child is None else child.frame))
+        return child
+
+    graph = CTRoadmap(PATTERNS, np.ones(2), radius=0.3, max_nodes=32,
+                      rng=np.random.default_rng(0), prefer_lasting=True)
+    CTRoadmap._advance = recording
+    try:
+        result = graph.solve(space, space.objective[0] + np.array([0.0, 0.9]))
+    finally:
+        CTRoadmap._advance = advance
+    assert result.ok and result.nodes < 8
+    assert advances[0] == (0, blocked[0] - 1)
+    held = result.path[:blocked[0]] - space.objective[:blocked[0]]
+    assert np.abs(held - [0.0, 0.9]).max() < 1e-9
+    assert space.first_invalid(result.path[1:], np.arange(1, space.frame_count)) == -1
+
+
+def test_a_held_posture_goes_on_to_where_a_longer_hold_of_it_failed():
+    bend, other = np.array([0.0, 0.6]), np.array([0.0, 0.3])
+    # The long hold to frame 80 failed at frame 52: the chosen short hold to 35 goes to 51.
+    assert CTRoadmap._longest_hold(bend, 35, [(other, 40), (bend, 80)], [38, 52]) == 51
+    # Not from a hold of another posture, nor from a failure sooner than the chosen arrival.
+    assert CTRoadmap._longest_hold(bend, 35, [(other, 80)], [52]) == 35
+    assert CTRoadmap._longest_hold(bend, 35, [(bend, 80)], [33]) == 35

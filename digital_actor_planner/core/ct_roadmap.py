@@ -467,6 +467,7 @@ class CTRoadmap:
         # Holding the posture: first past the stretch where the objective is blocked (one long
         # advance), else for hold_frames.
         hold_end = horizon.hold_end(here)
+        approach = None
         if hold_end > min(here + hold_frames, last) and not on_objective:
             # End the hold where a return to the objective would arrive as it becomes legal.
             back = self._travel_frames(space, here, state.deviation, speed_fraction)
@@ -474,6 +475,17 @@ class CTRoadmap:
             if hold_end > here + hold_frames:
                 targets.append(state.deviation.copy())
                 frames.append(hold_end)
+        elif self.prefer_lasting and not state.relaxed and not on_objective:
+            # Before a blocked stretch, a search that prefers lasting postures holds a lasting
+            # one up to it in one advance, not hold_frames at a time (re-ranking the same
+            # neighbours at every hold, the table's arm took 7 of them to get there); from
+            # the stretch on, as before (held into it in one advance, the arm that met the
+            # second pillar swung back 1.0 rad instead of 0.35).
+            ahead = np.flatnonzero(~horizon.free[here:])
+            if len(ahead) and ahead[0] - 1 > hold_frames:
+                approach = len(targets)
+                targets.append(state.deviation.copy())
+                frames.append(here + int(ahead[0]) - 1)
         targets.append(state.deviation.copy())
         frames.append(min(here + hold_frames, last))
         targets = np.array(targets)
@@ -485,6 +497,10 @@ class CTRoadmap:
                    if self.prefer_lasting and not state.relaxed else None)
         keys = (np.where(holds | on_objective, -frames, frames), np.round(closeness, 6))
         order = np.lexsort(keys if lasting is None else keys + (~lasting,))
+        if approach is not None and not lasting[-1]:
+            # The posture does not last through the stretch (held from hold_frames on, checked
+            # on _lasting's grid): ranked at every hold on the way.
+            order = order[order != approach]
         # Endpoints in collision cannot start a legal motion: filter them, best first, until
         # enough are legal (holding the current posture is kept whatever its rank).
         motion = None
@@ -637,10 +653,29 @@ class CTRoadmap:
         if chosen < 0:
             return None
         target, arrival = fresh[chosen]
+        if np.array_equal(target, state.deviation):
+            arrival = self._longest_hold(target, arrival, fresh[:chosen], failures)
         child = _State(np.array(target), arrival)
         if arrival < state.until:
             child.until, child.allowed = state.until, state.allowed
         return child
+
+    @staticmethod
+    def _longest_hold(deviation: np.ndarray, arrival: int, before: list,
+                      failures: List[int]) -> int:
+        """Arrival frame of a hold of ``deviation`` chosen to ``arrival``, made as long as the
+        failed longer holds of it checked before show it is legal.
+
+        A longer hold that failed was legal up to the frame before it failed, and of two holds
+        the longer ranks first (see _candidates): the hold goes on to there in this advance
+        rather than hold_frames at a time. ``before``: the (target, arrival) motions checked
+        before, in order, with their first illegal frames ``failures``.
+        """
+        for (other, other_arrival), bad in zip(before, failures):
+            longer = other_arrival > arrival and np.array_equal(other, deviation)
+            if longer and bad - 1 > arrival:
+                arrival = bad - 1
+        return arrival
 
     def _follow(self, space: CTSpace, state: _State, horizon: _Horizon) -> Optional[_State]:
         """Follow the objective from a state on it, hold_frames at a time, in one motion check.
