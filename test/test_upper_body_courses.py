@@ -252,3 +252,34 @@ def test_the_steps_after_the_first_under_the_beam_go_on_along_the_last_plan():
     assert seeded[first] == plain[first], 'the first step at the beam has nothing to go on'
     assert max(plain_followed) == 0 and max(seeded_followed[first + 1:]) > 0
     assert sum(seeded[first + 1:]) < 0.6 * sum(plain[first + 1:])
+
+
+@pytest.mark.slow
+def test_a_step_after_a_stop_is_not_seeded_with_the_plan_from_before_it():
+    """The last plan seeds only the step that directly follows it: after the actor stopped
+    (here under the beam, the waist bent), the pelvis did not go on as that plan's preview
+    had it, and the next step searches afresh."""
+    sc = scene('low_beam')
+    actor = Actor(skeleton(), sc.environment, ActorConfig(), start=sc.start)
+    calls = []
+    plan = actor._upper.plan
+
+    def recording(*args, **kwargs):
+        calls.append(bool(kwargs.get('seeds')))
+        return plan(*args, **kwargs)
+
+    actor._upper.plan = recording
+    actor.set_command(0.8, 0.0)
+    for _ in range(40):
+        block = actor.plan_next()
+        assert block.status == 'walking'
+        if calls and calls[-1]:
+            break
+    assert calls and calls[-1], 'a step under the beam was seeded with the last plan'
+    actor.set_command(0.0, 0.0)
+    while actor.plan_next().status != 'idle':
+        pass
+    before = len(calls)
+    actor.set_command(0.8, 0.0)
+    assert actor.plan_next().status == 'walking'
+    assert len(calls) > before and not any(calls[before:]), 'no seed after the stop'
