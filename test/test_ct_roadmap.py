@@ -300,18 +300,25 @@ def test_bad_seeds_name_the_value(beam_space, seed, match):
         roadmap().solve(beam_space, np.zeros(2), seed=seed)
 
 
+def with_and_without_going_back_directly(space, start, monkeypatch):
+    """(result, checks) of a search from ``start``, then of one without _return_directly."""
+    out = []
+    for shortcut in (True, False):
+        if not shortcut:
+            monkeypatch.setattr(CTRoadmap, '_return_directly', lambda *args: False)
+        before = space.checks
+        out.append((roadmap().solve(space, start), space.checks - before))
+    return out
+
+
 def test_a_start_off_the_objective_goes_back_to_it_in_one_check_where_it_is_free(
         skeleton, monkeypatch):
     # The start of a step after an obstacle is still off the pattern: best-first's first path
     # (back to the objective, then along it) is checked in one batch, without ranking.
     space = waist_space(skeleton, None, frame_count=100)
     start = space.objective[0] + np.array([0.0, 0.5])
-    before = space.checks
-    direct = roadmap().solve(space, start)
-    direct_checks, before = space.checks - before, space.checks
-    monkeypatch.setattr(CTRoadmap, '_return_directly', lambda *args: False)
-    searched = roadmap().solve(space, start)
-    searched_checks = space.checks - before
+    (direct, direct_checks), (searched, searched_checks) = \
+        with_and_without_going_back_directly(space, start, monkeypatch)
     assert direct.ok and searched.ok
     assert direct.nodes == 0 and searched.nodes > 0
     assert np.allclose(direct.path, searched.path, atol=1e-12), 'the same path'
@@ -326,13 +333,9 @@ def test_a_start_off_the_objective_goes_back_to_it_in_one_check_where_it_is_free
 def test_a_start_off_the_objective_is_searched_from_as_before_where_the_objective_is_blocked(
         beam_space, monkeypatch):
     start = beam_space.objective[0] + np.array([0.0, 0.5])
-    before = beam_space.checks
-    plain = roadmap().solve(beam_space, start)
-    plain_checks, before = beam_space.checks - before, beam_space.checks
-    monkeypatch.setattr(CTRoadmap, '_return_directly', lambda *args: False)
-    searched = roadmap().solve(beam_space, start)
-    assert plain.ok and plain.nodes == searched.nodes and plain_checks == (
-        beam_space.checks - before)
+    (plain, plain_checks), (searched, searched_checks) = \
+        with_and_without_going_back_directly(beam_space, start, monkeypatch)
+    assert plain.ok and plain.nodes == searched.nodes and plain_checks == searched_checks
     assert np.array_equal(plain.path, searched.path)
 
 

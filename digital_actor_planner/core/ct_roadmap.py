@@ -261,8 +261,9 @@ class CTRoadmap:
             (s, d) deviations from the objective at frames 0..s-1, rad: a motion likely to be
             legal (the rest of the previous step's plan, receding horizon; row 0 is not used,
             the motion starts at ``start``). The search first goes along it, in states
-            ``hold_frames`` apart, as far as it is legal, and searches on from there; it can
-            backtrack into it like into any of its states.
+            ``hold_frames`` apart, as far as it is legal and at most to the end of the last
+            stretch within it where the objective is blocked, and searches on from there; it
+            can backtrack into it like into any of its states.
 
         Returns
         -------
