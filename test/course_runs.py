@@ -59,14 +59,16 @@ def simulate(name, window_steps=3, upper_body=True, greedy_restart=True, lasting
     return sc, times, frames, tuple(blocks)
 
 
-def actor_with_lasting_branches(environment, start, lasting_branches, config=ActorConfig()):
+def actor_with_lasting_branches(environment, start, lasting_branches, config=ActorConfig(),
+                                planner_seed=0):
     """An Actor built as its constructor builds one, but with the upper-body planner's
-    ``lasting_branches`` set (``()``: no branch prefers lasting postures)."""
+    ``lasting_branches`` set (``()``: no branch prefers lasting postures) and its random
+    generator seeded with ``planner_seed`` (the constructor's: 0)."""
     collision = BodyCollision(skeleton(), environment)
     upper = UpperBodyPlanner(skeleton(), collision,
                              UpperBodyConfig(check_budget=int(config.upper_body_check_budget),
                                              lasting_branches=tuple(lasting_branches)),
-                             rng=np.random.default_rng(0))
+                             rng=np.random.default_rng(planner_seed))
     return Actor(skeleton(), environment, config, start=start, upper_body_planner=upper,
                  body_collision=collision)
 
