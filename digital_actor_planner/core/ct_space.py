@@ -1107,20 +1107,14 @@ class CTSpace:
             if first and failures:
                 continue
             # The others are interpolated only when the first goal fails.
-            batch = [self._motion_rows(qa, ia, qb, ib)
-                     for qb, ib in (goals[:1] if first else goals[1:])]
-            if not batch:
+            chosen = goals[:1] if first else goals[1:]
+            if not chosen:
                 continue
-            lengths = np.array([len(rows) for rows, _ in batch])
-            ends = np.cumsum(lengths)
-            segments = list(zip((ends - lengths).tolist(), ends.tolist()))
-            q = np.concatenate([rows for rows, _ in batch])
-            frame_index = np.concatenate([np.arange(ia + 1, ia + 1 + n) for n in lengths])
+            q, frame_index, segments, early = self._motion_batch([(a, b) for b in chosen])
             # The other goals usually fail within a few frames of the start: their broad
             # phase runs a few frames of each at a time rather than over whole motions.
             check = self._check_segments if first else self._check_progressively
-            for bad in check(q, frame_index, segments, [late for _, late in batch],
-                             stop_at_legal=True):
+            for bad in check(q, frame_index, segments, early, stop_at_legal=True):
                 failures.append(bad)
                 if bad < 0:
                     return len(failures) - 1, failures
@@ -1142,22 +1136,25 @@ class CTSpace:
         """
         if len(waypoints) < 2:
             return -1
-        batch = [self._motion_rows(qa, ia, qb, ib)
-                 for (qa, ia), (qb, ib) in zip(waypoints[:-1], waypoints[1:])]
+        q, frames, segments, early = self._motion_batch(list(zip(waypoints[:-1],
+                                                                 waypoints[1:])))
+        for bad in self._check_segments(q, frames, segments, early, stop_at_legal=False):
+            if bad >= 0:
+                return bad
+        return -1
+
+    def _motion_batch(self, motions: Sequence[tuple]) -> tuple:
+        """The rows of motions ((qa, ia), (qb, ib)) for one check: (q (m, d) rad, frames (m,),
+        segments [(begin, end)] per motion, early: each motion's speed violation frame or -1,
+        its start frame for one that does not go forward in time)."""
+        batch = [self._motion_rows(qa, ia, qb, ib) for (qa, ia), (qb, ib) in motions]
         lengths = np.array([len(rows) for rows, _ in batch])
-        if not lengths.all():
-            # A motion that does not go forward in time is illegal where it starts.
-            return int(waypoints[int(np.flatnonzero(lengths == 0)[0])][1])
         ends = np.cumsum(lengths)
         segments = list(zip((ends - lengths).tolist(), ends.tolist()))
         q = np.concatenate([rows for rows, _ in batch])
         frames = np.concatenate([np.arange(ia + 1, ia + 1 + n)
-                                 for (_, ia), n in zip(waypoints[:-1], lengths.tolist())])
-        for bad in self._check_segments(q, frames, segments, [late for _, late in batch],
-                                        stop_at_legal=False):
-            if bad >= 0:
-                return bad
-        return -1
+                                 for ((_, ia), _), n in zip(motions, lengths.tolist())])
+        return q, frames, segments, [late for _, late in batch]
 
     def _motion_rows(self, qa: np.ndarray, ia: int, qb: np.ndarray,
                      ib: int) -> Tuple[np.ndarray, int]:
