@@ -338,7 +338,8 @@ def test_steps_seeded_with_the_last_plan_go_on_along_it_and_check_less(skeleton)
     ({'torso': np.zeros((5, 2))}, "unknown branch 'torso'"),
     ({'waist': np.zeros((5, 3))}, r'waist seed must have shape \(s, 2\)'),
     ({'left_arm': np.zeros((40, 4))}, r'left_arm seed must have shape \(s, 4\) with 1 <= s <= 30'),
-    ({'waist': np.zeros((0, 2))}, r'got \(0, 2\)')])
+    ({'waist': np.zeros((0, 2))}, r'got \(0, 2\)'),
+    ({'right_arm': np.full((5, 4), np.inf)}, 'right_arm seed contains NaN or infinite')])
 def test_bad_seeds_name_the_branch_and_the_shape(skeleton, seeds, match):
     planner, _ = planner_for(skeleton)
     times, frames = walk(skeleton, 30)

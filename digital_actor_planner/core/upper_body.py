@@ -371,6 +371,8 @@ class UpperBodyPlanner:
             if seed.ndim != 2 or seed.shape[1] != d or not 1 <= len(seed) <= len(times):
                 raise ValueError(f'{name} seed must have shape (s, {d}) with 1 <= s <= '
                                  f'{len(times)}, got {seed.shape}')
+            if not np.all(np.isfinite(seed)):
+                raise ValueError(f'{name} seed contains NaN or infinite values')
         config = self.config
         body = TimedBody(self.kinematics, self.shapes, self.environment, frames)
         out = frames.copy()
