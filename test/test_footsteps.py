@@ -135,6 +135,17 @@ def test_config_validation_names_the_field(leg):
         FootstepPlanner(FootstepConfig(step_intervals=0), leg)
 
 
+def test_bad_plan_arguments_are_named(leg):
+    planner = FootstepPlanner(FootstepConfig(), leg)
+    profile = profile_from(lambda s: 0.0)
+    with pytest.raises(ValueError, match=r'stance side 2 '):
+        planner.plan(profile, 2, 0.0, 0.0, 0.0, 0.0, 0.5, 0.5)
+    with pytest.raises(ValueError, match=r'start configuration \(1, 2, 14\)'):
+        plan(planner, profile, start=(1, 2, 14))
+    # Both feet planned after the errors, as before them.
+    assert plan(planner, profile) is not None
+
+
 def _reference_foothold(config, leg, profile, side, s):
     """One sole evaluated on its own with slices: (ok, height, pitch), the rules of
     :meth:`FootstepPlanner.footholds` written out sole by sole."""

@@ -173,12 +173,15 @@ class _Search:
     (so a range maximum over a slice is the swing test's).
     ``prefixes``: state after the first footsteps of a configuration (see
     :meth:`FootstepPlanner._search_effort`), None where they are already infeasible.
+    ``reach``: the swing test's numbers as plain floats (sole toe and heel, the profile's first
+    arc length, spacing and last sample index, the swing height limit), read once per plan.
     """
 
     ok: List[list]
     height: List[list]
     pitch: List[list]
     obstacle: Tuple[list, list] = ((), ())
+    reach: tuple = ()
     swings: Dict[tuple, bool] = field(default_factory=dict)
     feasible: Dict[Tuple[int, ...], Optional[float]] = field(default_factory=dict)
     prefixes: Dict[Tuple[int, ...], Optional[tuple]] = field(default_factory=dict)
@@ -210,9 +213,19 @@ class FootstepPlanner:
                             + config.step_increment * np.arange(counts[i]) for i in range(n)]),
             [int(b) for b in np.cumsum([0] + counts)])
         self._lengths = config.lengths()
+        self._length_list = self._lengths.tolist()
+        # The side of each footstep of a window, by the side of the stance foot: the other
+        # foot steps first. As an array (read-only: windows get copies) and as a list.
+        self._sides = {}
+        for stance_side in (0, 1):
+            sides = np.array([(1 - stance_side) if i % 2 == 0 else stance_side
+                              for i in range(n)])
+            sides.setflags(write=False)
+            self._sides[stance_side] = (sides, sides.tolist())
         # (profile, stance and swing feet, _Search) of the last plan: its foothold tables and
         # swing tests, reused by another attempt at the same step (see plan).
         self._last_tables = None
+        self._rise_limits = (float(config.max_step_up), float(config.max_step_down))
         # Weights and ranges of the effort terms (see _step_effort), as plain floats.
         self._effort_terms = (
             float(config.weight_length), float(config.weight_height),
@@ -369,7 +382,9 @@ class FootstepPlanner:
         q = tuple(start) if start is not None else (init_index,) * n
         if len(q) != n or any(not 0 <= j <= m for j in q):
             raise ValueError(f'start configuration {q} is not {n} indices in [0, {m}]')
-        sides = np.array([(1 - stance_side) if i % 2 == 0 else stance_side for i in range(n)])
+        if stance_side not in (0, 1):
+            raise ValueError(f'stance side {stance_side!r} is not 0 (left) or 1 (right)')
+        sides, side_list = self._sides[stance_side]
         # Another attempt at the same step (the walk generator could not realise the last
         # s_1) reads the same footholds and swings: its tables are reused, the search is not.
         key = (stance_side, stance_s, stance_height, swing_s, swing_height)
@@ -377,13 +392,14 @@ class FootstepPlanner:
                 and self._last_tables[1] == key:
             last = self._last_tables[2]
             memo = _Search(ok=last.ok, height=last.height, pitch=last.pitch,
-                           obstacle=last.obstacle, swings=last.swings)
+                           obstacle=last.obstacle, reach=last.reach, swings=last.swings)
         else:
             memo = self._search_tables(profile, sides, stance_s)
             self._last_tables = (profile, key, memo)
-        length_list, side_list = lengths.tolist(), sides.tolist()
+        length_list = self._length_list
         banned = set(int(b) for b in banned_first)
-        banned_lengths = set((lengths > max_length + 1e-9).nonzero()[0].tolist())
+        banned_lengths = (set((lengths > max_length + 1e-9).nonzero()[0].tolist())
+                          if max_length + 1e-9 < length_list[-1] else set())
 
         feasible, prefixes = memo.feasible, memo.prefixes
         search_effort = self._search_effort
@@ -494,7 +510,10 @@ class FootstepPlanner:
         obstacle = np.where(np.isnan(profile.obstacle), -np.inf, profile.obstacle).tolist()
         return _Search(ok=[ok[a:b] for a, b in rows], height=[height[a:b] for a, b in rows],
                        pitch=[pitch[a:b] for a, b in rows],
-                       obstacle=(obstacle[0], obstacle[1]))
+                       obstacle=(obstacle[0], obstacle[1]),
+                       reach=(float(self.leg.toe), float(self.leg.heel), float(profile.s0),
+                              float(profile.ds), profile.samples - 1,
+                              float(self.config.max_swing_height)))
 
     def _swing_clear_in(self, profile, memo: _Search, side: int, s_from: float, h_from: float,
                         s_to: float, h_to: float) -> bool:
@@ -503,14 +522,13 @@ class FootstepPlanner:
         Reads the search's per-side obstacle lists (``memo``), not NumPy arrays: it runs for
         every configuration the search visits.
         """
-        i0 = max(math.floor((s_from + self.leg.toe - profile.s0) / profile.ds), 0)
-        i1 = min(math.ceil((s_to - self.leg.heel - profile.s0) / profile.ds),
-                 profile.samples - 1)
+        toe, heel, s0, ds, last, max_swing = memo.reach
+        i0 = max(math.floor((s_from + toe - s0) / ds), 0)
+        i1 = min(math.ceil((s_to - heel - s0) / ds), last)
         if i1 < i0:
             return True
         # -inf (empty space) passes: there is nothing to hit.
-        return max(memo.obstacle[side][i0:i1 + 1]) <= (max(h_from, h_to)
-                                                       + self.config.max_swing_height)
+        return max(memo.obstacle[side][i0:i1 + 1]) <= max(h_from, h_to) + max_swing
 
     def _greedy_seed(self, memo, lengths, stance_height, s_init, previous_length, banned_first,
                      banned_lengths) -> Optional[Tuple[int, ...]]:
@@ -520,21 +538,27 @@ class FootstepPlanner:
         evaluates the whole configuration); None when some footstep has no usable foothold.
         """
         cfg = self.config
-        m = cfg.step_intervals
-        up, down = cfg.max_step_up, cfg.max_step_down
+        choices = [j for j in range(cfg.step_intervals + 1) if j not in banned_lengths]
+        first_choices = [j for j in choices if j not in banned_first]
+        up, down = self._rise_limits
+        w_length, w_height, w_pitch, w_smooth, span, up_range, pitch_range = self._effort_terms
         seed, cumulative, height_before, length_before = [], 0, stance_height, previous_length
-        step_effort = self._step_effort
         for i in range(cfg.window_steps):
             ok, height, pitch = memo.ok[i], memo.height[i], memo.pitch[i]
-            best, best_cost = None, np.inf
-            for j in range(m + 1):
+            best, best_cost = None, math.inf
+            for j in (choices if i else first_choices):
                 c = cumulative + j
-                if not ok[c] or j in banned_lengths or (i == 0 and j in banned_first):
+                if not ok[c]:
                     continue
                 rise = height[c] - height_before
                 if rise > up or -rise > down:
                     continue
-                cost = step_effort(lengths[j], rise, pitch[c], length_before, s_init)
+                length = lengths[j]
+                # _step_effort written out (the same terms in the same order).
+                cost = (w_length * ((length - s_init) / span) ** 2
+                        + w_height * (rise / up_range) ** 2
+                        + w_pitch * (pitch[c] / pitch_range) ** 2
+                        + w_smooth * ((length - length_before) / span) ** 2)
                 if cost < best_cost:
                     best, best_cost = j, cost
             if best is None:
@@ -616,8 +640,7 @@ class FootstepPlanner:
         """
         if config[0] in banned:
             return None
-        cfg = self.config
-        up, down = cfg.max_step_up, cfg.max_step_down
+        up, down = self._rise_limits
         prefixes = memo.prefixes
         start = len(config) - 1
         while start > 0 and config[:start] not in prefixes:
@@ -632,44 +655,49 @@ class FootstepPlanner:
             return None
         effort, s, height_before, length_before, cumulative = state
         w_length, w_height, w_pitch, w_smooth, span, up_range, pitch_range = self._effort_terms
+        ok, heights, pitches, swings = memo.ok, memo.height, memo.pitch, memo.swings
         for i in range(start, len(config)):
             j = config[i]
             length = lengths[j]
             s += length
             cumulative += j
-            key = config[:i + 1]
-            if not memo.ok[i][cumulative]:
-                prefixes[key] = None
+            if not ok[i][cumulative]:
+                prefixes[config[:i + 1]] = None
                 return None
-            hold_height = memo.height[i][cumulative]
+            hold_height = heights[i][cumulative]
             rise = hold_height - height_before
             if rise > up or -rise > down:
-                prefixes[key] = None
+                prefixes[config[:i + 1]] = None
                 return None
-            # The foot swings from where it was two footsteps before (the same side).
+            # The foot swings from where it was two footsteps before (the same side): the
+            # swing foot's or the stance foot's place (-1), or footstep i - 2's foothold.
             if i >= 2:
                 before = prefixes[config[:i - 1]]
-                origin, s_from, h_from = (i - 2, before[4]), before[1], before[2]
+                origin, s_from, h_from = before[4], before[1], before[2]
             elif i == 1:
                 origin, s_from, h_from = -1, stance_s, stance_height
             else:
-                origin, s_from, h_from = -2, swing_s, swing_height
-            swing_key = (origin, (i, cumulative))
-            clear = memo.swings.get(swing_key)
+                origin, s_from, h_from = -1, swing_s, swing_height
+            swing_key = (i, origin, cumulative)
+            clear = swings.get(swing_key)
             if clear is None:
-                clear = self._swing_clear_in(profile, memo, sides[i], s_from, h_from, s,
-                                             hold_height)
-                memo.swings[swing_key] = clear
+                # _swing_clear_in written out (the same arithmetic).
+                toe, heel, s0, ds, last, max_swing = memo.reach
+                i0 = max(math.floor((s_from + toe - s0) / ds), 0)
+                i1 = min(math.ceil((s - heel - s0) / ds), last)
+                clear = i1 < i0 or (max(memo.obstacle[sides[i]][i0:i1 + 1])
+                                    <= max(h_from, hold_height) + max_swing)
+                swings[swing_key] = clear
             if not clear:
-                prefixes[key] = None
+                prefixes[config[:i + 1]] = None
                 return None
             # _step_effort written out (the same terms in the same order): it runs for every
             # footstep the search visits.
             effort += (w_length * ((length - s_init) / span) ** 2
                        + w_height * (rise / up_range) ** 2
-                       + w_pitch * (memo.pitch[i][cumulative] / pitch_range) ** 2
+                       + w_pitch * (pitches[i][cumulative] / pitch_range) ** 2
                        + w_smooth * ((length - length_before) / span) ** 2)
-            prefixes[key] = (effort, s, hold_height, length, cumulative)
+            prefixes[config[:i + 1]] = (effort, s, hold_height, length, cumulative)
             height_before, length_before = hold_height, length
         return effort
 
