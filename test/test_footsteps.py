@@ -58,6 +58,53 @@ def test_a_step_up_higher_than_allowed_makes_the_window_infeasible(leg):
     assert window is not None and max(window.heights) == pytest.approx(0.15, abs=0.02)
 
 
+def test_a_foot_placed_before_a_face_keeps_room_to_lift_off(leg):
+    # A 0.22 m block's face 0.71 m ahead of the stance toe, 0.6 m long, the ground beyond it at
+    # 0.0: footstep 0 must not end with its toe within lift_room of the face unless the window's
+    # footstep 2 then steps up (bench_terrain: the rear foot 2 cm from a block's face, no swing
+    # can lift it over the block).
+    face, top = 0.89, 0.22
+    profile = profile_from(lambda s: top if face <= s < face + 0.6 else 0.0)
+    planner = FootstepPlanner(FootstepConfig(), leg)
+    room = planner.config.lift_room
+    sides = np.array([LEFT, RIGHT, LEFT])
+    memo = planner._search_tables(profile, sides, 0.0)
+    s = 0.0 + planner._table_layout[1][:14]
+    rise = np.array([planner._rise_ahead_at(memo, 0, c) for c in range(14)])
+    toe_gap = face - (s + leg.toe)
+    near = (toe_gap >= 0) & (toe_gap <= room - 0.01 + 1e-9)
+    far = toe_gap > room + DS
+    assert near.any() and far.any()
+    assert np.all(rise[near] > top - 0.01) and np.all(np.abs(rise[far]) < 1e-9)
+    lengths = planner.config.lengths().tolist()
+    arguments = (0.0, 0.0, -0.05, 0.0, 0.5, 0.45)
+    j0 = int(np.flatnonzero(near)[0])
+    for j1 in range(14):
+        for j2 in range(14):
+            config = (j0, j1, j2)
+            c2 = j0 + j1 + j2
+            effort = planner._effort(profile, config, lengths, sides.tolist(), *arguments,
+                                     planner._search_tables(profile, sides, 0.0), set())
+            # Footstep 2 swings from footstep 0's foothold: only onto the block.
+            if effort is not None:
+                assert memo.height[2][c2] > top - 0.02, config
+    # Without the room (lift_room 0) the same footstep 0 has windows that stride on.
+    loose = FootstepPlanner(FootstepConfig(lift_room=0.0), leg)
+    plain = loose._search_tables(profile, sides, 0.0)
+    assert any(loose._effort(profile, (j0, j1, j2), lengths, sides.tolist(), *arguments,
+                             plain, set()) is not None and plain.height[2][j0 + j1 + j2] < 0.01
+               for j1 in range(14) for j2 in range(14))
+    # A ramp ahead of the toe is the sole's plane carried on, and a low bump is within
+    # lift_rise: neither is a face.
+    ramp = profile_from(lambda s: 0.25 * s)
+    ok, height, pitch = planner.footholds(ramp, LEFT, np.array([0.6]))
+    assert ok[0] and planner.rise_ahead(ramp, LEFT, np.array([0.6]), height, pitch)[0] < 0.005
+    bump = profile_from(lambda s: 0.02 if 0.99 < s < 1.1 else 0.0)
+    s = np.array([1.0 - leg.toe - 0.01])
+    ok, height, pitch = planner.footholds(bump, LEFT, s)
+    assert planner.rise_ahead(bump, LEFT, s, height, pitch)[0] <= planner.config.lift_rise
+
+
 def test_window_slides_from_the_previous_solution(leg):
     planner = FootstepPlanner(FootstepConfig(), leg)
     profile = profile_from(lambda s: 0.0)
@@ -133,6 +180,10 @@ def test_config_validation_names_the_field(leg):
         validate_footstep_config(FootstepConfig(step_length_min=0.9, step_length_max=0.8))
     with pytest.raises(ValueError, match='step_intervals'):
         FootstepPlanner(FootstepConfig(step_intervals=0), leg)
+    with pytest.raises(ValueError, match=r'lift_room must be finite and >= 0, got -0.01'):
+        FootstepPlanner(FootstepConfig(lift_room=-0.01), leg)
+    with pytest.raises(ValueError, match=r'lift_rise must be finite and >= 0, got nan'):
+        FootstepPlanner(FootstepConfig(lift_rise=float('nan')), leg)
 
 
 def test_bad_plan_arguments_are_named(leg):
@@ -252,6 +303,39 @@ def test_search_swing_test_agrees_with_the_plain_one(leg):
                                        h_to) == expected
         answers.add(expected)
     assert answers == {True, False}
+
+
+def test_search_rise_ahead_agrees_with_the_batched_one(leg):
+    """The search's one-foothold rise ahead of the toe (plain Python, asked for lazily) is
+    the batched rise_ahead of the same footholds, on slopes, edges, holes and faces."""
+    rng = np.random.default_rng(3)
+    planner = FootstepPlanner(FootstepConfig(), leg)
+    step, offsets, bounds = planner._table_layout
+    faces = 0
+    for trial in range(20):
+        count = 160
+        ground = np.repeat(rng.choice([0.0, 0.05, 0.2, 0.3, np.nan], size=count // 8,
+                                      p=[0.4, 0.2, 0.15, 0.15, 0.1]), 8)
+        ground = ground + 0.1 * np.sin(np.arange(count) * rng.uniform(0.0, 0.1))
+        both = np.vstack([ground, np.roll(ground, int(rng.integers(8)))])
+        profile = GroundProfile(s0=-0.3, ds=DS, height=both, low=both.copy(),
+                                headroom=np.full_like(both, np.inf), obstacle=both.copy())
+        sides = np.array([LEFT, RIGHT, LEFT]) if trial % 2 else np.array([RIGHT, LEFT, RIGHT])
+        stance_s = float(rng.uniform(0.0, 0.3))
+        memo = planner._search_tables(profile, sides, stance_s)
+        s = stance_s + offsets
+        ok, height, pitch = planner.footholds(profile, sides[step], s)
+        batched = planner.rise_ahead(profile, sides[step], s, height, pitch)
+        for row in range(3):
+            for c in range(bounds[row + 1] - bounds[row]):
+                k = bounds[row] + c
+                got = planner._rise_ahead_at(memo, row, c)
+                if np.isnan(batched[k]):
+                    assert np.isnan(got)
+                else:
+                    assert got == pytest.approx(batched[k], abs=1e-12), (trial, row, c)
+                    faces += batched[k] > planner.config.lift_rise
+    assert faces > 0
 
 
 def test_search_effort_from_prefixes_is_the_plain_effort(leg):

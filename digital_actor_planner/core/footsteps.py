@@ -31,6 +31,19 @@ class FootstepConfig:
     ``greedy_restart``: after the paper's breadth-first search and hill-climbing, climb once
     more from a footstep-by-footstep greedy configuration and keep the better result (False:
     the paper's search alone).
+
+    ``max_swing_height``: how far above the higher of its two footholds a swinging foot may
+    have to clear the ground in between, m (at 0.40 the front foot strode over a 0.3 m long,
+    0.28 m high block and the rear foot could not follow; at 0.25 it steps onto the block).
+
+    ``lift_room``, ``lift_rise``: a foot the window places must be able to lift off again for
+    the window's later footstep on that side. Within ``lift_room`` (m) ahead of its toe the
+    ground may rise no more than ``lift_rise`` (m) above its sole's plane, more by as much as
+    that footstep lands higher. From 2 cm before a 0.22 m block's face, with the next footstep
+    onto the ground beyond, no swing lifted the foot (the conservative ground map puts the
+    block under the toe at lift-off); bumps and 0.15 m blocks that close are lifted over, and a
+    flight's risers stand that close to the toes while the swing onto the next tread rises at
+    once. 0 room: no such test.
     """
 
     window_steps: int = 3
@@ -39,7 +52,7 @@ class FootstepConfig:
     step_length_max: float = 0.80
     max_step_up: float = 0.30
     max_step_down: float = 0.35
-    max_swing_height: float = 0.40
+    max_swing_height: float = 0.25
     flatness_tolerance: float = 0.015
     min_support_fraction: float = 0.6
     max_foot_pitch: float = 0.30
@@ -49,6 +62,8 @@ class FootstepConfig:
     weight_pitch: float = 0.2
     weight_smooth: float = 0.3
     greedy_restart: bool = True
+    lift_room: float = 0.03
+    lift_rise: float = 0.15
 
     @property
     def step_increment(self) -> float:
@@ -72,7 +87,8 @@ def validate_footstep_config(config: FootstepConfig) -> None:
         raise ValueError(f'greedy_restart must be true or false, got {config.greedy_restart!r}')
     for name in ('step_length_min', 'step_length_max', 'max_step_up', 'max_step_down',
                  'max_swing_height', 'flatness_tolerance', 'max_foot_pitch', 'min_headroom',
-                 'weight_length', 'weight_height', 'weight_pitch', 'weight_smooth'):
+                 'weight_length', 'weight_height', 'weight_pitch', 'weight_smooth',
+                 'lift_room', 'lift_rise'):
         value = getattr(config, name)
         if not np.isfinite(value) or value < 0:
             raise ValueError(f'{name} must be finite and >= 0, got {value!r}')
@@ -175,6 +191,10 @@ class _Search:
     :meth:`FootstepPlanner._search_effort`), None where they are already infeasible.
     ``reach``: the swing test's numbers as plain floats (sole toe and heel, the profile's first
     arc length, spacing and last sample index, the swing height limit), read once per plan.
+    ``rise_ahead[(i, c)]``: how far the ground within ``lift_room`` ahead of that foothold's
+    toe rises above its sole's plane, m (-inf where it does not; see ``FootstepConfig``),
+    filled in by :meth:`FootstepPlanner._rise_ahead_at` for the footholds a swing leaves from.
+    ``stance_s``, ``sides``: the window's stance arc length (m) and footstep sides.
     """
 
     ok: List[list]
@@ -182,6 +202,9 @@ class _Search:
     pitch: List[list]
     obstacle: Tuple[list, list] = ((), ())
     reach: tuple = ()
+    stance_s: float = 0.0
+    sides: tuple = ()
+    rise_ahead: Dict[Tuple[int, int], float] = field(default_factory=dict)
     swings: Dict[tuple, bool] = field(default_factory=dict)
     feasible: Dict[Tuple[int, ...], Optional[float]] = field(default_factory=dict)
     prefixes: Dict[Tuple[int, ...], Optional[tuple]] = field(default_factory=dict)
@@ -214,6 +237,7 @@ class FootstepPlanner:
             [int(b) for b in np.cumsum([0] + counts)])
         self._lengths = config.lengths()
         self._length_list = self._lengths.tolist()
+        self._offset_list = self._table_layout[1].tolist()
         # The side of each footstep of a window, by the side of the stance foot: the other
         # foot steps first. As an array (read-only: windows get copies) and as a list.
         self._sides = {}
@@ -339,6 +363,49 @@ class FootstepPlanner:
         pitch = np.where(edge, 0.0, np.where(usable, pitch, 0.0))
         return ok, height, pitch
 
+    def rise_ahead(self, profile: GroundProfile, side, s: np.ndarray, height: np.ndarray,
+                   pitch: np.ndarray) -> np.ndarray:
+        """How far the ground just ahead of soles' toes rises above their planes.
+
+        Parameters
+        ----------
+        profile
+            Ground under both foot tracks.
+        side
+            0 left, 1 right; one for all or (N,).
+        s, height, pitch
+            (N,) ankle arc lengths (m), sole heights under the ankles (m) and sole pitches
+            (rad), as :meth:`footholds` gives them.
+
+        Returns
+        -------
+        numpy.ndarray
+            (N,) the most the profile's swing obstacle rises within ``lift_room`` past each
+            toe above the sole's plane carried on, m; -inf where nothing is there (or no room
+            is asked for), NaN where the sole has no height.
+
+        """
+        cfg, leg = self.config, self.leg
+        s = np.asarray(s, dtype=float)
+        out = np.full(s.shape, -np.inf)
+        if cfg.lift_room <= 0 or not s.size:
+            return out
+        samples = profile.samples
+        side = np.asarray(side, dtype=int)
+        # The samples past the toe (the sole is judged on those up to it) within lift_room.
+        toe = np.floor((s + leg.toe - profile.s0) / profile.ds + 1e-9).astype(int)
+        reach = np.floor((s + (leg.toe + cfg.lift_room) - profile.s0) / profile.ds
+                         + 1e-9).astype(int) - toe
+        ahead = np.arange(1, max(int(reach.max()), 0) + 1)[:, None]
+        if not ahead.size:
+            return out
+        index = np.minimum(np.maximum(toe + ahead, 0), samples - 1)
+        past = profile.obstacle.take(side * samples + index)
+        past = past - np.tan(pitch) * (profile.s0 + profile.ds * index - s) - height
+        past = np.where((ahead <= reach) & ~np.isnan(past), past, -np.inf)
+        out = past.max(axis=0)
+        return np.where(np.isnan(height), np.nan, out)
+
     # -- §4.2 search -------------------------------------------------------------------
     def plan(self, profile: GroundProfile, stance_side: int, stance_s: float,
              stance_height: float, swing_s: float, swing_height: float, s_init: float,
@@ -392,7 +459,9 @@ class FootstepPlanner:
                 and self._last_tables[1] == key:
             last = self._last_tables[2]
             memo = _Search(ok=last.ok, height=last.height, pitch=last.pitch,
-                           obstacle=last.obstacle, reach=last.reach, swings=last.swings)
+                           obstacle=last.obstacle, reach=last.reach,
+                           stance_s=last.stance_s, sides=last.sides,
+                           rise_ahead=last.rise_ahead, swings=last.swings)
         else:
             memo = self._search_tables(profile, sides, stance_s)
             self._last_tables = (profile, key, memo)
@@ -510,6 +579,7 @@ class FootstepPlanner:
         obstacle = np.where(np.isnan(profile.obstacle), -np.inf, profile.obstacle).tolist()
         return _Search(ok=[ok[a:b] for a, b in rows], height=[height[a:b] for a, b in rows],
                        pitch=[pitch[a:b] for a, b in rows],
+                       stance_s=stance_s, sides=tuple(int(side) for side in sides),
                        obstacle=(obstacle[0], obstacle[1]),
                        reach=(float(self.leg.toe), float(self.leg.heel), float(profile.s0),
                               float(profile.ds), profile.samples - 1,
@@ -529,6 +599,38 @@ class FootstepPlanner:
             return True
         # -inf (empty space) passes: there is nothing to hit.
         return max(memo.obstacle[side][i0:i1 + 1]) <= max(h_from, h_to) + max_swing
+
+    def _rise_ahead_at(self, memo: _Search, row: int, cumulative: int) -> float:
+        """:meth:`rise_ahead` of one foothold of the search's table (row ``row``, cumulative
+        interval index ``cumulative``), in plain Python on the search's lists and remembered:
+        only the footholds a swing of the window leaves from are asked for, a few per plan.
+        The same arithmetic as :meth:`rise_ahead`, so the same value.
+        """
+        key = (row, cumulative)
+        value = memo.rise_ahead.get(key)
+        if value is not None:
+            return value
+        height = memo.height[row][cumulative]
+        if height != height:  # NaN: no foothold there
+            memo.rise_ahead[key] = math.nan
+            return math.nan
+        if self.config.lift_room <= 0:
+            memo.rise_ahead[key] = -math.inf
+            return -math.inf
+        toe, _, s0, ds, last, _ = memo.reach
+        s = memo.stance_s + self._offset_list[self._table_layout[2][row] + cumulative]
+        first = math.floor((s + toe - s0) / ds + 1e-9)
+        end = math.floor((s + (toe + self.config.lift_room) - s0) / ds + 1e-9)
+        slope = math.tan(memo.pitch[row][cumulative])
+        obstacle = memo.obstacle[memo.sides[row]]
+        value = -math.inf
+        for j in range(first + 1, end + 1):
+            j = min(max(j, 0), last)
+            past = obstacle[j]
+            if past != -math.inf:
+                value = max(value, past - slope * (s0 + ds * j - s) - height)
+        memo.rise_ahead[key] = value
+        return value
 
     def _greedy_seed(self, memo, lengths, stance_height, s_init, previous_length, banned_first,
                      banned_lengths) -> Optional[Tuple[int, ...]]:
@@ -618,6 +720,10 @@ class FootstepPlanner:
                 s_from, h_from = placed[origin]
                 clear = self._swing_clear_in(profile, memo, side, s_from, h_from, s,
                                              hold_height)
+                if clear and origin not in (-2, -1):
+                    # A foothold this window placed must let the foot lift off again.
+                    clear = (self._rise_ahead_at(memo, origin[0], origin[1])
+                             <= cfg.lift_rise + max(hold_height - h_from, 0.0))
                 memo.swings[swing_key] = clear
             if not clear:
                 return None
@@ -641,6 +747,7 @@ class FootstepPlanner:
         if config[0] in banned:
             return None
         up, down = self._rise_limits
+        lift_rise = self.config.lift_rise
         prefixes = memo.prefixes
         start = len(config) - 1
         while start > 0 and config[:start] not in prefixes:
@@ -687,6 +794,12 @@ class FootstepPlanner:
                 i1 = min(math.ceil((s - heel - s0) / ds), last)
                 clear = i1 < i0 or (max(memo.obstacle[sides[i]][i0:i1 + 1])
                                     <= max(h_from, hold_height) + max_swing)
+                if clear and i >= 2:
+                    # A foothold this window placed must let the foot lift off again.
+                    rise_ahead = memo.rise_ahead.get((i - 2, origin))
+                    if rise_ahead is None:
+                        rise_ahead = self._rise_ahead_at(memo, i - 2, origin)
+                    clear = rise_ahead <= lift_rise + max(hold_height - h_from, 0.0)
                 swings[swing_key] = clear
             if not clear:
                 prefixes[config[:i + 1]] = None
