@@ -453,11 +453,13 @@ def test_walking_straight_over_high_short_blocks():
     from a block's face, where the conservative ground map puts the block under the toe at
     lift-off and only a swing that steps up at once clears it (FootstepConfig.lift_room), or
     the front foot strode over a short 0.28 m block and the rear foot could not follow over it
-    (max_swing_height 0.40 allowed the stride; 0.25 has the foot step onto the block). None of
-    these 5 crossed before; now every one does, and the checker passes each."""
+    (max_swing_height 0.40 allowed the stride; 0.25 has the foot step onto the block), or the
+    rear foot, 2 cm before a 0.28 m block's face, stepped up onto it and its knee passed its
+    limit (lift_step_up). None of these 6 crossed before; now every one does, and the checker
+    passes each."""
     for height, length, x, speed in ((0.22, 0.3, 1.75, 0.8), (0.22, 0.6, 2.05, 1.1),
                                      (0.28, 0.3, 1.6, 0.8), (0.28, 0.3, 1.9, 0.5),
-                                     (0.28, 0.6, 1.6, 1.1)):
+                                     (0.28, 0.6, 1.6, 1.1), (0.28, 1.2, 2.05, 0.8)):
         environment = Environment([box([-1, -1, -0.1], [x + length + 4, 1, 0]),
                                    box([x, -1, -0.1], [x + length, 1, height])],
                                   resolution=0.02)

@@ -94,6 +94,15 @@ def test_a_foot_placed_before_a_face_keeps_room_to_lift_off(leg):
     assert any(loose._effort(profile, (j0, j1, j2), lengths, sides.tolist(), *arguments,
                              plain, set()) is not None and plain.height[2][j0 + j1 + j2] < 0.01
                for j1 in range(14) for j2 in range(14))
+    # Before a 0.28 m face the foot may not even step up onto it (lift_step_up 0.25: the knee
+    # of a foot that close could not fold that far), before a 0.2 m riser it may.
+    for height, steps_up in ((0.28, False), (0.2, True)):
+        block = profile_from(lambda s: height if face <= s < face + 0.6 else 0.0)
+        tables = planner._search_tables(block, sides, 0.0)
+        assert steps_up == any(
+            planner._effort(block, (j0, j1, j2), lengths, sides.tolist(), *arguments,
+                            tables, set()) is not None
+            for j1 in range(14) for j2 in range(14)), height
     # A ramp ahead of the toe is the sole's plane carried on, and a low bump is within
     # lift_rise: neither is a face.
     ramp = profile_from(lambda s: 0.25 * s)
@@ -184,6 +193,8 @@ def test_config_validation_names_the_field(leg):
         FootstepPlanner(FootstepConfig(lift_room=-0.01), leg)
     with pytest.raises(ValueError, match=r'lift_rise must be finite and >= 0, got nan'):
         FootstepPlanner(FootstepConfig(lift_rise=float('nan')), leg)
+    with pytest.raises(ValueError, match=r'lift_step_up must be finite and >= 0, got inf'):
+        FootstepPlanner(FootstepConfig(lift_step_up=float('inf')), leg)
 
 
 def test_bad_plan_arguments_are_named(leg):

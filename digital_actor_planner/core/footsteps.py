@@ -36,14 +36,15 @@ class FootstepConfig:
     have to clear the ground in between, m (at 0.40 the front foot strode over a 0.3 m long,
     0.28 m high block and the rear foot could not follow; at 0.25 it steps onto the block).
 
-    ``lift_room``, ``lift_rise``: a foot the window places must be able to lift off again for
-    the window's later footstep on that side. Within ``lift_room`` (m) ahead of its toe the
-    ground may rise no more than ``lift_rise`` (m) above its sole's plane, more by as much as
-    that footstep lands higher. From 2 cm before a 0.22 m block's face, with the next footstep
-    onto the ground beyond, no swing lifted the foot (the conservative ground map puts the
-    block under the toe at lift-off); bumps and 0.15 m blocks that close are lifted over, and a
-    flight's risers stand that close to the toes while the swing onto the next tread rises at
-    once. 0 room: no such test.
+    ``lift_room``, ``lift_rise``, ``lift_step_up``: a foot the window places must be able to
+    lift off again for the window's later footstep on that side. Within ``lift_room`` (m) ahead
+    of its toe the ground may rise no more than ``lift_rise`` (m) above its sole's plane, more
+    by as much as that footstep lands higher, but never more than ``lift_step_up`` (m). From
+    2 cm before a 0.22 m block's face, with the next footstep onto the ground beyond, no swing
+    lifted the foot (the conservative ground map puts the block under the toe at lift-off);
+    bumps and 0.15 m blocks that close are lifted over, and a flight's risers (up to 0.2 m)
+    stand that close to the toes while the swing onto the next tread rises at once; a 0.28 m
+    step up from there bent the knee past its limit. 0 room: no such test.
     """
 
     window_steps: int = 3
@@ -64,6 +65,7 @@ class FootstepConfig:
     greedy_restart: bool = True
     lift_room: float = 0.03
     lift_rise: float = 0.15
+    lift_step_up: float = 0.25
 
     @property
     def step_increment(self) -> float:
@@ -88,7 +90,7 @@ def validate_footstep_config(config: FootstepConfig) -> None:
     for name in ('step_length_min', 'step_length_max', 'max_step_up', 'max_step_down',
                  'max_swing_height', 'flatness_tolerance', 'max_foot_pitch', 'min_headroom',
                  'weight_length', 'weight_height', 'weight_pitch', 'weight_smooth',
-                 'lift_room', 'lift_rise'):
+                 'lift_room', 'lift_rise', 'lift_step_up'):
         value = getattr(config, name)
         if not np.isfinite(value) or value < 0:
             raise ValueError(f'{name} must be finite and >= 0, got {value!r}')
@@ -723,7 +725,8 @@ class FootstepPlanner:
                 if clear and origin not in (-2, -1):
                     # A foothold this window placed must let the foot lift off again.
                     clear = (self._rise_ahead_at(memo, origin[0], origin[1])
-                             <= cfg.lift_rise + max(hold_height - h_from, 0.0))
+                             <= min(cfg.lift_rise + max(hold_height - h_from, 0.0),
+                                    cfg.lift_step_up))
                 memo.swings[swing_key] = clear
             if not clear:
                 return None
@@ -747,7 +750,7 @@ class FootstepPlanner:
         if config[0] in banned:
             return None
         up, down = self._rise_limits
-        lift_rise = self.config.lift_rise
+        lift_rise, lift_step_up = self.config.lift_rise, self.config.lift_step_up
         prefixes = memo.prefixes
         start = len(config) - 1
         while start > 0 and config[:start] not in prefixes:
@@ -799,7 +802,8 @@ class FootstepPlanner:
                     rise_ahead = memo.rise_ahead.get((i - 2, origin))
                     if rise_ahead is None:
                         rise_ahead = self._rise_ahead_at(memo, i - 2, origin)
-                    clear = rise_ahead <= lift_rise + max(hold_height - h_from, 0.0)
+                    clear = rise_ahead <= min(lift_rise + max(hold_height - h_from, 0.0),
+                                              lift_step_up)
                 swings[swing_key] = clear
             if not clear:
                 prefixes[config[:i + 1]] = None
