@@ -309,7 +309,7 @@ def test_search_swing_test_agrees_with_the_plain_one(leg):
         s_to = s_from + rng.uniform(-0.2, 1.6)
         h_from, h_to = rng.uniform(-0.2, 0.4, 2)
         expected = _swing_clear_reference(planner, profile, side, s_from, h_from, s_to, h_to)
-        assert planner._swing_clear_in(profile, memo, side, s_from, h_from, s_to,
+        assert planner._swing_clear_in(memo, side, s_from, h_from, s_to,
                                        h_to) == expected
         answers.add(expected)
     assert answers == {True, False}

@@ -557,9 +557,9 @@ class FootstepPlanner:
         cfg = self.config
         n, m = cfg.window_steps, cfg.step_intervals
         lengths = self._lengths
-        sides = np.array([(1 - stance_side) if i % 2 == 0 else stance_side for i in range(n)])
+        sides, side_list = self._sides[stance_side]
         memo = self._search_tables(profile, sides, stance_s)
-        length_list, side_list = lengths.tolist(), sides.tolist()
+        length_list = self._length_list
         best, best_effort = None, np.inf
         for config in np.ndindex(*([m + 1] * n)):
             value = self._effort(profile, tuple(config), length_list, side_list, stance_s,
@@ -587,20 +587,27 @@ class FootstepPlanner:
                               float(profile.ds), profile.samples - 1,
                               float(self.config.max_swing_height)))
 
-    def _swing_clear_in(self, profile, memo: _Search, side: int, s_from: float, h_from: float,
-                        s_to: float, h_to: float) -> bool:
+    def _swing_clear_in(self, memo: _Search, side: int, s_from: float, h_from: float,
+                        s_to: float, h_to: float, lifts_from: Optional[Tuple[int, int]] = None
+                        ) -> bool:
         """Whether a foot can swing from one foothold to the next over the ground profile.
 
+        ``lifts_from``: (row, cumulative index) of the foothold it leaves when the window placed
+        it there; that foothold must also let it lift off (see ``FootstepConfig.lift_room``).
         Reads the search's per-side obstacle lists (``memo``), not NumPy arrays: it runs for
-        every configuration the search visits.
+        every new swing the search visits.
         """
         toe, heel, s0, ds, last, max_swing = memo.reach
         i0 = max(math.floor((s_from + toe - s0) / ds), 0)
         i1 = min(math.ceil((s_to - heel - s0) / ds), last)
-        if i1 < i0:
-            return True
         # -inf (empty space) passes: there is nothing to hit.
-        return max(memo.obstacle[side][i0:i1 + 1]) <= max(h_from, h_to) + max_swing
+        if i1 >= i0 and max(memo.obstacle[side][i0:i1 + 1]) > max(h_from, h_to) + max_swing:
+            return False
+        if lifts_from is None:
+            return True
+        cfg = self.config
+        return (self._rise_ahead_at(memo, *lifts_from)
+                <= min(cfg.lift_rise + max(h_to - h_from, 0.0), cfg.lift_step_up))
 
     def _rise_ahead_at(self, memo: _Search, row: int, cumulative: int) -> float:
         """:meth:`rise_ahead` of one foothold of the search's table (row ``row``, cumulative
@@ -720,13 +727,8 @@ class FootstepPlanner:
             clear = memo.swings.get(swing_key)
             if clear is None:
                 s_from, h_from = placed[origin]
-                clear = self._swing_clear_in(profile, memo, side, s_from, h_from, s,
-                                             hold_height)
-                if clear and origin not in (-2, -1):
-                    # A foothold this window placed must let the foot lift off again.
-                    clear = (self._rise_ahead_at(memo, origin[0], origin[1])
-                             <= min(cfg.lift_rise + max(hold_height - h_from, 0.0),
-                                    cfg.lift_step_up))
+                clear = self._swing_clear_in(memo, side, s_from, h_from, s, hold_height,
+                                             None if origin in (-2, -1) else origin)
                 memo.swings[swing_key] = clear
             if not clear:
                 return None
@@ -750,7 +752,6 @@ class FootstepPlanner:
         if config[0] in banned:
             return None
         up, down = self._rise_limits
-        lift_rise, lift_step_up = self.config.lift_rise, self.config.lift_step_up
         prefixes = memo.prefixes
         start = len(config) - 1
         while start > 0 and config[:start] not in prefixes:
@@ -791,19 +792,8 @@ class FootstepPlanner:
             swing_key = (i, origin, cumulative)
             clear = swings.get(swing_key)
             if clear is None:
-                # _swing_clear_in written out (the same arithmetic).
-                toe, heel, s0, ds, last, max_swing = memo.reach
-                i0 = max(math.floor((s_from + toe - s0) / ds), 0)
-                i1 = min(math.ceil((s - heel - s0) / ds), last)
-                clear = i1 < i0 or (max(memo.obstacle[sides[i]][i0:i1 + 1])
-                                    <= max(h_from, hold_height) + max_swing)
-                if clear and i >= 2:
-                    # A foothold this window placed must let the foot lift off again.
-                    rise_ahead = memo.rise_ahead.get((i - 2, origin))
-                    if rise_ahead is None:
-                        rise_ahead = self._rise_ahead_at(memo, i - 2, origin)
-                    clear = rise_ahead <= min(lift_rise + max(hold_height - h_from, 0.0),
-                                              lift_step_up)
+                clear = self._swing_clear_in(memo, sides[i], s_from, h_from, s, hold_height,
+                                             (i - 2, origin) if i >= 2 else None)
                 swings[swing_key] = clear
             if not clear:
                 prefixes[config[:i + 1]] = None
