@@ -467,6 +467,27 @@ def test_walking_straight_over_high_short_blocks():
                            x + length + 1.0, (height, length, x, speed))
 
 
+def test_walking_straight_past_low_bumps_beside_the_feet():
+    """Low bumps (5 and 8 cm high, 0.2 m long) beside both foot tracks, their inner edges 5 mm
+    outside the soles, one every 0.45 or 0.6 m on each side. The ground map answers for a
+    point's whole 2 cm cell: the swing's clearance, read under the sole's edges, saw the bumps,
+    and the footholds, read 1 cm inside them, did not. A landing the footsteps had found fine
+    then could not be reached, every step was refused, and none of these walks got past (as
+    on random course 23 of bench_terrain.py). Both now read the same lines
+    (footsteps.SOLE_LINES): every walk gets past, and the checker passes each."""
+    leg = skeleton().leg
+    inner = leg.hip_half_width + 0.5 * leg.foot_width + 0.005
+    for height, spacing, speed in ((0.05, 0.45, 0.6), (0.08, 0.45, 0.9), (0.05, 0.6, 0.9),
+                                   (0.08, 0.6, 0.6)):
+        meshes = [box([-1, -1, -0.1], [8, 1, 0])]
+        for x in np.arange(1.0, 5.5, spacing):
+            meshes.append(box([x, inner, -0.1], [x + 0.2, inner + 0.15, height]))
+            meshes.append(box([x + spacing / 2, -inner - 0.15, -0.1],
+                              [x + spacing / 2 + 0.2, -inner, height]))
+        walk_straight_past(Environment(meshes, resolution=0.02), speed, 12.0, 6.0,
+                           (height, spacing, speed))
+
+
 def test_walking_straight_up_and_down_a_steep_flight():
     """Four steps, 0.2 m rise and 0.26 m treads (a sole is 0.25 m), from three distances at
     two speeds, up and then down. Going up, a heel must overhang the tread's nosing (the plane

@@ -19,6 +19,13 @@ from .skeleton import LegGeometry
 
 LEFT, RIGHT = 0, 1
 
+#: The lines along which the ground map is read under a sole, as fractions of its width from
+#: its centre line. Both the footholds (sample_ground_profile) and the swing's clearance (gait)
+#: read these same lines: a swing is then never asked to clear what its footholds stand beside.
+#: The map answers for a point's whole grid cell, so an obstacle up to a cell outside a line
+#: may show; the 3D check of every step (collision.BodyCollision) is exact.
+SOLE_LINES = (-0.4, 0.0, 0.4)
+
 
 # Rows of the ankle's sample and its two neighbours in a sole window padded by one.
 _AROUND = np.arange(3)[:, None]
@@ -840,7 +847,8 @@ def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: f
 
     "By taking the intersection of the ground and the sagittal plane of the actor, one can
     compute the ground profile along the global path." Here each foot has its own track, offset
-    from the path by the hip half-width, sampled at three points across the sole's width.
+    from the path by the hip half-width, sampled on the three lines of ``SOLE_LINES`` across the
+    sole.
 
     Parameters
     ----------
@@ -867,7 +875,7 @@ def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: f
     """
     count = int(np.ceil((s_end - s_start) / ds)) + 1
     s = s_start + ds * np.arange(count)
-    across = np.array([-0.4, 0.0, 0.4]) * foot_width
+    across = np.array(SOLE_LINES) * foot_width
     # Left track first, then right; three lines across each sole.
     tracks = np.concatenate([hip_half_width + across, -hip_half_width + across])
     points = path.offset_points(s, tracks[:, None])

@@ -19,7 +19,7 @@ from typing import Tuple
 
 import numpy as np
 
-from .footsteps import FootstepConfig, LEFT, RIGHT
+from .footsteps import FootstepConfig, LEFT, RIGHT, SOLE_LINES
 from .skeleton import LegGeometry, Skeleton
 
 SOLE_CLEARANCE = 0.002  # a resting sole floats this far above the surface, m
@@ -417,9 +417,12 @@ class WalkGenerator:
         # The hip yaw range a swinging foot's heading is held to, 0.01 rad inside the limits.
         self._swing_yaw_range = {s: (float(self._leg_lower[s][0]) + 0.01,
                                      float(self._leg_upper[s][0]) - 0.01) for s in (LEFT, RIGHT)}
-        # Where the swing clearance looks under the sole: 9 points heel..toe, 2 across, m.
+        # Where the swing clearance looks under the sole: 9 points heel..toe, and across it the
+        # outer lines the footholds are read on (SOLE_LINES; the sole's own edges read obstacles
+        # up to a map cell beside them, and a landing whose foothold was fine could not clear
+        # a bump 5 mm beside its toe), m.
         self._sole_along = np.linspace(-self.leg.heel, self.leg.toe, 9)
-        self._sole_across = np.array([-0.5, 0.5]) * self.leg.foot_width
+        self._sole_across = np.array([SOLE_LINES[0], SOLE_LINES[-1]]) * self.leg.foot_width
         # _StepTiming per number of frames (a handful of step durations recur).
         self._timings = {}
 
