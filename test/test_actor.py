@@ -488,6 +488,20 @@ def test_walking_straight_past_low_bumps_beside_the_feet():
                            (height, spacing, speed))
 
 
+def test_walking_down_a_corridor_of_low_curbs_beside_the_feet():
+    """Curbs 5 or 10 cm high along both sides of the path, 3-8 mm outside the soles: read at
+    the soles' edges, the swing's clearance saw them under every landing, and the actor could
+    not take a single step. It now walks down the corridor, and the checker passes each walk."""
+    leg = skeleton().leg
+    for gap, height in ((0.003, 0.1), (0.008, 0.05)):
+        inner = leg.hip_half_width + 0.5 * leg.foot_width + gap
+        environment = Environment([box([-1, -1, -0.1], [8, 1, 0]),
+                                   box([-1, inner, -0.1], [8, inner + 0.1, height]),
+                                   box([-1, -inner - 0.1, -0.1], [8, -inner, height])],
+                                  resolution=0.02)
+        walk_straight_past(environment, 0.8, 4.0, 2.0, (gap, height))
+
+
 def test_walking_straight_up_and_down_a_steep_flight():
     """Four steps, 0.2 m rise and 0.26 m treads (a sole is 0.25 m), from three distances at
     two speeds, up and then down. Going up, a heel must overhang the tread's nosing (the plane
