@@ -18,18 +18,6 @@ _MAX_CONTACTS = 64
 
 _IDENTITY = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
 
-# Where the broad phase reads the ground map under a shape: its centre and the four corners of
-# its axis-aligned footprint, as multiples of the half extents.
-_FOOTPRINT_CORNERS = np.array([[0, 0], [1, 1], [1, -1], [-1, 1], [-1, -1]], dtype=float)
-
-
-def _last_axis_min(values: np.ndarray) -> np.ndarray:
-    """Minimum over a short last axis, NaN where any value is NaN (like ``np.min``)."""
-    out = values[..., 0]
-    for i in range(1, values.shape[-1]):
-        out = np.minimum(out, values[..., i])
-    return out
-
 
 def _matmul(a: Sequence[float], b: Sequence[float]) -> Tuple[float, ...]:
     """Product of two row-major 3x3 matrices held as 9 floats."""
@@ -127,7 +115,7 @@ class BodyCollision:
         environment's height bound (:meth:`environment.Environment.top_height`) over its
         footprint, and a shape at the first frame of a motion without an exact test when it
         has not moved from the last frame of the previous motion found free; False: every
-        broad-phase suspect gets an exact test (same answers).
+        shape at every frame gets an exact test (same answers, slower).
 
     Notes
     -----
@@ -321,15 +309,15 @@ class BodyCollision:
                     return True
         return False
 
-    def first_collision(self, frames: np.ndarray, links: Optional[Iterable[str]] = None,
-                        margin: float = 0.02) -> Tuple[int, List[str]]:
+    def first_collision(self, frames: np.ndarray,
+                        links: Optional[Iterable[str]] = None) -> Tuple[int, List[str]]:
         """First frame of a motion at which the given links touch the environment.
 
-        Batched: forward kinematics for all frames at once, then a broad phase that drops every
-        shape whose bounding sphere is clear of the ground map by ``margin`` (nothing below it
-        within reach, no ceiling inside it, no wall beside it), a conservative height bound that
-        clears the suspects lying above everything under their footprint (``top_bound``), then
-        exact FCL tests of the rest in time order.
+        Batched: forward kinematics for all frames at once, a conservative height bound that
+        clears the shapes lying above everything near their footprint (``top_bound``), then
+        exact FCL tests of the rest in time order. Nothing else clears a shape: reading the
+        ground map at a few points of a footprint (the centre and the corners, before session
+        19) missed a post between them, and a swinging foot went 62 mm into one.
 
         Parameters
         ----------
@@ -337,8 +325,6 @@ class BodyCollision:
             (k, 22) configurations, rad or m.
         links
             Link names; None = every link with a shape.
-        margin
-            Broad-phase clearance, m.
 
         Returns
         -------
@@ -363,21 +349,14 @@ class BodyCollision:
         bottom = centres[..., 2] - extent[..., 2]
         if self.top_bound:
             # A shape entirely above the environment's height bound over its footprint cannot
-            # touch it (most shapes, and a foot resting on level ground): one lookup each. Only
-            # the others go through the ground map and, if still suspect, to FCL.
+            # touch it (most shapes, and a foot resting on level ground): one lookup each. The
+            # others go to FCL.
             half_width = np.maximum(extent[..., 0], extent[..., 1])
             tops = self.environment.top_height_near(centres[..., :2].reshape(-1, 2),
                                                     half_width.ravel())
-            flat_bottom = bottom.ravel()
-            suspect = ~(flat_bottom > tops)
-            rest = suspect.nonzero()[0]
-            if rest.size:
-                suspect[rest] = self._ground_map_suspects(
-                    centres.reshape(-1, 3)[rest], extent.reshape(-1, 3)[rest], flat_bottom[rest],
-                    margin)
-            suspect = suspect.reshape(bottom.shape)
+            suspect = ~(bottom.ravel() > tops).reshape(bottom.shape)
         else:
-            suspect = self._ground_map_suspects(centres, extent, bottom, margin)
+            suspect = np.ones(bottom.shape, dtype=bool)
         # A shape that has not moved since the frame before, where it was tested or found
         # unmoved in turn (a stance foot), needs no other exact test. The 1e-9 m per frame
         # that counts as unmoved adds up to well under a micrometre over a step.
@@ -431,31 +410,6 @@ class BodyCollision:
         if hit_frame < 0:
             self._free_end = (chosen, transforms[-1, :, :3, :].copy())
         return hit_frame, sorted(set(hits))
-
-    def _ground_map_suspects(self, centres: np.ndarray, extent: np.ndarray, bottom: np.ndarray,
-                             margin: float) -> np.ndarray:
-        """Broad phase against the ground map: which shapes are not clear by ``margin``.
-
-        ``centres``, ``extent``: (..., 3) box centres and half extents, ``bottom`` (...,), m.
-        A shape is clear when the ground under the centre and the corners of its footprint is
-        ``margin`` below it and the ceiling there ``margin`` above it.
-        """
-        offsets = _FOOTPRINT_CORNERS
-        points = centres[..., None, :2] + offsets * extent[..., None, :2]
-        top = centres[..., 2] + extent[..., 2]
-        ground, room = self.environment.ground_height(
-            points.reshape(-1, 2), np.repeat(top.ravel(), offsets.shape[0]))
-        ground = ground.reshape(points.shape[:-1])
-        room = room.reshape(points.shape[:-1])
-        with np.errstate(invalid='ignore'):
-            # NaN ground (no surface, or inside a solid) leaves a shape suspect.
-            # Minima over the points written out (a reduction over a short last axis costs
-            # more); NaN propagates the same way.
-            below = bottom[..., None] - ground
-            above = ground + room
-            bottom_clear = _last_axis_min(below) > margin
-            ceiling_clear = _last_axis_min(above) > top + margin
-        return ~(bottom_clear & ceiling_clear)
 
     def _aabb_half_extents(self, shapes: Sequence[int], rotations: np.ndarray) -> np.ndarray:
         """World axis-aligned half extents of shapes: rotations (k, S, 3, 3) -> (k, S, 3), m."""
