@@ -8,6 +8,7 @@ steering away) makes a step feasible again.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields, replace
+import math
 import time as _time
 from typing import Optional, Tuple
 
@@ -67,6 +68,15 @@ class ActorConfig:
     # the hips flexed the knees meet (a turn reversed mid-walk made them pass through each
     # other). The path's heading is caught up by the next steps, whose feet may toe out.
     max_toe_in: float = 0.35
+    # Where the window's next footstep swings the other foot over ground more than
+    # follow_check_rise (m) above both of its footholds, the leg motion of that footstep is
+    # generated too before this step is taken (check_follow): a rear foot that must follow the
+    # front one over a block from just behind its face can pass the knee's limit (the sole
+    # tips toes-down at the ankle's limit, so it must rise higher still), and once the front
+    # foot is over there is no step left (a 0.24 m high, 0.31 m long block met in 20 phases
+    # at 0.6-1.1 m/s: 39 of 60 walks crossed without the check, 60 with it).
+    check_follow: bool = True
+    follow_check_rise: float = 0.12
     upper_body_check_budget: int = 15000
     upper_body_attempts: int = 6
     footsteps: FootstepConfig = field(default_factory=FootstepConfig)
@@ -112,6 +122,8 @@ def validate(config: ActorConfig) -> None:
         raise ValueError(f'pivot_turn must be in [0, 1] rad, got {config.pivot_turn}')
     if not 0 <= config.max_toe_in <= 1.0:
         raise ValueError(f'max_toe_in must be in [0, 1] rad, got {config.max_toe_in}')
+    if not 0 <= config.follow_check_rise <= 1.0:
+        raise ValueError(f'follow_check_rise must be in [0, 1] m, got {config.follow_check_rise}')
     if config.upper_body_check_budget < 1:
         raise ValueError(f'upper_body_check_budget must be >= 1, got '
                          f'{config.upper_body_check_budget}')
@@ -529,6 +541,12 @@ class Actor:
                 reason = collision
                 start = None
                 continue
+            follow = self._follow_failure(profile, stance, stance_s, path, window, motion, v)
+            if follow is not None:
+                banned.append(window.indices[0])
+                reason = follow
+                start = None
+                continue
             frames, ok, upper_reason = self._upper_body(motion.times, motion.frames)
             if not ok:
                 # §3.2: the step is not taken; another footstep may leave the upper body time.
@@ -749,7 +767,42 @@ class Actor:
         self._window = None
         return self._hold('stuck', reason, started, footsteps, path_points)
 
-    def _generate(self, stance: Stance, path, window: FootstepWindow, v: float):
+    def _follow_failure(self, profile, stance: Stance, stance_s: float, path,
+                        window: FootstepWindow, motion, v: float) -> Optional[str]:
+        """Why the window's second footstep cannot follow this step, or None.
+
+        Only where that footstep swings the other foot over ground higher than both its
+        footholds by ``follow_check_rise`` (the profile's swing obstacle between the toe it
+        lifts and the heel it lands), and only its leg motion (the next window may choose
+        another footstep; this one it starts from).
+        """
+        if window.arc_lengths.size < 2 or not self.config.check_follow:
+            return None
+        leg = self.skeleton.leg
+        side = int(window.sides[1])
+        s_from, s_to = stance_s + leg.toe, float(window.arc_lengths[1]) - leg.heel
+        i0 = max(math.floor((s_from - profile.s0) / profile.ds), 0)
+        i1 = min(math.ceil((s_to - profile.s0) / profile.ds), profile.samples - 1)
+        if i1 < i0:
+            return None
+        # NaN (empty space, nothing to pass over) is skipped by fmax; all NaN stays NaN.
+        top = float(np.fmax.reduce(profile.obstacle[side, i0:i1 + 1]))
+        base = max(stance.feet[stance.stance_side].sole, float(window.heights[1]))
+        if not top > base + self.config.follow_check_rise:
+            return None
+        following = replace(window, lengths=window.lengths[1:], indices=window.indices[1:],
+                            arc_lengths=window.arc_lengths[1:], heights=window.heights[1:],
+                            pitches=window.pitches[1:], sides=window.sides[1:])
+        try:
+            self._generate(motion.stance, path, following, v, motion.frames[-1])
+        except GaitError as error:
+            return f'walk generation failed: the other foot could not follow ({error})'
+        return None
+
+    def _generate(self, stance: Stance, path, window: FootstepWindow, v: float,
+                  configuration: Optional[np.ndarray] = None):
+        """The leg motion of the window's first footstep from ``stance``; ``configuration``:
+        the frame it starts from (default: the actor's current one)."""
         leg = self.skeleton.leg
         s1 = float(window.arc_lengths[0])
         side = int(window.sides[0])
@@ -774,17 +827,20 @@ class Actor:
         rise = float(window.heights[0]) - stance.feet[stance.stance_side].sole
         duration = self._walk.step_duration(float(window.lengths[0]), v, rise)
         return self._timed_step(stance, landing_xy, landing_yaw, float(window.heights[0]),
-                                float(window.pitches[0]), middle, duration)
+                                float(window.pitches[0]), middle, duration,
+                                configuration=configuration)
 
     def _timed_step(self, stance, landing_xy, landing_yaw, sole, pitch, target, duration,
-                    to_rest=False):
+                    to_rest=False, configuration=None):
         """Generate a step, slowing it down until every joint respects its speed limit."""
         rate = self.config.frame_rate
+        if configuration is None:
+            configuration = self._configuration
         for _ in range(3):
             motion = self._walk.step(stance, landing_xy, landing_yaw, sole, pitch, target,
                                      duration, self._obstacles, to_rest=to_rest)
             lower = self._lower_body
-            frames = np.concatenate([self._configuration[None, lower], motion.frames[:, lower]])
+            frames = np.concatenate([configuration[None, lower], motion.frames[:, lower]])
             # np.diff without its wrapper: the same differences.
             speed = np.abs(frames[1:] - frames[:-1]) * rate / self._lower_velocity_limit
             ratio = float(speed.max())
