@@ -1,13 +1,14 @@
 """Terrain a user expects the actor to walk: single features swept, then random courses.
 
 Run: .venv/bin/python bench/bench_terrain.py [--features block stairs_up ...] [--random 60]
-         [--first-seed 0] [--list] [--no-sweep]
+         [--first-seed 0] [--list] [--no-sweep] [--phases]
 
 **Sweep.** One feature across a 2 m wide floor, walked straight at 0.5, 0.8 and 1.1 m/s from
 the origin, the feature starting 1.6, 1.75, 1.9 or 2.05 m ahead (so the footsteps meet it in
 every phase): a block (0.08-0.28 m high, 0.3-1.2 m long), a 4-step flight up or down (rise
 0.1-0.2 m, tread 0.26-0.4 m), a drop (0.1-0.3 m), a ditch (0.15-0.45 m wide) and a ramp up
-(6-14 degrees). A walk *passes* when the pelvis gets 1 m past the feature; each walk is judged
+(6-14 degrees). ``--phases`` walks, instead, blocks a swing may pass over from 20 starts 4 cm
+apart. A walk *passes* when the pelvis gets 1 m past the feature; each walk is judged
 by the independent checker (every link against the meshes, a foot always down, limits, no
 jumps, stance slip <= 1 cm).
 
@@ -49,6 +50,14 @@ FEATURES = {
     'ditch': [(width,) for width in (0.15, 0.3, 0.45)],
     'ramp': [(degrees,) for degrees in (6, 10, 14)],
 }
+
+#: ``--phases``: blocks low enough for a swing to pass over (max_swing_height 0.25 m) and short
+#: enough that the front foot strides over them, met from 20 starts 4 cm apart (every phase of
+#: the footsteps against the block's faces).
+PHASE_BLOCKS = {'block': [(0.24, 0.31), (0.22, 0.35), (0.24, 0.5)]}
+PHASE_STARTS = tuple(np.round(1.6 + 0.04 * np.arange(20), 2))
+PHASE_SETTINGS = {'block': 'high x long 0.24 x 0.31 / 0.22 x 0.35 / 0.24 x 0.5 m, from 20 '
+                           'starts 1.6-2.36 m'}
 
 SETTINGS = {
     'block': 'high 0.08 / 0.15 / 0.22 / 0.28 x long 0.3 / 0.6 / 1.2 m',
@@ -188,7 +197,8 @@ def first_stop(blocks):
     return reasons[0] if reasons else 'too slow'
 
 
-def sweep(kinds, listing, upper_body=False):
+def sweep(kinds, listing, upper_body=False, features=FEATURES, starts=STARTS,
+          settings=SETTINGS):
     """The single-feature table; returns the number of checker failures."""
     sk = skeleton()
     config = ActorConfig(plan_upper_body=upper_body)
@@ -197,8 +207,8 @@ def sweep(kinds, listing, upper_body=False):
     print('|---|---|---:|---:|')
     for kind in kinds:
         passed = walks = 0
-        for parameters in FEATURES[kind]:
-            for start in STARTS:
+        for parameters in features[kind]:
+            for start in starts:
                 meshes, goal = feature(kind, parameters, start)
                 environment = Environment(meshes, resolution=0.02)
                 for speed in SPEEDS:
@@ -218,7 +228,7 @@ def sweep(kinds, listing, upper_body=False):
                         failures += 1
                         print(f'{kind} {parameters} at {start} m, {speed} m/s: checker: '
                               f'{"; ".join(report.failures()[:2])}')
-        print(f'| {kind} | {SETTINGS[kind]} | {walks} | {passed} |')
+        print(f'| {kind} | {settings[kind]} | {walks} | {passed} |')
     print(f'\nchecker failures: {failures}; why the other walks stopped:')
     for (kind, reason), count in why.most_common():
         print(f'- {kind}: {count} x {reason}')
@@ -265,6 +275,8 @@ def main(argv=None):
     parser.add_argument('--first-seed', type=int, default=0)
     parser.add_argument('--list', action='store_true', help='print every walk that stopped')
     parser.add_argument('--no-sweep', action='store_true', help='random courses only')
+    parser.add_argument('--phases', action='store_true',
+                        help='instead of the sweep: blocks a swing passes over, met in 20 phases')
     parser.add_argument('--upper-body', action='store_true',
                         help='plan the upper body too (the node default)')
     args = parser.parse_args(argv)
@@ -272,7 +284,10 @@ def main(argv=None):
         parser.error(f'--random must be >= 0, got {args.random}')
     started = time.perf_counter()
     failures = 0
-    if not args.no_sweep:
+    if args.phases:
+        failures += sweep(['block'], args.list, args.upper_body, PHASE_BLOCKS, PHASE_STARTS,
+                          PHASE_SETTINGS)
+    elif not args.no_sweep:
         failures += sweep(args.features, args.list, args.upper_body)
     if args.random:
         failures += random_courses(args.random, args.first_seed, args.list, args.upper_body)
