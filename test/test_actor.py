@@ -469,24 +469,28 @@ def test_walking_straight_over_high_short_blocks():
 
 def test_the_front_foot_does_not_stride_over_a_block_the_rear_foot_cannot_follow_over():
     """A block 0.24 m high and 0.31 m long (low enough for a swing to pass over it), met in ten
-    phases at 0.9 m/s. Where the front foot strode over it with the rear foot's toe just before
-    its face, the rear foot could not follow: lifted from behind the hip its knee passed its
-    limit, or its sole, tipped toes-down at the ankle's limit, could not clear the block, and
-    with the front foot beyond it no step was left (4 of these 10 walks stopped so). The window's
-    next footstep is now generated before such a step is taken (ActorConfig.check_follow):
-    every walk gets past, and the checker passes each. Without the check the first one still
-    stops, with the rear foot behind the block."""
-    height, length, speed = 0.24, 0.31, 0.9
+    phases at 0.8 and 0.9 m/s. Where the front foot strode over it with the rear foot's toe
+    just before its face, the rear foot could not follow: lifted from behind the hip its knee
+    passed its limit, or its sole, tipped toes-down at the ankle's limit, could not clear the
+    block, and with the front foot beyond it no step was left (9 of these 20 walks stopped so).
+    The window's next footstep is now generated before such a step is taken
+    (ActorConfig.check_follow), and a foot the window places keeps 5 cm ahead of its toe free
+    of a face it cannot lift over (FootstepConfig.lift_room; with 3 cm one walk stopped before
+    the block, every first footstep leaving a rear foot that could not follow). Every walk gets
+    past, and the checker passes each. Without the check the first one still stops, with the
+    rear foot behind the block."""
+    height, length = 0.24, 0.31
     for x in np.arange(1.6, 2.0, 0.04):
         environment = Environment([box([-1, -1, -0.1], [x + length + 4, 1, 0]),
                                    box([x, -1, -0.1], [x + length, 1, height])],
                                   resolution=0.02)
-        walk_straight_past(environment, speed, 9.0, x + length + 1.0, x)
+        for speed in (0.8, 0.9):
+            walk_straight_past(environment, speed, 9.0, x + length + 1.0, (x, speed))
         if x == 1.6:
             actor = Actor(skeleton(), environment,
                           ActorConfig(plan_upper_body=False, check_follow=False),
                           start=(0.0, 0.0, 0.0))
-            blocks = run_commands(actor, [0.0, 9.0], [speed, 0.0], [0.0, 0.0])
+            blocks = run_commands(actor, [0.0, 9.0], [0.9, 0.0], [0.0, 0.0])
             assert actor.stance.pelvis[0] < x + length
             feet_x = sorted(foot.xy[0] for foot in actor.stance.feet)
             assert feet_x[0] < x < x + length < feet_x[1]

@@ -69,14 +69,15 @@ class ActorConfig:
     # other). The path's heading is caught up by the next steps, whose feet may toe out.
     max_toe_in: float = 0.35
     # Where the window's next footstep swings the other foot over ground more than
-    # follow_check_rise (m) above both of its footholds, the leg motion of that footstep is
-    # generated too before this step is taken (check_follow): a rear foot that must follow the
-    # front one over a block from just behind its face can pass the knee's limit (the sole
-    # tips toes-down at the ankle's limit, so it must rise higher still), and once the front
-    # foot is over there is no step left (a 0.24 m high, 0.31 m long block met in 20 phases
-    # at 0.6-1.1 m/s: 39 of 60 walks crossed without the check, 60 with it).
+    # follow_check_rise (m) above the foot's sole and higher than where it lands
+    # (FOLLOW_OVER_LANDING), the leg motion of that footstep is generated too before this step
+    # is taken (check_follow). A rear foot that must follow the front one over a block from
+    # just behind its face can pass the knee's limit (the sole tips toes-down at the ankle's
+    # limit, so it must rise higher still), and once the front foot is over there is no step
+    # left: a 0.24 m high, 0.31 m long block met in 20 phases at 0.6-1.1 m/s, 39 of 60 walks
+    # crossed without the check, 60 with it.
     check_follow: bool = True
-    follow_check_rise: float = 0.12
+    follow_check_rise: float = 0.10
     upper_body_check_budget: int = 15000
     upper_body_attempts: int = 6
     footsteps: FootstepConfig = field(default_factory=FootstepConfig)
@@ -131,6 +132,9 @@ def validate(config: ActorConfig) -> None:
     validate_gait_config(config.gait_config())
 
 
+#: How far (m) the ground a swing passes over must rise above where it lands for the actor to
+#: check that the window's next footstep can follow (see ``ActorConfig.check_follow``).
+FOLLOW_OVER_LANDING = 0.02
 #: Turns tighter than this radius (m) pivot where their arc is refused (see ``pivot_turn``).
 PIVOT_RADIUS = 0.5
 #: Where a pivot's landing foot may go along the pelvis's heading from beside the stance foot,
@@ -771,10 +775,10 @@ class Actor:
                         window: FootstepWindow, motion, v: float) -> Optional[str]:
         """Why the window's second footstep cannot follow this step, or None.
 
-        Only where that footstep swings the other foot over ground higher than both its
-        footholds by ``follow_check_rise`` (the profile's swing obstacle between the toe it
-        lifts and the heel it lands), and only its leg motion (the next window may choose
-        another footstep; this one it starts from).
+        Only where that footstep swings the other foot over ground (the profile's swing
+        obstacle between the toe it lifts and the heel it lands) higher than its sole by
+        ``follow_check_rise`` and than its landing by ``FOLLOW_OVER_LANDING``, and only its leg
+        motion (the next window may choose another footstep; this one it starts from).
         """
         if window.arc_lengths.size < 2 or not self.config.check_follow:
             return None
@@ -787,8 +791,9 @@ class Actor:
             return None
         # NaN (empty space, nothing to pass over) is skipped by fmax; all NaN stays NaN.
         top = float(np.fmax.reduce(profile.obstacle[side, i0:i1 + 1]))
-        base = max(stance.feet[stance.stance_side].sole, float(window.heights[1]))
-        if not top > base + self.config.follow_check_rise:
+        # Up a flight the foot passes over the tread between, lower than where it lands.
+        if not top > max(stance.feet[stance.stance_side].sole + self.config.follow_check_rise,
+                         float(window.heights[1]) + FOLLOW_OVER_LANDING):
             return None
         following = replace(window, lengths=window.lengths[1:], indices=window.indices[1:],
                             arc_lengths=window.arc_lengths[1:], heights=window.heights[1:],
