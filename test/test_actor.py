@@ -498,6 +498,25 @@ def test_the_front_foot_does_not_stride_over_a_block_the_rear_foot_cannot_follow
                                                     if b.status == 'stuck')
 
 
+def test_the_rear_foot_is_not_left_behind_a_bump_before_a_step_down_it_cannot_follow_over():
+    """A bump 3.5 cm high and 0.29 m long across the path on a 0.19 m high platform, its far
+    end 3 cm before the platform's edge and a step down to the floor, met in nine phases at
+    1.08 m/s (as on bench_terrain's random course 38). Where the front foot stepped down past
+    the bump with the rear foot's toe just before it, lifting the rear foot over the bump and
+    down passed its knee's limit (its sole tipped toes-down at the ankle's limit), and no step
+    was left (3 of these 9 walks stopped so). The follow check (ActorConfig.check_follow) now
+    asks for that footstep from a rise of follow_check_rise (3 cm): every walk gets past, and
+    the checker passes each."""
+    top, speed = 0.186, 1.08
+    for x in np.arange(1.96, 2.3, 0.04):
+        edge = x + 0.32
+        environment = Environment([box([-1, -1, -0.1], [edge, 1, top]),
+                                   box([edge, -1, -0.1], [edge + 4, 1, 0.02]),
+                                   box([x, -1, top - 0.01], [x + 0.29, 1, top + 0.035])],
+                                  resolution=0.02)
+        walk_straight_past(environment, speed, 9.0, edge + 1.0, x)
+
+
 def test_walking_straight_past_low_bumps_beside_the_feet():
     """Low bumps (5 and 8 cm high, 0.2 m long) beside both foot tracks, their inner edges 5 mm
     outside the soles, one every 0.45 or 0.6 m on each side. The ground map answers for a
