@@ -276,17 +276,10 @@ def test_batched_footholds_agree_with_the_single_foothold(leg):
 
 
 def _swing_clear_reference(planner, profile, side, s_from, h_from, s_to, h_to):
-    """The swing test written plainly over the NumPy profile (NaN: nothing there)."""
-    i0 = int(np.floor((s_from + planner.leg.toe - profile.s0) / profile.ds))
-    i1 = int(np.ceil((s_to - planner.leg.heel - profile.s0) / profile.ds))
-    i0, i1 = max(i0, 0), min(i1, profile.samples - 1)
-    if i1 < i0:
-        return True
-    tops = profile.obstacle[side, i0:i1 + 1]
-    tops = tops[~np.isnan(tops)]
-    if tops.size == 0:
-        return True
-    return float(np.max(tops)) <= max(h_from, h_to) + planner.config.max_swing_height
+    """The swing test written plainly over the NumPy profile (GroundProfile.swing_top, which
+    the actor's follow check reads too; NaN: nothing there)."""
+    top = profile.swing_top(side, s_from + planner.leg.toe, s_to - planner.leg.heel)
+    return not top > max(h_from, h_to) + planner.config.max_swing_height
 
 
 def test_search_swing_test_agrees_with_the_plain_one(leg):

@@ -8,7 +8,6 @@ steering away) makes a step feasible again.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields, replace
-import math
 import time as _time
 from typing import Optional, Tuple
 
@@ -785,15 +784,10 @@ class Actor:
         if window.arc_lengths.size < 2 or not self.config.check_follow:
             return None
         leg = self.skeleton.leg
-        side = int(window.sides[1])
-        s_from, s_to = stance_s + leg.toe, float(window.arc_lengths[1]) - leg.heel
-        i0 = max(math.floor((s_from - profile.s0) / profile.ds), 0)
-        i1 = min(math.ceil((s_to - profile.s0) / profile.ds), profile.samples - 1)
-        if i1 < i0:
-            return None
-        # NaN (empty space, nothing to pass over) is skipped by fmax; all NaN stays NaN.
-        top = float(np.fmax.reduce(profile.obstacle[side, i0:i1 + 1]))
-        # Up a flight the foot passes over the tread between, lower than where it lands.
+        top = profile.swing_top(int(window.sides[1]), stance_s + leg.toe,
+                                float(window.arc_lengths[1]) - leg.heel)
+        # NaN (nothing to pass over) asks nothing. Up a flight the foot passes over the tread
+        # between, lower than where it lands.
         if not top > max(stance.feet[stance.stance_side].sole + self.config.follow_check_rise,
                          float(window.heights[1]) + FOLLOW_OVER_LANDING):
             return None

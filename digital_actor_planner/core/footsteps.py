@@ -146,6 +146,31 @@ class GroundProfile:
         """(K,) arc length of each sample, m."""
         return self.s0 + self.ds * np.arange(self.samples)
 
+    def swing_top(self, side: int, s_toe: float, s_heel: float) -> float:
+        """Highest ground a foot swings over between a sole's toe and a later sole's heel.
+
+        Parameters
+        ----------
+        side
+            0 left, 1 right.
+        s_toe, s_heel
+            Arc lengths of the lifting sole's toe and of the landing sole's heel, m.
+
+        Returns
+        -------
+        float
+            The most of ``obstacle`` from the sample at or before ``s_toe`` to the one at or
+            after ``s_heel``, m; NaN where that is empty space only or no sample lies between.
+            The footstep search's swing test reads the same span (on lists, for speed).
+
+        """
+        i0 = max(math.floor((s_toe - self.s0) / self.ds), 0)
+        i1 = min(math.ceil((s_heel - self.s0) / self.ds), self.samples - 1)
+        if i1 < i0:
+            return math.nan
+        # NaN (empty space, nothing to pass over) is skipped by fmax; all NaN stays NaN.
+        return float(np.fmax.reduce(self.obstacle[side, i0:i1 + 1]))
+
 
 @dataclass(frozen=True)
 class Foothold:
