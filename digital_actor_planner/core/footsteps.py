@@ -15,6 +15,7 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
+from .jit import kernel
 from .skeleton import LegGeometry
 
 LEFT, RIGHT = 0, 1
@@ -27,8 +28,86 @@ LEFT, RIGHT = 0, 1
 SOLE_LINES = (-0.4, 0.0, 0.4)
 
 
-# Rows of the ankle's sample and its two neighbours in a sole window padded by one.
-_AROUND = np.arange(3)[:, None]
+def _writable(array) -> np.ndarray:
+    """``array`` as float64 that a compiled kernel accepts (a read-only one is copied)."""
+    array = np.asarray(array, dtype=np.float64)
+    return array if array.flags.writeable else array.copy()
+
+
+@kernel('Tuple((b1[::1], f8[::1], f8[::1]))(f8[:, :], f8[:, :], f8[:, :], f8, f8, i8[::1], '
+        'f8[::1], f8, f8, f8, f8, f8, f8)')
+def _footholds(high, low, headroom, s0, ds, side, s, heel, toe, min_headroom, max_pitch,
+               tolerance, min_fraction):
+    """:meth:`FootstepPlanner.footholds` for every sole in one pass (see there for the rules).
+
+    Returns (ok, sole height under the ankle (NaN where not ok), slope of the sole's plane:
+    0 on an edge and where the sole is not usable). A maximum or minimum over a NaN sample is
+    NaN, as NumPy's: a missing sample makes the sole neither flat nor supported at an edge.
+    """
+    count = s.shape[0]
+    samples = high.shape[1]
+    ok = np.zeros(count, dtype=np.bool_)
+    height = np.full(count, np.nan)
+    slope_out = np.zeros(count)
+    for n in range(count):
+        sn = s[n]
+        row = side[n]
+        # The samples from the heel to the toe, none beyond them.
+        i0 = int(math.ceil((sn - heel - s0) / ds - 1e-9))
+        i1 = int(math.floor((sn + toe - s0) / ds + 1e-9))
+        if i0 < 0 or i1 >= samples or i1 < i0:
+            continue
+        usable = True
+        for i in range(i0, i1 + 1):
+            if not headroom[row, i] >= min_headroom:  # NaN has no headroom either
+                usable = False
+                break
+        if not usable:
+            continue
+        width = i1 - i0 + 1
+        # The least-squares slope through evenly spaced samples: their mean is the middle of
+        # the first and the last, and the squares of their distances from it sum to
+        # ds^2 W (W^2 - 1) / 12. Two samples or fewer fit no slope.
+        slope = 0.0
+        if width > 2:
+            middle = s0 + (0.5 * ds) * (i0 + i1) - sn
+            total = 0.0
+            for i in range(i0, i1 + 1):
+                total += ((s0 + ds * i - sn) - middle) * high[row, i]
+            slope = total / max((ds * ds / 12.0) * width * (width * width - 1), 1e-30)
+        # The sole rests on the highest point above the fitted plane and must not bridge a dip
+        # below it deeper than the tolerance.
+        lift, dip, top = -np.inf, np.inf, -np.inf
+        for i in range(i0, i1 + 1):
+            plane = slope * (s0 + ds * i - sn)
+            above, below, h = high[row, i] - plane, low[row, i] - plane, high[row, i]
+            if lift == lift and (above != above or above > lift):
+                lift = above
+            if dip == dip and (below != below or below < dip):
+                dip = below
+            if top == top and (h != h or h > top):
+                top = h
+        if abs(np.arctan(slope)) <= max_pitch and lift - dip <= tolerance:
+            ok[n] = True
+            height[n] = lift
+            slope_out[n] = slope
+            continue
+        # At an edge a flat sole may overhang lower ground: the ankle's sample and its
+        # neighbours on the sole must be supported, and most of the sole.
+        level = top - tolerance
+        ankle = int(min(max(math.ceil((sn - s0) / ds - 0.5), i0), i1))
+        supported, around = 0, True
+        for i in range(i0, i1 + 1):
+            if high[row, i] >= level and low[row, i] >= level:
+                supported += 1
+            elif ankle - 1 <= i <= ankle + 1:
+                around = False
+        if around and supported / width >= min_fraction:
+            ok[n] = True
+            height[n] = top
+        else:
+            slope_out[n] = slope
+    return ok, height, slope_out
 
 
 @dataclass(frozen=True)
@@ -332,72 +411,17 @@ class FootstepPlanner:
 
         """
         cfg, leg = self.config, self.leg
-        s = np.asarray(s, dtype=float)
-        count = s.shape[0]
-        side = np.asarray(side, dtype=int)
-        samples = profile.samples
-        i0 = np.ceil((s - leg.heel - profile.s0) / profile.ds - 1e-9).astype(int)
-        i1 = np.floor((s + leg.toe - profile.s0) / profile.ds + 1e-9).astype(int)
-        inside = (i0 >= 0) & (i1 < samples)
-        width = i1 - i0 + 1
-        # The samples under a sole run down the rows, the soles across the columns: (W, N).
-        # A reduction over a sole's samples is then one elementwise pass per row, where along
-        # a short last axis it paid a loop per sole. The float sums keep their order: they are
-        # taken along the rows of an (N, W) copy, as before.
-        span = np.arange(int(width.max()) if count else 0)[:, None]
-        mask = span < width
-        # Rows past a sole's end repeat its last sample: that changes no maximum or minimum
-        # and no first minimum (argmin), so only the sums and the support count need ``mask``.
-        index = i0 + np.minimum(span, width - 1)
-        # One flat index into the (2, K) tracks for all three gathers. Clipping only moves
-        # soles that reach past the profile's ends, which are not usable anyway.
-        flat = side * samples + index
-        high = profile.height.take(flat, mode='clip')
-        low = profile.low.take(flat, mode='clip')
-        room = profile.headroom.take(flat, mode='clip')
-        # A missing sample (NaN: both the highest and the lowest ground across the sole are
-        # missing there) needs no test of its own: it makes the sole's slope, lift and top
-        # NaN, so the sole is neither flat nor supported at an edge (and the profile gives it
-        # no headroom). Its NaN only reaches its own columns.
-        usable = inside & (room.min(axis=0) >= cfg.min_headroom)
-        x = profile.s0 + profile.ds * index - s
-        # The least-squares slope through the sole's samples, which are evenly spaced: their
-        # mean is the middle of the first and the last, and the squares of their distances
-        # from it sum to ds^2 W (W^2 - 1) / 12 (closed forms: one reduction instead of three).
-        # Two samples or fewer fit no slope: 0 there. A NaN sample (not usable) gives NaN.
-        middle = profile.s0 + (0.5 * profile.ds) * (i0 + i1) - s
-        centred = np.where(mask, x - middle, 0.0)
-        spread = (profile.ds * profile.ds / 12.0) * width * (width * width - 1)
-        slope = np.where(width > 2, (centred * high).sum(axis=0) / np.maximum(spread, 1e-30),
-                         0.0)
-        pitch = np.arctan(slope)
-        plane = slope * x
-        lift = (high - plane).max(axis=0)
-        dip = (low - plane).min(axis=0)
-        steady = np.abs(pitch) <= cfg.max_foot_pitch
-        flat = usable & steady & (lift - dip <= cfg.flatness_tolerance)
-        # At an edge a flat sole may overhang lower ground.
-        top = high.max(axis=0)
-        level = top - cfg.flatness_tolerance
-        supported = (high >= level) & (low >= level)
-        # The sample nearest the ankle (the lower of two as near), relative to the sole's first.
-        ankle = np.minimum(np.maximum(np.ceil((s - profile.s0) / profile.ds - 0.5), i0), i1) - i0
-        ankle = ankle.astype(int)
-        # The ankle's sample and its neighbours must be supported; past either end of the sole
-        # there is nothing to ask (a True border row on each side; a repeated last row asks
-        # the ankle's own sample again). One gather of the three.
-        padded = np.ones((span.size + 2, count), dtype=bool)
-        padded[1:-1] = supported
-        near = padded.take((ankle + _AROUND) * count + np.arange(count))
-        around = near.all(axis=0)
-        fraction = (supported & mask).sum(axis=0) / width
-        # Not ``steady``: that is the pitch of the plane through the overhung ground too (a
-        # heel over a stair's nosing, 0.2 m lower, tilted it past the limit).
-        edge = usable & ~flat & around & (fraction >= cfg.min_support_fraction)
-        ok = flat | edge
-        height = np.where(flat, lift, np.where(edge, top, np.nan))
-        pitch = np.where(edge, 0.0, np.where(usable, pitch, 0.0))
-        return ok, height, pitch
+        # The kernel's exact argument types (it is compiled for those alone): fresh arrays.
+        s = np.array(s, dtype=np.float64)
+        side = np.array(np.broadcast_to(np.asarray(side, dtype=np.int64), s.shape))
+        ok, height, slope = _footholds(_writable(profile.height), _writable(profile.low),
+                                       _writable(profile.headroom),
+                                       float(profile.s0), float(profile.ds), side, s,
+                                       float(leg.heel), float(leg.toe), float(cfg.min_headroom),
+                                       float(cfg.max_foot_pitch), float(cfg.flatness_tolerance),
+                                       float(cfg.min_support_fraction))
+        # NumPy's arctan, not the kernel's: the two may differ in the last bit.
+        return ok, height, np.arctan(slope)
 
     def rise_ahead(self, profile: GroundProfile, side, s: np.ndarray, height: np.ndarray,
                    pitch: np.ndarray) -> np.ndarray:
