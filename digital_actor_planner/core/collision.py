@@ -12,11 +12,110 @@ from typing import Dict, Iterable, List, Optional, Sequence, Tuple
 import fcl
 import numpy as np
 
+from .environment import _top_near
+from .jit import float_array, kernel
+
 # Contacts asked of FCL per shape when measuring penetration.
 _MAX_CONTACTS = 64
 
 
 _IDENTITY = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+
+
+# Shape kinds as the compiled kernels know them (their half extents padded to 3 values).
+_KIND_CODES = {'box': 0, 'cylinder': 1, 'sphere': 2}
+# No poses (first_collision with no free end to compare the first frame with).
+_NO_POSES = np.zeros((0, 3, 4))
+
+
+@kernel('f8(i8, f8[::1], f8[:, :], i8)')
+def _extent(kind, half, rotation, axis):
+    """World axis-aligned half extent along ``axis`` of a shape (kind code, padded half
+    extents) turned by ``rotation`` (its top-left 3 x 3 is read), m."""
+    if kind == 0:
+        return (abs(rotation[axis, 0]) * half[0] + abs(rotation[axis, 1]) * half[1]
+                + abs(rotation[axis, 2]) * half[2])
+    if kind == 1:
+        along = abs(rotation[axis, 2])
+        return half[0] * math.sqrt(min(max(1.0 - along * along, 0.0), 1.0)) + half[1] * along
+    return half[0]
+
+
+@kernel('f8[:, :, ::1](i8[::1], f8[:, ::1], f8[:, :, :, :])')
+def _half_extents(kinds, halves, rotations):
+    """:func:`_extent` of (k, S) rotations for S shapes: (k, S, 3), m."""
+    k, count = rotations.shape[0], rotations.shape[1]
+    out = np.empty((k, count, 3))
+    for f in range(k):
+        for c in range(count):
+            for axis in range(3):
+                out[f, c, axis] = _extent(kinds[c], halves[c], rotations[f, c], axis)
+    return out
+
+
+@kernel('b1(f8[:, :], f8[:, :])')
+def _unmoved(a, b):
+    """Whether two (3+, 4) poses differ by at most 1e-9 in every entry of their top 3 rows."""
+    for r in range(3):
+        for c in range(4):
+            if not abs(a[r, c] - b[r, c]) <= 1e-9:
+                return False
+    return True
+
+
+@kernel('Tuple((i8[:, ::1], b1[:, ::1]))(f8[:, :, :, ::1], i8[::1], f8[:, ::1], b1, '
+        'f8[::1], i8, i8, i8, f8, f8, f8, f8[:, :, ::1], b1, f8[::1], f8[:, ::1], f8[:, ::1])')
+def _suspects(transforms, kinds, halves, top_bound, pyramid, cells, nx, ny, x0, y0, inverse,
+              free_end, after_free_end, reach, mesh_low, mesh_high):
+    """The broad phase of :meth:`BodyCollision.first_collision` in one pass.
+
+    ``transforms``: (k, S, 4, 4) shape poses over a motion. A shape is a suspect at a frame
+    unless ``top_bound`` and its lowest point lies above the environment's height bound over
+    its footprint (:func:`environment._top_near`, the top map pyramid's layout in ``pyramid``
+    to ``inverse``). A suspect that has not moved since the frame before, where it was a
+    suspect too (or, with ``after_free_end``, at the first frame since ``free_end``, the poses
+    the last motion found free) needs no exact test. Returns the (frame, shape column) pairs to
+    test in time order and, for each, which meshes' bounds (``mesh_low``, ``mesh_high``) come
+    within its ``reach`` of its centre.
+    """
+    k, count = transforms.shape[0], transforms.shape[1]
+    suspect = np.ones((k, count), dtype=np.bool_)
+    if top_bound:
+        for f in range(k):
+            for c in range(count):
+                pose = transforms[f, c]
+                width = max(_extent(kinds[c], halves[c], pose, 0),
+                            _extent(kinds[c], halves[c], pose, 1))
+                bottom = pose[2, 3] - _extent(kinds[c], halves[c], pose, 2)
+                top = _top_near(pyramid, cells, nx, ny, x0, y0, inverse, pose[0, 3],
+                                pose[1, 3], width)
+                suspect[f, c] = not bottom > top
+    pairs = np.empty((k * count, 2), dtype=np.int64)
+    found = 0
+    for f in range(k):
+        for c in range(count):
+            if not suspect[f, c]:
+                continue
+            if f > 0 and suspect[f - 1, c] and _unmoved(transforms[f, c], transforms[f - 1, c]):
+                continue
+            if f == 0 and after_free_end and _unmoved(transforms[0, c], free_end[c]):
+                continue
+            pairs[found, 0], pairs[found, 1] = f, c
+            found += 1
+    meshes = mesh_low.shape[0]
+    near = np.zeros((found, meshes), dtype=np.bool_)
+    for p in range(found):
+        f, c = pairs[p, 0], pairs[p, 1]
+        for m in range(meshes):
+            inside = True
+            for axis in range(3):
+                centre = transforms[f, c, axis, 3]
+                if not (mesh_low[m, axis] <= centre + reach[c]
+                        and centre - reach[c] <= mesh_high[m, axis]):
+                    inside = False
+                    break
+            near[p, m] = inside
+    return pairs[:found].copy(), near
 
 
 def _matmul(a: Sequence[float], b: Sequence[float]) -> Tuple[float, ...]:
@@ -145,10 +244,15 @@ class BodyCollision:
         self._mesh_low = np.array([m.bounds[0] for m in environment.meshes], dtype=float)
         self._mesh_high = np.array([m.bounds[1] for m in environment.meshes], dtype=float)
         self._reach_array = np.array(self._reach, dtype=float)
-        # first_collision's shapes and links per ``links`` argument, and the shapes of each
-        # kind per tuple of shapes (for the axis-aligned extents).
+        # Each shape's kind code and half extents padded to three values, for the kernels.
+        self._kind_codes = np.array([_KIND_CODES[kind] for kind, _ in self._half_extent],
+                                    dtype=np.int64)
+        self._halves = np.zeros((len(self.shapes), 3))
+        for i, (_, half) in enumerate(self._half_extent):
+            self._halves[i, :len(half)] = half
+        # first_collision's shapes per ``links`` argument, with their kind codes, half
+        # extents and reaches.
         self._broad_phase_sets: Dict[Optional[tuple], tuple] = {}
-        self._extent_groups: Dict[tuple, dict] = {}
         self.link_shapes: Dict[str, Tuple[int, ...]] = {}
         for i, shape in enumerate(self.shapes):
             self.link_shapes[shape.link] = self.link_shapes.get(shape.link, ()) + (i,)
@@ -339,61 +443,31 @@ class BodyCollision:
         key = None if links is None else tuple(links)
         chosen = self._broad_phase_sets.get(key)
         if chosen is None:
-            chosen = tuple(s for _, shapes in self._shapes_of(links) for s in shapes)
+            shapes = tuple(s for _, shapes in self._shapes_of(links) for s in shapes)
+            index = np.array(shapes, dtype=np.int64)
+            chosen = (shapes, self._kind_codes[index], self._halves[index],
+                      self._reach_array[index])
             self._broad_phase_sets[key] = chosen
+        chosen, kinds, halves, reach = chosen
         if not chosen or frames.shape[0] == 0:
             return -1, []
         transforms = self.skeleton.shape_transforms_at(frames, chosen)
-        centres = transforms[..., :3, 3]
-        extent = self._aabb_half_extents(chosen, transforms[..., :3, :3])
-        bottom = centres[..., 2] - extent[..., 2]
-        if self.top_bound:
-            # A shape entirely above the environment's height bound over its footprint cannot
-            # touch it (most shapes, and a foot resting on level ground): one lookup each. The
-            # others go to FCL.
-            half_width = np.maximum(extent[..., 0], extent[..., 1])
-            tops = self.environment.top_height_near(centres[..., :2].reshape(-1, 2),
-                                                    half_width.ravel())
-            suspect = ~(bottom.ravel() > tops).reshape(bottom.shape)
-        else:
-            suspect = np.ones(bottom.shape, dtype=bool)
-        # A shape that has not moved since the frame before, where it was tested or found
-        # unmoved in turn (a stance foot), needs no other exact test. The 1e-9 m per frame
-        # that counts as unmoved adds up to well under a micrometre over a step.
-        # Only suspects are compared with the frame before (far fewer than all shapes).
-        pairs = np.array(suspect.nonzero()).T
-        after = pairs[pairs[:, 0] > 0]
-        frame, column = after[:, 0], after[:, 1]
-        moved = transforms[frame, column, :3, :] - transforms[frame - 1, column, :3, :]
-        unmoved = suspect[frame - 1, column] & (np.abs(moved).reshape(-1, 12).max(axis=1)
-                                                <= 1e-9)
-        if unmoved.any():
-            keep = np.ones(pairs.shape[0], dtype=bool)
-            keep[pairs.shape[0] - after.shape[0]:] = ~unmoved
-            pairs = pairs[keep]
-        if self.top_bound and self._free_end is not None and self._free_end[0] == chosen:
-            # The same for a shape at the first frame that has not moved from where the last
-            # motion found free left it (both feet at the start of a step).
-            first = (pairs[:, 0] == 0).nonzero()[0]
-            if first.size:
-                columns = pairs[first, 1]
-                moved = transforms[0, columns, :3, :] - self._free_end[1][columns]
-                unmoved = np.abs(moved).reshape(-1, 12).max(axis=1) <= 1e-9
-                if unmoved.any():
-                    keep = np.ones(pairs.shape[0], dtype=bool)
-                    keep[first[unmoved]] = False
-                    pairs = pairs[keep]
+        # A shape entirely above the environment's height bound over its footprint cannot
+        # touch it (most shapes, and a foot resting on level ground); a shape that has not
+        # moved since it was last tested or found free needs no other test (a stance foot:
+        # the 1e-9 m per frame that counts as unmoved adds up to well under a micrometre over
+        # a step). The rest go to FCL, in time order.
+        after_free_end = (self.top_bound and self._free_end is not None
+                          and self._free_end[0] == chosen)
+        pairs, near = _suspects(
+            transforms, kinds, halves, self.top_bound, self.environment._top_pyramid,
+            *self.environment.top_near_grid(),
+            self._free_end[1] if after_free_end else _NO_POSES, after_free_end, reach,
+            self._mesh_low, self._mesh_high)
         hit_frame, hits = -1, []
         if pairs.shape[0]:
-            # Which meshes each tested shape may touch, for all of them at once.
-            columns = pairs[:, 1]
-            reach = self._reach_array[np.asarray(chosen)[columns]]
-            centre = centres[pairs[:, 0], columns]
-            low, high = centre - reach[:, None], centre + reach[:, None]
-            near = ((self._mesh_low <= high[:, None])
-                    & (low[:, None] <= self._mesh_high)).all(axis=-1).tolist()
             targets = self.environment.objects
-            for (j, column), meshes in zip(pairs.tolist(), near):
+            for (j, column), meshes in zip(pairs.tolist(), near.tolist()):
                 if hit_frame >= 0 and j != hit_frame:
                     break
                 shape = chosen[column]
@@ -413,34 +487,9 @@ class BodyCollision:
 
     def _aabb_half_extents(self, shapes: Sequence[int], rotations: np.ndarray) -> np.ndarray:
         """World axis-aligned half extents of shapes: rotations (k, S, 3, 3) -> (k, S, 3), m."""
-        key = tuple(shapes)
-        groups = self._extent_groups.get(key)
-        if groups is None:
-            groups = {}
-            for column, shape in enumerate(shapes):
-                kind, half = self._half_extent[shape]
-                columns, halves = groups.setdefault(kind, ([], []))
-                columns.append(column)
-                halves.append(half)
-            groups = {kind: (np.array(columns, dtype=int), np.array(halves, dtype=float))
-                      for kind, (columns, halves) in groups.items()}
-            self._extent_groups[key] = groups
-        out = np.empty(rotations.shape[:-1])
-        # Each kind for all its shapes at once (the per-shape loop was mostly call overhead).
-        if 'box' in groups:
-            columns, halves = groups['box']
-            # einsum: a stack of (3, 3) @ (3, 1) products is mostly call overhead.
-            out[:, columns] = np.einsum('kcij,cj->kci', np.abs(rotations[:, columns]), halves)
-        if 'cylinder' in groups:
-            columns, halves = groups['cylinder']
-            axis = np.abs(rotations[..., 2][:, columns])
-            out[:, columns] = (halves[:, 0, None] * np.sqrt(
-                np.minimum(np.maximum(1.0 - axis * axis, 0.0), 1.0))
-                + halves[:, 1, None] * axis)
-        if 'sphere' in groups:
-            columns, halves = groups['sphere']
-            out[:, columns] = halves[:, 0, None]
-        return out
+        index = np.asarray(shapes, dtype=np.int64)
+        return _half_extents(self._kind_codes[index], self._halves[index],
+                             float_array(rotations))
 
     def links_in_collision(self, q, links: Optional[Iterable[str]] = None) -> List[str]:
         """Names of the given links that touch the environment, in ``links`` order."""

@@ -19,6 +19,8 @@ import numpy as np
 import trimesh
 import yaml
 
+from .jit import float_array, kernel
+
 SCENE_KEYS = ('meshes', 'start', 'description', 'expect')
 MESH_KEYS = ('file', 'pose')
 YAML_SUFFIXES = ('.yaml', '.yml')
@@ -35,7 +37,69 @@ _Z_TOLERANCE = 1e-6
 _RASTER_CHUNK = 2_000_000
 # Dilations of the top map, cells (see Environment.top_height_near).
 _TOP_RADII = (1, 2, 4, 8, 16, 32)
-_TOP_RADII_ARRAY = np.array(_TOP_RADII, dtype=float)
+
+
+@kernel('Tuple((f8[::1], f8[::1]))(f8[:, :], f8[::1], f8, f8, f8, f8, f8, i8, f8[::1], '
+        'f8[::1], i8)')
+def _ground_heights(xy, z_ref, x0, y0, inverse, last_x, last_y, row_cells, ground, ceiling,
+                    layers):
+    """:meth:`Environment.ground_height` of each point in one pass (see there): the grid
+    cell holding it (``row_cells`` cells a row, node indices up to ``last_x``, ``last_y``),
+    the highest of its ``layers`` grounds at or below ``z_ref`` and the ceiling over that."""
+    count = xy.shape[0]
+    height = np.full(count, np.nan)
+    clearance = np.full(count, np.nan)
+    for n in range(count):
+        z = z_ref[n]
+        gx, gy = (xy[n, 0] - x0) * inverse, (xy[n, 1] - y0) * inverse
+        # On the grid when clamping leaves the point where it is (NaN is not).
+        if not (0.0 <= gx <= last_x and 0.0 <= gy <= last_y and abs(z) < np.inf):
+            continue
+        cell = int(min(gy, last_y - 1.0)) * row_cells + int(min(gx, last_x - 1.0))
+        if layers == 1:
+            index = cell
+            if not ground[index] <= z + _Z_TOLERANCE:
+                continue
+        else:
+            level = -1
+            for layer in range(layers):
+                if ground[cell * layers + layer] <= z + _Z_TOLERANCE:
+                    level += 1
+            if level < 0:
+                continue
+            index = cell * layers + level
+        if z > ceiling[index]:
+            continue
+        height[n] = ground[index]
+        clearance[n] = ceiling[index] - ground[index]
+    return height, clearance
+
+
+@kernel('f8(f8[::1], i8, i8, i8, f8, f8, f8, f8, f8, f8)')
+def _top_near(pyramid, cells, nx, ny, x0, y0, inverse, x, y, half):
+    """:meth:`Environment.top_height_near` of one square: the smallest dilation of the top map
+    that covers ``half`` (m) read at the cell holding (x, y) (clamped onto the grid); +inf
+    where no dilation is wide enough or the centre is NaN."""
+    need = np.ceil(half * inverse + 1e-6)
+    fx, fy = (x - x0) * inverse, (y - y0) * inverse
+    if not need <= _TOP_RADII[-1] or fx != fx or fy != fy:
+        return np.inf
+    level = 0
+    while _TOP_RADII[level] < need:
+        level += 1
+    column = min(max(np.floor(fx), 0.0), nx - 1)
+    row = min(max(np.floor(fy), 0.0), ny - 1)
+    return pyramid[level * cells + int(row) * nx + int(column)]
+
+
+@kernel('f8[::1](f8[::1], i8, i8, i8, f8, f8, f8, f8[:, :], f8[::1])')
+def _tops_near(pyramid, cells, nx, ny, x0, y0, inverse, xy, half):
+    """:func:`_top_near` of each (N, 2) centre and (N,) half width."""
+    out = np.empty(xy.shape[0])
+    for i in range(xy.shape[0]):
+        out[i] = _top_near(pyramid, cells, nx, ny, x0, y0, inverse, xy[i, 0], xy[i, 1],
+                           half[i])
+    return out
 
 
 def _compact(grounds: np.ndarray, ceilings: np.ndarray):
@@ -714,18 +778,18 @@ class Environment:
             than the largest dilation or a NaN centre.
 
         """
+        xy = float_array(xy)
+        if xy.ndim != 2 or xy.shape[1] != 2:
+            raise ValueError(f'xy must have shape (N, 2), got {xy.shape}')
+        return _tops_near(self._top_pyramid, *self.top_near_grid(), xy,
+                          np.array(np.broadcast_to(float_array(half_extent), xy.shape[:1])))
+
+    def top_near_grid(self) -> tuple:
+        """The top map's pyramid layout for the compiled :func:`_top_near`: cells per level,
+        columns, rows, grid origin x and y (m), inverse resolution (1/m)."""
         ny, nx = self._tops.shape
-        cells = np.asarray(half_extent, dtype=float) * self._inverse_resolution + 1e-6
-        level = _TOP_RADII_ARRAY.searchsorted(np.ceil(cells))
-        fx = (xy[:, 0] - self._origin[0]) * self._inverse_resolution
-        fy = (xy[:, 1] - self._origin[1]) * self._inverse_resolution
-        column = np.fmin(np.fmax(np.floor(fx), 0.0), nx - 1)
-        row = np.fmin(np.fmax(np.floor(fy), 0.0), ny - 1)
-        # Level past the last: read anywhere, answer +inf below (NaN centres too).
-        usable = (level < len(_TOP_RADII)) & (fx == fx) & (fy == fy)
-        flat = np.where(usable, np.minimum(level, len(_TOP_RADII) - 1) * self._top_cells
-                        + row * nx + column, 0).astype(np.int64)
-        return np.where(usable, self._top_pyramid[flat], np.inf)
+        return (int(self._top_cells), int(nx), int(ny), float(self._origin[0]),
+                float(self._origin[1]), float(self._inverse_resolution))
 
     def top_height(self, low_xy, high_xy) -> np.ndarray:
         """Upper bound of the environment's height over axis-aligned rectangles.
@@ -858,32 +922,12 @@ class Environment:
         if xy.ndim != 2 or xy.shape[1] != 2:
             raise ValueError(f'xy must have shape (N, 2), got {xy.shape}')
         z = np.asarray(z_ref, dtype=float)
-        cell, valid = self._cells(xy)
         if z.ndim == 0:
-            # One height for all points: kept a scalar (broadcast), not a filled array.
-            z = float(z)
-            if not abs(z) < np.inf:
-                valid[:] = False
-            z_column = z
+            z = np.full(len(xy), float(z))
         elif z.shape != (len(xy),):
             raise ValueError(f'z_ref must be a scalar or shape ({len(xy)},), got {z.shape}')
-        else:
-            valid &= np.abs(z) < np.inf
-            z_column = z[:, None]
-        layers = self._layers
-        if layers == 1:
-            height = self._ground_flat[cell]
-            ceiling = self._ceiling_flat[cell]
-            bad = ~(height <= z + _Z_TOLERANCE)
-        else:
-            level = np.count_nonzero(self._ground[cell] <= z_column + _Z_TOLERANCE,
-                                     axis=1) - 1
-            bad = level < 0
-            flat = cell * layers + level
-            height = self._ground_flat[flat]
-            ceiling = self._ceiling_flat[flat]
-        bad |= z > ceiling
-        bad |= ~valid
-        height[bad] = np.nan
-        clearance = ceiling - height
-        return height, clearance
+        return _ground_heights(float_array(xy), float_array(z), float(self._origin[0]),
+                               float(self._origin[1]), float(self._inverse_resolution),
+                               float(self._grid_last[0]), float(self._grid_last[1]),
+                               int(self._shape[1] - 1), self._ground_flat, self._ceiling_flat,
+                               int(self._layers))

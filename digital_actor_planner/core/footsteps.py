@@ -15,7 +15,7 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .jit import kernel
+from .jit import float_array, kernel
 from .skeleton import LegGeometry
 
 LEFT, RIGHT = 0, 1
@@ -26,12 +26,6 @@ LEFT, RIGHT = 0, 1
 #: The map answers for a point's whole grid cell, so an obstacle up to a cell outside a line
 #: may show; the 3D check of every step (collision.BodyCollision) is exact.
 SOLE_LINES = (-0.4, 0.0, 0.4)
-
-
-def _writable(array) -> np.ndarray:
-    """``array`` as float64 that a compiled kernel accepts (a read-only one is copied)."""
-    array = np.asarray(array, dtype=np.float64)
-    return array if array.flags.writeable else array.copy()
 
 
 @kernel('Tuple((b1[::1], f8[::1], f8[::1]))(f8[:, :], f8[:, :], f8[:, :], f8, f8, i8[::1], '
@@ -414,8 +408,8 @@ class FootstepPlanner:
         # The kernel's exact argument types (it is compiled for those alone): fresh arrays.
         s = np.array(s, dtype=np.float64)
         side = np.array(np.broadcast_to(np.asarray(side, dtype=np.int64), s.shape))
-        ok, height, slope = _footholds(_writable(profile.height), _writable(profile.low),
-                                       _writable(profile.headroom),
+        ok, height, slope = _footholds(float_array(profile.height), float_array(profile.low),
+                                       float_array(profile.headroom),
                                        float(profile.s0), float(profile.ds), side, s,
                                        float(leg.heel), float(leg.toe), float(cfg.min_headroom),
                                        float(cfg.max_foot_pitch), float(cfg.flatness_tolerance),

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from typing import Callable
 
+import numpy as np
+
 try:  # pragma: no cover - which branch runs depends on the installation
     import numba
 except ImportError:  # pragma: no cover
@@ -29,3 +31,10 @@ def kernel(signature: str) -> Callable:
             return function
         return numba.njit(signature, cache=True, nogil=True)(function)
     return wrap
+
+
+def float_array(array) -> np.ndarray:
+    """``array`` as float64 that a compiled kernel accepts: a read-only or non-float one is
+    copied, any other passed as it is."""
+    array = np.asarray(array, dtype=np.float64)
+    return array if array.flags.writeable else array.copy()

@@ -6,12 +6,15 @@ hand-written NumPy, batched over configurations, because it sits on every planne
 from __future__ import annotations
 
 from dataclasses import dataclass
+import math
 import os
 import sys
 from typing import Dict, Optional, Tuple
 import xml.etree.ElementTree as ElementTree
 
 import numpy as np
+
+from .jit import kernel
 
 URDF_FILE_NAME = 'digital_actor.urdf'
 PACKAGE_NAME = 'digital_actor_planner'
@@ -221,6 +224,48 @@ def _compose(qs: np.ndarray, links, terms, out: np.ndarray) -> None:
     local = (weights @ basis).reshape(len(parents), k, 4, 4)
     for j, (parent, child) in enumerate(zip(parents, children)):
         np.matmul(out[parent], local[j], out=out[child])
+
+
+@kernel('f8[:, :, :, ::1](f8[:, ::1], i8[::1], i8[::1], f8[:, :, ::1], i8[::1], i8[::1], '
+        'i8[::1], f8[:, :, ::1])')
+def _shape_transforms(qs, parents, children, basis, motion, joint_q, rows, origins):
+    """Shape->world transforms (k, S, 4, 4) of a compact chain (see
+    :meth:`Skeleton.shape_transforms_at`): per frame, each joint's local transform
+    A + w1 B + w2 C (see :func:`_compile_plan`) composed onto its parent link's, then each
+    shape's origin onto its link's. ``motion``: 0 fixed, 1 revolute, 2 prismatic, with the
+    joint's index ``joint_q`` into a configuration."""
+    k, joints, count = qs.shape[0], parents.shape[0], rows.shape[0]
+    link = np.zeros((joints + 1, 4, 4))
+    local = np.empty((4, 4))
+    out = np.empty((k, count, 4, 4))
+    for f in range(k):
+        link[0] = 0.0
+        for d in range(4):
+            link[0, d, d] = 1.0
+        for j in range(joints):
+            w1, w2 = 0.0, 0.0
+            if motion[j] == 1:
+                w1, w2 = math.cos(qs[f, joint_q[j]]), math.sin(qs[f, joint_q[j]])
+            elif motion[j] == 2:
+                w1 = qs[f, joint_q[j]]
+            for e in range(16):
+                local[e // 4, e % 4] = basis[j, 0, e] + w1 * basis[j, 1, e] + w2 * basis[j, 2, e]
+            parent, child = parents[j], children[j]
+            for r in range(4):
+                for c in range(4):
+                    link[child, r, c] = (link[parent, r, 0] * local[0, c]
+                                         + link[parent, r, 1] * local[1, c]
+                                         + link[parent, r, 2] * local[2, c]
+                                         + link[parent, r, 3] * local[3, c])
+        for s in range(count):
+            a = rows[s]
+            for r in range(4):
+                for c in range(4):
+                    out[f, s, r, c] = (link[a, r, 0] * origins[s, 0, c]
+                                       + link[a, r, 1] * origins[s, 1, c]
+                                       + link[a, r, 2] * origins[s, 2, c]
+                                       + link[a, r, 3] * origins[s, 3, c])
+    return out
 
 
 class Skeleton:
@@ -500,24 +545,25 @@ class Skeleton:
             row = {0: 0}
             for child in chain[1]:
                 row[child] = len(row)
-            links = (tuple(row[p] for p in chain[0]), tuple(row[c] for c in chain[1]))
-            layout = (links, chain[2:],
+            basis, revolute, revolute_q, prismatic, prismatic_q = chain[2:]
+            # Each joint's motion (0 fixed, 1 revolute, 2 prismatic) and its q index.
+            motion = np.zeros(len(chain[0]), dtype=np.int64)
+            joint_q = np.zeros(len(chain[0]), dtype=np.int64)
+            motion[revolute], joint_q[revolute] = 1, revolute_q
+            motion[prismatic], joint_q[prismatic] = 2, prismatic_q
+            layout = (np.array([row[p] for p in chain[0]], dtype=np.int64),
+                      np.array([row[c] for c in chain[1]], dtype=np.int64),
+                      np.ascontiguousarray(basis), motion, joint_q,
                       np.array([row[self.link_index[self.collision_shapes[i].link]]
-                                for i in key], dtype=int),
-                      np.stack([self.collision_shapes[i].origin for i in key]))
+                                for i in key], dtype=np.int64),
+                      np.ascontiguousarray(np.stack([self.collision_shapes[i].origin
+                                                     for i in key])))
             self._shape_chains[key] = layout
-        links, terms, rows, origins = layout
         qs = np.asarray(q, dtype=float)
         if qs.ndim != 2 or qs.shape[1] != len(self.joint_names):
             raise ValueError(f'configurations must have shape (k, {len(self.joint_names)}), '
                              f'got {qs.shape}')
-        k = qs.shape[0]
-        out = np.empty((len(links[1]) + 1, k, 4, 4))
-        _compose(qs, links, terms, out)
-        # Each shape's origin for all frames as one (4 k, 4) @ (4, 4) product, not k (4, 4)
-        # ones.
-        placed = (out[rows].reshape(len(rows), 4 * k, 4) @ origins).reshape(len(rows), k, 4, 4)
-        return np.ascontiguousarray(placed.transpose(1, 0, 2, 3))
+        return _shape_transforms(np.array(qs, dtype=np.float64, order='C'), *layout)
 
     def link_transform(self, q: np.ndarray, link: str) -> np.ndarray:
         """World transform(s) of one link: (4, 4) or (k, 4, 4)."""
