@@ -20,6 +20,7 @@ from typing import Tuple
 import numpy as np
 
 from .footsteps import FootstepConfig, LEFT, RIGHT, SOLE_LINES
+from .jit import kernel
 from .skeleton import LegGeometry, Skeleton
 
 SOLE_CLEARANCE = 0.002  # a resting sole floats this far above the surface, m
@@ -132,6 +133,8 @@ def smoothstep(t: np.ndarray) -> np.ndarray:
 _TIME_RAMPS = np.array([[0.0, 1.0], [0.2, 0.8], [0.35, 0.65], [0.3, 0.65]])
 _SWING_RAMPS = np.array([[0.0, 0.88 - 0.0], [0.12, 0.88 - 0.12], [0.2, 0.55], [0.15, 0.35],
                          [0.65, 0.35]])
+# _StepTiming per (number of frames, swing clearance): a handful of step durations recur.
+_TIMINGS = {}
 
 
 def _wrap(angle):
@@ -239,6 +242,57 @@ def _sagittal_leg(leg: LegGeometry, forward: np.ndarray, down: np.ndarray,
     joints[:, 2] = knee
     joints[:, 3] = foot_pitch - (hip_pitch - knee)
     return reach
+
+
+@kernel('f8[::1](f8[:, :], readonly(f8[::1]), f8[::1], f8[::1], f8, readonly(f8[:]))')
+def _swing_need(tops, along, sin_pitch, cos_pitch, ankle_height, clearance):
+    """Height the swinging ankle must keep at each sampled frame (s,), m: the highest of the
+    ground ``tops`` (s, P) under P points ``along`` the sole (m from the ankle) relative to the
+    sole pitched as (sin, cos) of the frame's pitch, plus the ankle's height over the sole and
+    the ``clearance`` kept there."""
+    out = np.empty(tops.shape[0])
+    for i in range(tops.shape[0]):
+        most = -np.inf
+        for j in range(tops.shape[1]):
+            value = tops[i, j] - along[j] * sin_pitch[i]
+            if value > most or value != value:
+                most = value
+        out[i] = most + ankle_height * cos_pitch[i] + clearance[i]
+    return out
+
+
+@kernel('Tuple((f8, f8, b1))(readonly(f8[:]), readonly(f8[:]), readonly(f8[:]), '
+        'readonly(f8[:]), readonly(f8[:]), f8[:], readonly(f8[:]), f8, f8, f8, f8, f8)')
+def _raise_swing(basis_0, basis_1, basis_2, basis_3, b, need, slack, z0, z1, h1, h2, cap):
+    """The Bezier adjustment of :meth:`WalkGenerator._swing_heights` (§4.1): raise the inner
+    control heights h1, h2 (above z0 and z1) at the worst sample until the curve clears
+    ``need`` less ``slack`` at every sample, at most 12 times and while neither passes ``cap``.
+    ``basis_*`` are the Bernstein weights and ``b`` the curve parameter at the samples.
+    Returns (h1, h2, whether it cleared)."""
+    for _ in range(12):
+        worst, most = 0, -np.inf
+        for i in range(need.shape[0]):
+            curve = basis_0[i] * z0 + basis_1[i] * (z0 + h1) + basis_2[i] * (z1 + h2) \
+                + basis_3[i] * z1
+            short = need[i] - curve - slack[i]
+            # The first largest, or the first NaN (as NumPy's argmax).
+            if short != short:
+                worst, most = i, short
+                break
+            if i == 0 or short > most:
+                worst, most = i, short
+        if most <= 1e-4:
+            return h1, h2, True
+        raise_by = min(most / max(basis_1[worst] + basis_2[worst], 0.05), 0.15) + 0.005
+        if b[worst] < 0.5:
+            h1 += raise_by
+            h2 += 0.5 * raise_by
+        else:
+            h2 += raise_by
+            h1 += 0.5 * raise_by
+        if max(h1, h2) > cap:
+            break
+    return h1, h2, False
 
 
 def _segment_gaps(a0: np.ndarray, a1: np.ndarray, b0: np.ndarray,
@@ -423,12 +477,12 @@ class WalkGenerator:
         # a bump 5 mm beside its toe), m.
         self._sole_along = np.linspace(-self.leg.heel, self.leg.toe, 9)
         self._sole_across = np.array([SOLE_LINES[0], SOLE_LINES[-1]]) * self.leg.foot_width
-        # _StepTiming per number of frames (a handful of step durations recur).
-        self._timings = {}
 
     def _timing(self, k: int) -> _StepTiming:
-        """The time shapes of a k-frame step (built once per k)."""
-        timing = self._timings.get(k)
+        """The time shapes of a k-frame step (built once per k and swing clearance in a
+        process, shared by every generator: they are read-only)."""
+        key = (k, self.config.swing_clearance)
+        timing = _TIMINGS.get(key)
         if timing is not None:
             return timing
         tau = np.arange(1, k + 1) / k
@@ -466,7 +520,7 @@ class WalkGenerator:
                     timing.bezier, timing.lift, timing.plane_turn, timing.pitch_release,
                     timing.pitch_take, timing.weight, timing.fade, timing.samples,
                     timing.bezier_terms, timing.pinned, timing.hump))
-        self._timings[k] = timing
+        _TIMINGS[key] = timing
         return timing
 
     def _turn_ease(self, heading_difference: float) -> float:
@@ -959,8 +1013,9 @@ class WalkGenerator:
         tops[np.isnan(tops)] = -np.inf
         # The pitch moves the points across the sole together (they share an offset along
         # it), and subtracting one number keeps the order: their maximum is taken here, once,
-        # not in every pass of the swing heights.
-        return samples, along, tops.max(axis=2), timing.bezier_terms
+        # not in every pass of the swing heights (of two lines: an elementwise maximum, far
+        # cheaper than a reduction over an axis of 2).
+        return samples, along, np.maximum(tops[:, :, 0], tops[:, :, 1]), timing.bezier_terms
 
     def _bezier_terms(self, tau, samples):
         """Per-frame Bernstein weights of the swing Bezier and the clearance terms at the
@@ -996,33 +1051,16 @@ class WalkGenerator:
         samples, along, tops, (b, clearance, slack, sampled, frames) = footprint
         # Ground relative to a sole pitched like the foot: what the ankle must stay above.
         pitch = swing_pitch[samples]
-        ground = (tops - along * np.sin(pitch)[:, None]).max(axis=1)
-        need = ground + leg.ankle_height * np.cos(pitch) + clearance
+        need = _swing_need(tops, along, np.sin(pitch), np.cos(pitch), leg.ankle_height,
+                           clearance)
         basis_0, basis_1, basis_2, basis_3 = sampled
         # Off a heel-off the toe is on the ground: lift more briskly so it does not scuff.
         h1 = cfg.swing_lift * (2.0 if lift_foot.pitch < -0.05 else 1.0) + max(0.0, z1 - z0)
         h2 = cfg.swing_lift + 0.5 * max(0.0, z0 - z1)
-        start, end = basis_0 * z0, basis_3 * z1
         cap = cfg.max_swing_lift + abs(z1 - z0)
         first = (h1, h2)
-        cleared = False
-        for _ in range(12):
-            curve = start + basis_1 * (z0 + h1) + basis_2 * (z1 + h2) + end
-            short = need - curve - slack
-            worst = int(short.argmax())
-            if short[worst] <= 1e-4:
-                cleared = True
-                break
-            weight = basis_1[worst] + basis_2[worst]
-            raise_by = min(short[worst] / max(weight, 0.05), 0.15) + 0.005
-            if b[worst] < 0.5:
-                h1 += raise_by
-                h2 += 0.5 * raise_by
-            else:
-                h2 += raise_by
-                h1 += 0.5 * raise_by
-            if max(h1, h2) > cap:
-                break
+        h1, h2, cleared = _raise_swing(basis_0, basis_1, basis_2, basis_3, b, need, slack,
+                                       z0, z1, h1, h2, cap)
         if not cleared:
             # Raising the control points ran into the limit (or did not converge). Over a
             # block whose face is close ahead of the lifting toe (or behind the landing heel)

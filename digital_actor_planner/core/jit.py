@@ -21,16 +21,26 @@ COMPILED = numba is not None
 
 
 def kernel(signature: str) -> Callable:
-    """Decorator: compile ``function`` for ``signature`` (numba's type string) if numba is
-    installed, else return it unchanged. The plain function stays reachable as ``py_func``
-    either way (the tests compare the two).
+    """Decorator: compile ``function`` for ``signature`` if numba is installed, else return it
+    unchanged. The plain function stays reachable as ``py_func`` either way (the tests compare
+    the two).
+
+    ``signature`` is numba's type string (``'f8(f8[::1], i8)'``), where ``readonly(T)`` is
+    the array type T that also accepts read-only arrays (shared tables).
     """
     def wrap(function: Callable) -> Callable:
         if numba is None:
             function.py_func = function
             return function
-        return numba.njit(signature, cache=True, nogil=True)(function)
+        return numba.njit(_parse(signature), cache=True, nogil=True)(function)
     return wrap
+
+
+def _parse(signature: str):
+    """numba's signature string with ``readonly`` added to its type names."""
+    names = dict(vars(numba.types))
+    names['readonly'] = lambda array: array.copy(readonly=True)
+    return eval(signature, {'__builtins__': {}}, names)
 
 
 def float_array(array) -> np.ndarray:
