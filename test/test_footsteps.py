@@ -3,9 +3,7 @@ import numpy as np
 import pytest
 
 from digital_actor_planner.core.footsteps import (
-    _footholds, FootstepConfig, FootstepPlanner, GroundProfile, LEFT, RIGHT,
-    validate_footstep_config)
-from digital_actor_planner.core.jit import COMPILED
+    FootstepConfig, FootstepPlanner, GroundProfile, LEFT, RIGHT, validate_footstep_config)
 from digital_actor_planner.core.skeleton import Skeleton
 
 DS = 0.02
@@ -275,32 +273,6 @@ def test_batched_footholds_agree_with_the_single_foothold(leg):
                 assert np.isnan(height[k])
                 kinds.add('refused')
     assert kinds == {'flat', 'edge or level', 'refused'}
-
-
-def test_the_compiled_foothold_kernel_gives_what_it_gives_as_plain_python(leg):
-    """numba is installed (requirements.txt) and the compiled foothold kernel agrees with its
-    own Python source to the last bit, on ground with holes, steps, slopes and low headroom:
-    an installation without numba runs that source and walks the same."""
-    assert COMPILED
-    rng = np.random.default_rng(11)
-    count = 300
-    steps = np.repeat(rng.choice([0.0, 0.1, 0.25, -0.15], size=count // 15), 15)
-    high = np.vstack([steps + 0.1 * np.sin(np.arange(count) * 0.07), steps])
-    high += rng.normal(0.0, 0.002, high.shape)
-    low = high - np.abs(rng.normal(0.0, 0.004, high.shape))
-    high[1, 100:105] = low[1, 100:105] = np.nan
-    headroom = np.where(rng.random(high.shape) < 0.01, 0.3, np.inf)
-    s = rng.uniform(-0.5, DS * count, 2000)
-    side = rng.integers(0, 2, s.size)
-    config = FootstepConfig()
-    arguments = (high, low, headroom, -0.3, DS, side, s, float(leg.heel), float(leg.toe),
-                 config.min_headroom, config.max_foot_pitch, config.flatness_tolerance,
-                 config.min_support_fraction)
-    compiled = _footholds(*arguments)
-    plain = _footholds.py_func(*arguments)
-    assert 0 < compiled[0].sum() < s.size
-    for a, b in zip(compiled, plain):
-        np.testing.assert_array_equal(a, b)
 
 
 def _swing_clear_reference(planner, profile, side, s_from, h_from, s_to, h_to):

@@ -1,0 +1,181 @@
+"""The compiled kernels (core/jit.py) give what their own Python source gives, to the last bit.
+
+An installation without numba runs that source: it then plans the same frames, only slower.
+Each kernel is run compiled and as plain Python on the inputs the planners give it, including
+the awkward ones (off the map, NaN, holes, a table over the floor).
+"""
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from digital_actor_planner.core import collision, environment, footsteps, gait
+from digital_actor_planner.core import skeleton as skeleton_module
+from digital_actor_planner.core.collision import BodyCollision
+from digital_actor_planner.core.environment import Environment, start_configuration
+from digital_actor_planner.core.footsteps import FootstepConfig
+from digital_actor_planner.core.jit import COMPILED, float_array
+from digital_actor_planner.core.skeleton import Skeleton
+from scene_helpers import box
+
+
+def same(compiled, plain):
+    """Assert two kernel results (an array or a tuple of arrays and numbers) are identical."""
+    if not isinstance(compiled, tuple):
+        compiled, plain = (compiled,), (plain,)
+    assert len(compiled) == len(plain)
+    for a, b in zip(compiled, plain):
+        np.testing.assert_array_equal(a, b)
+
+
+@pytest.fixture(scope='module')
+def skeleton():
+    return Skeleton()
+
+
+@pytest.fixture(scope='module')
+def world():
+    """A floor, a step, a table (a surface with another under it) and a post."""
+    return Environment([box((-3, -3, -0.2), (3, 3, 0.0)), box((0.5, -3, 0.0), (3, 3, 0.15)),
+                        box((-1.5, -0.5, 0.7), (-0.7, 0.5, 0.75)),
+                        box((1.0, 0.3, 0.15), (1.1, 0.4, 1.5))])
+
+
+def test_numba_is_installed_and_the_kernels_are_compiled():
+    """requirements.txt pins numba: without it every kernel runs as Python, many times
+    slower, and the planning-time numbers in the README would not hold."""
+    assert COMPILED
+    for kernel in (footsteps._footholds, environment._ground_heights, environment._tops_near,
+                   collision._suspects, collision._half_extents, skeleton_module._shape_transforms,
+                   gait._raise_swing, gait._swing_need):
+        assert kernel.py_func is not kernel
+
+
+def test_footholds(skeleton):
+    """On ground with holes, steps, slopes and low headroom."""
+    leg = skeleton.leg
+    rng = np.random.default_rng(11)
+    count = 300
+    steps = np.repeat(rng.choice([0.0, 0.1, 0.25, -0.15], size=count // 15), 15)
+    high = np.vstack([steps + 0.1 * np.sin(np.arange(count) * 0.07), steps])
+    high += rng.normal(0.0, 0.002, high.shape)
+    low = high - np.abs(rng.normal(0.0, 0.004, high.shape))
+    high[1, 100:105] = low[1, 100:105] = np.nan
+    headroom = np.where(rng.random(high.shape) < 0.01, 0.3, np.inf)
+    s = rng.uniform(-0.5, 0.02 * count, 2000)
+    side = rng.integers(0, 2, s.size)
+    config = FootstepConfig()
+    arguments = (high, low, headroom, -0.3, 0.02, side, s, float(leg.heel), float(leg.toe),
+                 config.min_headroom, config.max_foot_pitch, config.flatness_tolerance,
+                 config.min_support_fraction)
+    compiled = footsteps._footholds(*arguments)
+    same(compiled, footsteps._footholds.py_func(*arguments))
+    assert 0 < compiled[0].sum() < s.size
+
+
+def test_shape_transforms(skeleton):
+    rng = np.random.default_rng(1)
+    qs = rng.uniform(np.maximum(skeleton.lower, -3), np.minimum(skeleton.upper, 3), (30, 22))
+    shapes = tuple(range(len(skeleton.collision_shapes)))
+    for chosen in (shapes, shapes[::4], (shapes[-1],)):
+        skeleton.shape_transforms_at(qs[:1], chosen)
+        layout = skeleton._shape_chains[chosen]
+        same(skeleton_module._shape_transforms(qs, *layout),
+             skeleton_module._shape_transforms.py_func(qs, *layout))
+
+
+def test_ground_heights_and_top_bounds(world):
+    rng = np.random.default_rng(2)
+    xy = rng.uniform(-3.5, 3.5, (3000, 2))
+    xy[:20, 0] = np.nan
+    z = rng.uniform(-0.5, 1.2, xy.shape[0])
+    z[20:30] = np.inf
+    grid = (float(world._origin[0]), float(world._origin[1]), float(world._inverse_resolution),
+            float(world._grid_last[0]), float(world._grid_last[1]), int(world._shape[1] - 1),
+            world._ground_flat, world._ceiling_flat, int(world._layers))
+    assert world._layers > 1  # the table over the floor
+    compiled = environment._ground_heights(xy, z, *grid)
+    same(compiled, environment._ground_heights.py_func(xy, z, *grid))
+    assert np.isfinite(compiled[0]).sum() > 1000 and np.isnan(compiled[0]).sum() > 30
+    half = rng.uniform(0.0, 0.8, xy.shape[0])
+    half[30:40] = np.nan
+    layout = (world._top_pyramid, *world.top_near_grid(), xy, half)
+    tops = environment._tops_near(*layout)
+    same(tops, environment._tops_near.py_func(*layout))
+    assert np.isinf(tops).sum() > 30 and np.isfinite(tops).sum() > 1000
+
+
+def test_the_broad_phase_of_the_3d_check(skeleton, world):
+    rng = np.random.default_rng(3)
+    body = BodyCollision(skeleton, world)
+    start = start_configuration(world, (0.0, 0.0, 0.0), skeleton)
+    # A walk-like motion: the root moving over the step and the legs swinging, with frames
+    # repeated (shapes that have not moved) and some in the table and the post.
+    frames = np.repeat(start[None], 40, axis=0)
+    frames[:, skeleton.index['root_x']] += np.linspace(-1.0, 1.6, 40)
+    frames[::3, skeleton.index['left_knee']] += rng.uniform(0.0, 1.0, 14)
+    frames[10:20, skeleton.index['root_z']] -= 0.3
+    shapes = tuple(range(len(body.shapes)))
+    transforms = skeleton.shape_transforms_at(frames, shapes)
+    index = np.array(shapes)
+    for free_end in (False, True):
+        arguments = (transforms, body._kind_codes[index], body._halves[index], True,
+                     world._top_pyramid, *world.top_near_grid(),
+                     transforms[5, :, :3, :].copy(), free_end, body._reach_array[index],
+                     body._mesh_low, body._mesh_high)
+        pairs, near = collision._suspects(*arguments)
+        same((pairs, near), collision._suspects.py_func(*arguments))
+        assert 0 < pairs.shape[0] < transforms.shape[0] * transforms.shape[1]
+        assert near.any() and not near.all()
+    rotations = float_array(transforms[..., :3, :3])
+    same(collision._half_extents(body._kind_codes[index], body._halves[index], rotations),
+         collision._half_extents.py_func(body._kind_codes[index], body._halves[index],
+                                         rotations))
+
+
+def test_the_swing_height_kernels():
+    rng = np.random.default_rng(4)
+    outcomes = set()
+    for trial in range(50):
+        count = int(rng.integers(3, 30))
+        b = np.sort(rng.uniform(0.0, 1.0, count))
+        basis = ((1 - b) ** 3, 3 * b * (1 - b) ** 2, 3 * b * b * (1 - b), b ** 3)
+        # Ground well below the sole at lift-off and touchdown, up to 0.6 m high between.
+        hump = np.sin(np.pi * b)[:, None] ** 2 * rng.uniform(0.0, 0.6)
+        tops = -0.12 + hump * rng.uniform(0.5, 1.0, (count, 9))
+        tops[rng.random(tops.shape) < 0.2] = -np.inf
+        along = np.linspace(-0.07, 0.18, 9)
+        pitch = rng.uniform(-0.5, 0.5, count)
+        clearance = rng.uniform(0.0, 0.03, count)
+        arguments = (tops, along, np.sin(pitch), np.cos(pitch), 0.08, clearance)
+        need = gait._swing_need(*arguments)
+        same(need, gait._swing_need.py_func(*arguments))
+        slack = rng.uniform(0.0, 0.015, count)
+        arguments = (*basis, b, need, slack, 0.0, float(rng.uniform(-0.2, 0.2)), 0.05, 0.05, 0.6)
+        raised = gait._raise_swing(*arguments)
+        same(raised, gait._raise_swing.py_func(*arguments))
+        outcomes.add((raised[2], raised[:2] == (0.05, 0.05)))
+    # Cleared at once, cleared after raising the curve, and not cleared under the cap.
+    assert outcomes == {(True, True), (True, False), (False, False)}
+
+
+def test_without_numba_the_actor_walks_the_same_frames(tmp_path):
+    """The kernels' fallback: in a process where numba cannot be imported every kernel runs as
+    Python, and the actor climbs the stairs with the same frames to the last bit."""
+    from course_runs import simulate
+    out = tmp_path / 'frames.npy'
+    code = '\n'.join([
+        'import sys',
+        'sys.modules["numba"] = None',
+        f'sys.path.insert(0, {os.path.dirname(os.path.abspath(__file__))!r})',
+        'import numpy as np',
+        'from digital_actor_planner.core import jit',
+        'assert not jit.COMPILED',
+        'from course_runs import simulate',
+        'np.save(sys.argv[1], simulate("stairs_up", upper_body=False)[2])'])
+    subprocess.run([sys.executable, '-c', code, str(out)], check=True, timeout=300)
+    frames = simulate('stairs_up', upper_body=False)[2]
+    assert frames.shape[0] > 300
+    np.testing.assert_array_equal(np.load(out), frames)
