@@ -49,7 +49,7 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
     assert COMPILED
     for kernel in (footsteps._footholds, environment._ground_heights, environment._tops_near,
                    collision._suspects, collision._half_extents, skeleton_module._shape_transforms,
-                   gait._raise_swing, gait._swing_need):
+                   gait._raise_swing, gait._swing_need, gait._leg_triangle):
         assert kernel.py_func is not kernel
 
 
@@ -133,6 +133,16 @@ def test_the_broad_phase_of_the_3d_check(skeleton, world):
     same(collision._half_extents(body._kind_codes[index], body._halves[index], rotations),
          collision._half_extents.py_func(body._kind_codes[index], body._halves[index],
                                          rotations))
+
+
+def test_the_leg_triangle():
+    """Ankles within reach, beyond it and at the hip itself."""
+    rng = np.random.default_rng(5)
+    forward = rng.uniform(-1.0, 1.0, 500)
+    down = rng.uniform(-0.2, 1.2, 500)
+    forward[:3] = down[:3] = 0.0
+    same(gait._leg_triangle(forward, down, 0.45, 0.43),
+         gait._leg_triangle.py_func(forward, down, 0.45, 0.43))
 
 
 def test_the_swing_height_kernels():

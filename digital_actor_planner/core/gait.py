@@ -229,19 +229,36 @@ def _sagittal_leg(leg: LegGeometry, forward: np.ndarray, down: np.ndarray,
     do not depend on the heights: the swing leg's passes, which change only those, solve
     just this part.
     """
-    distance = np.hypot(forward, down)
-    l1, l2 = leg.thigh, leg.shank
-    reach = distance / (l1 + l2)
-    d = np.minimum(np.maximum(distance, 1e-6), l1 + l2)
-    squared = d * d
-    cos_knee = np.minimum(np.maximum((l1 * l1 + l2 * l2 - squared) / (2 * l1 * l2), -1.0), 1.0)
+    forward = np.asarray(forward, dtype=np.float64)
+    down = np.asarray(down, dtype=np.float64)
+    reach, cos_knee, cos_beta = _leg_triangle(forward, down, float(leg.thigh),
+                                              float(leg.shank))
+    # NumPy's arccos and arctan2, not the kernel's: the two may differ in the last bit.
     knee = np.pi - np.arccos(cos_knee)
-    cos_beta = np.minimum(np.maximum((l1 * l1 + squared - l2 * l2) / (2 * l1 * d), -1.0), 1.0)
     hip_pitch = np.arctan2(forward, down) + np.arccos(cos_beta)
     joints[:, 1] = hip_pitch
     joints[:, 2] = knee
     joints[:, 3] = foot_pitch - (hip_pitch - knee)
     return reach
+
+
+@kernel('UniTuple(f8[::1], 3)(f8[:], f8[:], f8, f8)')
+def _leg_triangle(forward, down, l1, l2):
+    """The leg's triangle for ankles ``forward`` and ``down`` of the hip (m): the reach (the
+    hip-ankle distance over the leg's length), and the cosines of the knee's inner angle and
+    of the thigh's angle off the hip-ankle line (law of cosines, the distance kept within
+    (0, l1 + l2])."""
+    count = forward.shape[0]
+    reach, cos_knee, cos_beta = np.empty(count), np.empty(count), np.empty(count)
+    for i in range(count):
+        # NumPy's hypot (the C library's): Python's math.hypot rounds differently.
+        distance = np.hypot(forward[i], down[i])
+        reach[i] = distance / (l1 + l2)
+        d = min(max(distance, 1e-6), l1 + l2)
+        squared = d * d
+        cos_knee[i] = min(max((l1 * l1 + l2 * l2 - squared) / (2 * l1 * l2), -1.0), 1.0)
+        cos_beta[i] = min(max((l1 * l1 + squared - l2 * l2) / (2 * l1 * d), -1.0), 1.0)
+    return reach, cos_knee, cos_beta
 
 
 @kernel('f8[::1](f8[:, :], readonly(f8[::1]), f8[::1], f8[::1], f8, readonly(f8[:]))')

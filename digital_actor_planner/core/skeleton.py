@@ -233,38 +233,41 @@ def _shape_transforms(qs, parents, children, basis, motion, joint_q, rows, origi
     :meth:`Skeleton.shape_transforms_at`): per frame, each joint's local transform
     A + w1 B + w2 C (see :func:`_compile_plan`) composed onto its parent link's, then each
     shape's origin onto its link's. ``motion``: 0 fixed, 1 revolute, 2 prismatic, with the
-    joint's index ``joint_q`` into a configuration."""
+    joint's index ``joint_q`` into a configuration. Every transform is rigid (bottom row
+    0 0 0 1), so only the top three rows are composed."""
     k, joints, count = qs.shape[0], parents.shape[0], rows.shape[0]
-    link = np.zeros((joints + 1, 4, 4))
-    local = np.empty((4, 4))
-    out = np.empty((k, count, 4, 4))
+    link = np.zeros((joints + 1, 3, 4))
+    local = np.empty((3, 4))
+    out = np.zeros((k, count, 4, 4))
+    for d in range(3):
+        link[0, d, d] = 1.0
     for f in range(k):
-        link[0] = 0.0
-        for d in range(4):
-            link[0, d, d] = 1.0
         for j in range(joints):
             w1, w2 = 0.0, 0.0
             if motion[j] == 1:
                 w1, w2 = math.cos(qs[f, joint_q[j]]), math.sin(qs[f, joint_q[j]])
             elif motion[j] == 2:
                 w1 = qs[f, joint_q[j]]
-            for e in range(16):
+            for e in range(12):
                 local[e // 4, e % 4] = basis[j, 0, e] + w1 * basis[j, 1, e] + w2 * basis[j, 2, e]
-            parent, child = parents[j], children[j]
-            for r in range(4):
-                for c in range(4):
-                    link[child, r, c] = (link[parent, r, 0] * local[0, c]
-                                         + link[parent, r, 1] * local[1, c]
-                                         + link[parent, r, 2] * local[2, c]
-                                         + link[parent, r, 3] * local[3, c])
+            a, child = parents[j], children[j]
+            for r in range(3):
+                for c in range(3):
+                    link[child, r, c] = (link[a, r, 0] * local[0, c] + link[a, r, 1] * local[1, c]
+                                         + link[a, r, 2] * local[2, c])
+                link[child, r, 3] = (link[a, r, 0] * local[0, 3] + link[a, r, 1] * local[1, 3]
+                                     + link[a, r, 2] * local[2, 3] + link[a, r, 3])
         for s in range(count):
             a = rows[s]
-            for r in range(4):
-                for c in range(4):
+            for r in range(3):
+                for c in range(3):
                     out[f, s, r, c] = (link[a, r, 0] * origins[s, 0, c]
                                        + link[a, r, 1] * origins[s, 1, c]
-                                       + link[a, r, 2] * origins[s, 2, c]
-                                       + link[a, r, 3] * origins[s, 3, c])
+                                       + link[a, r, 2] * origins[s, 2, c])
+                out[f, s, r, 3] = (link[a, r, 0] * origins[s, 0, 3]
+                                   + link[a, r, 1] * origins[s, 1, 3]
+                                   + link[a, r, 2] * origins[s, 2, 3] + link[a, r, 3])
+            out[f, s, 3, 3] = 1.0
     return out
 
 
