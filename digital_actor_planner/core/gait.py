@@ -14,6 +14,7 @@ downhill the rear leg is bent first (the pelvis lowers early, before the foot la
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+import functools
 import math
 from typing import Tuple
 
@@ -133,8 +134,68 @@ def smoothstep(t: np.ndarray) -> np.ndarray:
 _TIME_RAMPS = np.array([[0.0, 1.0], [0.2, 0.8], [0.35, 0.65], [0.3, 0.65]])
 _SWING_RAMPS = np.array([[0.0, 0.88 - 0.0], [0.12, 0.88 - 0.12], [0.2, 0.55], [0.15, 0.35],
                          [0.65, 0.35]])
-# _StepTiming per (number of frames, swing clearance): a handful of step durations recur.
-_TIMINGS = {}
+
+
+@functools.lru_cache(maxsize=256)
+def _step_timing(k: int, swing_clearance: float) -> _StepTiming:
+    """The time shapes of a k-frame step: a function of its arguments alone, remembered (a
+    handful of step durations recur) and shared by every generator, so read-only."""
+    tau = np.arange(1, k + 1) / k
+    # The ramps over time through one smoothstep call, the ramps over the swing curve's
+    # parameter through another (each row is the formula's own (x - start) / length).
+    level, turn, uphill, downhill = smoothstep(
+        (tau - _TIME_RAMPS[:, :1]) / _TIME_RAMPS[:, 1:])
+    bezier = 0.5 * (tau + level)
+    lift_now, lift_late, plane_turn, release, take = smoothstep(
+        (bezier - _SWING_RAMPS[:, :1]) / _SWING_RAMPS[:, 1:])
+    samples = np.arange(0, tau.size, max(1, tau.size // 24))
+    if samples[-1] != tau.size - 1:
+        samples = np.append(samples, tau.size - 1)
+    timing = _StepTiming(
+        tau=tau,
+        ease={(False, False): tau, (False, True): _ease(tau, False, True),
+              (True, False): _ease(tau, True, False), (True, True): level},
+        ease_in=-tau * (1.0 - tau) ** 2,
+        ease_out=tau * tau * (1.0 - tau),
+        turn=turn,
+        bezier=bezier,
+        lift={0.0: lift_now, 0.12: lift_late},
+        plane_turn=plane_turn,
+        pitch_release=1.0 - release,
+        pitch_take=take,
+        weight={'uphill': uphill, 'downhill': downhill, 'level': level},
+        fade=np.minimum(1.0, 6.0 * (1 - tau)),
+        samples=samples,
+        bezier_terms=_bezier_terms(bezier, samples, swing_clearance),
+        pinned=np.maximum(1.0 - smoothstep((bezier - 0.04) / 0.12),
+                          smoothstep((bezier - 0.84) / 0.12)),
+        hump=np.sin(np.pi * bezier) ** 2)
+    # Shared by every step of k frames: nothing may change them in place.
+    _read_only((timing.tau, timing.ease, timing.ease_in, timing.ease_out, timing.turn,
+                timing.bezier, timing.lift, timing.plane_turn, timing.pitch_release,
+                timing.pitch_take, timing.weight, timing.fade, timing.samples,
+                timing.bezier_terms, timing.pinned, timing.hump))
+    return timing
+
+
+def _bezier_terms(tau, samples, swing_clearance: float):
+    """Per-frame Bernstein weights of the swing Bezier and the clearance terms at the
+    sampled frames (the parts of :meth:`WalkGenerator._swing_heights` fixed during one step)."""
+    b = tau[samples]
+    ramp = np.minimum(1.0, 10.0 * np.minimum(b, 1.0 - b))
+    # Near lift-off and touchdown the sole is by definition at its foothold: the
+    # conservative map may read a few mm high there (the 3D check is exact).
+    slack = 0.015 * (1.0 - ramp)
+    frames = np.empty((4, tau.size))
+    frames[0] = (1 - tau) ** 3
+    frames[1] = 3 * tau * (1 - tau) ** 2
+    frames[2] = 3 * tau * tau * (1 - tau)
+    frames[3] = tau ** 3
+    # The same formulas at the sampled frames give the same values: gathered, not redone.
+    sampled = tuple(frames[:, samples])
+    frames = tuple(frames)
+    # The clearance the sole keeps at each sample (full away from lift-off and touchdown).
+    return b, swing_clearance * ramp, slack, sampled, frames
 
 
 def _wrap(angle):
@@ -397,7 +458,7 @@ class _StepTiming:
         Weight of the swing ankle's range correction (none at touchdown).
     samples, bezier_terms
         Frames the swing clearance is tested at and their Bezier terms (see
-        :meth:`WalkGenerator._bezier_terms`).
+        :func:`_bezier_terms`).
     pinned
         How fully the swing foot's plane turns through the foot instead of moving with the hip:
         1 near lift-off and touchdown, 0 in mid-swing.
@@ -496,49 +557,8 @@ class WalkGenerator:
         self._sole_across = np.array([SOLE_LINES[0], SOLE_LINES[-1]]) * self.leg.foot_width
 
     def _timing(self, k: int) -> _StepTiming:
-        """The time shapes of a k-frame step (built once per k and swing clearance in a
-        process, shared by every generator: they are read-only)."""
-        key = (k, self.config.swing_clearance)
-        timing = _TIMINGS.get(key)
-        if timing is not None:
-            return timing
-        tau = np.arange(1, k + 1) / k
-        # The ramps over time through one smoothstep call, the ramps over the swing curve's
-        # parameter through another (each row is the formula's own (x - start) / length).
-        level, turn, uphill, downhill = smoothstep(
-            (tau - _TIME_RAMPS[:, :1]) / _TIME_RAMPS[:, 1:])
-        bezier = 0.5 * (tau + level)
-        lift_now, lift_late, plane_turn, release, take = smoothstep(
-            (bezier - _SWING_RAMPS[:, :1]) / _SWING_RAMPS[:, 1:])
-        samples = np.arange(0, tau.size, max(1, tau.size // 24))
-        if samples[-1] != tau.size - 1:
-            samples = np.append(samples, tau.size - 1)
-        timing = _StepTiming(
-            tau=tau,
-            ease={(False, False): tau, (False, True): _ease(tau, False, True),
-                  (True, False): _ease(tau, True, False), (True, True): level},
-            ease_in=-tau * (1.0 - tau) ** 2,
-            ease_out=tau * tau * (1.0 - tau),
-            turn=turn,
-            bezier=bezier,
-            lift={0.0: lift_now, 0.12: lift_late},
-            plane_turn=plane_turn,
-            pitch_release=1.0 - release,
-            pitch_take=take,
-            weight={'uphill': uphill, 'downhill': downhill, 'level': level},
-            fade=np.minimum(1.0, 6.0 * (1 - tau)),
-            samples=samples,
-            bezier_terms=self._bezier_terms(bezier, samples),
-            pinned=np.maximum(1.0 - smoothstep((bezier - 0.04) / 0.12),
-                              smoothstep((bezier - 0.84) / 0.12)),
-            hump=np.sin(np.pi * bezier) ** 2)
-        # Shared by every step of k frames: nothing may change them in place.
-        _read_only((timing.tau, timing.ease, timing.ease_in, timing.ease_out, timing.turn,
-                    timing.bezier, timing.lift, timing.plane_turn, timing.pitch_release,
-                    timing.pitch_take, timing.weight, timing.fade, timing.samples,
-                    timing.bezier_terms, timing.pinned, timing.hump))
-        _TIMINGS[key] = timing
-        return timing
+        """The time shapes of a k-frame step (:func:`_step_timing`)."""
+        return _step_timing(k, float(self.config.swing_clearance))
 
     def _turn_ease(self, heading_difference: float) -> float:
         """How far the pelvis eases to rest where the feet differ by ``heading_difference``."""
@@ -1014,7 +1034,7 @@ class WalkGenerator:
             tops (s, 9) highest obstacle across the sole at each point along it, m, -inf
             over empty space,
             bezier: the swing-height terms that do not depend on the pitch, see
-            :meth:`_bezier_terms`).
+            :func:`_bezier_terms`).
 
         """
         along, across = self._sole_along, self._sole_across
@@ -1033,25 +1053,6 @@ class WalkGenerator:
         # not in every pass of the swing heights (of two lines: an elementwise maximum, far
         # cheaper than a reduction over an axis of 2).
         return samples, along, np.maximum(tops[:, :, 0], tops[:, :, 1]), timing.bezier_terms
-
-    def _bezier_terms(self, tau, samples):
-        """Per-frame Bernstein weights of the swing Bezier and the clearance terms at the
-        sampled frames (the parts of :meth:`_swing_heights` fixed during one step)."""
-        b = tau[samples]
-        ramp = np.minimum(1.0, 10.0 * np.minimum(b, 1.0 - b))
-        # Near lift-off and touchdown the sole is by definition at its foothold: the
-        # conservative map may read a few mm high there (the 3D check is exact).
-        slack = 0.015 * (1.0 - ramp)
-        frames = np.empty((4, tau.size))
-        frames[0] = (1 - tau) ** 3
-        frames[1] = 3 * tau * (1 - tau) ** 2
-        frames[2] = 3 * tau * tau * (1 - tau)
-        frames[3] = tau ** 3
-        # The same formulas at the sampled frames give the same values: gathered, not redone.
-        sampled = tuple(frames[:, samples])
-        frames = tuple(frames)
-        # The clearance the sole keeps at each sample (full away from lift-off and touchdown).
-        return b, self.config.swing_clearance * ramp, slack, sampled, frames
 
     def _swing_heights(self, tau, lift_foot: FootPose, landing: FootPose, swing_pitch,
                        footprint):
