@@ -189,3 +189,27 @@ def test_without_numba_the_actor_walks_the_same_frames(tmp_path):
     frames = simulate('stairs_up', upper_body=False)[2]
     assert frames.shape[0] > 300
     np.testing.assert_array_equal(np.load(out), frames)
+
+
+def test_a_kernel_compiles_without_a_cache_when_numba_can_cache_it_nowhere(monkeypatch):
+    """numba refuses ``cache=True`` when neither the package nor the user's cache directory is
+    writable: the kernel is then compiled for the process alone, not an import error."""
+    from digital_actor_planner.core import jit
+    real = jit.numba.njit
+
+    def no_cache(*args, **kwargs):
+        if kwargs.get('cache'):
+            raise RuntimeError('cannot cache function: no locator available')
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(jit.numba, 'njit', no_cache)
+
+    @jit.kernel('f8(f8[::1])')
+    def total(values):
+        out = 0.0
+        for value in values:
+            out += value
+        return out
+
+    assert total(np.arange(4.0)) == 6.0
+    assert total.py_func is not total

@@ -32,7 +32,12 @@ def kernel(signature: str) -> Callable:
         if numba is None:
             function.py_func = function
             return function
-        return numba.njit(_parse(signature), cache=True, nogil=True)(function)
+        try:
+            return numba.njit(_parse(signature), cache=True, nogil=True)(function)
+        except RuntimeError:
+            # numba found nowhere writable to cache it (a read-only install and home):
+            # compiled for this process alone.
+            return numba.njit(_parse(signature), nogil=True)(function)
     return wrap
 
 
