@@ -11,7 +11,7 @@ import sys
 import numpy as np
 import pytest
 
-from digital_actor_planner.core import collision, environment, footsteps, gait
+from digital_actor_planner.core import collision, ct_space, environment, footsteps, gait
 from digital_actor_planner.core import skeleton as skeleton_module
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment, start_configuration
@@ -49,7 +49,8 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
     assert COMPILED
     for kernel in (footsteps._footholds, environment._ground_heights, environment._tops_near,
                    collision._suspects, collision._half_extents, skeleton_module._shape_transforms,
-                   gait._raise_swing, gait._swing_need, gait._leg_triangle):
+                   gait._raise_swing, gait._swing_need, gait._leg_triangle,
+                   ct_space._link_poses, ct_space._place_shapes, ct_space._shape_bounds):
         assert kernel.py_func is not kernel
 
 
@@ -135,6 +136,41 @@ def test_the_broad_phase_of_the_3d_check(skeleton, world):
                                          rotations))
 
 
+def test_the_upper_body_kinematics_and_boxes(skeleton):
+    """Every link's pose over frames (the CT-space's kinematics), the shapes placed on them and
+    their boxes."""
+    rng = np.random.default_rng(6)
+    q = rng.uniform(np.maximum(skeleton.lower, -3), np.minimum(skeleton.upper, 3), (25, 22))
+    kinematics = ct_space.BodyKinematics(skeleton)
+    shapes = ct_space.BodyShapes(skeleton)
+    poses = []
+    for kernel in (ct_space._link_poses, ct_space._link_poses.py_func):
+        rotations = np.zeros((25, kinematics.link_count, 3, 3))
+        positions = np.zeros((25, kinematics.link_count, 3))
+        rotations[:, 0] = np.eye(3)
+        kernel(q, rotations, positions, *kinematics._step_arrays(kinematics.steps))
+        poses.append((rotations, positions))
+    same(poses[0], poses[1])
+    every = np.arange(len(shapes.kind))
+    assert set(shapes.kind) == {'box', 'cylinder', 'sphere'}
+    # The model's shapes are not turned on their links: every other one is turned here.
+    turns = np.array([np.linalg.qr(rng.normal(size=(3, 3)))[0] for _ in every])
+    arguments = (*poses[0], every, shapes.origin_translation, turns, every % 2 == 0)
+    placed = []
+    for kernel in (ct_space._place_shapes, ct_space._place_shapes.py_func):
+        rotation, centre = np.empty((25, every.size, 3, 3)), np.empty((25, every.size, 3))
+        kernel(*arguments, rotation, centre)
+        placed.append((rotation, centre))
+    same(placed[0], placed[1])
+    boxes = []
+    for kernel in (ct_space._shape_bounds, ct_space._shape_bounds.py_func):
+        lower, upper = np.empty((25, every.size, 3)), np.empty((25, every.size, 3))
+        kernel(*placed[0], shapes.kind_code, shapes.half, lower, upper)
+        boxes.append((lower, upper))
+    same(boxes[0], boxes[1])
+    assert (boxes[0][1] > boxes[0][0]).all()
+
+
 def test_the_leg_triangle():
     """Ankles within reach, beyond it and at the hip itself."""
     rng = np.random.default_rng(5)
@@ -173,9 +209,10 @@ def test_the_swing_height_kernels():
 
 def test_without_numba_the_actor_walks_the_same_frames(tmp_path):
     """The kernels' fallback: in a process where numba cannot be imported every kernel runs as
-    Python, and the actor climbs the stairs with the same frames to the last bit."""
+    Python, and the actor climbs the stairs (lower body) and passes the table, flexing an arm
+    (whole body), with the same frames to the last bit."""
     from course_runs import simulate
-    out = tmp_path / 'frames.npy'
+    courses = (('stairs_up', False), ('table', True))
     code = '\n'.join([
         'import sys',
         'sys.modules["numba"] = None',
@@ -184,11 +221,13 @@ def test_without_numba_the_actor_walks_the_same_frames(tmp_path):
         'from digital_actor_planner.core import jit',
         'assert not jit.COMPILED',
         'from course_runs import simulate',
-        'np.save(sys.argv[1], simulate("stairs_up", upper_body=False)[2])'])
-    subprocess.run([sys.executable, '-c', code, str(out)], check=True, timeout=300)
-    frames = simulate('stairs_up', upper_body=False)[2]
-    assert frames.shape[0] > 300
-    np.testing.assert_array_equal(np.load(out), frames)
+        f'for i, (name, upper) in enumerate({courses!r}):',
+        '    np.save(f"{sys.argv[1]}/{i}.npy", simulate(name, upper_body=upper)[2])'])
+    subprocess.run([sys.executable, '-c', code, str(tmp_path)], check=True, timeout=300)
+    for i, (name, upper) in enumerate(courses):
+        frames = simulate(name, upper_body=upper)[2]
+        assert frames.shape[0] > 300
+        np.testing.assert_array_equal(np.load(tmp_path / f'{i}.npy'), frames, err_msg=name)
 
 
 def test_a_kernel_compiles_without_a_cache_when_numba_can_cache_it_nowhere(monkeypatch):

@@ -22,12 +22,15 @@ from __future__ import annotations
 
 import bisect
 from dataclasses import dataclass
+import math
 from typing import Dict, List, Optional, Sequence, Tuple
 
 import fcl
 import numpy as np
 
-from .skeleton import axis_rotation, Skeleton
+from .collision import _extent, _KIND_CODES
+from .jit import float_array, kernel
+from .skeleton import Skeleton
 
 #: Relative slack on the joint speed limits, for rounding in interpolation.
 SPEED_TOLERANCE = 1e-6
@@ -56,6 +59,118 @@ def _axis_code(axis: np.ndarray) -> Tuple[int, float]:
     return -1, 0.0
 
 
+@kernel('void(f8[:, :], f8[:, :, :, :], f8[:, :, :], i8[::1], i8[::1], f8[:, :, ::1], '
+        'b1[::1], f8[:, ::1], i8[::1], f8[::1], b1[::1], i8[::1], i8[::1], i8[::1], f8[::1], '
+        'f8[:, ::1])')
+def _link_poses(q, rotations, positions, parent, child, origin_rotation, turned,
+                origin_translation, offset_axis, offset_length, has_offset, joint, kind,
+                axis_coordinate, axis_sign, axis):
+    """:meth:`BodyKinematics.poses` of a sequence of joint steps for every frame, in place.
+
+    Per step (arrays over the steps): its ``parent`` and ``child`` link rows; its origin's
+    rotation (where ``turned``) and translation (where ``has_offset``; along one coordinate
+    axis ``offset_axis`` >= 0 by ``offset_length``); its configuration index ``joint`` (-1
+    fixed) and ``kind`` (1 revolute, 2 prismatic); its unit ``axis``, a coordinate axis
+    ``axis_coordinate`` >= 0 with ``axis_sign`` where it is one.
+    """
+    base = np.empty((3, 3))
+    turn = np.empty((3, 3))
+    for f in range(q.shape[0]):
+        for i in range(parent.shape[0]):
+            p, c = parent[i], child[i]
+            for r in range(3):
+                if offset_axis[i] >= 0:
+                    shift = rotations[f, p, r, offset_axis[i]] * offset_length[i]
+                elif has_offset[i]:
+                    shift = (rotations[f, p, r, 0] * origin_translation[i, 0]
+                             + rotations[f, p, r, 1] * origin_translation[i, 1]
+                             + rotations[f, p, r, 2] * origin_translation[i, 2])
+                else:
+                    shift = 0.0
+                positions[f, c, r] = positions[f, p, r] + shift
+                for col in range(3):
+                    if turned[i]:
+                        base[r, col] = (rotations[f, p, r, 0] * origin_rotation[i, 0, col]
+                                        + rotations[f, p, r, 1] * origin_rotation[i, 1, col]
+                                        + rotations[f, p, r, 2] * origin_rotation[i, 2, col])
+                    else:
+                        base[r, col] = rotations[f, p, r, col]
+            if joint[i] < 0 or kind[i] == 2:
+                rotations[f, c] = base
+                if joint[i] >= 0:
+                    value = q[f, joint[i]]
+                    for r in range(3):
+                        if axis_coordinate[i] >= 0:
+                            along = base[r, axis_coordinate[i]] * axis_sign[i]
+                        else:
+                            along = (base[r, 0] * axis[i, 0] + base[r, 1] * axis[i, 1]
+                                     + base[r, 2] * axis[i, 2])
+                        positions[f, c, r] += along * value
+                continue
+            # A revolute joint: about a coordinate axis the rotation mixes two columns.
+            if axis_coordinate[i] >= 0:
+                angle = q[f, joint[i]] * axis_sign[i]
+                cos, sin = math.cos(angle), math.sin(angle)
+                a, b = (axis_coordinate[i] + 1) % 3, (axis_coordinate[i] + 2) % 3
+                turn[:, :] = 0.0
+                turn[axis_coordinate[i], axis_coordinate[i]] = 1.0
+                turn[a, a] = cos
+                turn[b, b] = cos
+                turn[b, a] = sin
+                turn[a, b] = -sin
+            else:
+                x, y, z = axis[i, 0], axis[i, 1], axis[i, 2]
+                cos, sin = math.cos(q[f, joint[i]]), math.sin(q[f, joint[i]])
+                t = 1.0 - cos
+                turn[0, 0], turn[0, 1], turn[0, 2] = t * x * x + cos, t * x * y - sin * z, \
+                    t * x * z + sin * y
+                turn[1, 0], turn[1, 1], turn[1, 2] = t * x * y + sin * z, t * y * y + cos, \
+                    t * y * z - sin * x
+                turn[2, 0], turn[2, 1], turn[2, 2] = t * x * z - sin * y, t * y * z + sin * x, \
+                    t * z * z + cos
+            for r in range(3):
+                for col in range(3):
+                    rotations[f, c, r, col] = (base[r, 0] * turn[0, col]
+                                               + base[r, 1] * turn[1, col]
+                                               + base[r, 2] * turn[2, col])
+
+
+@kernel('void(f8[:, :, :, :], f8[:, :, :], i8[::1], f8[:, ::1], f8[:, :, ::1], b1[::1], '
+        'f8[:, :, :, ::1], f8[:, :, ::1])')
+def _place_shapes(rotations, positions, links, offsets, turns, turned, rotation, centre):
+    """Shapes' world poses over frames, into ``rotation`` (k, n, 3, 3) and ``centre``
+    (k, n, 3): shape i hangs from link row ``links[i]`` at ``offsets[i]`` (m, in the link's
+    frame), turned by ``turns[i]`` where ``turned[i]``."""
+    for f in range(rotations.shape[0]):
+        for i in range(links.shape[0]):
+            link = links[i]
+            for r in range(3):
+                centre[f, i, r] = positions[f, link, r] + (
+                    rotations[f, link, r, 0] * offsets[i, 0]
+                    + rotations[f, link, r, 1] * offsets[i, 1]
+                    + rotations[f, link, r, 2] * offsets[i, 2])
+                for c in range(3):
+                    if turned[i]:
+                        rotation[f, i, r, c] = (rotations[f, link, r, 0] * turns[i, 0, c]
+                                                + rotations[f, link, r, 1] * turns[i, 1, c]
+                                                + rotations[f, link, r, 2] * turns[i, 2, c])
+                    else:
+                        rotation[f, i, r, c] = rotations[f, link, r, c]
+
+
+@kernel('void(f8[:, :, :, :], f8[:, :, :], i8[::1], f8[:, ::1], f8[:, :, ::1], '
+        'f8[:, :, ::1])')
+def _shape_bounds(rotation, centre, kinds, halves, lower, upper):
+    """Axis-aligned boxes (k, n, 3) x 2 around n shapes (kind codes and padded half extents
+    of :func:`collision._extent`) posed over k frames."""
+    for f in range(rotation.shape[0]):
+        for i in range(kinds.shape[0]):
+            for axis in range(3):
+                extent = _extent(kinds[i], halves[i], rotation[f, i], axis)
+                lower[f, i, axis] = centre[f, i, axis] - extent
+                upper[f, i, axis] = centre[f, i, axis] + extent
+
+
 @dataclass(frozen=True)
 class _Step:
     parent: int
@@ -77,18 +192,32 @@ class _Step:
 class _Chain:
     """A set of joint steps laid out over a compact array of only the links they touch.
 
-    ``links`` lists the links the steps start from, then each step's child; ``moves`` holds,
-    per step, (step, position of its parent in ``links``, position of its child, position of
-    its rotation among ``joints``). ``table_index`` picks the nine entries of each joint
-    rotation from the columns [cos | sin | -sin | 0 | 1] of the joint angles.
+    ``links`` lists the links the steps start from, then each step's child; ``step_table``
+    holds the steps as :func:`_link_poses` reads them, over those links' rows.
     """
 
     links: np.ndarray
-    moves: Tuple[Tuple[_Step, int, int, int], ...]
-    joints: np.ndarray
-    signs: np.ndarray
-    table_index: np.ndarray
-    general: Tuple[Tuple[int, _Step], ...]
+    step_table: tuple
+
+
+def _step_table(steps: Sequence[_Step], parents: Sequence[int], children: Sequence[int]) -> tuple:
+    """Joint steps as the arrays :func:`_link_poses` reads, their parent and child links at
+    rows ``parents`` and ``children`` of the pose arrays."""
+    count = len(steps)
+    return (np.array(parents, dtype=np.int64).reshape(count),
+            np.array(children, dtype=np.int64).reshape(count),
+            np.array([np.eye(3) if st.origin_rotation is None else st.origin_rotation
+                      for st in steps], dtype=float).reshape(count, 3, 3),
+            np.array([st.origin_rotation is not None for st in steps], dtype=np.bool_),
+            np.array([st.origin_translation for st in steps], dtype=float).reshape(count, 3),
+            np.array([st.offset_axis for st in steps], dtype=np.int64),
+            np.array([st.offset_length for st in steps], dtype=float),
+            np.array([st.has_offset for st in steps], dtype=np.bool_),
+            np.array([st.joint for st in steps], dtype=np.int64),
+            np.array([2 if st.kind == 'prismatic' else 1 for st in steps], dtype=np.int64),
+            np.array([st.axis_coordinate for st in steps], dtype=np.int64),
+            np.array([st.axis_sign for st in steps], dtype=float),
+            np.array([st.axis for st in steps], dtype=float).reshape(count, 3))
 
 
 class BodyKinematics:
@@ -126,33 +255,10 @@ class BodyKinematics:
                 offset_length=float(joint.origin[offset_axis, 3]) if offset_axis >= 0 else 0.0))
         self.steps: Tuple[_Step, ...] = tuple(steps)
         self.link_count = len(skeleton.link_names)
-        # Per set of steps, the index arrays of its joint rotations (built once, used per call).
-        self._layouts: Dict[Tuple[int, ...], tuple] = {}
+        # Per set of steps, its arrays for _link_poses over every link, and its compact chain
+        # (built once, used per call).
+        self._layouts: Dict[tuple, tuple] = {}
         self._chains: Dict[Tuple[int, ...], _Chain] = {}
-        # Constant columns (0, 1) of the joint-rotation table, grown as batches need.
-        self._zero_one = np.tile([0.0, 1.0], (64, 1))
-
-    def _layout(self, steps: Sequence[_Step]) -> tuple:
-        """Joint columns, signs and scatter indices of the revolute joints among ``steps``."""
-        key = tuple(step.child for step in steps)
-        layout = self._layouts.get(key)
-        if layout is None:
-            revolute = [st for st in steps if st.joint >= 0 and st.kind != 'prismatic']
-            local = {st.child: n for n, st in enumerate(revolute)}
-            joints = np.array([st.joint for st in revolute], dtype=int)
-            signs = np.array([st.axis_sign if st.axis_coordinate >= 0 else 1.0
-                              for st in revolute])
-            n = np.array([i for i, st in enumerate(revolute) if st.axis_coordinate >= 0],
-                         dtype=int)
-            c = np.array([revolute[i].axis_coordinate for i in n], dtype=int)
-            a, b = (c + 1) % 3, (c + 2) % 3
-            # Flat positions in (len(revolute) * 9) of the entries of each rotation matrix.
-            flat = [n * 9 + row * 3 + column for row, column in ((c, c), (a, a), (b, b),
-                                                                 (b, a), (a, b))]
-            general = [(i, st) for i, st in enumerate(revolute) if st.axis_coordinate < 0]
-            layout = (revolute, local, joints, signs, n, flat, general)
-            self._layouts[key] = layout
-        return layout
 
     def chain(self, steps: Sequence[_Step]) -> _Chain:
         """The compact layout of ``steps`` for :meth:`chain_poses` (built once per set)."""
@@ -167,24 +273,9 @@ class BodyKinematics:
                 starts.append(step.parent)
         links = starts + children
         place = {link: i for i, link in enumerate(links)}
-        revolute, local, joints, signs, n, _, general = self._layout(steps)
-        count = len(revolute)
-        # Column of the table [cos (count) | sin (count) | -sin (count) | 0 | 1] for each of
-        # the nine entries of each joint rotation, as the scattered writes of poses() place
-        # them (general axes are filled in separately).
-        zero, one = 3 * count, 3 * count + 1
-        table_index = np.full((count, 3, 3), zero, dtype=int)
-        for i in n.tolist():
-            c = revolute[i].axis_coordinate
-            a, b = (c + 1) % 3, (c + 2) % 3
-            table_index[i, c, c] = one
-            table_index[i, a, a] = table_index[i, b, b] = i
-            table_index[i, b, a] = count + i
-            table_index[i, a, b] = 2 * count + i
-        moves = tuple((step, place[step.parent], place[step.child], local.get(step.child, -1))
-                      for step in steps)
-        chain = _Chain(links=np.array(links, dtype=int), moves=moves, joints=joints,
-                       signs=signs, table_index=table_index.ravel(), general=tuple(general))
+        chain = _Chain(links=np.array(links, dtype=int),
+                       step_table=_step_table(steps, [place[st.parent] for st in steps],
+                                              [place[st.child] for st in steps]))
         self._chains[key] = chain
         return chain
 
@@ -192,10 +283,9 @@ class BodyKinematics:
                     chain: _Chain) -> None:
         """Evaluate a chain's steps in place over compact poses of its links.
 
-        The same numbers as :meth:`poses` with the chain's steps, but over (k, C) arrays of
-        the C links of ``chain.links`` instead of every link, and with the joint rotations
-        gathered from one table instead of scattered: fewer and smaller NumPy calls, which is
-        what a branch's small batches pay for.
+        The same numbers as :meth:`poses` with the chain's steps (the same kernel, the same
+        arithmetic), but over (k, C) arrays of the C links of ``chain.links`` instead of every
+        link: what a branch's small batches need.
 
         Parameters
         ----------
@@ -208,41 +298,7 @@ class BodyKinematics:
             From :meth:`chain`.
 
         """
-        k = q.shape[0]
-        count = len(chain.joints)
-        if count:
-            angle = q[:, chain.joints] * chain.signs
-            sin = np.sin(angle)
-            if len(self._zero_one) < k:
-                self._zero_one = np.tile([0.0, 1.0], (k, 1))
-            table = np.concatenate((np.cos(angle), sin, -sin, self._zero_one[:k]), axis=1)
-            mats = table.take(chain.table_index, axis=1).reshape(k, count, 3, 3)
-            for i, st in chain.general:
-                mats[:, i] = axis_rotation(st.axis, q[:, st.joint])
-        for step, parent, child, joint in chain.moves:
-            parent_rotation = rotations[:, parent]
-            if step.offset_axis >= 0:
-                positions[:, child] = (positions[:, parent]
-                                       + parent_rotation[..., step.offset_axis]
-                                       * step.offset_length)
-            elif step.has_offset:
-                positions[:, child] = (positions[:, parent]
-                                       + parent_rotation @ step.origin_translation)
-            else:
-                positions[:, child] = positions[:, parent]
-            base = (parent_rotation if step.origin_rotation is None
-                    else parent_rotation @ step.origin_rotation)
-            if step.joint < 0:
-                rotations[:, child] = base
-            elif step.kind == 'prismatic':
-                rotations[:, child] = base
-                if step.axis_coordinate >= 0:
-                    along = base[..., step.axis_coordinate] * step.axis_sign
-                else:
-                    along = base @ step.axis
-                positions[:, child] += along * q[:, step.joint, None]
-            else:
-                np.matmul(base, mats[:, joint], out=rotations[:, child])
+        _link_poses(float_array(q), rotations, positions, *chain.step_table)
 
     def subtree_steps(self, joint_names: Sequence[str]) -> Tuple[_Step, ...]:
         """Return the steps that move when any of the named joints moves, in evaluation order."""
@@ -256,6 +312,15 @@ class BodyKinematics:
                 moving.add(step.child)
                 out.append(step)
         return tuple(out)
+
+    def _step_arrays(self, steps: Sequence[_Step]) -> tuple:
+        """The steps as :func:`_link_poses` reads them over every link (built once per set)."""
+        key = tuple(step.child for step in steps)
+        arrays = self._layouts.get(key)
+        if arrays is None:
+            arrays = _step_table(steps, [st.parent for st in steps], [st.child for st in steps])
+            self._layouts[key] = arrays
+        return arrays
 
     def poses(self, q: np.ndarray, rotations: Optional[np.ndarray] = None,
               positions: Optional[np.ndarray] = None,
@@ -286,52 +351,7 @@ class BodyKinematics:
             rotations[:, 0] = np.eye(3)
             positions[:, 0] = 0.0
         steps = self.steps if steps is None else steps
-        # All joint rotations at once: few large NumPy calls instead of many small ones.
-        revolute, local, joints, signs, n, flat, general = self._layout(steps)
-        if revolute:
-            angle = q[:, joints] * signs
-            cos, sin = np.cos(angle), np.sin(angle)
-            flat_mats = np.zeros((k, len(revolute) * 9))
-            mats = flat_mats.reshape(k, len(revolute), 3, 3)
-            # Rotations about coordinate axes: five scattered writes for all joints at once
-            # (into the flat array: cheaper than into four indexed axes).
-            if len(n):
-                one, first, second, lower, upper = flat
-                cos, sin = cos[:, n], sin[:, n]
-                flat_mats[:, one] = 1.0
-                flat_mats[:, first] = cos
-                flat_mats[:, second] = cos
-                flat_mats[:, lower] = sin
-                flat_mats[:, upper] = -sin
-            for i, st in general:
-                mats[:, i] = axis_rotation(st.axis, q[:, st.joint])
-        for step in steps:
-            parent_rotation = rotations[:, step.parent]
-            if step.offset_axis >= 0:
-                # An offset along one axis moves along that column of the rotation (the same
-                # numbers as the matrix product, without its per-matrix cost).
-                positions[:, step.child] = (positions[:, step.parent]
-                                            + parent_rotation[..., step.offset_axis]
-                                            * step.offset_length)
-            elif step.has_offset:
-                positions[:, step.child] = (positions[:, step.parent]
-                                            + parent_rotation @ step.origin_translation)
-            else:
-                positions[:, step.child] = positions[:, step.parent]
-            base = (parent_rotation if step.origin_rotation is None
-                    else parent_rotation @ step.origin_rotation)
-            if step.joint < 0:
-                rotations[:, step.child] = base
-            elif step.kind == 'prismatic':
-                rotations[:, step.child] = base
-                if step.axis_coordinate >= 0:
-                    # Along a coordinate axis: that column of the rotation, as in the product.
-                    along = base[..., step.axis_coordinate] * step.axis_sign
-                else:
-                    along = base @ step.axis
-                positions[:, step.child] += along * q[:, step.joint, None]
-            else:
-                np.matmul(base, mats[:, local[step.child]], out=rotations[:, step.child])
+        _link_poses(float_array(q), rotations, positions, *self._step_arrays(steps))
         return rotations, positions
 
 
@@ -377,12 +397,9 @@ class BodyShapes:
             self.objects.append(fcl.CollisionObject(geometry, fcl.Transform()))
         self._request = fcl.CollisionRequest()
         self._result = fcl.CollisionResult()
-        self.is_box = np.array([k == 'box' for k in self.kind])
-        self.is_cylinder = np.array([k == 'cylinder' for k in self.kind])
-        self.is_sphere = np.array([k == 'sphere' for k in self.kind])
+        # Kind codes of collision._extent (with ``half``, its padded half extents).
+        self.kind_code = np.array([_KIND_CODES[k] for k in self.kind], dtype=np.int64)
         self._tree_distance = self._link_tree_distances()
-        # Per set of shapes, the columns and sizes used by :meth:`bounds` (built once).
-        self._layouts: Dict[bytes, tuple] = {}
         #: Per branch CT-space, the data that depends on the model only (built once).
         self.branch_layouts: Dict[tuple, tuple] = {}
 
@@ -427,47 +444,22 @@ class BodyShapes:
     def poses(self, rotations: np.ndarray, positions: np.ndarray,
               shapes: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
         """World poses of some shapes: rotations (k, n, 3, 3) and centres (k, n, 3), m."""
-        # take() keeps the result C-ordered (fancy indexing a middle axis does not), which
-        # keeps later reductions over it on NumPy's fast path.
-        links = self.link[shapes]
-        link_rotation = rotations.take(links, axis=1)
-        centre = positions.take(links, axis=1) + (
-            link_rotation @ self.origin_translation[shapes][:, :, None])[..., 0]
-        if self.identity_origin[shapes].all():
-            return link_rotation, centre
-        return link_rotation @ self.origin_rotation[shapes], centre
+        shapes = np.asarray(shapes, dtype=np.int64)
+        k = rotations.shape[0]
+        rotation, centre = np.empty((k, len(shapes), 3, 3)), np.empty((k, len(shapes), 3))
+        _place_shapes(rotations, positions, self.link[shapes], self.origin_translation[shapes],
+                      self.origin_rotation[shapes], ~self.identity_origin[shapes], rotation,
+                      centre)
+        return rotation, centre
 
     def bounds(self, rotation: np.ndarray, centre: np.ndarray,
                shapes: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
         """Axis-aligned boxes around shapes posed at (k, n): lower and upper corners (k, n, 3)."""
-        box, box_half, cylinder, radius, half_length, sphere, sphere_radius = (
-            self._bounds_layout(shapes))
-        extent = np.empty(centre.shape)
-        if len(box):
-            extent[:, box] = (np.abs(rotation.take(box, axis=1)) @ box_half)[..., 0]
-        if len(cylinder):
-            axis = np.abs(rotation.take(cylinder, axis=1)[..., 2])
-            # 1 - axis^2 <= 1 always: only the lower clip can bite (np.clip's wrapper costs
-            # more than the arithmetic on a branch's few shapes).
-            extent[:, cylinder] = (radius * np.sqrt(np.maximum(1.0 - axis * axis, 0.0))
-                                   + half_length * axis)
-        if len(sphere):
-            extent[:, sphere] = sphere_radius
-        return centre - extent, centre + extent
-
-    def _bounds_layout(self, shapes: np.ndarray) -> tuple:
-        """Columns and padded sizes of the boxes, cylinders and spheres among ``shapes``."""
-        key = shapes.tobytes()
-        layout = self._layouts.get(key)
-        if layout is None:
-            half = self.half[shapes]
-            box = np.flatnonzero(self.is_box[shapes])
-            cylinder = np.flatnonzero(self.is_cylinder[shapes])
-            sphere = np.flatnonzero(self.is_sphere[shapes])
-            layout = (box, half[box][:, :, None], cylinder, half[cylinder, 0, None],
-                      half[cylinder, 1, None], sphere, half[sphere, 0, None])
-            self._layouts[key] = layout
-        return layout
+        shapes = np.asarray(shapes, dtype=np.int64)
+        lower, upper = np.empty(centre.shape), np.empty(centre.shape)
+        _shape_bounds(float_array(rotation), float_array(centre), self.kind_code[shapes],
+                      self.half[shapes], lower, upper)
+        return lower, upper
 
     def collides(self, shape: int, rotation: np.ndarray, centre: np.ndarray,
                  other) -> bool:
@@ -964,10 +956,10 @@ class CTSpace:
         place = {link: i for i, link in enumerate(self._chain.links.tolist())}
         shapes = body.shapes
         self._shape_links = np.array([place[link] for link in shapes.link[self.checked]],
-                                     dtype=int)
-        self._shape_offsets = shapes.origin_translation[self.checked][:, :, None]
-        self._shape_turns = (None if shapes.identity_origin[self.checked].all()
-                             else shapes.origin_rotation[self.checked])
+                                     dtype=np.int64)
+        self._shape_offsets = np.ascontiguousarray(shapes.origin_translation[self.checked])
+        self._shape_turns = np.ascontiguousarray(shapes.origin_rotation[self.checked])
+        self._shape_turned = ~shapes.identity_origin[self.checked]
         self._prepare_environment()
         self.checks = 0
         # A motion whose broad phase ran ahead (see best_valid_rows), or None.
@@ -1394,11 +1386,10 @@ class CTSpace:
         rotations, positions = body.rotations[at], body.positions[at]
         body.kinematics.chain_poses(full, rotations, positions, self._chain)
         # BodyShapes.poses, over the compact links.
-        links = self._shape_links
-        link_rotation = rotations.take(links, axis=1)
-        centre = positions.take(links, axis=1) + (link_rotation @ self._shape_offsets)[..., 0]
-        rotation = (link_rotation if self._shape_turns is None
-                    else link_rotation @ self._shape_turns)
+        rotation = np.empty((len(frames), len(self.checked), 3, 3))
+        centre = np.empty((len(frames), len(self.checked), 3))
+        _place_shapes(rotations, positions, self._shape_links, self._shape_offsets,
+                      self._shape_turns, self._shape_turned, rotation, centre)
         low, high = body.shapes.bounds(rotation, centre, self.checked)
         return rotation, centre, low, high
 
