@@ -49,7 +49,8 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
     assert COMPILED
     for kernel in (footsteps._footholds, environment._ground_heights, environment._tops_near,
                    collision._suspects, collision._half_extents, skeleton_module._shape_transforms,
-                   gait._raise_swing, gait._swing_need, gait._leg_triangle,
+                   gait._raise_swing, gait._swing_need, gait._leg_triangle, gait._feet_meet,
+                   gait._leg_violation, gait._sole_points, gait._across_sole,
                    ct_space._link_poses, ct_space._place_shapes, ct_space._shape_bounds):
         assert kernel.py_func is not kernel
 
@@ -179,6 +180,42 @@ def test_the_leg_triangle():
     forward[:3] = down[:3] = 0.0
     same(gait._leg_triangle(forward, down, 0.45, 0.43),
          gait._leg_triangle.py_func(forward, down, 0.45, 0.43))
+
+
+def test_the_gait_checks_and_the_sole_points():
+    """The feet's separating-axis test and the leg's limits (both outcomes), and the points
+    and heights under a swinging sole."""
+    rng = np.random.default_rng(7)
+    met, violations = set(), set()
+    for trial in range(200):
+        k = 30
+        swing_xy = rng.uniform(-0.4, 0.4, (k, 2))
+        heading = rng.uniform(-np.pi, np.pi, k)
+        direction = np.stack([np.cos(heading), np.sin(heading)], axis=1)
+        swing_z = rng.uniform(0.0, 0.2, k)
+        arguments = (swing_xy, direction, swing_z, 0.0, 0.0, 0.1, 1.0, 0.0, 0.05, 0.13,
+                     0.05, 4.0 * (0.13 ** 2 + 0.05 ** 2))
+        meet = gait._feet_meet(*arguments)
+        assert meet == gait._feet_meet.py_func(*arguments)
+        met.add(meet)
+        joints = rng.uniform(-1.2, 1.2, (k, 4)) * (1.0 if trial % 3 else 0.9)
+        reach = rng.uniform(0.5, 1.0, k)
+        if trial % 7 == 0:
+            reach[5] = 1.01
+        low, high = np.full(4, -1.19), np.full(4, 1.19)
+        found = gait._leg_violation(joints, reach, low, high)
+        assert found == gait._leg_violation.py_func(joints, reach, low, high)
+        violations.add(found[0] if found[0] < 0 else 'joint')
+    assert met == {True, False} and violations == {-2, -1, 'joint'}
+    samples = np.arange(0, 30, 3)
+    along, across = np.linspace(-0.07, 0.18, 9), np.array([-0.04, 0.04])
+    arguments = (swing_xy, direction, samples, along, across)
+    points = gait._sole_points(*arguments)
+    same(points, gait._sole_points.py_func(*arguments))
+    assert points.shape == (samples.size * 9 * 2, 2)
+    heights = rng.uniform(0.0, 0.3, points.shape[0])
+    heights[::7] = np.nan
+    same(gait._across_sole(heights, 9, 2), gait._across_sole.py_func(heights, 9, 2))
 
 
 def test_the_swing_height_kernels():

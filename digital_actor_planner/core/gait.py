@@ -303,6 +303,91 @@ def _sagittal_leg(leg: LegGeometry, forward: np.ndarray, down: np.ndarray,
     return reach
 
 
+@kernel('b1(f8[:, :], f8[:, :], f8[:], f8, f8, f8, f8, f8, f8, f8, f8, f8)')
+def _feet_meet(swing_xy, direction, swing_z, stance_x, stance_y, top, ux, uy, shift,
+               half_length, half_width, far):
+    """Whether the swinging sole (ankle ``swing_xy`` (k, 2), heading ``direction`` (k, 2) as
+    cosine and sine, ankle height ``swing_z`` (k,)) meets the stance sole (ankle at
+    (``stance_x``, ``stance_y``), heading (``ux``, ``uy``)) seen from above at a frame where it
+    is below the stance foot's ``top``: a separating-axis test of the two boxes, ``shift`` from
+    the ankle to the middle of a sole, ``half_length`` and ``half_width`` its half sizes. Sole
+    middles farther apart than ``far`` squared (two half-diagonals) cannot meet."""
+    for f in range(swing_xy.shape[0]):
+        if not swing_z[f] < top:
+            continue
+        dx, dy = direction[f, 0], direction[f, 1]
+        gap_x = swing_xy[f, 0] + shift * dx - (stance_x + shift * ux)
+        gap_y = swing_xy[f, 1] + shift * dy - (stance_y + shift * uy)
+        if not gap_x * gap_x + gap_y * gap_y < far:
+            continue
+        # |cos| and |sin| of the angle between the feet: the projections of one sole's axes
+        # (along, across) on the other's.
+        along = abs(dx * ux + dy * uy)
+        across = abs(dy * ux - dx * uy)
+        long_reach = half_length + half_length * along + half_width * across
+        wide_reach = half_width + half_length * across + half_width * along
+        if not (abs(gap_x * ux + gap_y * uy) > long_reach
+                or abs(gap_y * ux - gap_x * uy) > wide_reach
+                or abs(gap_x * dx + gap_y * dy) > long_reach
+                or abs(gap_y * dx - gap_x * dy) > wide_reach):
+            return True
+    return False
+
+
+@kernel('f8[:, ::1](f8[:, :], f8[:, :], readonly(i8[::1]), f8[::1], f8[::1])')
+def _sole_points(swing_xy, direction, samples, along, across):
+    """Points under the swinging sole at the sampled frames: for each sample, each offset
+    ``along`` the sole from the ankle and each line ``across`` it (m, left positive), the
+    point (x, y); (samples x along x across, 2), m, in that order."""
+    out = np.empty((samples.shape[0] * along.shape[0] * across.shape[0], 2))
+    row = 0
+    for i in samples:
+        dx, dy = direction[i, 0], direction[i, 1]
+        for a in range(along.shape[0]):
+            x = swing_xy[i, 0] + along[a] * dx
+            y = swing_xy[i, 1] + along[a] * dy
+            for c in range(across.shape[0]):
+                out[row, 0] = x + across[c] * -dy
+                out[row, 1] = y + across[c] * dx
+                row += 1
+    return out
+
+
+@kernel('f8[:, ::1](f8[::1], i8, i8)')
+def _across_sole(heights, along, across):
+    """The highest of ``across`` heights at each point along the sole: (samples, along), m;
+    NaN (nothing to clear) read as -inf."""
+    out = np.empty((heights.shape[0] // (along * across), along))
+    for i in range(out.shape[0]):
+        for a in range(along):
+            most = -np.inf
+            for c in range(across):
+                value = heights[(i * along + a) * across + c]
+                if value > most:
+                    most = value
+            out[i, a] = most
+    return out
+
+
+@kernel('UniTuple(i8, 2)(f8[:, :], f8[:], f8[::1], f8[::1])')
+def _leg_violation(joints, reach, low, high):
+    """Where a leg's (k, 4) ``joints`` first leave their bounds [``low``, ``high``]: (-2, -1)
+    when some ``reach`` (hip-ankle distance over the leg's length) passes 1, else (the first
+    frame with a joint out of bounds, the first joint out of bounds in any frame), or (-1, -1).
+    """
+    for f in range(reach.shape[0]):
+        if reach[f] > 1.0 + 1e-9:
+            return -2, -1
+    row, column = -1, joints.shape[1]
+    for f in range(joints.shape[0]):
+        for j in range(joints.shape[1]):
+            if joints[f, j] < low[j] or joints[f, j] > high[j]:
+                if row < 0:
+                    row = f
+                column = min(column, j)
+    return row, (column if row >= 0 else -1)
+
+
 @kernel('UniTuple(f8[::1], 3)(f8[:], f8[:], f8, f8)')
 def _leg_triangle(forward, down, l1, l2):
     """The leg's triangle for ankles ``forward`` and ``down`` of the hip (m): the reach (the
@@ -867,33 +952,13 @@ class WalkGenerator:
         through it.
         """
         leg = self.leg
-        low = swing_z < stance_foot.z + leg.ankle_height
-        if not low.any():
-            return
         shift = 0.5 * (leg.toe - leg.heel)  # ankle -> middle of the sole
         half_length = 0.5 * (leg.heel + leg.toe)
         half_width = 0.5 * leg.foot_width
-        ux, uy = math.cos(stance_foot.yaw), math.sin(stance_foot.yaw)
-        dx, dy = direction[low, 0], direction[low, 1]
-        gap_x = swing_xy[low, 0] + shift * dx - (stance_foot.xy[0] + shift * ux)
-        gap_y = swing_xy[low, 1] + shift * dy - (stance_foot.xy[1] + shift * uy)
-        # Soles whose middles are farther apart than two half-diagonals cannot meet (most
-        # frames of most steps): only the others are tested.
-        near = gap_x * gap_x + gap_y * gap_y < 4.0 * (half_length ** 2 + half_width ** 2)
-        if not near.any():
-            return
-        dx, dy, gap_x, gap_y = dx[near], dy[near], gap_x[near], gap_y[near]
-        # |cos| and |sin| of the angle between the feet: the projections of one sole's axes
-        # (along, across) on the other's.
-        along = np.abs(dx * ux + dy * uy)
-        across = np.abs(dy * ux - dx * uy)
-        long_reach = half_length + half_length * along + half_width * across
-        wide_reach = half_width + half_length * across + half_width * along
-        apart = ((np.abs(gap_x * ux + gap_y * uy) > long_reach)
-                 | (np.abs(gap_y * ux - gap_x * uy) > wide_reach)
-                 | (np.abs(gap_x * dx + gap_y * dy) > long_reach)
-                 | (np.abs(gap_y * dx - gap_x * dy) > wide_reach))
-        if not apart.all():
+        if _feet_meet(swing_xy, direction, swing_z, float(stance_foot.xy[0]),
+                      float(stance_foot.xy[1]), stance_foot.z + leg.ankle_height,
+                      math.cos(stance_foot.yaw), math.sin(stance_foot.yaw), shift, half_length,
+                      half_width, 4.0 * (half_length ** 2 + half_width ** 2)):
             raise GaitError('the swing foot would pass into the stance foot')
 
     def _check_legs_apart(self, stance_outward: float, stance_hip: np.ndarray, stance_plane,
@@ -942,15 +1007,14 @@ class WalkGenerator:
 
     def _check_leg(self, side: int, joints: np.ndarray, reach: np.ndarray) -> None:
         """Raise GaitError if a leg's (k, 4) joints leave their limits or it is out of reach."""
-        if reach.max() > 1.0 + 1e-9:
-            raise GaitError(f'{"left" if side == LEFT else "right"} leg out of reach')
         low, high = self._leg_bounds[side]
-        bad = (joints < low) | (joints > high)
-        if bad.any():
-            column = int(np.argmax(np.any(bad, axis=0)))
+        row, column = _leg_violation(joints, reach, low, high)
+        if row == -2:
+            raise GaitError(f'{"left" if side == LEFT else "right"} leg out of reach')
+        if row >= 0:
             name = self.skeleton.joint_names[self._leg_index[side][column]]
-            value = joints[np.any(bad, axis=1)][0, column]
-            raise GaitError(f'{name} would reach {value:.2f} rad, outside its limits')
+            raise GaitError(f'{name} would reach {joints[row, column]:.2f} rad, outside its '
+                            'limits')
 
     def _supported_toe(self, foot: FootPose, ground) -> float:
         """How far ahead of the ankle a stance sole's heel lifts about, m: its toe tip where its
@@ -1039,20 +1103,14 @@ class WalkGenerator:
         """
         along, across = self._sole_along, self._sole_across
         samples = timing.samples
-        d = direction[samples]
-        n = np.empty_like(d)
-        n[:, 0] = -d[:, 1]
-        n[:, 1] = d[:, 0]
-        points = (swing_xy[samples, None, None, :] + along[None, :, None, None] * d[:, None, None]
-                  + across[None, None, :, None] * n[:, None, None])
+        points = _sole_points(swing_xy, direction, samples, along, across)
         z_ref = max(lift_foot.z, landing.z) + self.config.max_swing_lift
-        tops = swing_profile(points.reshape(-1, 2), z_ref).reshape(len(samples), along.size, -1)
-        tops[np.isnan(tops)] = -np.inf
         # The pitch moves the points across the sole together (they share an offset along
         # it), and subtracting one number keeps the order: their maximum is taken here, once,
-        # not in every pass of the swing heights (of two lines: an elementwise maximum, far
-        # cheaper than a reduction over an axis of 2).
-        return samples, along, np.maximum(tops[:, :, 0], tops[:, :, 1]), timing.bezier_terms
+        # not in every pass of the swing heights.
+        tops = _across_sole(np.array(swing_profile(points, z_ref), dtype=np.float64),
+                            along.size, across.size)
+        return samples, along, tops, timing.bezier_terms
 
     def _swing_heights(self, tau, lift_foot: FootPose, landing: FootPose, swing_pitch,
                        footprint):
