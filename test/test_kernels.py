@@ -51,7 +51,8 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    collision._suspects, collision._half_extents, skeleton_module._shape_transforms,
                    gait._raise_swing, gait._swing_need, gait._leg_triangle, gait._feet_meet,
                    gait._leg_violation, gait._sole_points, gait._across_sole,
-                   ct_space._link_poses, ct_space._place_shapes, ct_space._shape_bounds):
+                   ct_space._link_poses, ct_space._place_shapes, ct_space._shape_bounds,
+                   ct_space._mesh_contacts):
         assert kernel.py_func is not kernel
 
 
@@ -170,6 +171,28 @@ def test_the_upper_body_kinematics_and_boxes(skeleton):
         boxes.append((lower, upper))
     same(boxes[0], boxes[1])
     assert (boxes[0][1] > boxes[0][0]).all()
+
+
+def test_the_contacts_of_shape_boxes_with_triangle_boxes():
+    """Which (row, shape, mesh) boxes meet: compiled, as Python, with and without the cut by
+    the swept boxes, and by brute force over every triangle."""
+    rng = np.random.default_rng(8)
+    centre = rng.uniform(0.0, 1.0, (12, 5, 3))
+    low, high = centre - 0.05, centre + 0.05
+    corner = rng.uniform(0.0, 1.0, (300, 3))
+    triangle_lower, triangle_upper = corner, corner + rng.uniform(0.0, 0.1, (300, 3))
+    owner = rng.integers(0, 4, 300)
+    brute = np.zeros((12, 5, 4), dtype=bool)
+    meets = ((high[:, :, None] >= triangle_lower) & (low[:, :, None] <= triangle_upper)).all(-1)
+    for t in range(300):
+        brute[:, :, owner[t]] |= meets[:, :, t]
+    expected = np.nonzero(brute)
+    assert 0 < len(expected[0]) < brute.size
+    for swept in (True, False):
+        arguments = (low, high, triangle_lower, triangle_upper, owner, 4, swept)
+        found = ct_space._mesh_contacts(*arguments)
+        same(found, ct_space._mesh_contacts.py_func(*arguments))
+        same(found, expected)
 
 
 def test_the_leg_triangle():

@@ -171,6 +171,68 @@ def _shape_bounds(rotation, centre, kinds, halves, lower, upper):
                 upper[f, i, axis] = centre[f, i, axis] + extent
 
 
+@kernel('UniTuple(i8[::1], 3)(f8[:, :, :], f8[:, :, :], f8[:, :], f8[:, :], i8[:], i8, b1)')
+def _mesh_contacts(low, high, triangle_lower, triangle_upper, owner, mesh_count, swept):
+    """:func:`mesh_contacts`: the (row, shape, mesh) triples where a shape's box meets a box of
+    one of the mesh's triangles, in row, shape, mesh order. With ``swept`` each shape is first
+    tested against the triangles its box swept over all rows meets (the same triples)."""
+    m, n, count = low.shape[0], low.shape[1], triangle_lower.shape[0]
+    hit = np.zeros((m, n, mesh_count), dtype=np.bool_)
+    candidates = np.empty(count, dtype=np.int64)
+    lowest, highest = np.empty(3), np.empty(3)
+    for c in range(n):
+        found = 0
+        if swept:
+            for axis in range(3):
+                lowest[axis], highest[axis] = low[0, c, axis], high[0, c, axis]
+                for r in range(1, m):
+                    lowest[axis] = min(lowest[axis], low[r, c, axis])
+                    highest[axis] = max(highest[axis], high[r, c, axis])
+            for t in range(count):
+                meets = True
+                for axis in range(3):
+                    if not (highest[axis] >= triangle_lower[t, axis]
+                            and lowest[axis] <= triangle_upper[t, axis]):
+                        meets = False
+                        break
+                if meets:
+                    candidates[found] = t
+                    found += 1
+        else:
+            for t in range(count):
+                candidates[found] = t
+                found += 1
+        for r in range(m):
+            for k in range(found):
+                t = candidates[k]
+                if hit[r, c, owner[t]]:
+                    continue
+                meets = True
+                for axis in range(3):
+                    if not (high[r, c, axis] >= triangle_lower[t, axis]
+                            and low[r, c, axis] <= triangle_upper[t, axis]):
+                        meets = False
+                        break
+                if meets:
+                    hit[r, c, owner[t]] = True
+    total = 0
+    for r in range(m):
+        for c in range(n):
+            for g in range(mesh_count):
+                total += hit[r, c, g]
+    rows = np.empty(total, dtype=np.int64)
+    columns = np.empty(total, dtype=np.int64)
+    meshes = np.empty(total, dtype=np.int64)
+    i = 0
+    for r in range(m):
+        for c in range(n):
+            for g in range(mesh_count):
+                if hit[r, c, g]:
+                    rows[i], columns[i], meshes[i] = r, c, g
+                    i += 1
+    return rows, columns, meshes
+
+
 @dataclass(frozen=True)
 class _Step:
     parent: int
@@ -792,26 +854,13 @@ def mesh_contacts(low: np.ndarray, high: np.ndarray, triangle_lower: np.ndarray,
         Index arrays in row, shape, mesh order (a scatter, not a sort).
 
     """
-    m, n = low.shape[:2]
-    if swept is None:
-        swept = m * n * len(triangle_lower) > SWEPT_CONTACTS
-    if m > 1 and swept:
-        # Many rows: only the (shape, triangle) pairs whose boxes meet when the shape's is
-        # swept over all rows can meet in one of them.
-        shape, triangle = np.nonzero(boxes_overlap(
-            low.min(axis=0)[:, None], high.max(axis=0)[:, None], triangle_lower[None],
-            triangle_upper[None]))
-        rows, which = np.nonzero(boxes_overlap(
-            low.take(shape, axis=1), high.take(shape, axis=1), triangle_lower[triangle],
-            triangle_upper[triangle]))
-        columns, triangles = shape[which], triangle[which]
-    else:
-        rows, columns, triangles = np.nonzero(boxes_overlap(
-            low[:, :, None], high[:, :, None], triangle_lower[None, None],
-            triangle_upper[None, None]))
-    hit = np.zeros(low.shape[:2] + (mesh_count,), dtype=bool)
-    hit[rows, columns, triangle_owner[triangles]] = True
-    return np.nonzero(hit)
+    return _mesh_contacts(float_array(low), float_array(high), float_array(triangle_lower),
+                          float_array(triangle_upper),
+                          np.asarray(triangle_owner, dtype=np.int64), int(mesh_count),
+                          bool(low.shape[0] > 1 and (
+                              swept if swept is not None
+                              else low.shape[0] * low.shape[1] * len(triangle_lower)
+                              > SWEPT_CONTACTS)))
 
 
 def branch_layout(kinematics: BodyKinematics, shapes: BodyShapes, branch: str,
