@@ -1,7 +1,8 @@
 """The 22-DOF actor model read from the URDF: joint order, limits, segment lengths, kinematics.
 
 This is the one place the joint names come from (paper §3.1, Figure 1). Forward kinematics is
-hand-written NumPy, batched over configurations, because it sits on every planner's hot path.
+one compiled kernel (:func:`_compose`, see ``jit``), batched over configurations, because it sits
+on every planner's hot path.
 """
 from __future__ import annotations
 
@@ -145,27 +146,6 @@ def _origin_matrix(element) -> np.ndarray:
     return transform
 
 
-def axis_rotation(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
-    """Rodrigues rotation about a unit axis for a batch of angles: (k,) -> (k, 3, 3)."""
-    x, y, z = axis
-    c, s = np.cos(angle), np.sin(angle)
-    t = 1.0 - c
-    rot = np.empty(angle.shape + (3, 3))
-    rot[..., 0, 0] = t * x * x + c
-    rot[..., 0, 1] = t * x * y - s * z
-    rot[..., 0, 2] = t * x * z + s * y
-    rot[..., 1, 0] = t * x * y + s * z
-    rot[..., 1, 1] = t * y * y + c
-    rot[..., 1, 2] = t * y * z - s * x
-    rot[..., 2, 0] = t * x * z - s * y
-    rot[..., 2, 1] = t * y * z + s * x
-    rot[..., 2, 2] = t * z * z + c
-    return rot
-
-
-_IDENTITY = np.eye(4)
-
-
 def _compile_plan(plan) -> tuple:
     """Constant matrices of a kinematic chain plan for :meth:`Skeleton.forward_kinematics`.
 
@@ -174,17 +154,19 @@ def _compile_plan(plan) -> tuple:
     (cos q, sin q) for a revolute joint, (q, 0) prismatic and (0, 0) fixed.
     """
     basis = np.zeros((len(plan), 3, 4, 4))
-    revolute, revolute_q, prismatic, prismatic_q = [], [], [], []
+    # Each joint's motion (0 fixed, 1 revolute, 2 prismatic) and its q index.
+    motion = np.zeros(len(plan), dtype=np.int64)
+    joint_q = np.zeros(len(plan), dtype=np.int64)
     for j, (_, _, origin, qi, kind, axis) in enumerate(plan):
         basis[j, 0] = origin
         if qi < 0:
             continue
+        joint_q[j] = qi
         if kind == 'prismatic':
             shift = np.zeros((4, 4))
             shift[:3, 3] = axis
             basis[j, 1] = origin @ shift
-            prismatic.append(j)
-            prismatic_q.append(qi)
+            motion[j] = 2
             continue
         # Rodrigues: R(q) = (I + K^2) - cos(q) K^2 + sin(q) K.
         x, y, z = axis
@@ -194,55 +176,29 @@ def _compile_plan(plan) -> tuple:
         basis[j, 0] = origin @ (np.eye(4) + square)
         basis[j, 1] = -(origin @ square)
         basis[j, 2] = origin @ skew
-        revolute.append(j)
-        revolute_q.append(qi)
-    return (tuple(e[0] for e in plan), tuple(e[1] for e in plan),
-            basis.reshape(len(plan), 3, 16), np.array(revolute, dtype=int),
-            np.array(revolute_q, dtype=int), np.array(prismatic, dtype=int),
-            np.array(prismatic_q, dtype=int))
+        motion[j] = 1
+    return (np.array([e[0] for e in plan], dtype=np.int64).reshape(len(plan)),
+            np.array([e[1] for e in plan], dtype=np.int64).reshape(len(plan)),
+            basis.reshape(len(plan), 3, 16), motion, joint_q)
 
 
-def _compose(qs: np.ndarray, links, terms, out: np.ndarray) -> None:
-    """Compose a compiled chain (see :func:`_compile_plan`) for configurations ``qs`` (k, 22).
+@kernel('void(f8[:, ::1], i8[::1], i8[::1], f8[:, :, ::1], i8[::1], i8[::1], '
+        'f8[:, :, :, ::1])')
+def _compose(qs, parents, children, basis, motion, joint_q, out):
+    """Compose a compiled chain (see :func:`_compile_plan`) for configurations ``qs`` (k, 22)
+    into ``out`` (k, L, 4, 4), whose link row 0 is the root (set to the identity here).
 
-    ``links`` (parents, children) index the link-major ``out`` (L, k, 4, 4), whose row 0 is the
-    root (set to the identity here); ``terms`` are the rest of the compiled plan.
+    Per frame, each joint's local transform A + w1 B + w2 C is composed onto its parent link's;
+    ``motion``: 0 fixed, 1 revolute, 2 prismatic, with the joint's index ``joint_q`` into a
+    configuration. Every transform is rigid (bottom row 0 0 0 1), so only the top three rows
+    are composed.
     """
-    parents, children = links
-    basis, revolute, revolute_q, prismatic, prismatic_q = terms
-    k = qs.shape[0]
-    out[0] = _IDENTITY
-    # Local transforms A + w1 B + w2 C (see _compile_plan) for all joints and frames as one
-    # batched (k, 3) @ (3, 16) product per joint (far cheaper than one (1, 3) @ (3, 16)
-    # product per joint and frame).
-    weights = np.zeros((len(parents), k, 3))
-    weights[:, :, 0] = 1.0
-    angles = qs[:, revolute_q].T
-    weights[revolute, :, 1] = np.cos(angles)
-    weights[revolute, :, 2] = np.sin(angles)
-    weights[prismatic, :, 1] = qs[:, prismatic_q].T
-    local = (weights @ basis).reshape(len(parents), k, 4, 4)
-    for j, (parent, child) in enumerate(zip(parents, children)):
-        np.matmul(out[parent], local[j], out=out[child])
-
-
-@kernel('f8[:, :, :, ::1](f8[:, ::1], i8[::1], i8[::1], f8[:, :, ::1], i8[::1], i8[::1], '
-        'i8[::1], f8[:, :, ::1])')
-def _shape_transforms(qs, parents, children, basis, motion, joint_q, rows, origins):
-    """Shape->world transforms (k, S, 4, 4) of a compact chain (see
-    :meth:`Skeleton.shape_transforms_at`): per frame, each joint's local transform
-    A + w1 B + w2 C (see :func:`_compile_plan`) composed onto its parent link's, then each
-    shape's origin onto its link's. ``motion``: 0 fixed, 1 revolute, 2 prismatic, with the
-    joint's index ``joint_q`` into a configuration. Every transform is rigid (bottom row
-    0 0 0 1), so only the top three rows are composed."""
-    k, joints, count = qs.shape[0], parents.shape[0], rows.shape[0]
-    link = np.zeros((joints + 1, 3, 4))
     local = np.empty((3, 4))
-    out = np.zeros((k, count, 4, 4))
-    for d in range(3):
-        link[0, d, d] = 1.0
-    for f in range(k):
-        for j in range(joints):
+    for f in range(qs.shape[0]):
+        out[f, 0] = 0.0
+        for d in range(4):
+            out[f, 0, d, d] = 1.0
+        for j in range(parents.shape[0]):
             w1, w2 = 0.0, 0.0
             if motion[j] == 1:
                 w1, w2 = math.cos(qs[f, joint_q[j]]), math.sin(qs[f, joint_q[j]])
@@ -253,20 +209,37 @@ def _shape_transforms(qs, parents, children, basis, motion, joint_q, rows, origi
             a, child = parents[j], children[j]
             for r in range(3):
                 for c in range(3):
-                    link[child, r, c] = (link[a, r, 0] * local[0, c] + link[a, r, 1] * local[1, c]
-                                         + link[a, r, 2] * local[2, c])
-                link[child, r, 3] = (link[a, r, 0] * local[0, 3] + link[a, r, 1] * local[1, 3]
-                                     + link[a, r, 2] * local[2, 3] + link[a, r, 3])
+                    out[f, child, r, c] = (out[f, a, r, 0] * local[0, c]
+                                           + out[f, a, r, 1] * local[1, c]
+                                           + out[f, a, r, 2] * local[2, c])
+                out[f, child, r, 3] = (out[f, a, r, 0] * local[0, 3]
+                                       + out[f, a, r, 1] * local[1, 3]
+                                       + out[f, a, r, 2] * local[2, 3] + out[f, a, r, 3])
+            out[f, child, 3, 0] = out[f, child, 3, 1] = out[f, child, 3, 2] = 0.0
+            out[f, child, 3, 3] = 1.0
+
+
+@kernel('f8[:, :, :, ::1](f8[:, ::1], i8[::1], i8[::1], f8[:, :, ::1], i8[::1], i8[::1], '
+        'i8[::1], f8[:, :, ::1])')
+def _shape_transforms(qs, parents, children, basis, motion, joint_q, rows, origins):
+    """Shape->world transforms (k, S, 4, 4) of a compact chain (see
+    :meth:`Skeleton.shape_transforms_at`): :func:`_compose`, then each shape's origin
+    ``origins[i]`` composed onto its link's row ``rows[i]`` (rigid, top three rows)."""
+    k, count = qs.shape[0], rows.shape[0]
+    link = np.empty((k, parents.shape[0] + 1, 4, 4))
+    _compose(qs, parents, children, basis, motion, joint_q, link)
+    out = np.zeros((k, count, 4, 4))
+    for f in range(k):
         for s in range(count):
             a = rows[s]
             for r in range(3):
                 for c in range(3):
-                    out[f, s, r, c] = (link[a, r, 0] * origins[s, 0, c]
-                                       + link[a, r, 1] * origins[s, 1, c]
-                                       + link[a, r, 2] * origins[s, 2, c])
-                out[f, s, r, 3] = (link[a, r, 0] * origins[s, 0, 3]
-                                   + link[a, r, 1] * origins[s, 1, 3]
-                                   + link[a, r, 2] * origins[s, 2, 3] + link[a, r, 3])
+                    out[f, s, r, c] = (link[f, a, r, 0] * origins[s, 0, c]
+                                       + link[f, a, r, 1] * origins[s, 1, c]
+                                       + link[f, a, r, 2] * origins[s, 2, c])
+                out[f, s, r, 3] = (link[f, a, r, 0] * origins[s, 0, 3]
+                                   + link[f, a, r, 1] * origins[s, 1, 3]
+                                   + link[f, a, r, 2] * origins[s, 2, 3] + link[f, a, r, 3])
             out[f, s, 3, 3] = 1.0
     return out
 
@@ -511,13 +484,10 @@ class Skeleton:
         if qs.shape[-1] != len(self.joint_names):
             raise ValueError(f'configuration has {qs.shape[-1]} values, expected '
                              f'{len(self.joint_names)}')
-        # Link-major (L, k, 4, 4) so each joint composes contiguous (k, 4, 4) blocks; the
-        # result is returned as a (k, L, 4, 4) view.
-        shape = (len(self.link_names), qs.shape[0], 4, 4)
+        shape = (qs.shape[0], len(self.link_names), 4, 4)
         out = np.empty(shape) if links is None else np.zeros(shape)
         chain = self._chain_compiled if links is None else self._plan_for(links)
-        _compose(qs, chain[:2], chain[2:], out)
-        out = out.transpose(1, 0, 2, 3)
+        _compose(np.array(qs, dtype=np.float64, order='C'), *chain, out)
         return out[0] if single else out
 
     def shape_transforms_at(self, q: np.ndarray, shapes) -> np.ndarray:
@@ -546,17 +516,12 @@ class Skeleton:
             chain = self._plan_for({self.collision_shapes[i].link for i in key})
             # Compact rows: 0 the root link (identity), then each joint's child in plan order.
             row = {0: 0}
-            for child in chain[1]:
+            for child in chain[1].tolist():
                 row[child] = len(row)
-            basis, revolute, revolute_q, prismatic, prismatic_q = chain[2:]
-            # Each joint's motion (0 fixed, 1 revolute, 2 prismatic) and its q index.
-            motion = np.zeros(len(chain[0]), dtype=np.int64)
-            joint_q = np.zeros(len(chain[0]), dtype=np.int64)
-            motion[revolute], joint_q[revolute] = 1, revolute_q
-            motion[prismatic], joint_q[prismatic] = 2, prismatic_q
-            layout = (np.array([row[p] for p in chain[0]], dtype=np.int64),
-                      np.array([row[c] for c in chain[1]], dtype=np.int64),
-                      np.ascontiguousarray(basis), motion, joint_q,
+            parents, children, basis, motion, joint_q = chain
+            layout = (np.array([row[p] for p in parents.tolist()], dtype=np.int64),
+                      np.array([row[c] for c in children.tolist()], dtype=np.int64),
+                      basis, motion, joint_q,
                       np.array([row[self.link_index[self.collision_shapes[i].link]]
                                 for i in key], dtype=np.int64),
                       np.ascontiguousarray(np.stack([self.collision_shapes[i].origin
