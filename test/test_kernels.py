@@ -51,7 +51,7 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    collision._suspects, collision._half_extents, skeleton_module._shape_transforms,
                    gait._raise_swing, gait._swing_need, gait._leg_triangle, gait._feet_meet,
                    gait._leg_violation, gait._sole_points, gait._across_sole,
-                   ct_space._link_poses, ct_space._place_shapes, ct_space._shape_bounds,
+                   ct_space._link_poses, ct_space._place_shapes,
                    ct_space._mesh_contacts):
         assert kernel.py_func is not kernel
 
@@ -164,13 +164,11 @@ def test_the_upper_body_kinematics_and_boxes(skeleton):
         kernel(*arguments, rotation, centre)
         placed.append((rotation, centre))
     same(placed[0], placed[1])
-    boxes = []
-    for kernel in (ct_space._shape_bounds, ct_space._shape_bounds.py_func):
-        lower, upper = np.empty((25, every.size, 3)), np.empty((25, every.size, 3))
-        kernel(*placed[0], shapes.kind_code, shapes.half, lower, upper)
-        boxes.append((lower, upper))
-    same(boxes[0], boxes[1])
-    assert (boxes[0][1] > boxes[0][0]).all()
+    extents = [kernel(shapes.kind_code, shapes.half, placed[0][0])
+               for kernel in (collision._half_extents, collision._half_extents.py_func)]
+    same(extents[0], extents[1])
+    lower, upper = shapes.bounds(*placed[0], every)
+    assert (upper > lower).all()
 
 
 def test_the_contacts_of_shape_boxes_with_triangle_boxes():

@@ -28,7 +28,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import fcl
 import numpy as np
 
-from .collision import _extent, _KIND_CODES
+from .collision import _half_extents, _KIND_CODES
 from .jit import float_array, kernel
 from .skeleton import Skeleton
 
@@ -156,19 +156,6 @@ def _place_shapes(rotations, positions, links, offsets, turns, turned, rotation,
                                                 + rotations[f, link, r, 2] * turns[i, 2, c])
                     else:
                         rotation[f, i, r, c] = rotations[f, link, r, c]
-
-
-@kernel('void(f8[:, :, :, :], f8[:, :, :], i8[::1], f8[:, ::1], f8[:, :, ::1], '
-        'f8[:, :, ::1])')
-def _shape_bounds(rotation, centre, kinds, halves, lower, upper):
-    """Axis-aligned boxes (k, n, 3) x 2 around n shapes (kind codes and padded half extents
-    of :func:`collision._extent`) posed over k frames."""
-    for f in range(rotation.shape[0]):
-        for i in range(kinds.shape[0]):
-            for axis in range(3):
-                extent = _extent(kinds[i], halves[i], rotation[f, i], axis)
-                lower[f, i, axis] = centre[f, i, axis] - extent
-                upper[f, i, axis] = centre[f, i, axis] + extent
 
 
 @kernel('UniTuple(i8[::1], 3)(f8[:, :, :], f8[:, :, :], f8[:, :], f8[:, :], i8[:], i8, b1)')
@@ -459,7 +446,7 @@ class BodyShapes:
             self.objects.append(fcl.CollisionObject(geometry, fcl.Transform()))
         self._request = fcl.CollisionRequest()
         self._result = fcl.CollisionResult()
-        # Kind codes of collision._extent (with ``half``, its padded half extents).
+        # Kind codes of collision._half_extents (with ``half``, its padded half extents).
         self.kind_code = np.array([_KIND_CODES[k] for k in self.kind], dtype=np.int64)
         self._tree_distance = self._link_tree_distances()
         #: Per branch CT-space, the data that depends on the model only (built once).
@@ -518,10 +505,8 @@ class BodyShapes:
                shapes: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
         """Axis-aligned boxes around shapes posed at (k, n): lower and upper corners (k, n, 3)."""
         shapes = np.asarray(shapes, dtype=np.int64)
-        lower, upper = np.empty(centre.shape), np.empty(centre.shape)
-        _shape_bounds(float_array(rotation), float_array(centre), self.kind_code[shapes],
-                      self.half[shapes], lower, upper)
-        return lower, upper
+        extent = _half_extents(self.kind_code[shapes], self.half[shapes], float_array(rotation))
+        return centre - extent, centre + extent
 
     def collides(self, shape: int, rotation: np.ndarray, centre: np.ndarray,
                  other) -> bool:
