@@ -86,8 +86,10 @@ def _footholds(high, low, headroom, s0, ds, side, s, heel, toe, min_headroom, ma
             height[n] = lift
             slope_out[n] = slope
             continue
-        # At an edge a flat sole may overhang lower ground: the ankle's sample and its
-        # neighbours on the sole must be supported, and most of the sole.
+        # At an edge a flat sole may overhang lower ground: the ankle's sample (the lower of
+        # two as near) and its neighbours on the sole must be supported, and most of the sole.
+        # Not the pitch limit: the plane through the overhung ground tilts too (a heel over a
+        # stair's nosing, 0.2 m lower, tilted it past the limit).
         level = top - tolerance
         ankle = int(min(max(math.ceil((sn - s0) / ds - 0.5), i0), i1))
         supported, around = 0, True
