@@ -304,8 +304,8 @@ class BodyKinematics:
                 offset_length=float(joint.origin[offset_axis, 3]) if offset_axis >= 0 else 0.0))
         self.steps: Tuple[_Step, ...] = tuple(steps)
         self.link_count = len(skeleton.link_names)
-        # Per set of steps, its arrays for _link_poses over every link, and its compact chain
-        # (built once, used per call).
+        # Per set of steps, its arrays for _link_poses over every link (_step_arrays) and its
+        # compact chain (chain), each built once.
         self._layouts: Dict[tuple, tuple] = {}
         self._chains: Dict[Tuple[int, ...], _Chain] = {}
 
