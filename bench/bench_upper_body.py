@@ -154,9 +154,11 @@ class OmplBranchPlanner:
         began = time.perf_counter()
         body = TimedBody(planner.kinematics, planner.shapes, planner.environment, frames)
         out = frames.copy()
-        if planner._pattern_is_legal(times, body):
-            # The same check of the whole pattern as the CT-roadmap's plan starts with.
+        # The same check of the whole pattern as the CT-roadmap's plan starts with.
+        legality = planner.pattern_checks(times, body)
+        if all(start and motion for start, motion in legality.values()):
             return True, 0.0, time.perf_counter() - began
+        moved = False
         for name in BRANCH_ORDER:
             indices = planner.indices[name]
             start = frames[0, indices].copy()
@@ -165,7 +167,8 @@ class OmplBranchPlanner:
                                    planner.skeleton.lower[indices],
                                    planner.skeleton.upper[indices])
             # The same checks of the start and of the motion pattern as the CT-roadmap's plan.
-            start_legal, objective_legal = planner.start_and_objective(times, body, name)
+            start_legal, objective_legal = (planner.start_and_objective(times, body, name)
+                                            if moved else legality[name])
             if not start_legal:
                 return False, 0.0, time.perf_counter() - began
             if objective_legal:
@@ -182,6 +185,7 @@ class OmplBranchPlanner:
             out[:, indices] = path
             if name != BRANCH_ORDER[-1]:
                 body.set_branch(indices, path, space.steps)
+                moved = True
         upper = planner.upper_indices
         deviation = float(np.max(np.abs(out[1:, upper] - frames[1:, upper])))
         return True, deviation, time.perf_counter() - began

@@ -223,7 +223,7 @@ def _objective_is_legal(space, start) -> bool:
 
 def test_one_batch_pattern_check_agrees_with_the_branch_fast_paths(skeleton):
     # Offset postures held over 0.6 s windows walking past a low beam and a table: the one-batch
-    # check of the whole pattern must say legal exactly when every branch's own check does.
+    # check of the whole pattern must give each branch the answer its own check gives.
     from digital_actor_planner.core.ct_space import CTSpace, TimedBody
     from digital_actor_planner.core.upper_body import BRANCH_ORDER
     planner, _ = planner_for(skeleton, box([0.6, -1.0, 1.55], [0.8, 1.0, 1.75]),
@@ -231,7 +231,7 @@ def test_one_batch_pattern_check_agrees_with_the_branch_fast_paths(skeleton):
     times, frames = walk(skeleton, 320)
     rng = np.random.default_rng(5)
     upper = upper_columns(skeleton)
-    outcomes = []
+    outcomes, mixed = [], []
     for trial in range(60):
         begin = int(rng.integers(0, 320 - 61))
         window = frames[begin:begin + 61].copy()
@@ -240,6 +240,7 @@ def test_one_batch_pattern_check_agrees_with_the_branch_fast_paths(skeleton):
                                    skeleton.upper[upper])
         body = TimedBody(planner.kinematics, planner.shapes, planner.environment, window)
         expected = True
+        legality = planner.pattern_checks(times[:61], body)
         for name in BRANCH_ORDER:
             indices = planner.indices[name]
             space = CTSpace(name, body, times[:61], window[:, indices], planner._checked[name],
@@ -253,11 +254,16 @@ def test_one_batch_pattern_check_agrees_with_the_branch_fast_paths(skeleton):
                 start_legal, start_legal and objective_legal)
             assert planner.start_and_objective(times[:61], body, name) == (
                 start_legal, start_legal and objective_legal)
+            # And the one batch over all three branches says it of each.
+            assert legality[name] == (start_legal, start_legal and objective_legal), (
+                trial, name)
             expected &= start_legal and objective_legal
-        got = planner._pattern_is_legal(times[:61], body)
+        got = all(start and motion for start, motion in legality.values())
         assert got == expected, (trial, begin, offset)
         outcomes.append(got)
+        mixed.append(len(set(legality.values())) > 1)
     assert 0 < np.mean(outcomes) < 1  # both outcomes occur
+    assert any(mixed)  # and branches with different answers in one batch
 
 
 def test_arm_roadmap_starts_with_the_arm_held_in_against_the_side(skeleton):

@@ -672,11 +672,43 @@ class TimedBody:
             The first frame in collision, or -1.
 
         """
+        return self.first_collisions(checked, pairs, None, 1, frames)[0]
+
+    def first_collisions(self, checked: np.ndarray, pairs: np.ndarray,
+                         group: Optional[np.ndarray], count: int,
+                         frames: Optional[np.ndarray] = None) -> List[int]:
+        """Per group of checked shapes, the first frame at which one of them touches something.
+
+        :meth:`first_collision` of several groups at once: one broad phase over all of them,
+        the narrow phase in frame order, each group's left out once it has collided, stopping
+        when every group has.
+
+        Parameters
+        ----------
+        checked
+            (n,) shapes to check.
+        pairs
+            (P, 2) shape pairs (a checked shape, a body shape it must not touch).
+        group
+            (S,) group of each body shape (read for the checked ones, in [0, count)), or None
+            (one group).
+        count
+            Number of groups.
+        frames
+            (m,) frame indices to check, in increasing order (default: every frame).
+
+        Returns
+        -------
+        list of int
+            Per group, the first frame in collision, or -1.
+
+        """
+        found = [-1] * count
         if frames is None:
             frames = np.arange(len(self.frames))
         frames = np.asarray(frames, dtype=int)
         if not len(frames) or not len(checked):
-            return -1
+            return found
         environment = self.environment
         lower, upper = self.shape_lower[frames], self.shape_upper[frames]
         low, high = lower.take(checked, axis=1), upper.take(checked, axis=1)
@@ -707,18 +739,26 @@ class TimedBody:
                 targets.append(a[pair])
                 owners.append(b[pair])
         if not rows:
-            return -1
+            return found
         rows = np.concatenate(rows)
         order = np.argsort(rows, kind='stable')
-        shape_of = np.concatenate(targets)[order].tolist()
-        other_of = np.concatenate(owners)[order].tolist()
-        for row, shape, other in zip(rows[order].tolist(), shape_of, other_of):
+        shapes = np.concatenate(targets)[order]
+        groups = (np.zeros(len(shapes), dtype=int) if group is None
+                  else group[shapes]).tolist()
+        left = count
+        for row, shape, other, which in zip(rows[order].tolist(), shapes.tolist(),
+                                            np.concatenate(owners)[order].tolist(), groups):
+            if found[which] >= 0:
+                continue
             frame = int(frames[row])
             target = (environment.object_of(-1 - other) if other < 0
                       else self.posed_shape(frame, other))
             if self.collides(frame, shape, target):
-                return frame
-        return -1
+                found[which] = frame
+                left -= 1
+                if not left:
+                    break
+        return found
 
     def posed_shape(self, frame: int, shape: int) -> fcl.CollisionObject:
         """The FCL object of body shape ``shape``, placed where it is at ``frame``."""

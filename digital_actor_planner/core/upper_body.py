@@ -298,12 +298,17 @@ class UpperBodyPlanner:
         self._obstacles = {'waist': _LEG_LINKS,
                            'left_arm': _LEG_LINKS + _TRUNK_LINKS,
                            'right_arm': _LEG_LINKS + _TRUNK_LINKS + _ARM_LINKS['left']}
-        self._upper_shapes = self.shapes.shapes_of(
-            _TRUNK_LINKS + _ARM_LINKS['left'] + _ARM_LINKS['right'])
-        self._upper_pairs = np.vstack([
-            self.shapes.pairs(self.shapes.shapes_of(self._checked[name]),
-                              self.shapes.shapes_of(self._obstacles[name]))
-            for name in BRANCH_ORDER])
+        # Every branch's own check of its start and motion pattern (start_and_objective), as
+        # groups of one check over the whole upper body (pattern_checks).
+        layouts = [branch_layout(self.kinematics, self.shapes, name, self._checked[name],
+                                 self._obstacles[name]) for name in BRANCH_ORDER]
+        self._pattern_checked = np.concatenate([layout[1] for layout in layouts])
+        self._pattern_pairs = np.vstack([layout[3] for layout in layouts])
+        self._pattern_group = np.full(len(self.shapes.kind), -1, dtype=int)
+        for group, layout in enumerate(layouts):
+            self._pattern_group[layout[1]] = group
+        first = np.cumsum([0] + [len(self.indices[name]) for name in BRANCH_ORDER])
+        self._pattern_columns = [slice(a, b) for a, b in zip(first[:-1], first[1:])]
 
     def _check_input(self, times: np.ndarray, frames: np.ndarray) -> None:
         skeleton = self.skeleton
@@ -379,7 +384,8 @@ class UpperBodyPlanner:
         body = TimedBody(self.kinematics, self.shapes, self.environment, frames)
         out = frames.copy()
         per_branch: Dict[str, dict] = {}
-        if self._pattern_is_legal(times, body):
+        legality = self.pattern_checks(times, body)
+        if all(start and motion for start, motion in legality.values()):
             for name in BRANCH_ORDER:
                 per_branch[name] = dict(ok=True, fast=True, nodes=0, backtracks=0, grown=0,
                                         deviation=0.0, checks=0, time=0.0)
@@ -388,6 +394,7 @@ class UpperBodyPlanner:
                                  per_branch=per_branch)
         ok, reason, blocked_frame = True, '', -1
         last = len(times) - 1
+        moved = False  # whether a branch planned so far left the motion the body held
         for name in BRANCH_ORDER:
             tic = time.perf_counter()
             indices = self.indices[name]
@@ -400,7 +407,8 @@ class UpperBodyPlanner:
             record = dict(ok=True, fast=False, nodes=0, backtracks=0, grown=0)
             path = None
             checks = 0
-            start_legal, objective_legal = self.start_and_objective(times, body, name)
+            start_legal, objective_legal = (self.start_and_objective(times, body, name)
+                                            if moved else legality[name])
             if not start_legal:
                 ok, record['ok'], blocked_frame = False, False, 0
                 links = self._links_in_collision(frames[0], name)
@@ -440,6 +448,7 @@ class UpperBodyPlanner:
                 if not record['fast'] and name != BRANCH_ORDER[-1]:
                     # The branches planned after this one see it where it now is.
                     body.set_branch(indices, path, steps)
+                    moved = True
             record['deviation'] = float(np.max(np.abs(out[1:, indices] - frames[1:, indices])))
             record['checks'] = checks
             record['time'] = time.perf_counter() - tic
@@ -490,21 +499,40 @@ class UpperBodyPlanner:
         bad = body.first_collision(checked, pairs)
         return bad != 0, bad < 0
 
-    def _pattern_is_legal(self, times: np.ndarray, body: TimedBody) -> bool:
-        """Whether the input upper-body motion is legal as it is, in one batch over the step (§5).
+    def pattern_checks(self, times: np.ndarray, body: TimedBody) -> Dict[str, Tuple[bool, bool]]:
+        """:meth:`start_and_objective` of every branch, in one batch over the upper body.
 
-        The input is the start at frame 0, then the objective: the motion every branch's fast
-        path would take. True when it is within the speed limits and no upper-body shape touches
-        the environment or a body shape it must not touch at any frame. The poses and boxes of
-        every shape at every frame are already in ``body``; FCL runs only where boxes meet.
-        This checks a superset of the shapes, triangles and pairs each branch checks, with the
-        same narrow phase, so it is True only when all three fast paths would succeed.
+        The input upper-body motion is the start at frame 0, then the objective: the motion
+        every branch's fast path would take. Each branch's answer is the one
+        :meth:`start_and_objective` gives on ``body`` as it is, with one broad phase for all
+        three (the poses and boxes of every shape at every frame are already in ``body``) and
+        FCL only where boxes meet, each branch's shapes left out once they have collided. The
+        answers hold for a branch as long as the branches before it keep the motion ``body``
+        holds.
+
+        Returns
+        -------
+        dict
+            Branch name -> (start legal at frame 0, the whole motion legal: start included).
+
         """
+        skeleton = self.skeleton
         upper = self.upper_indices
-        speed = np.abs(np.diff(body.frames[:, upper], axis=0)) / np.diff(times)[:, None]
-        if np.any(speed > self.skeleton.velocity_limit[upper] * (1 + 1e-6)):
-            return False
-        return body.first_collision(self._upper_shapes, self._upper_pairs) < 0
+        path = body.frames[:, upper]
+        inside = ((path >= skeleton.lower[upper] - 1e-9)
+                  & (path <= skeleton.upper[upper] + 1e-9))
+        speed = np.abs(np.diff(path, axis=0)) / np.diff(times)[:, None]
+        too_fast = speed > skeleton.velocity_limit[upper] * (1 + 1e-6)
+        first = body.first_collisions(self._pattern_checked, self._pattern_pairs,
+                                      self._pattern_group, len(BRANCH_ORDER))
+        out = {}
+        for name, columns, bad in zip(BRANCH_ORDER, self._pattern_columns, first):
+            if too_fast[:, columns].any() or not inside[:, columns].all():
+                # The motion is not legal whatever it touches: only the start is left.
+                out[name] = (bool(inside[0, columns].all()) and bad != 0, False)
+            else:
+                out[name] = (bad != 0, bad < 0)
+        return out
 
     def _links_in_collision(self, q: np.ndarray, branch: str) -> list:
         """Names of the branch's links touching the environment at ``q`` (for the reason)."""
