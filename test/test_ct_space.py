@@ -257,6 +257,32 @@ def test_first_legal_motion_agrees_with_goals_checked_one_by_one(beam_world):
     assert spent < sum(rows), 'motions blocked early are not boxed to their ends'
 
 
+def test_rows_and_path_in_one_batch_agree_with_each_checked_alone(beam_world):
+    # The CT-roadmap's first batch (the objective on a grid, and the way back to it from the
+    # start): the same answers as valid_rows and first_invalid_path, with the same rows.
+    space, _, _ = beam_world
+    rng = np.random.default_rng(3)
+    objective = space.objective
+    outcomes = set()
+    for trial in range(40):
+        grid = np.sort(rng.choice(len(space.times), 12, replace=False))
+        q = objective[grid] + rng.normal(0.0, 0.4, (12, 2)) * (trial % 2)
+        here = int(rng.integers(0, 150))
+        arrival = here + int(rng.integers(10, 20))
+        end = arrival + int(rng.integers(1, 199 - arrival))
+        waypoints = [(objective[here] + rng.normal(0.0, 0.1, 2), here),
+                     (objective[arrival], arrival), (objective[end], end)]
+        before = space.checks
+        legal, bad = space.rows_and_path(q, grid, waypoints)
+        batched = space.checks - before
+        before = space.checks
+        assert np.array_equal(legal, space.valid_rows(q, grid)), trial
+        assert bad == space.first_invalid_path(waypoints), trial
+        assert batched == space.checks - before
+        outcomes.add((bool(legal.all()), bad < 0))
+    assert len(outcomes) >= 3, outcomes  # legal and illegal rows and paths occur
+
+
 def test_fixing_a_branch_moves_the_body_as_if_built_with_it(skeleton):
     environment = Environment([box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0])], resolution=0.05)
     times, frames = walk(skeleton, 40)

@@ -272,22 +272,38 @@ class CTRoadmap:
 
         """
         last = space.frame_count - 1
-        # Where the objective itself is legal, in one batch over the step: it tells how long a
-        # posture must be held to get past an obstacle (one long advance instead of creeping
-        # hold_frames at a time). A fixed cost of about k / hold_frames configurations, outside
-        # the search budget.
-        horizon = _Horizon(self._objective_free(space, hold_frames), hold_frames)
-        checks_limit = None if check_budget is None else space.checks + check_budget
-        start_state = _State(np.asarray(start, dtype=float) - space.objective[0], 0)
-        stack = [start_state]
         if preview_from is not None and not 0 < preview_from <= last:
             raise ValueError(f'preview_from must be in (0, {last}], got {preview_from}')
         if preview_backtracks < 0:
             raise ValueError(f'preview_backtracks must be >= 0, got {preview_backtracks}')
+        start_state = _State(np.asarray(start, dtype=float) - space.objective[0], 0)
+        stack = [start_state]
+        # Where the objective itself is legal, in one batch over the step: it tells how long a
+        # posture must be held to get past an obstacle (one long advance instead of creeping
+        # hold_frames at a time). A fixed cost of about k / hold_frames configurations, outside
+        # the search budget.
+        grid = self._objective_grid(space, hold_frames)
+        before = space.checks
+        route = (None if seed is not None
+                 else self._direct_route(space, start_state, speed_fraction))
+        route_bad = None
+        if route is None:
+            legal = space.valid_rows(space.objective[grid], grid)
+        else:
+            # Unseeded, the search starts with _return_directly from the start: its motion
+            # shares the horizon's broad phase (one batch instead of two, the same answers).
+            legal, route_bad = space.rows_and_path(space.objective[grid], grid, route[1])
+        route_rows = space.checks - before - len(grid)
+        horizon = _Horizon(self._free_frames(grid, legal, last), hold_frames)
         seeded = 0
         if seed is not None:
             seeded = self._follow_seed(space, stack, seed, hold_frames, horizon)
-        self._return_directly(space, stack, horizon, speed_fraction)
+        self._return_directly(space, stack, horizon, speed_fraction, route, route_bad)
+        # The route's rows count towards the budget only where _return_directly would have
+        # checked them itself (where the objective is free from the route's arrival on).
+        unused = route is not None and not horizon.free[route[0]:].all()
+        checks_limit = None if check_budget is None else (
+            before + len(grid) + check_budget + (route_rows if unused else 0))
         visited = set()
         jumps = set()
         known = {}
@@ -353,7 +369,8 @@ class CTRoadmap:
                             in_preview, gave_up_in_preview, seeded)
 
     def _return_directly(self, space: CTSpace, stack: List[_State], horizon: _Horizon,
-                         speed_fraction: float) -> bool:
+                         speed_fraction: float, route: Optional[tuple] = None,
+                         route_bad: Optional[int] = None) -> bool:
         """From a state off the objective with the objective free from where it can be
         reached on, go back to it and follow it to the final frame, if that is legal.
 
@@ -361,24 +378,44 @@ class CTRoadmap:
         neighbour, and following it to the final frame the best advance from it), checked in
         one batch without ranking the neighbours: the step after an obstacle, whose start is
         still off the pattern, mostly needs nothing else. Pushes the two states and returns
-        True when legal; otherwise leaves the stack as it was.
+        True when legal; otherwise leaves the stack as it was. ``route``, ``route_bad``: the
+        top state's :meth:`_direct_route` and its first illegal frame, when already checked.
         """
-        state = stack[-1]
-        if not state.deviation.any():
+        if route is None:
+            route = self._direct_route(space, stack[-1], speed_fraction)
+            route_bad = None
+        if route is None:
             return False
+        arrival, waypoints = route
+        if not horizon.free[arrival:].all():
+            return False
+        if route_bad is None:
+            route_bad = space.first_invalid_path(waypoints)
+        if route_bad >= 0:
+            return False
+        self._push_return(stack, arrival, space.frame_count - 1)
+        return True
+
+    def _direct_route(self, space: CTSpace, state: _State,
+                      speed_fraction: float) -> Optional[Tuple[int, list]]:
+        """(arrival frame, waypoints) of the way back from an off-objective state to the
+        objective and along it to the final frame; None on the objective or when the way
+        back takes until the final frame."""
+        if not state.deviation.any():
+            return None
         last = space.frame_count - 1
         here = state.frame
         arrival = here + self._travel_frames(space, here, state.deviation, speed_fraction)
-        if arrival >= last or not horizon.free[arrival:].all():
-            return False
+        if arrival >= last:
+            return None
         objective = space.objective
-        if space.first_invalid_path([(objective[here] + state.deviation, here),
-                                     (objective[arrival], arrival),
-                                     (objective[last], last)]) >= 0:
-            return False
-        zero = np.zeros_like(state.deviation)
+        return arrival, [(objective[here] + state.deviation, here),
+                         (objective[arrival], arrival), (objective[last], last)]
+
+    @staticmethod
+    def _push_return(stack: List[_State], arrival: int, last: int) -> None:
+        zero = np.zeros_like(stack[-1].deviation)
         stack.extend([_State(zero, arrival), _State(zero.copy(), last)])
-        return True
 
     def _follow_seed(self, space: CTSpace, stack: List[_State], seed: np.ndarray,
                      spacing: int, horizon: _Horizon) -> int:
@@ -421,9 +458,19 @@ class CTRoadmap:
         A frame between two checked frames counts as blocked when either of them is, so the
         blocked stretches found cover the real ones up to ``spacing - 1`` frames either side.
         """
+        grid = CTRoadmap._objective_grid(space, spacing)
+        return CTRoadmap._free_frames(grid, space.valid_rows(space.objective[grid], grid),
+                                      space.frame_count - 1)
+
+    @staticmethod
+    def _objective_grid(space: CTSpace, spacing: int) -> np.ndarray:
+        """Frames :meth:`_objective_free` checks: every ``spacing``-th and the last."""
         last = space.frame_count - 1
-        grid = np.unique(np.append(np.arange(0, last + 1, spacing), last))
-        legal = space.valid_rows(space.objective[grid], grid)
+        return np.unique(np.append(np.arange(0, last + 1, spacing), last))
+
+    @staticmethod
+    def _free_frames(grid: np.ndarray, legal: np.ndarray, last: int) -> np.ndarray:
+        """:meth:`_objective_free` from the legality of the objective at the grid frames."""
         free = np.ones(last + 1, dtype=bool)
         for i in np.flatnonzero(~legal):
             free[grid[max(i - 1, 0)] + 1:grid[min(i + 1, len(grid) - 1)]] = False

@@ -1209,6 +1209,40 @@ class CTSpace:
                 return bad
         return -1
 
+    def rows_and_path(self, q: np.ndarray, frames: np.ndarray,
+                      waypoints: Sequence[Tuple[np.ndarray, int]]) -> Tuple[np.ndarray, int]:
+        """:meth:`valid_rows` of a batch and :meth:`first_invalid_path`, in one broad phase.
+
+        Returns
+        -------
+        tuple
+            ((m,) bool legality of the rows, first illegal frame along the path or -1).
+
+        """
+        q = np.asarray(q, dtype=float)
+        frames = np.asarray(frames)
+        m = len(frames)
+        if len(waypoints) < 2:
+            return self.valid_rows(q, frames), -1
+        path, path_frames, segments, early = self._motion_batch(
+            list(zip(waypoints[:-1], waypoints[1:])))
+        # The rows first, one segment each, then the motions: the narrow phase of the path
+        # stops at its first illegal frame.
+        segments = [(row, row + 1) for row in range(m)] + [
+            (begin + m, end + m) for begin, end in segments]
+        early = [-1] * m + list(early)
+        legal = np.ones(m, dtype=bool)
+        bad = -1
+        for i, frame in enumerate(self._check_segments(
+                np.concatenate([q, path]), np.concatenate([frames, path_frames]), segments,
+                early, stop_at_legal=False)):
+            if i < m:
+                legal[i] = frame < 0
+            elif frame >= 0:
+                bad = frame
+                break
+        return legal, bad
+
     def _motion_batch(self, motions: Sequence[tuple]) -> tuple:
         """The rows of motions ((qa, ia), (qb, ib)) for one check: (q (m, d) rad, frames (m,),
         segments [(begin, end)] per motion, early: each motion's speed violation frame or -1,
