@@ -51,6 +51,7 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    collision._suspects, collision._half_extents, skeleton_module._shape_transforms,
                    gait._raise_swing, gait._swing_need, gait._leg_triangle, gait._feet_meet,
                    gait._leg_violation, gait._sole_points, gait._across_sole,
+                   collision._quaternions,
                    ct_space._link_poses, ct_space._place_shapes,
                    ct_space._mesh_contacts):
         assert kernel.py_func is not kernel
@@ -169,6 +170,15 @@ def test_the_upper_body_kinematics_and_boxes(skeleton):
     same(extents[0], extents[1])
     lower, upper = shapes.bounds(*placed[0], every)
     assert (upper > lower).all()
+    # The narrow phase poses shapes by quaternion: each branch of the conversion is taken
+    # (the placed rotations, and half turns about each axis).
+    rotation = np.concatenate([placed[0][0].reshape(1, -1, 3, 3), np.array(
+        [[np.diag([1.0, -1.0, -1.0]), np.diag([-1.0, 1.0, -1.0]), np.diag([-1.0, -1.0, 1.0])]])],
+        axis=1)
+    quaternions = collision._quaternions(rotation)
+    same(quaternions, collision._quaternions.py_func(rotation))
+    for r, q in zip(rotation[0], quaternions[0]):
+        assert tuple(q) == collision._quaternion(r.ravel().tolist())
 
 
 def test_the_contacts_of_shape_boxes_with_triangle_boxes():

@@ -28,7 +28,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import fcl
 import numpy as np
 
-from .collision import _half_extents, _KIND_CODES
+from .collision import _half_extents, _KIND_CODES, _quaternions
 from .jit import float_array, kernel
 from .skeleton import Skeleton
 
@@ -1365,11 +1365,11 @@ class CTSpace:
         self.checks += len(frames)
         suspects = self._broad_phase(q, frames)
         if extra is not None:
-            kept, rotation, centre = suspects
+            kept, quaternion, centre = suspects
             # The motion's rows as a broad phase of their own (rows numbered from 0).
             own = {row - m: pairs for row, pairs in kept.items() if row >= m}
-            self._prefetched = extra + (self.within_bounds(extra[1]),
-                                        (own, rotation[m:], centre[m:]))
+            self._prefetched = extra + (self.within_bounds(extra[1]), (
+                own, None if quaternion is None else quaternion[m:], centre[m:]))
         checked = set()
         found = 0
         for row in list(order):
@@ -1502,7 +1502,11 @@ class CTSpace:
         return rotation, centre, low, high
 
     def _broad_phase(self, q: np.ndarray, frames: np.ndarray) -> tuple:
-        """Boxes of the branch's shapes against triangles and body shapes, all rows at once."""
+        """Boxes of the branch's shapes against triangles and body shapes, all rows at once.
+
+        Returns (suspect pairs per row, the shapes' rotations as (m, n, 4) quaternions or None
+        when no row has a suspect, their centres (m, n, 3)): what the narrow phase reads.
+        """
         rotation, centre, low, high = self._shape_boxes(q, frames)
         suspects: Dict[int, list] = {}
         if len(self._triangle_lower):
@@ -1537,11 +1541,12 @@ class CTSpace:
                     other_upper))
                 for row, pair in zip(rows.tolist(), active[which].tolist()):
                     suspects.setdefault(row, []).append((column_of[pair], pair))
-        return suspects, rotation, centre
+        # The narrow phase poses the branch's shapes by quaternion (see _quaternions).
+        return suspects, _quaternions(rotation) if suspects else None, centre
 
     def _narrow_phase(self, row: int, frame: int, broad: tuple) -> bool:
         """Whether any suspect pair of one row really collides (FCL)."""
-        suspects, rotation, centre = broad
+        suspects, quaternion, centre = broad
         pairs = suspects.get(row)
         if not pairs:
             return False
@@ -1567,7 +1572,8 @@ class CTSpace:
             # successive suspects often share the branch's shape: it is placed when it changes.
             shape = objects[self._checked_list[column]]
             if column != posed:
-                shape.setTransform(fcl.Transform(rotation[row, column], centre[row, column]))
+                shape.setQuatRotation(quaternion[row, column])
+                shape.setTranslation(centre[row, column])
                 posed = column
             # collide() returns the number of contacts, > 0 exactly when the shapes touch (FCL's
             # isCollision); one result object serves every call (a new one costs as much as
