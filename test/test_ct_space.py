@@ -60,6 +60,37 @@ def test_chain_kinematics_give_the_same_numbers_as_the_whole_body(skeleton, bran
     assert chain_positions.tobytes() == positions[:, chain.links].tobytes()
 
 
+@pytest.mark.parametrize('branch', ['waist', 'left_arm', 'right_arm'])
+def test_branch_boxes_are_those_of_the_whole_body_posed_row_by_row(skeleton, branch):
+    # The broad phase poses a branch's shapes in one kernel (_branch_boxes): rows where the
+    # branch is where the body holds it copy the body's poses, the others run the chain's
+    # kinematics. Either way, bit for bit the poses and boxes of the whole body built at that
+    # row's configuration.
+    from digital_actor_planner.core.upper_body import _ARM_LINKS, _LEG_LINKS, _TRUNK_LINKS
+    checked = {'waist': _TRUNK_LINKS, 'left_arm': _ARM_LINKS['left'],
+               'right_arm': _ARM_LINKS['right']}[branch]
+    environment = Environment([box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0])], resolution=0.05)
+    times, frames = walk(skeleton, 40)
+    body = timed_body(skeleton, environment, frames)
+    indices = skeleton.branch(branch)
+    space = CTSpace(branch, body, times, frames[:, indices], checked,
+                    _LEG_LINKS + _TRUNK_LINKS)
+    rng = np.random.default_rng(4)
+    rows = rng.integers(0, 40, 25)
+    q = frames[rows][:, indices] + rng.normal(0.0, 0.3, (25, len(indices))) * (
+        np.arange(25) % 3 > 0)[:, None]
+    rotation, centre, low, high = space._shape_boxes(q, rows)
+    for row, (frame, values) in enumerate(zip(rows, q)):
+        full = frames[frame].copy()
+        full[indices] = values
+        whole = timed_body(skeleton, environment, full[None])
+        at = (0, space.checked)
+        assert rotation[row].tobytes() == whole.shape_rotation[at].tobytes(), row
+        assert centre[row].tobytes() == whole.shape_centre[at].tobytes(), row
+        assert low[row].tobytes() == whole.shape_lower[at].tobytes(), row
+        assert high[row].tobytes() == whole.shape_upper[at].tobytes(), row
+
+
 def test_validity_agrees_with_body_collision(skeleton, beam_world):
     space, collision, frames = beam_world
     disagreements = []

@@ -53,7 +53,7 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    gait._leg_violation, gait._sole_points, gait._across_sole,
                    collision._quaternions,
                    ct_space._link_poses, ct_space._place_shapes,
-                   ct_space._mesh_contacts):
+                   ct_space._mesh_contacts, ct_space._branch_boxes):
         assert kernel.py_func is not kernel
 
 

@@ -158,6 +158,82 @@ def _place_shapes(rotations, positions, links, offsets, turns, turned, rotation,
                         rotation[f, i, r, c] = rotations[f, link, r, c]
 
 
+_STEP_TABLE_TYPES = ('i8[::1], i8[::1], f8[:, :, ::1], b1[::1], f8[:, ::1], i8[::1], f8[::1], '
+                     'b1[::1], i8[::1], i8[::1], i8[::1], f8[::1], f8[:, ::1]')
+
+
+@kernel('void(f8[:, :], i8[::1], f8[:, ::1], i8[::1], '
+        'f8[:, :, :, ::1], f8[:, :, ::1], i8[::1], f8[:, :, :, ::1], f8[:, :, ::1], '
+        'f8[:, :, ::1], f8[:, :, ::1], i8[::1], i8[::1], f8[:, ::1], f8[:, :, ::1], b1[::1], '
+        'i8[::1], f8[:, ::1], f8[:, :, :, ::1], f8[:, :, ::1], f8[:, :, ::1], f8[:, :, ::1], '
+        + _STEP_TABLE_TYPES + ')')
+def _branch_boxes(q, frames, body_frames, indices, body_rotations, body_positions, links,
+                  shape_rotation, shape_centre, shape_lower, shape_upper, checked, shape_links,
+                  offsets, turns, turned, kinds, halves, rotation, centre, low, high,
+                  parent, child, origin_rotation, step_turned, origin_translation, offset_axis,
+                  offset_length, has_offset, joint, kind, axis_coordinate, axis_sign, axis):
+    """:meth:`CTSpace._shape_boxes` in one pass, into ``rotation`` (m, n, 3, 3), ``centre``,
+    ``low`` and ``high`` (m, n, 3).
+
+    A row whose branch values ``q`` (m, d) are the body's at its frame (``body_frames`` at
+    ``indices``) takes the body's poses and boxes of the ``checked`` shapes; the others are
+    posed by :func:`_link_poses` over the chain's ``links`` (their poses read from
+    ``body_rotations`` and ``body_positions``, the step table last), :func:`_place_shapes`
+    and the boxes of :func:`collision._half_extents`: the same numbers, operation for
+    operation, as the NumPy code around those kernels.
+    """
+    m, n, d = q.shape[0], checked.shape[0], indices.shape[0]
+    moved = np.empty(m, dtype=np.int64)
+    count = 0
+    for r in range(m):
+        f = frames[r]
+        held = True
+        for j in range(d):
+            if not q[r, j] == body_frames[f, indices[j]]:
+                held = False
+                break
+        if not held:
+            moved[count] = r
+            count += 1
+            continue
+        for c in range(n):
+            s = checked[c]
+            rotation[r, c] = shape_rotation[f, s]
+            centre[r, c] = shape_centre[f, s]
+            low[r, c] = shape_lower[f, s]
+            high[r, c] = shape_upper[f, s]
+    if count:
+        links_count = links.shape[0]
+        full = np.empty((count, body_frames.shape[1]))
+        rotations = np.empty((count, links_count, 3, 3))
+        positions = np.empty((count, links_count, 3))
+        for i in range(count):
+            r = moved[i]
+            f = frames[r]
+            full[i] = body_frames[f]
+            for j in range(d):
+                full[i, indices[j]] = q[r, j]
+            for k in range(links_count):
+                rotations[i, k] = body_rotations[f, links[k]]
+                positions[i, k] = body_positions[f, links[k]]
+        _link_poses(full, rotations, positions, parent, child, origin_rotation, step_turned,
+                    origin_translation, offset_axis, offset_length, has_offset, joint, kind,
+                    axis_coordinate, axis_sign, axis)
+        placed = np.empty((count, n, 3, 3))
+        placed_centre = np.empty((count, n, 3))
+        _place_shapes(rotations, positions, shape_links, offsets, turns, turned, placed,
+                      placed_centre)
+        extent = _half_extents(kinds, halves, placed)
+        for i in range(count):
+            r = moved[i]
+            rotation[r] = placed[i]
+            centre[r] = placed_centre[i]
+            for c in range(n):
+                for e in range(3):
+                    low[r, c, e] = placed_centre[i, c, e] - extent[i, c, e]
+                    high[r, c, e] = placed_centre[i, c, e] + extent[i, c, e]
+
+
 @kernel('UniTuple(i8[::1], 3)(f8[:, :, :], f8[:, :, :], f8[:, :], f8[:, :], i8[:], i8, b1)')
 def _mesh_contacts(low, high, triangle_lower, triangle_upper, owner, mesh_count, swept):
     """:func:`mesh_contacts`: the (row, shape, mesh) triples where a shape's box meets a box of
@@ -1034,6 +1110,15 @@ class CTSpace:
         self._shape_offsets = np.ascontiguousarray(shapes.origin_translation[self.checked])
         self._shape_turns = np.ascontiguousarray(shapes.origin_rotation[self.checked])
         self._shape_turned = ~shapes.identity_origin[self.checked]
+        # _branch_boxes' arguments that stay the same while the branch is planned (the body's
+        # arrays are only ever written in place).
+        self._box_tables = (
+            body.frames, np.asarray(self.indices, dtype=np.int64), body.rotations,
+            body.positions, np.asarray(self._chain.links, dtype=np.int64), body.shape_rotation,
+            body.shape_centre, body.shape_lower, body.shape_upper,
+            np.asarray(self.checked, dtype=np.int64), self._shape_links, self._shape_offsets,
+            self._shape_turns, self._shape_turned, shapes.kind_code[self.checked],
+            shapes.half[self.checked])
         self._prepare_environment()
         self.checks = 0
         # A motion whose broad phase ran ahead (see best_valid_rows), or None.
@@ -1471,34 +1556,11 @@ class CTSpace:
             Rotations (m, n, 3, 3), centres (m, n, 3) and box corners (m, n, 3) x 2, m.
 
         """
-        body = self.body
-        checked = self.checked
-        held = np.all(q == body.frames[frames[:, None], self.indices], axis=1)
-        if not held.any():
-            return self._kinematic_boxes(q, frames)
-        at = (frames[:, None], checked)
-        rotation, centre = body.shape_rotation[at], body.shape_centre[at]
-        low, high = body.shape_lower[at], body.shape_upper[at]
-        moved = np.flatnonzero(~held)
-        if len(moved):
-            rotation[moved], centre[moved], low[moved], high[moved] = self._kinematic_boxes(
-                q[moved], frames[moved])
-        return rotation, centre, low, high
-
-    def _kinematic_boxes(self, q: np.ndarray, frames: np.ndarray) -> tuple:
-        """Like :meth:`_shape_boxes`, by forward kinematics of the branch's links."""
-        body = self.body
-        full = body.frames[frames]
-        full[:, self.indices] = q
-        at = (frames[:, None], self._chain.links)
-        rotations, positions = body.rotations[at], body.positions[at]
-        body.kinematics.chain_poses(full, rotations, positions, self._chain)
-        # BodyShapes.poses, over the compact links.
-        rotation = np.empty((len(frames), len(self.checked), 3, 3))
-        centre = np.empty((len(frames), len(self.checked), 3))
-        _place_shapes(rotations, positions, self._shape_links, self._shape_offsets,
-                      self._shape_turns, self._shape_turned, rotation, centre)
-        low, high = body.shapes.bounds(rotation, centre, self.checked)
+        m, n = len(frames), len(self.checked)
+        rotation, centre = np.empty((m, n, 3, 3)), np.empty((m, n, 3))
+        low, high = np.empty((m, n, 3)), np.empty((m, n, 3))
+        _branch_boxes(q, frames.astype(np.int64, copy=False), *self._box_tables, rotation,
+                      centre, low, high, *self._chain.step_table)
         return rotation, centre, low, high
 
     def _broad_phase(self, q: np.ndarray, frames: np.ndarray) -> tuple:
