@@ -53,7 +53,8 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    gait._leg_violation, gait._sole_points, gait._across_sole,
                    collision._quaternions,
                    ct_space._link_poses, ct_space._place_shapes,
-                   ct_space._mesh_contacts, ct_space._branch_boxes):
+                   ct_space._mesh_contacts, ct_space._branch_boxes,
+                   ct_space._suspect_table):
         assert kernel.py_func is not kernel
 
 
@@ -201,6 +202,42 @@ def test_the_contacts_of_shape_boxes_with_triangle_boxes():
         found = ct_space._mesh_contacts(*arguments)
         same(found, ct_space._mesh_contacts.py_func(*arguments))
         same(found, expected)
+
+
+def test_the_suspect_table_of_a_branch_batch():
+    """Per row, the meshes then the body-shape pairs whose boxes meet, as CSR arrays: compiled,
+    as Python, and by brute force."""
+    rng = np.random.default_rng(10)
+    m, n, k, pairs = 15, 4, 30, 7
+    centre = rng.uniform(0.0, 1.0, (m, n, 3))
+    low, high = centre - 0.04, centre + 0.04
+    corner = rng.uniform(0.0, 1.0, (60, 3))
+    triangle_lower, triangle_upper = corner, corner + rng.uniform(0.0, 0.1, (60, 3))
+    owner = rng.integers(0, 3, 60)
+    frames = rng.integers(0, k, m)
+    pair_column = rng.integers(0, n, pairs)
+    other = rng.uniform(0.0, 1.0, (k, pairs, 3))
+    pair_lower, pair_upper = other - 0.05, other + 0.05
+    expected = []
+    mesh_rows = ct_space.mesh_contacts(low, high, triangle_lower, triangle_upper, owner, 3)
+    for row in range(m):
+        entries = [(column, -1 - mesh) for r, column, mesh in zip(*mesh_rows) if r == row]
+        for p in range(pairs):
+            c, f = pair_column[p], frames[row]
+            if np.all((high[row, c] >= pair_lower[f, p]) & (low[row, c] <= pair_upper[f, p])):
+                entries.append((c, p))
+        expected.append(entries)
+    kinds = {(any(c < 0 for _, c in entries), any(c >= 0 for _, c in entries))
+             for entries in expected}
+    assert {(True, True), (False, False)} <= kinds, kinds  # both kinds, none, and mixed
+    for swept in (True, False):
+        arguments = (low, high, triangle_lower, triangle_upper, owner, 3, swept, frames,
+                     pair_column, pair_lower, pair_upper)
+        found = ct_space._suspect_table(*arguments)
+        same(found, ct_space._suspect_table.py_func(*arguments))
+        starts, columns, targets = found
+        assert [list(zip(columns[a:b].tolist(), targets[a:b].tolist()))
+                for a, b in zip(starts[:-1], starts[1:])] == expected
 
 
 def test_the_leg_triangle():

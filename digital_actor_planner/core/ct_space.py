@@ -42,8 +42,6 @@ FEW_TRIANGLES = 64
 #: Triangles above which one box is tested against them coordinate by coordinate (contiguous
 #: rows; below it, fewer NumPy calls over interleaved coordinates are faster).
 MANY_TRIANGLES = 256
-#: Rows x shape pairs up to which a batch tests every pair at every row at once.
-FEW_PAIR_ROWS = 2048
 #: Rows x shapes x triangles above which contacts are first cut by the shapes' swept boxes.
 SWEPT_CONTACTS = 4096
 #: Room around the actor's shapes over a step for the triangles kept per step, m (about the
@@ -294,6 +292,64 @@ def _mesh_contacts(low, high, triangle_lower, triangle_upper, owner, mesh_count,
                     rows[i], columns[i], meshes[i] = r, c, g
                     i += 1
     return rows, columns, meshes
+
+
+@kernel('UniTuple(i8[::1], 3)(f8[:, :, ::1], f8[:, :, ::1], f8[:, :], f8[:, :], i8[:], i8, b1, '
+        'i8[::1], i8[::1], f8[:, :, ::1], f8[:, :, ::1])')
+def _suspect_table(low, high, triangle_lower, triangle_upper, owner, mesh_count, swept, frames,
+                   pair_column, pair_lower, pair_upper):
+    """The broad phase of a batch of a branch's rows: which (shape, target) pairs each row must
+    check in FCL.
+
+    ``low``, ``high``: (m, n, 3) boxes of the branch's n shapes. A target is a mesh (the
+    contacts of :func:`_mesh_contacts`) or pair p of body shapes, whose other shape's box at
+    each frame is ``pair_lower``/``pair_upper`` (k, P, 3) and whose branch shape is column
+    ``pair_column[p]``; its boxes must meet at the row's frame (``frames`` (m,)).
+
+    Returns
+    -------
+    starts, columns, targets
+        Row r's suspects are entries ``starts[r]:starts[r + 1]``: the branch shape's column
+        and the target, ``-1 - mesh`` or the pair index; per row the meshes first, in shape
+        then mesh order, then the pairs in order.
+
+    """
+    m, pairs = low.shape[0], pair_column.shape[0]
+    rows, columns, meshes = _mesh_contacts(low, high, triangle_lower, triangle_upper, owner,
+                                           mesh_count, swept)
+    meets = np.zeros((m, pairs), dtype=np.bool_)
+    counts = np.zeros(m + 1, dtype=np.int64)
+    for i in range(rows.shape[0]):
+        counts[rows[i] + 1] += 1
+    for r in range(m):
+        f = frames[r]
+        for p in range(pairs):
+            c = pair_column[p]
+            touching = True
+            for axis in range(3):
+                if not (high[r, c, axis] >= pair_lower[f, p, axis]
+                        and low[r, c, axis] <= pair_upper[f, p, axis]):
+                    touching = False
+                    break
+            if touching:
+                meets[r, p] = True
+                counts[r + 1] += 1
+    starts = np.cumsum(counts)
+    out_columns = np.empty(starts[m], dtype=np.int64)
+    out_targets = np.empty(starts[m], dtype=np.int64)
+    filled = starts[:m].copy()
+    for i in range(rows.shape[0]):
+        r = rows[i]
+        out_columns[filled[r]] = columns[i]
+        out_targets[filled[r]] = -1 - meshes[i]
+        filled[r] += 1
+    for r in range(m):
+        for p in range(pairs):
+            if meets[r, p]:
+                out_columns[filled[r]] = pair_column[p]
+                out_targets[filled[r]] = p
+                filled[r] += 1
+    return starts, out_columns, out_targets
 
 
 @dataclass(frozen=True)
@@ -1091,15 +1147,12 @@ class CTSpace:
         self._pair_column = np.searchsorted(self.checked, self.pairs[:, 0])
         # For the narrow phase, as Python ints and objects.
         self._pair_other = other.tolist()
-        self._pair_column_list = self._pair_column.tolist()
         self._pair_other_checked = np.isin(other, self.checked).tolist()
         # FCL transforms of the obstacle shapes, per (frame, pair), made on first use: the
         # narrow phase meets the same ones again and again.
         self._pair_transforms: Dict[Tuple[int, int], fcl.Transform] = {}
         self._result = fcl.CollisionResult()
         self._checked_list = self.checked.tolist()
-        self._pair_swept_lower = body.swept_lower[other]
-        self._pair_swept_upper = body.swept_upper[other]
         # The links the checks need, in a compact layout, and where the checked shapes sit on
         # them (kinematics of the branch's few links, not of the whole body, per batch).
         self._chain = body.kinematics.chain(self._check_steps)
@@ -1570,39 +1623,22 @@ class CTSpace:
         when no row has a suspect, their centres (m, n, 3)): what the narrow phase reads.
         """
         rotation, centre, low, high = self._shape_boxes(q, frames)
+        m = len(frames)
+        triangles = len(self._triangle_lower)
+        # Many triangles: the pairs (shape, triangle) are first cut by each shape's box swept
+        # over the rows, which also drops the triangles far from every box (see mesh_contacts).
+        swept = m > 1 and (triangles > FEW_TRIANGLES
+                           or m * len(self.checked) * triangles > SWEPT_CONTACTS)
+        starts, columns, targets = _suspect_table(
+            low, high, self._triangle_lower, self._triangle_upper, self._triangle_owner,
+            self._mesh_count, swept, frames.astype(np.int64, copy=False), self._pair_column,
+            self._pair_lower, self._pair_upper)
         suspects: Dict[int, list] = {}
-        if len(self._triangle_lower):
-            # Many triangles: the pairs (shape, triangle) are first cut by each shape's box
-            # swept over the rows, which also drops the triangles far from every box (one
-            # (n, T) test; a cut by the box around all boxes first would only add calls).
-            rows, columns, owners = mesh_contacts(
-                low, high, self._triangle_lower, self._triangle_upper, self._triangle_owner,
-                self._mesh_count, swept=len(self._triangle_lower) > FEW_TRIANGLES or None)
-            for row, column, owner in zip(rows.tolist(), columns.tolist(), owners.tolist()):
-                suspects.setdefault(row, []).append((column, -1 - owner))
-        pairs = len(self.pairs)
-        if pairs:
-            if len(frames) * pairs > FEW_PAIR_ROWS:
-                # Only pairs whose boxes meet when swept over all rows and the whole step can
-                # meet.
-                active = np.flatnonzero(boxes_overlap(
-                    low.min(axis=0)[self._pair_column], high.max(axis=0)[self._pair_column],
-                    self._pair_swept_lower, self._pair_swept_upper))
-                # Two take() calls: several times cheaper than one two-axis fancy index.
-                other_lower = self._pair_lower.take(frames, axis=0).take(active, axis=1)
-                other_upper = self._pair_upper.take(frames, axis=0).take(active, axis=1)
-            else:
-                active = np.arange(pairs)
-                other_lower = self._pair_lower.take(frames, axis=0)
-                other_upper = self._pair_upper.take(frames, axis=0)
-            if len(active):
-                columns = self._pair_column[active]
-                column_of = self._pair_column_list
-                rows, which = np.nonzero(boxes_overlap(
-                    low.take(columns, axis=1), high.take(columns, axis=1), other_lower,
-                    other_upper))
-                for row, pair in zip(rows.tolist(), active[which].tolist()):
-                    suspects.setdefault(row, []).append((column_of[pair], pair))
+        if len(columns):
+            pairs = list(zip(columns.tolist(), targets.tolist()))
+            bounds = starts.tolist()
+            suspects = {row: pairs[bounds[row]:bounds[row + 1]]
+                        for row in np.flatnonzero(starts[1:] > starts[:-1]).tolist()}
         # The narrow phase poses the branch's shapes by quaternion (see _quaternions).
         return suspects, _quaternions(rotation) if suspects else None, centre
 
