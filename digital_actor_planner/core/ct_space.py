@@ -1028,7 +1028,9 @@ def branch_layout(kinematics: BodyKinematics, shapes: BodyShapes, branch: str,
     -------
     tuple
         (steps that move with the branch, checked shapes (n,) int, steps needed for the
-        checks, shape pairs (P, 2) int, link at the centre of its reach, reach radius m).
+        checks, shape pairs (P, 2) int, link at the centre of its reach, reach radius m, the
+        pairs' other shapes once each (O,) int, each pair's index into them (P,) int, whether
+        each pair's other shape is itself checked (P,) bool).
 
     """
     key = (branch, tuple(checked_links), tuple(obstacle_links), id(kinematics))
@@ -1051,7 +1053,9 @@ def branch_layout(kinematics: BodyKinematics, shapes: BodyShapes, branch: str,
     check_steps = tuple(step for step in steps if step.child in needed)
     pairs = shapes.pairs(checked, shapes.shapes_of(obstacle_links))
     first, reach = _reach_bound(shapes, steps, checked)
-    layout = (steps, checked, check_steps, pairs, first, reach)
+    obstacles, pair_obstacle = np.unique(pairs[:, 1], return_inverse=True)
+    layout = (steps, checked, check_steps, pairs, first, reach, obstacles,
+              pair_obstacle.ravel(), np.isin(pairs[:, 1], checked))
     shapes.branch_layouts[key] = layout
     return layout
 
@@ -1128,16 +1132,17 @@ class CTSpace:
         layout = branch_layout(body.kinematics, body.shapes, branch, checked_links,
                                obstacle_links)
         #: steps: the steps to re-evaluate when the branch moves (all links it carries).
-        self.steps, self.checked, self._check_steps, self.pairs, first, self._reach = layout
+        (self.steps, self.checked, self._check_steps, self.pairs, first, self._reach, obstacle,
+         pair_obstacle, other_checked) = layout
         self._reach_centre = body.positions[:, first]
         # Body shapes the branch can never reach during the step need no checks (each obstacle
         # shape tested once, however many of the branch's shapes it pairs with).
-        obstacle, pair_obstacle = np.unique(self.pairs[:, 1], return_inverse=True)
         centre = self._reach_centre[:, None]
         gap = np.maximum(np.maximum(body.shape_lower.take(obstacle, axis=1) - centre, 0.0),
                          centre - body.shape_upper.take(obstacle, axis=1))
         reachable = np.any(np.sum(gap * gap, axis=-1) <= self._reach ** 2, axis=0)
-        self.pairs = self.pairs[reachable[pair_obstacle.ravel()]]
+        kept = reachable[pair_obstacle]
+        self.pairs = self.pairs[kept]
         # The obstacle shapes do not move while this branch is planned.
         other = self.pairs[:, 1]
         self._pair_rotation = body.shape_rotation.take(other, axis=1)
@@ -1147,7 +1152,7 @@ class CTSpace:
         self._pair_column = np.searchsorted(self.checked, self.pairs[:, 0])
         # For the narrow phase, as Python ints and objects.
         self._pair_other = other.tolist()
-        self._pair_other_checked = np.isin(other, self.checked).tolist()
+        self._pair_other_checked = other_checked[kept].tolist()
         # FCL transforms of the obstacle shapes, per (frame, pair), made on first use: the
         # narrow phase meets the same ones again and again.
         self._pair_transforms: Dict[Tuple[int, int], fcl.Transform] = {}
@@ -1503,11 +1508,12 @@ class CTSpace:
         self.checks += len(frames)
         suspects = self._broad_phase(q, frames)
         if extra is not None:
-            kept, quaternion, centre = suspects
+            rows, starts, columns, targets, quaternion, centre = suspects
             # The motion's rows as a broad phase of their own (rows numbered from 0).
-            own = {row - m: pairs for row, pairs in kept.items() if row >= m}
-            self._prefetched = extra + (self.within_bounds(extra[1]), (
-                own, None if quaternion is None else quaternion[m:], centre[m:]))
+            own = ([row - m for row in rows if row >= m], None, None, None, None, centre[m:])
+            if starts is not None:
+                own = own[:1] + (starts[m:], columns, targets, quaternion[m:], centre[m:])
+            self._prefetched = extra + (self.within_bounds(extra[1]), own)
         checked = set()
         found = 0
         for row in list(order):
@@ -1619,8 +1625,11 @@ class CTSpace:
     def _broad_phase(self, q: np.ndarray, frames: np.ndarray) -> tuple:
         """Boxes of the branch's shapes against triangles and body shapes, all rows at once.
 
-        Returns (suspect pairs per row, the shapes' rotations as (m, n, 4) quaternions or None
-        when no row has a suspect, their centres (m, n, 3)): what the narrow phase reads.
+        Returns what the narrow phase reads: (the rows with suspect pairs in increasing order;
+        per row r its pairs at ``starts[r]:starts[r + 1]`` of the lists of the branch shape's
+        column and the target (``-1 - mesh`` or the pair index), as in :func:`_suspect_table`;
+        the shapes' rotations as (m, n, 4) quaternions; their centres (m, n, 3)). Without any
+        suspect only the rows (none) and the centres are there.
         """
         rotation, centre, low, high = self._shape_boxes(q, frames)
         m = len(frames)
@@ -1633,27 +1642,25 @@ class CTSpace:
             low, high, self._triangle_lower, self._triangle_upper, self._triangle_owner,
             self._mesh_count, swept, frames.astype(np.int64, copy=False), self._pair_column,
             self._pair_lower, self._pair_upper)
-        suspects: Dict[int, list] = {}
-        if len(columns):
-            pairs = list(zip(columns.tolist(), targets.tolist()))
-            bounds = starts.tolist()
-            suspects = {row: pairs[bounds[row]:bounds[row + 1]]
-                        for row in np.flatnonzero(starts[1:] > starts[:-1]).tolist()}
-        # The narrow phase poses the branch's shapes by quaternion (see _quaternions).
-        return suspects, _quaternions(rotation) if suspects else None, centre
+        if not len(columns):
+            return [], None, None, None, None, centre
+        # As Python lists: the narrow phase reads them one number at a time. It poses the
+        # branch's shapes by quaternion (see _quaternions).
+        return (np.flatnonzero(starts[1:] > starts[:-1]).tolist(), starts.tolist(),
+                columns.tolist(), targets.tolist(), _quaternions(rotation), centre)
 
     def _narrow_phase(self, row: int, frame: int, broad: tuple) -> bool:
         """Whether any suspect pair of one row really collides (FCL)."""
-        suspects, quaternion, centre = broad
-        pairs = suspects.get(row)
-        if not pairs:
+        _, starts, columns, targets, quaternion, centre = broad
+        if starts is None or starts[row] == starts[row + 1]:
             return False
         shapes = self.body.shapes
         objects, request = shapes.objects, shapes._request
         transforms = self._pair_transforms
         result = self._result
         posed = -1
-        for column, other in pairs:
+        for entry in range(starts[row], starts[row + 1]):
+            column, other = columns[entry], targets[entry]
             if other < 0:
                 target = self._mesh_objects[-1 - other]
             else:

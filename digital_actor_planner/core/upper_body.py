@@ -485,8 +485,9 @@ class UpperBodyPlanner:
             (start legal at frame 0, the whole motion legal: start included).
 
         """
-        _, checked, _, pairs, _, _ = branch_layout(self.kinematics, self.shapes, name,
-                                                   self._checked[name], self._obstacles[name])
+        layout = branch_layout(self.kinematics, self.shapes, name, self._checked[name],
+                               self._obstacles[name])
+        checked, pairs = layout[1], layout[3]
         indices = self.indices[name]
         path = body.frames[:, indices]
         skeleton = self.skeleton
