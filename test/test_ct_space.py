@@ -314,6 +314,62 @@ def test_rows_and_path_in_one_batch_agree_with_each_checked_alone(beam_world):
     assert len(outcomes) >= 3, outcomes  # legal and illegal rows and paths occur
 
 
+def test_separating_axis_tests_never_part_shapes_that_fcl_finds_touching(skeleton):
+    # The broad phase skips FCL for a pair whose oriented boxes are apart by more than
+    # SAT_MARGIN: every shape kind of the actor (box, cylinder, sphere, padded) against the
+    # others and against triangles, posed at random, often touching.
+    from digital_actor_planner.core import ct_space
+    shapes = BodyShapes(skeleton, padding=0.01)
+    rng = np.random.default_rng(12)
+    request, result = fcl.CollisionRequest(), fcl.CollisionResult()
+
+    def rotation():
+        q, r = np.linalg.qr(rng.normal(size=(3, 3)))
+        q = q * np.sign(np.diag(r))
+        return q if np.linalg.det(q) > 0 else -q
+
+    def touch(a, b) -> bool:
+        hit = fcl.collide(a, b, request, result) > 0
+        del result.contacts[:]
+        return hit
+
+    kinds = {kind: [i for i, k in enumerate(shapes.kind) if k == kind]
+             for kind in ('box', 'cylinder', 'sphere')}
+    assert all(kinds.values()), 'the actor has every kind of shape'
+    parted = {'pairs': [0, 0], 'triangles': [0, 0]}
+    for trial in range(3000):
+        a = kinds[('box', 'cylinder', 'sphere')[trial % 3]][trial % 5 % len(
+            kinds[('box', 'cylinder', 'sphere')[trial % 3]])]
+        b = int(rng.integers(len(shapes.kind) - 1))
+        b += b >= a  # another shape (another FCL object)
+        pose_a = (rotation(), np.zeros(3))
+        pose_b = (rotation(), rng.uniform(-0.4, 0.4, 3))
+        shape_a, shape_b = shapes.objects[a], shapes.objects[b]
+        shape_a.setTransform(fcl.Transform(*pose_a))
+        shape_b.setTransform(fcl.Transform(*pose_b))
+        apart = ct_space._boxes_apart(pose_a[0], pose_a[1], shapes.box_half[a], pose_b[0],
+                                      pose_b[1], shapes.box_half[b], ct_space.SAT_MARGIN)
+        touching = touch(shape_a, shape_b)
+        assert not (apart and touching), (trial, shapes.kind[a], shapes.kind[b])
+        parted['pairs'][0] += apart
+        parted['pairs'][1] += not touching
+        corners = rng.uniform(-0.4, 0.4, (3, 3))
+        model = fcl.BVHModel()
+        model.beginModel(3, 1)
+        model.addSubModel(corners, np.array([[0, 1, 2]]))
+        model.endModel()
+        apart = ct_space._box_triangle_apart(pose_a[0], pose_a[1], shapes.box_half[a],
+                                             corners, ct_space.SAT_MARGIN)
+        touching = touch(shape_a, fcl.CollisionObject(model, fcl.Transform()))
+        assert not (apart and touching), (trial, shapes.kind[a])
+        parted['triangles'][0] += apart
+        parted['triangles'][1] += not touching
+    for name, (apart, free) in parted.items():
+        # Both outcomes occur, and the test parts most pairs that do not touch (a sphere or
+        # cylinder only down to the box that holds it).
+        assert 0.5 * free < apart <= free < 3000, (name, apart, free)
+
+
 def test_fixing_a_branch_moves_the_body_as_if_built_with_it(skeleton):
     environment = Environment([box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0])], resolution=0.05)
     times, frames = walk(skeleton, 40)

@@ -54,7 +54,8 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    collision._quaternions,
                    ct_space._link_poses, ct_space._place_shapes,
                    ct_space._mesh_contacts, ct_space._branch_boxes,
-                   ct_space._suspect_table):
+                   ct_space._suspect_table, ct_space._boxes_apart,
+                   ct_space._box_triangle_apart):
         assert kernel.py_func is not kernel
 
 
@@ -198,10 +199,60 @@ def test_the_contacts_of_shape_boxes_with_triangle_boxes():
     expected = np.nonzero(brute)
     assert 0 < len(expected[0]) < brute.size
     for swept in (True, False):
-        arguments = (low, high, triangle_lower, triangle_upper, owner, 4, swept)
+        arguments = (low, high, triangle_lower, triangle_upper, owner, 4, swept,
+                     False) + ct_space._NOT_ORIENTED
         found = ct_space._mesh_contacts(*arguments)
         same(found, ct_space._mesh_contacts.py_func(*arguments))
         same(found, expected)
+    # With the oriented boxes inside the axis-aligned ones: a triangle counts only if the
+    # separating axis test does not put it apart from the shape's box.
+    rotation = np.array([[_rotation(rng) for _ in range(5)] for _ in range(12)])
+    half = rng.uniform(0.01, 0.03, (5, 3))
+    corners = triangle_lower[:, None] + rng.uniform(0.0, 0.1, (300, 3, 3))
+    oriented = np.zeros_like(brute)
+    for r, c, t in zip(*np.nonzero(meets)):
+        if not ct_space._box_triangle_apart.py_func(rotation[r, c], centre[r, c], half[c],
+                                                    corners[t], 1e-3):
+            oriented[r, c, owner[t]] = True
+    assert 0 < oriented.sum() < brute.sum()
+    for swept in (True, False):
+        arguments = (low, high, triangle_lower, triangle_upper, owner, 4, swept, True,
+                     rotation, centre, half, corners, 1e-3)
+        found = ct_space._mesh_contacts(*arguments)
+        same(found, ct_space._mesh_contacts.py_func(*arguments))
+        same(found, np.nonzero(oriented))
+
+
+def _rotation(rng) -> np.ndarray:
+    """A random rotation matrix."""
+    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
+    q = q * np.sign(np.diag(r))
+    return q if np.linalg.det(q) > 0 else -q
+
+
+def test_the_separating_axis_tests():
+    """Oriented boxes against boxes and triangles, parallel edges included: compiled and as
+    Python."""
+    rng = np.random.default_rng(9)
+    count = 400
+    rotation_a = np.array([_rotation(rng) for _ in range(count)])
+    rotation_b = np.array([_rotation(rng) if i % 4 else rotation_a[i] for i in range(count)])
+    centre_a, centre_b = np.zeros((count, 3)), rng.uniform(-0.6, 0.6, (count, 3))
+    half_a, half_b = rng.uniform(0.02, 0.3, (count, 3)), rng.uniform(0.02, 0.3, (count, 3))
+    apart = []
+    for i in range(count):
+        box = (rotation_a[i], centre_a[i], half_a[i], rotation_b[i], centre_b[i], half_b[i],
+               1e-3)
+        apart.append(ct_space._boxes_apart(*box))
+        assert apart[-1] == ct_space._boxes_apart.py_func(*box)
+    assert 0 < sum(apart) < count
+    corners = rng.uniform(-0.6, 0.6, (count, 3, 3))
+    apart = []
+    for i in range(count):
+        box = (rotation_a[i], centre_a[i], half_a[i], corners[i], 1e-3)
+        apart.append(ct_space._box_triangle_apart(*box))
+        assert apart[-1] == ct_space._box_triangle_apart.py_func(*box)
+    assert 0 < sum(apart) < count
 
 
 def test_the_suspect_table_of_a_branch_batch():
@@ -211,28 +262,48 @@ def test_the_suspect_table_of_a_branch_batch():
     m, n, k, pairs = 15, 4, 30, 7
     centre = rng.uniform(0.0, 1.0, (m, n, 3))
     low, high = centre - 0.04, centre + 0.04
-    corner = rng.uniform(0.0, 1.0, (60, 3))
-    triangle_lower, triangle_upper = corner, corner + rng.uniform(0.0, 0.1, (60, 3))
-    owner = rng.integers(0, 3, 60)
+    corner = rng.uniform(0.0, 1.0, (150, 3))
+    triangle_lower, triangle_upper = corner, corner + rng.uniform(0.0, 0.1, (150, 3))
+    owner = rng.integers(0, 3, 150)
     frames = rng.integers(0, k, m)
     pair_column = rng.integers(0, n, pairs)
-    other = rng.uniform(0.0, 1.0, (k, pairs, 3))
+    # The other shapes near the branch's, so that many boxes meet.
+    other = centre[rng.integers(0, m, (k, pairs)), pair_column] + rng.normal(0.0, 0.03,
+                                                                             (k, pairs, 3))
     pair_lower, pair_upper = other - 0.05, other + 0.05
+    # Oriented boxes inside the axis-aligned ones: the separating axis tests part some pairs
+    # whose axis-aligned boxes meet.
+    rotation = np.array([[_rotation(rng) for _ in range(n)] for _ in range(m)])
+    half = rng.uniform(0.01, 0.023, (n, 3))
+    corners = triangle_lower[:, None] + rng.uniform(0.0, 0.1, (150, 3, 3))
+    pair_rotation = np.array([[_rotation(rng) for _ in range(pairs)] for _ in range(k)])
+    pair_half = rng.uniform(0.005, 0.028, (pairs, 3))
     expected = []
-    mesh_rows = ct_space.mesh_contacts(low, high, triangle_lower, triangle_upper, owner, 3)
+    mesh_rows = ct_space.mesh_contacts(low, high, triangle_lower, triangle_upper, owner, 3,
+                                       oriented=(rotation, centre, half, corners, 1e-3))
+    parted = 0
     for row in range(m):
         entries = [(column, -1 - mesh) for r, column, mesh in zip(*mesh_rows) if r == row]
         for p in range(pairs):
             c, f = pair_column[p], frames[row]
             if np.all((high[row, c] >= pair_lower[f, p]) & (low[row, c] <= pair_upper[f, p])):
-                entries.append((c, p))
+                if ct_space._boxes_apart.py_func(rotation[row, c], centre[row, c], half[c],
+                                                 pair_rotation[f, p], other[f, p],
+                                                 pair_half[p], 1e-3):
+                    parted += 1
+                else:
+                    entries.append((c, p))
         expected.append(entries)
+    assert parted
     kinds = {(any(c < 0 for _, c in entries), any(c >= 0 for _, c in entries))
              for entries in expected}
-    assert {(True, True), (False, False)} <= kinds, kinds  # both kinds, none, and mixed
+    # Rows with meshes, with pairs, and with none.
+    assert {any(a for a, _ in kinds), any(b for _, b in kinds), (False, False) in kinds} == {
+        True}, kinds
     for swept in (True, False):
         arguments = (low, high, triangle_lower, triangle_upper, owner, 3, swept, frames,
-                     pair_column, pair_lower, pair_upper)
+                     pair_column, pair_lower, pair_upper, rotation, centre, half, corners,
+                     pair_rotation, other, pair_half, 1e-3)
         found = ct_space._suspect_table(*arguments)
         same(found, ct_space._suspect_table.py_func(*arguments))
         starts, columns, targets = found
