@@ -143,6 +143,34 @@ def test_motion_through_an_obstacle_is_invalid_though_its_ends_are_legal(beam_wo
     assert space.check_motion((upright, 40), (bent, 80))
 
 
+def test_motion_rows_are_the_interpolated_motion_up_to_its_first_speed_violation(beam_world):
+    # _motion_rows is one kernel (_motion_path); the reference is motion_frames and a NumPy
+    # speed check over the whole motion: the same numbers to the last bit.
+    from digital_actor_planner.core import ct_space
+    space, _, _ = beam_world
+    rng = np.random.default_rng(6)
+    late_seen = set()
+    for trial in range(200):
+        ia = int(rng.integers(0, 190))
+        ib = ia + int(rng.integers(1, 200 - ia))
+        qa = space.objective[ia] + rng.normal(0.0, 0.3, 2)
+        qb = space.objective[ib] + rng.normal(0.0, 0.3, 2) * (trial % 4 > 0)
+        path = space.motion_frames((qa, ia), (qb, ib))
+        speed = np.abs(np.diff(path, axis=0)) / np.diff(space.times[ia:ib + 1])[:, None]
+        fast = np.flatnonzero((speed > space.speed_limit * (1 + 1e-6)).any(axis=1))
+        end = ia + 1 + int(fast[0]) if len(fast) else ib + 1
+        rows, late = space._motion_rows(qa, ia, qb, ib)
+        assert rows.tobytes() == path[1:end - ia].tobytes(), trial
+        assert late == (end if len(fast) else -1), trial
+        if trial % 20 == 0:  # the kernel's own Python source gives the same
+            plain = ct_space._motion_path.py_func(space.objective, space.times,
+                                                  space._frame_step, space._speed_cap, qa,
+                                                  ia, qb, ib)
+            assert plain[0].tobytes() == rows.tobytes() and plain[1] == late
+        late_seen.add(late < 0)
+    assert late_seen == {True, False}  # motions within the limits and too fast ones
+
+
 def test_motion_between_objective_states_follows_the_objective(skeleton):
     times = np.arange(20) / 100.0
     objective = np.stack([0.3 * np.sin(times * 8), np.full(20, 0.06), np.zeros(20),

@@ -471,6 +471,40 @@ def _suspect_table(low, high, triangle_lower, triangle_upper, owner, mesh_count,
     return starts, out_columns, out_targets
 
 
+@kernel('Tuple((f8[:, ::1], i8))(f8[:, :], f8[:], f8[:, :], f8[:], f8[:], i8, f8[:], i8)')
+def _motion_path(objective, times, frame_step, speed_cap, qa, ia, qb, ib):
+    """:meth:`CTSpace._motion_rows`: the configurations at frames ia+1.. of the motion
+    (qa, ia) -> (qb, ib), its deviation from the ``objective`` (k, d) interpolated linearly in
+    ``times`` (:meth:`CTSpace.motion_frames`, the same arithmetic), up to the frame before the
+    first whose change from the frame before exceeds ``speed_cap`` (d,) over ``frame_step``
+    (k - 1, 1); and that frame, or -1 when there is none."""
+    d = objective.shape[1]
+    count = ib - ia
+    rows = np.empty((count, d))
+    da = np.empty(d)
+    change = np.empty(d)
+    for j in range(d):
+        da[j] = qa[j] - objective[ia, j]
+        change[j] = (qb[j] - objective[ib, j]) - da[j]
+    span = times[ib] - times[ia]
+    previous = np.empty(d)
+    for j in range(d):
+        previous[j] = objective[ia, j] + da[j] + 0.0 * change[j]
+    for i in range(count):
+        f = ia + 1 + i
+        share = (times[f] - times[ia]) / span
+        fast = False
+        for j in range(d):
+            rows[i, j] = objective[f, j] + da[j] + share * change[j]
+            if abs(rows[i, j] - previous[j]) / frame_step[f - 1, 0] > speed_cap[j]:
+                fast = True
+        if fast:
+            return rows[:i].copy(), f
+        for j in range(d):
+            previous[j] = rows[i, j]
+    return rows, -1
+
+
 @dataclass(frozen=True)
 class _Step:
     parent: int
@@ -1551,13 +1585,10 @@ class CTSpace:
         limits, and the frame of the first speed violation (-1 when none)."""
         if ib <= ia:
             return np.zeros((0, self.dimension)), ia
-        path = self.motion_frames((qa, ia), (qb, ib))
-        speed = np.abs(path[1:] - path[:-1]) / self._frame_step[ia:ib]
-        too_fast = np.flatnonzero((speed > self._speed_cap).any(axis=1))
-        if len(too_fast):
-            end = ia + 1 + int(too_fast[0])
-            return path[1:end - ia], end
-        return path[1:], -1
+        rows, late = _motion_path(self.objective, self.times, self._frame_step,
+                                  self._speed_cap, float_array(qa), int(ia), float_array(qb),
+                                  int(ib))
+        return rows, int(late)
 
     def first_invalid(self, q: np.ndarray, frames: np.ndarray) -> int:
         """Row of the first illegal configuration in a batch, or -1 when all are legal.
