@@ -946,26 +946,9 @@ class TimedBody:
 
     def first_collision(self, checked: np.ndarray, pairs: np.ndarray,
                         frames: Optional[np.ndarray] = None) -> int:
-        """First frame at which a checked shape touches the environment or its pair's shape.
-
-        Uses the poses the body already holds (no kinematics): the broad phase over all the
-        frames at once, the narrow phase in FCL in frame order, stopping at the first collision.
-
-        Parameters
-        ----------
-        checked
-            (n,) shapes to check.
-        pairs
-            (P, 2) shape pairs (a checked shape, a body shape it must not touch).
-        frames
-            (m,) frame indices to check, in increasing order (default: every frame).
-
-        Returns
-        -------
-        int
-            The first frame in collision, or -1.
-
-        """
+        """First frame at which a checked shape touches the environment or its pair's shape,
+        or -1: :meth:`first_collisions` with all the shapes in one group (the same
+        parameters)."""
         return self.first_collisions(checked, pairs, None, 1, frames)[0]
 
     def first_collisions(self, checked: np.ndarray, pairs: np.ndarray,
@@ -973,9 +956,9 @@ class TimedBody:
                          frames: Optional[np.ndarray] = None) -> List[int]:
         """Per group of checked shapes, the first frame at which one of them touches something.
 
-        :meth:`first_collision` of several groups at once: one broad phase over all of them,
-        the narrow phase in frame order, each group's left out once it has collided, stopping
-        when every group has.
+        Uses the poses the body already holds (no kinematics): one broad phase over all the
+        frames and groups at once, the narrow phase in FCL in frame order, each group left out
+        once it has collided, stopping when every group has.
 
         Parameters
         ----------
