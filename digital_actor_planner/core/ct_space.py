@@ -160,6 +160,7 @@ def _place_shapes(rotations, positions, links, offsets, turns, turned, rotation,
                         rotation[f, i, r, c] = rotations[f, link, r, c]
 
 
+# numba types of a step table (_step_table's arrays, in order), as _link_poses takes them.
 _STEP_TABLE_TYPES = ('i8[::1], i8[::1], f8[:, :, ::1], b1[::1], f8[:, ::1], i8[::1], f8[::1], '
                      'b1[::1], i8[::1], i8[::1], i8[::1], f8[::1], f8[:, ::1]')
 
@@ -181,8 +182,8 @@ def _branch_boxes(q, frames, body_frames, indices, body_rotations, body_position
     ``indices``) takes the body's poses and boxes of the ``checked`` shapes; the others are
     posed by :func:`_link_poses` over the chain's ``links`` (their poses read from
     ``body_rotations`` and ``body_positions``, the step table last), :func:`_place_shapes`
-    and the boxes of :func:`collision._half_extents`: the same numbers, operation for
-    operation, as the NumPy code around those kernels.
+    and the boxes of :func:`collision._half_extents`: bit for bit the poses and boxes of the
+    whole body built at the row's configuration (the same kernels, the same arithmetic).
     """
     m, n, d = q.shape[0], checked.shape[0], indices.shape[0]
     moved = np.empty(m, dtype=np.int64)
