@@ -279,8 +279,9 @@ def test_the_suspect_table_of_a_branch_batch():
     pair_rotation = np.array([[_rotation(rng) for _ in range(pairs)] for _ in range(k)])
     pair_half = rng.uniform(0.005, 0.028, (pairs, 3))
     expected = []
-    mesh_rows = ct_space.mesh_contacts(low, high, triangle_lower, triangle_upper, owner, 3,
-                                       oriented=(rotation, centre, half, corners, 1e-3))
+    mesh_rows = ct_space._mesh_contacts.py_func(low, high, triangle_lower, triangle_upper,
+                                                owner, 3, False, True, rotation, centre, half,
+                                                corners, 1e-3)
     parted = 0
     for row in range(m):
         entries = [(column, -1 - mesh) for r, column, mesh in zip(*mesh_rows) if r == row]

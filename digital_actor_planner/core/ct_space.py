@@ -1136,8 +1136,7 @@ def span(lower: np.ndarray, upper: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
 
 def mesh_contacts(low: np.ndarray, high: np.ndarray, triangle_lower: np.ndarray,
                   triangle_upper: np.ndarray, triangle_owner: np.ndarray,
-                  mesh_count: int, swept: Optional[bool] = None,
-                  oriented: Optional[tuple] = None) -> tuple:
+                  mesh_count: int, swept: Optional[bool] = None) -> tuple:
     """Which shape boxes meet a triangle box of which mesh, once per (row, shape, mesh).
 
     Parameters
@@ -1152,11 +1151,6 @@ def mesh_contacts(low: np.ndarray, high: np.ndarray, triangle_lower: np.ndarray,
         Whether to cut the (shape, triangle) pairs first by the shapes' boxes swept over the
         rows (None: when there are many rows x shapes x triangles). The contacts are the same
         either way; only the work differs.
-    oriented
-        Optional (rotation (m, n, 3, 3), centre (m, n, 3), half extents (n, 3) of boxes
-        holding the shapes, triangle corners (T, 3, 3), margin m): a triangle whose box meets
-        a shape's box counts only if the separating axis test does not find the shape's
-        oriented box more than ``margin`` from it (it then cannot touch the shape).
 
     Returns
     -------
@@ -1164,8 +1158,6 @@ def mesh_contacts(low: np.ndarray, high: np.ndarray, triangle_lower: np.ndarray,
         Index arrays in row, shape, mesh order (a scatter, not a sort).
 
     """
-    orient = oriented is not None
-    rotation, centre, half, corners, margin = oriented if orient else _NOT_ORIENTED
     return _mesh_contacts(float_array(low), float_array(high), float_array(triangle_lower),
                           float_array(triangle_upper),
                           np.asarray(triangle_owner, dtype=np.int64), int(mesh_count),
@@ -1173,11 +1165,11 @@ def mesh_contacts(low: np.ndarray, high: np.ndarray, triangle_lower: np.ndarray,
                               swept if swept is not None
                               else low.shape[0] * low.shape[1] * len(triangle_lower)
                               > SWEPT_CONTACTS)),
-                          orient, float_array(rotation), float_array(centre),
-                          float_array(half), float_array(corners), float(margin))
+                          False, *_NOT_ORIENTED)
 
 
-# mesh_contacts' oriented arguments when there are none (empty arrays of the kernel's types).
+# _mesh_contacts' oriented arguments when there are none (empty arrays of the kernel's types;
+# the CT-space's broad phase passes real ones, see _suspect_table).
 _NOT_ORIENTED = (np.zeros((0, 0, 3, 3)), np.zeros((0, 0, 3)), np.zeros((0, 3)),
                  np.zeros((0, 3, 3)), 0.0)
 
@@ -1793,6 +1785,7 @@ class CTSpace:
         the shapes' rotations as (m, n, 4) quaternions; their centres (m, n, 3)). Without any
         suspect only the rows (none) and the centres are there.
         """
+        frames = frames.astype(np.int64, copy=False)  # the kernels' index type, once
         rotation, centre, low, high = self._shape_boxes(q, frames)
         m = len(frames)
         triangles = len(self._triangle_lower)
@@ -1802,7 +1795,7 @@ class CTSpace:
                            or m * len(self.checked) * triangles > SWEPT_CONTACTS)
         starts, columns, targets = _suspect_table(
             low, high, self._triangle_lower, self._triangle_upper, self._triangle_owner,
-            self._mesh_count, swept, frames.astype(np.int64, copy=False), self._pair_column,
+            self._mesh_count, swept, frames, self._pair_column,
             self._pair_lower, self._pair_upper, rotation, centre, self._checked_box_half,
             self._triangle_corners, self._pair_rotation, self._pair_centre,
             self._pair_box_half, SAT_MARGIN)
