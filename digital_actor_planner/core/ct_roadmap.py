@@ -393,7 +393,8 @@ class CTRoadmap:
             route_bad = space.first_invalid_path(waypoints)
         if route_bad >= 0:
             return False
-        self._push_return(stack, arrival, space.frame_count - 1)
+        zero = np.zeros_like(stack[-1].deviation)
+        stack.extend([_State(zero, arrival), _State(zero.copy(), space.frame_count - 1)])
         return True
 
     def _direct_route(self, space: CTSpace, state: _State,
@@ -411,11 +412,6 @@ class CTRoadmap:
         objective = space.objective
         return arrival, [(objective[here] + state.deviation, here),
                          (objective[arrival], arrival), (objective[last], last)]
-
-    @staticmethod
-    def _push_return(stack: List[_State], arrival: int, last: int) -> None:
-        zero = np.zeros_like(stack[-1].deviation)
-        stack.extend([_State(zero, arrival), _State(zero.copy(), last)])
 
     def _follow_seed(self, space: CTSpace, stack: List[_State], seed: np.ndarray,
                      spacing: int, horizon: _Horizon) -> int:
