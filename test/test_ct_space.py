@@ -413,5 +413,72 @@ def test_fixing_a_branch_moves_the_body_as_if_built_with_it(skeleton):
         frames[:, skeleton.branch(branch)] = values
         fresh = timed_body(skeleton, environment, frames)
         for name in ('rotations', 'positions', 'shape_rotation', 'shape_centre', 'shape_lower',
-                     'shape_upper'):
+                     'shape_upper', 'swept_lower', 'swept_upper'):
             assert np.allclose(getattr(body, name), getattr(fresh, name), atol=1e-12), name
+
+
+def test_body_poses_are_those_of_its_shapes_posed_one_by_one(skeleton):
+    # TimedBody poses and boxes every shape in one kernel; BodyShapes.poses and .bounds are
+    # the reference, bit for bit, and the swept boxes hold every frame's box.
+    environment = Environment([box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0])], resolution=0.05)
+    times, frames = walk(skeleton, 30)
+    frames += np.random.default_rng(5).normal(0.0, 0.2, frames.shape)
+    body = timed_body(skeleton, environment, frames, padding=0.01)
+    every = np.arange(len(body.shapes.kind))
+    rotation, centre = body.shapes.poses(body.rotations, body.positions, every)
+    lower, upper = body.shapes.bounds(rotation, centre, every)
+    assert np.array_equal(body.shape_rotation, rotation)
+    assert np.array_equal(body.shape_centre, centre)
+    assert np.array_equal(body.shape_lower, lower)
+    assert np.array_equal(body.shape_upper, upper)
+    assert np.array_equal(body.swept_lower, lower.min(axis=0))
+    assert np.array_equal(body.swept_upper, upper.max(axis=0))
+
+
+def test_first_collisions_per_group_agree_with_every_pair_checked_frame_by_frame(skeleton):
+    # The upper body swings close to a bumpy table, a beam and its own legs: the one-batch
+    # check (compiled broad phase and separating axis cut, FCL after) must find, per group of
+    # shapes, the first frame a straightforward FCL check of every pair finds.
+    rng = np.random.default_rng(11)
+    top = trimesh.creation.box(extents=[1.2, 1.6, 0.1])
+    for _ in range(3):
+        top = top.subdivide()
+    top.vertices += [0.4, 0.7, 0.85]
+    top.vertices[:, 2] += rng.uniform(0.0, 0.03, len(top.vertices))
+    environment = Environment([box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0]), top,
+                               box([0.3, -1.0, 1.50], [0.5, 1.0, 1.70])], resolution=0.05)
+    k = 60
+    times, frames = walk(skeleton, k, x0=-0.6)
+    upper = np.concatenate([skeleton.branch(name)
+                            for name in ('waist', 'left_arm', 'right_arm')])
+    found_any = 0
+    for trial in range(12):
+        noisy = frames.copy()
+        noisy[:, upper] += rng.normal(0.0, 0.5, (k, len(upper))) * rng.random() ** 2
+        noisy[:, upper] = np.clip(noisy[:, upper], skeleton.lower[upper],
+                                  skeleton.upper[upper])
+        body = timed_body(skeleton, environment, noisy, padding=0.01)
+        shapes = body.shapes
+        groups = [shapes.shapes_of(TRUNK), shapes.shapes_of(('left_upper_arm', 'left_forearm')),
+                  shapes.shapes_of(('right_upper_arm', 'right_forearm'))]
+        checked = np.concatenate(groups)
+        group = np.full(len(shapes.kind), -1)
+        for g, members in enumerate(groups):
+            group[members] = g
+        pairs = shapes.pairs(checked, shapes.shapes_of(LEGS))
+        touching = np.zeros((k, 3), dtype=bool)  # per frame and group, by FCL on every pair
+        for frame in range(k):
+            for shape in checked.tolist():
+                targets = list(environment.objects) + [
+                    body.posed_shape(frame, int(b)) for a, b in pairs if a == shape]
+                if any(body.collides(frame, shape, target) for target in targets):
+                    touching[frame, group[shape]] = True
+        expected = [int(np.argmax(column)) if column.any() else -1 for column in touching.T]
+        found_any += sum(e >= 0 for e in expected)
+        assert body.first_collisions(checked, pairs, group, 3) == expected, trial
+        anywhere = np.flatnonzero(touching.any(axis=1))
+        assert body.first_collision(checked, pairs) == (anywhere[0] if len(anywhere) else -1)
+        at = np.sort(rng.choice(k, 20, replace=False))
+        hit = at[touching[at].any(axis=1)]
+        assert body.first_collision(checked, pairs, at) == (hit[0] if len(hit) else -1), trial
+    assert 6 <= found_any <= 30, found_any  # collisions and clear groups both occur

@@ -161,6 +161,38 @@ def _place_shapes(rotations, positions, links, offsets, turns, turned, rotation,
                         rotation[f, i, r, c] = rotations[f, link, r, c]
 
 
+@kernel('void(f8[:, :, :, :], f8[:, :, :], i8[::1], i8[::1], f8[:, ::1], f8[:, :, ::1], b1[::1], '
+        'i8[::1], f8[:, ::1], f8[:, :, :, ::1], f8[:, :, ::1], f8[:, :, ::1], f8[:, :, ::1], '
+        'f8[:, ::1], f8[:, ::1])')
+def _pose_shapes(rotations, positions, shapes, links, offsets, turns, turned, kinds, halves,
+                 shape_rotation, shape_centre, shape_lower, shape_upper, swept_lower,
+                 swept_upper):
+    """World poses, boxes and boxes swept over the frames of the body's ``shapes`` (n,), in
+    place in the (k, S, ...) and (S, 3) arrays: :meth:`BodyShapes.poses` and
+    :meth:`BodyShapes.bounds` with the shapes' tables (``links`` ... ``halves``, one row per
+    listed shape), the same arithmetic, in one pass."""
+    k, n = rotations.shape[0], shapes.shape[0]
+    rotation = np.empty((k, n, 3, 3))
+    centre = np.empty((k, n, 3))
+    _place_shapes(rotations, positions, links, offsets, turns, turned, rotation, centre)
+    extent = _half_extents(kinds, halves, rotation)
+    for c in range(n):
+        s = shapes[c]
+        for e in range(3):
+            swept_lower[s, e], swept_upper[s, e] = np.inf, -np.inf
+        for f in range(k):
+            for e in range(3):
+                for j in range(3):
+                    shape_rotation[f, s, e, j] = rotation[f, c, e, j]
+                shape_centre[f, s, e] = centre[f, c, e]
+                low = centre[f, c, e] - extent[f, c, e]
+                high = centre[f, c, e] + extent[f, c, e]
+                shape_lower[f, s, e] = low
+                shape_upper[f, s, e] = high
+                swept_lower[s, e] = min(swept_lower[s, e], low)
+                swept_upper[s, e] = max(swept_upper[s, e], high)
+
+
 # numba types of a step table (_step_table's arrays, in order), as _link_poses takes them.
 _STEP_TABLE_TYPES = ('i8[::1], i8[::1], f8[:, :, ::1], b1[::1], f8[:, ::1], i8[::1], f8[::1], '
                      'b1[::1], i8[::1], i8[::1], i8[::1], f8[::1], f8[:, ::1]')
@@ -473,6 +505,111 @@ def _suspect_table(low, high, triangle_lower, triangle_upper, owner, mesh_count,
     return starts, out_columns, out_targets
 
 
+@kernel('UniTuple(i8[::1], 3)(i8[::1], i8[::1], f8[:, :, ::1], f8[:, :, ::1], '
+        'f8[:, :, :, ::1], f8[:, :, ::1], f8[:, ::1], f8[:, :], f8[:, :], i8[:], f8[:, :, :], '
+        'i8[::1], i8, i8[:, :], f8[:, ::1], f8[:, ::1], f8)')
+def _frame_suspects(frames, checked, shape_lower, shape_upper, shape_rotation, shape_centre,
+                    box_half, triangle_lower, triangle_upper, owner, corners, near, mesh_count,
+                    pairs, swept_lower, swept_upper, margin):
+    """The broad phase of :meth:`TimedBody.first_collisions`: per row (frame ``frames[r]``)
+    the (shape, target) pairs to check in FCL, read from the poses and boxes the body holds.
+
+    ``checked`` (n,) body shapes, each against the environment's triangles ``near`` (indices
+    into ``triangle_lower`` ... ``corners``; once per mesh ``owner[t]`` < ``mesh_count``) and
+    as the first shape of its ``pairs`` (P, 2) of body shapes. A pair is a suspect where the
+    boxes meet and the separating axis test does not find the oriented boxes holding the
+    shapes (half extents ``box_half`` (S, 3)) more than ``margin`` apart: the suspects of
+    :func:`_suspect_table`, cut first by each shape's box swept over the rows (a pair: by
+    the boxes ``swept_lower``/``swept_upper`` (S, 3) its shapes sweep over every frame).
+
+    Returns
+    -------
+    starts, shapes, targets
+        Row r's suspects are entries ``starts[r]:starts[r + 1]``: the checked body shape and
+        the target, ``-1 - mesh`` or the other body shape; per row the meshes first, in
+        ``checked`` then mesh order, then the pairs in order.
+
+    """
+    m, n, count = frames.shape[0], checked.shape[0], pairs.shape[0]
+    hit = np.zeros((m, n, mesh_count), dtype=np.bool_)
+    counts = np.zeros(m + 1, dtype=np.int64)
+    candidates = np.empty(near.shape[0], dtype=np.int64)
+    lowest, highest = np.empty(3), np.empty(3)
+    for c in range(n):
+        s = checked[c]
+        for axis in range(3):
+            lowest[axis], highest[axis] = np.inf, -np.inf
+            for r in range(m):
+                lowest[axis] = min(lowest[axis], shape_lower[frames[r], s, axis])
+                highest[axis] = max(highest[axis], shape_upper[frames[r], s, axis])
+        found = 0
+        for i in range(near.shape[0]):
+            t = near[i]
+            meets = True
+            for axis in range(3):
+                if not (highest[axis] >= triangle_lower[t, axis]
+                        and lowest[axis] <= triangle_upper[t, axis]):
+                    meets = False
+                    break
+            if meets:
+                candidates[found] = t
+                found += 1
+        for r in range(m):
+            f = frames[r]
+            for k in range(found):
+                t = candidates[k]
+                if hit[r, c, owner[t]]:
+                    continue
+                meets = True
+                for axis in range(3):
+                    if not (shape_upper[f, s, axis] >= triangle_lower[t, axis]
+                            and shape_lower[f, s, axis] <= triangle_upper[t, axis]):
+                        meets = False
+                        break
+                if meets and not _box_triangle_apart(shape_rotation[f, s], shape_centre[f, s],
+                                                     box_half[s], corners[t], margin):
+                    hit[r, c, owner[t]] = True
+                    counts[r + 1] += 1
+    meets_pair = np.zeros((m, count), dtype=np.bool_)
+    for p in range(count):
+        a, b = pairs[p, 0], pairs[p, 1]
+        apart = False
+        for axis in range(3):
+            if not (swept_upper[a, axis] >= swept_lower[b, axis]
+                    and swept_lower[a, axis] <= swept_upper[b, axis]):
+                apart = True
+        if apart:
+            continue
+        for r in range(m):
+            f = frames[r]
+            touching = True
+            for axis in range(3):
+                if not (shape_upper[f, a, axis] >= shape_lower[f, b, axis]
+                        and shape_lower[f, a, axis] <= shape_upper[f, b, axis]):
+                    touching = False
+                    break
+            if touching and not _boxes_apart(shape_rotation[f, a], shape_centre[f, a],
+                                             box_half[a], shape_rotation[f, b],
+                                             shape_centre[f, b], box_half[b], margin):
+                meets_pair[r, p] = True
+                counts[r + 1] += 1
+    starts = np.cumsum(counts)
+    shapes = np.empty(starts[m], dtype=np.int64)
+    targets = np.empty(starts[m], dtype=np.int64)
+    i = 0
+    for r in range(m):
+        for c in range(n):
+            for g in range(mesh_count):
+                if hit[r, c, g]:
+                    shapes[i], targets[i] = checked[c], -1 - g
+                    i += 1
+        for p in range(count):
+            if meets_pair[r, p]:
+                shapes[i], targets[i] = pairs[p, 0], pairs[p, 1]
+                i += 1
+    return starts, shapes, targets
+
+
 @kernel('Tuple((f8[:, ::1], i8))(f8[:, :], f8[:], f8[:, :], f8[:], f8[:], i8, f8[:], i8)')
 def _motion_path(objective, times, frame_step, speed_cap, qa, ia, qb, ib):
     """:meth:`CTSpace._motion_rows`: the configurations at frames ia+1.. of the motion
@@ -743,6 +880,9 @@ class BodyShapes:
         self._tree_distance = self._link_tree_distances()
         #: Per branch CT-space, the data that depends on the model only (built once).
         self.branch_layouts: Dict[tuple, tuple] = {}
+        # Per set of shapes, the tables place() poses them with; per set of links, its shapes.
+        self._place_tables: Dict[tuple, tuple] = {}
+        self._link_shapes: Dict[frozenset, np.ndarray] = {}
 
     def _link_tree_distances(self) -> np.ndarray:
         names = self.skeleton.link_names
@@ -781,6 +921,23 @@ class BodyShapes:
         a, b = a.ravel(), b.ravel()
         keep = self._tree_distance[self.link[a], self.link[b]] > ADJACENT_JOINTS
         return np.stack([a[keep], b[keep]], axis=1)
+
+    def place(self, shapes: np.ndarray, rotations: np.ndarray, positions: np.ndarray,
+              body: 'TimedBody') -> None:
+        """Pose the ``shapes`` (n,) int64 on links posed at ``rotations`` (k, L, 3, 3) and
+        ``positions`` (k, L, 3): their poses, boxes and swept boxes written into ``body``'s
+        arrays (:func:`_pose_shapes`; :meth:`poses` and :meth:`bounds`, the same numbers)."""
+        key = tuple(shapes.tolist())
+        table = self._place_tables.get(key)
+        if table is None:
+            table = self._place_tables[key] = (
+                shapes, self.link[shapes].astype(np.int64),
+                np.ascontiguousarray(self.origin_translation[shapes]),
+                np.ascontiguousarray(self.origin_rotation[shapes]),
+                ~self.identity_origin[shapes], self.kind_code[shapes],
+                np.ascontiguousarray(self.half[shapes]))
+        _pose_shapes(rotations, positions, *table, body.shape_rotation, body.shape_centre,
+                     body.shape_lower, body.shape_upper, body.swept_lower, body.swept_upper)
 
     def poses(self, rotations: np.ndarray, positions: np.ndarray,
               shapes: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
@@ -860,6 +1017,8 @@ class EnvironmentIndex:
             self.lower = np.zeros((0, 3))
             self.upper = np.zeros((0, 3))
             self.owner = np.zeros(0, dtype=int)
+        #: Meshes with triangles: every ``owner`` is below it.
+        self.mesh_count = int(self.owner.max()) + 1 if len(self.owner) else 0
         # The corners coordinate by coordinate, each contiguous: a box is tested against
         # thousands of triangles per plan, and comparisons over contiguous rows are several
         # times faster than over every third number.
@@ -921,30 +1080,38 @@ class TimedBody:
         """
         lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
         environment = self.environment
-        if (self._near is None or np.any(lower < self._near_lower)
-                or np.any(upper > self._near_upper)):
-            box_lower = np.minimum(lower, self.swept_lower.min(axis=0) - NEAR_MARGIN)
-            box_upper = np.maximum(upper, self.swept_upper.max(axis=0) + NEAR_MARGIN)
-            self._near = environment.triangles_near(box_lower, box_upper)
-            self._near_lower, self._near_upper = box_lower, box_upper
-        near = self._near
+        near = self._step_near(lower, upper)
         if len(near) <= MANY_TRIANGLES:
             return near[boxes_overlap(lower, upper, environment.lower[near],
                                       environment.upper[near])]
         return near[_box_meets(lower, upper, environment.lower_by_axis.take(near, axis=1),
                                environment.upper_by_axis.take(near, axis=1))]
 
+    def _step_near(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+        """The triangles near the actor over the step: (N,) int64 indices, a superset of those
+        meeting the box [lower, upper] or any shape's box swept over the step (found once
+        per step, again only when a box reaches past where they were searched)."""
+        if (self._near is None or np.any(lower < self._near_lower)
+                or np.any(upper > self._near_upper)):
+            box_lower = np.minimum(lower, self.swept_lower.min(axis=0) - NEAR_MARGIN)
+            box_upper = np.maximum(upper, self.swept_upper.max(axis=0) + NEAR_MARGIN)
+            self._near = self.environment.triangles_near(box_lower, box_upper).astype(
+                np.int64, copy=False)
+            self._near_lower, self._near_upper = box_lower, box_upper
+        return self._near
+
     def _shape_poses(self) -> None:
-        shapes = self.shapes
-        every = np.arange(len(shapes.kind))
+        k, count = len(self.frames), len(self.shapes.kind)
         #: (k, S, 3, 3), (k, S, 3) world poses and (k, S, 3) box corners of every shape.
-        self.shape_rotation, self.shape_centre = shapes.poses(self.rotations, self.positions,
-                                                              every)
-        self.shape_lower, self.shape_upper = shapes.bounds(self.shape_rotation,
-                                                           self.shape_centre, every)
+        self.shape_rotation = np.empty((k, count, 3, 3))
+        self.shape_centre = np.empty((k, count, 3))
+        self.shape_lower = np.empty((k, count, 3))
+        self.shape_upper = np.empty((k, count, 3))
         #: (S, 3) box corners of every shape swept over the step, m.
-        self.swept_lower = self.shape_lower.min(axis=0)
-        self.swept_upper = self.shape_upper.max(axis=0)
+        self.swept_lower = np.empty((count, 3))
+        self.swept_upper = np.empty((count, 3))
+        self.shapes.place(np.arange(count, dtype=np.int64), self.rotations, self.positions,
+                          self)
 
     def first_collision(self, checked: np.ndarray, pairs: np.ndarray,
                         frames: Optional[np.ndarray] = None) -> int:
@@ -983,61 +1150,44 @@ class TimedBody:
 
         """
         found = [-1] * count
-        if frames is None:
-            frames = np.arange(len(self.frames))
-        frames = np.asarray(frames, dtype=int)
+        frames = (np.arange(len(self.frames)) if frames is None
+                  else np.asarray(frames, dtype=np.int64))
         if not len(frames) or not len(checked):
             return found
         environment = self.environment
-        lower, upper = self.shape_lower[frames], self.shape_upper[frames]
-        low, high = lower.take(checked, axis=1), upper.take(checked, axis=1)
-        rows, targets, owners = [], [], []
-        # The boxes swept over the whole step hold those at the frames checked.
-        near = self.triangles_near(self.swept_lower[checked].min(axis=0),
-                                   self.swept_upper[checked].max(axis=0))
-        if len(near):
-            owner = environment.owner[near]
-            row, column, mesh = mesh_contacts(low, high, environment.lower[near],
-                                              environment.upper[near], owner,
-                                              int(owner.max()) + 1)
-            rows.append(row)
-            targets.append(checked[column])
-            owners.append(-1 - mesh)
-        if len(pairs):
-            a, b = pairs[:, 0], pairs[:, 1]
-            # Only pairs whose boxes swept over the step meet can meet at one of its frames.
-            swept_lower, swept_upper = self.swept_lower, self.swept_upper
-            active = boxes_overlap(swept_lower[a], swept_upper[a], swept_lower[b],
-                                   swept_upper[b])
-            a, b = a[active], b[active]
-            if len(a):
-                row, pair = np.nonzero(boxes_overlap(
-                    lower.take(a, axis=1), upper.take(a, axis=1), lower.take(b, axis=1),
-                    upper.take(b, axis=1)))
-                rows.append(row)
-                targets.append(a[pair])
-                owners.append(b[pair])
-        if not rows:
+        starts, shapes, targets = _frame_suspects(
+            frames, np.asarray(checked, dtype=np.int64), self.shape_lower, self.shape_upper,
+            self.shape_rotation, self.shape_centre, self.shapes.box_half, environment.lower,
+            environment.upper, environment.owner, environment.corners,
+            self._step_near(*self._swept_box()),
+            environment.mesh_count, np.asarray(pairs, dtype=np.int64).reshape(-1, 2),
+            self.swept_lower, self.swept_upper, SAT_MARGIN)
+        if not len(shapes):
             return found
-        rows = np.concatenate(rows)
-        order = np.argsort(rows, kind='stable')
-        shapes = np.concatenate(targets)[order]
-        groups = (np.zeros(len(shapes), dtype=int) if group is None
-                  else group[shapes]).tolist()
+        groups = [0] * len(self.shapes.kind) if group is None else group.tolist()
+        frames, starts = frames.tolist(), starts.tolist()
+        shapes, targets = shapes.tolist(), targets.tolist()
         left = count
-        for row, shape, other, which in zip(rows[order].tolist(), shapes.tolist(),
-                                            np.concatenate(owners)[order].tolist(), groups):
-            if found[which] >= 0:
-                continue
-            frame = int(frames[row])
-            target = (environment.object_of(-1 - other) if other < 0
-                      else self.posed_shape(frame, other))
-            if self.collides(frame, shape, target):
-                found[which] = frame
-                left -= 1
-                if not left:
-                    break
+        for row in np.flatnonzero(np.diff(starts)).tolist():
+            frame = frames[row]
+            for entry in range(starts[row], starts[row + 1]):
+                shape = shapes[entry]
+                which = groups[shape]
+                if found[which] >= 0:
+                    continue
+                other = targets[entry]
+                target = (environment.object_of(-1 - other) if other < 0
+                          else self.posed_shape(frame, other))
+                if self.collides(frame, shape, target):
+                    found[which] = frame
+                    left -= 1
+                    if not left:
+                        return found
         return found
+
+    def _swept_box(self) -> Tuple[np.ndarray, np.ndarray]:
+        """Corners (3,) of the box around every shape's box over the step, m."""
+        return self.swept_lower.min(axis=0), self.swept_upper.max(axis=0)
 
     def posed_shape(self, frame: int, shape: int) -> fcl.CollisionObject:
         """The FCL object of body shape ``shape``, placed where it is at ``frame``."""
@@ -1059,14 +1209,12 @@ class TimedBody:
         self.frames[:, indices] = values
         self.kinematics.poses(self.frames, self.rotations, self.positions, steps)
         # Only the shapes the branch carries have moved.
-        moved = self.shapes.shapes_of_links({step.child for step in steps})
-        rotation, centre = self.shapes.poses(self.rotations, self.positions, moved)
-        self.shape_rotation[:, moved] = rotation
-        self.shape_centre[:, moved] = centre
-        self.shape_lower[:, moved], self.shape_upper[:, moved] = self.shapes.bounds(
-            rotation, centre, moved)
-        self.swept_lower = self.shape_lower.min(axis=0)
-        self.swept_upper = self.shape_upper.max(axis=0)
+        links = frozenset(step.child for step in steps)
+        moved = self.shapes._link_shapes.get(links)
+        if moved is None:
+            moved = self.shapes._link_shapes[links] = self.shapes.shapes_of_links(
+                links).astype(np.int64)
+        self.shapes.place(moved, self.rotations, self.positions, self)
 
 
 def boxes_overlap(lower_a: np.ndarray, upper_a: np.ndarray, lower_b: np.ndarray,
