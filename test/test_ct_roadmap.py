@@ -374,3 +374,21 @@ def test_a_held_posture_goes_on_to_where_a_longer_hold_of_it_failed():
     # Not from a hold of another posture, nor from a failure sooner than the chosen arrival.
     assert CTRoadmap._longest_hold(bend, 35, [(other, 80)], [52]) == 35
     assert CTRoadmap._longest_hold(bend, 35, [(bend, 80)], [33]) == 35
+
+
+def test_horizon_tables_follow_their_definitions():
+    # Where the objective is free next, and where each blocked stretch starts, frame by frame.
+    rng = np.random.default_rng(2)
+    for k in (1, 2, 7, 61, 127):
+        for density in (0.0, 0.3, 0.8, 1.0):
+            free = rng.random(k) >= density
+            horizon = _Horizon(free, 5)
+            last = k - 1
+            for i in range(k + 1):
+                ahead = [j for j in range(i, k) if free[j]]
+                assert horizon.next_free[i] == (ahead[0] if ahead else last)
+            for i in range(k):
+                start = i
+                while start > 0 and not free[start] and not free[start - 1]:
+                    start -= 1
+                assert horizon.run_start[i] == start, (k, density, i)

@@ -56,7 +56,8 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    ct_space._mesh_contacts, ct_space._branch_boxes,
                    ct_space._suspect_table, ct_space._boxes_apart,
                    ct_space._box_triangle_apart, ct_space._motion_path,
-                   ct_space._frame_suspects, ct_space._pose_shapes):
+                   ct_space._frame_suspects, ct_space._pose_shapes,
+                   ct_space._reachable_pairs):
         assert kernel.py_func is not kernel
 
 

@@ -33,7 +33,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 import time
-from typing import List, Optional, Tuple
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
@@ -105,6 +105,8 @@ class _State:
 
 #: Every how many grid frames the first pass of the lasting check looks (see _lasting).
 COARSE_STRIDE = 4
+# (last frame, spacing) -> CTRoadmap._objective_grid.
+_GRIDS: Dict[Tuple[int, int], np.ndarray] = {}
 
 
 class _Horizon:
@@ -126,15 +128,16 @@ class _Horizon:
         last = len(free) - 1
         self.last = last
         self.free = free
+        frames = np.arange(last + 1)
         # next_free[i]: the first frame >= i where the objective is legal (last if none).
         self.next_free = np.full(last + 2, last, dtype=int)
-        for i in range(last, -1, -1):
-            self.next_free[i] = i if free[i] else self.next_free[i + 1]
-        # run_start[i]: the first frame of the blocked stretch holding i (i itself if free).
-        self.run_start = np.arange(last + 1)
-        for i in range(1, last + 1):
-            if not free[i] and not free[i - 1]:
-                self.run_start[i] = self.run_start[i - 1]
+        self.next_free[:-1] = np.minimum.accumulate(np.where(free, frames, last)[::-1])[::-1]
+        # run_start[i]: the first frame of the blocked stretch holding i (i itself if free):
+        # the latest frame up to i that is free or follows a free one (or is the first).
+        begins = free.copy()
+        begins[1:] |= free[:-1]
+        begins[0] = True
+        self.run_start = np.maximum.accumulate(np.where(begins, frames, 0))
 
     def hold_end(self, here: int) -> int:
         """Frame a posture held from ``here`` is held to: ``hold_frames`` on, then on to where
@@ -460,9 +463,14 @@ class CTRoadmap:
 
     @staticmethod
     def _objective_grid(space: CTSpace, spacing: int) -> np.ndarray:
-        """Frames :meth:`_objective_free` checks: every ``spacing``-th and the last."""
+        """Frames :meth:`_objective_free` checks: every ``spacing``-th and the last (made once
+        per frame count and spacing and shared: never changed by a caller)."""
         last = space.frame_count - 1
-        return np.unique(np.append(np.arange(0, last + 1, spacing), last))
+        grid = _GRIDS.get((last, spacing))
+        if grid is None:
+            grid = _GRIDS[last, spacing] = np.unique(np.append(np.arange(0, last + 1, spacing),
+                                                               last))
+        return grid
 
     @staticmethod
     def _free_frames(grid: np.ndarray, legal: np.ndarray, last: int) -> np.ndarray:

@@ -161,9 +161,9 @@ def _place_shapes(rotations, positions, links, offsets, turns, turned, rotation,
                         rotation[f, i, r, c] = rotations[f, link, r, c]
 
 
-@kernel('void(f8[:, :, :, :], f8[:, :, :], i8[::1], i8[::1], f8[:, ::1], f8[:, :, ::1], b1[::1], '
-        'i8[::1], f8[:, ::1], f8[:, :, :, ::1], f8[:, :, ::1], f8[:, :, ::1], f8[:, :, ::1], '
-        'f8[:, ::1], f8[:, ::1])')
+@kernel('void(f8[:, :, :, ::1], f8[:, :, ::1], i8[::1], i8[::1], f8[:, ::1], f8[:, :, ::1], '
+        'b1[::1], i8[::1], f8[:, ::1], f8[:, :, :, ::1], f8[:, :, ::1], f8[:, :, ::1], '
+        'f8[:, :, ::1], f8[:, ::1], f8[:, ::1])')
 def _pose_shapes(rotations, positions, shapes, links, offsets, turns, turned, kinds, halves,
                  shape_rotation, shape_centre, shape_lower, shape_upper, swept_lower,
                  swept_upper):
@@ -172,25 +172,46 @@ def _pose_shapes(rotations, positions, shapes, links, offsets, turns, turned, ki
     :meth:`BodyShapes.bounds` with the shapes' tables (``links`` ... ``halves``, one row per
     listed shape), the same arithmetic, in one pass."""
     k, n = rotations.shape[0], shapes.shape[0]
-    rotation = np.empty((k, n, 3, 3))
-    centre = np.empty((k, n, 3))
-    _place_shapes(rotations, positions, links, offsets, turns, turned, rotation, centre)
-    extent = _half_extents(kinds, halves, rotation)
+    turn = np.empty((3, 3))
     for c in range(n):
-        s = shapes[c]
         for e in range(3):
-            swept_lower[s, e], swept_upper[s, e] = np.inf, -np.inf
-        for f in range(k):
-            for e in range(3):
+            swept_lower[shapes[c], e], swept_upper[shapes[c], e] = np.inf, -np.inf
+    for f in range(k):  # frame by frame: the arrays are read and written in memory order
+        for c in range(n):
+            s, link = shapes[c], links[c]
+            kind, half = kinds[c], halves[c]
+            # _place_shapes' arithmetic, then _extent's.
+            for r in range(3):
+                shape_centre[f, s, r] = positions[f, link, r] + (
+                    rotations[f, link, r, 0] * offsets[c, 0]
+                    + rotations[f, link, r, 1] * offsets[c, 1]
+                    + rotations[f, link, r, 2] * offsets[c, 2])
                 for j in range(3):
-                    shape_rotation[f, s, e, j] = rotation[f, c, e, j]
-                shape_centre[f, s, e] = centre[f, c, e]
-                low = centre[f, c, e] - extent[f, c, e]
-                high = centre[f, c, e] + extent[f, c, e]
+                    if turned[c]:
+                        turn[r, j] = (rotations[f, link, r, 0] * turns[c, 0, j]
+                                      + rotations[f, link, r, 1] * turns[c, 1, j]
+                                      + rotations[f, link, r, 2] * turns[c, 2, j])
+                    else:
+                        turn[r, j] = rotations[f, link, r, j]
+                    shape_rotation[f, s, r, j] = turn[r, j]
+            for e in range(3):
+                if kind == 0:
+                    extent = (abs(turn[e, 0]) * half[0] + abs(turn[e, 1]) * half[1]
+                              + abs(turn[e, 2]) * half[2])
+                elif kind == 1:
+                    along = abs(turn[e, 2])
+                    extent = (half[0] * math.sqrt(min(max(1.0 - along * along, 0.0), 1.0))
+                              + half[1] * along)
+                else:
+                    extent = half[0]
+                low = shape_centre[f, s, e] - extent
+                high = shape_centre[f, s, e] + extent
                 shape_lower[f, s, e] = low
                 shape_upper[f, s, e] = high
-                swept_lower[s, e] = min(swept_lower[s, e], low)
-                swept_upper[s, e] = max(swept_upper[s, e], high)
+                if low < swept_lower[s, e]:
+                    swept_lower[s, e] = low
+                if high > swept_upper[s, e]:
+                    swept_upper[s, e] = high
 
 
 # numba types of a step table (_step_table's arrays, in order), as _link_poses takes them.
@@ -608,6 +629,56 @@ def _frame_suspects(frames, checked, shape_lower, shape_upper, shape_rotation, s
                 shapes[i], targets[i] = pairs[p, 0], pairs[p, 1]
                 i += 1
     return starts, shapes, targets
+
+
+@kernel('Tuple((i8[::1], f8[:, :, :, ::1], f8[:, :, ::1], f8[:, :, ::1], f8[:, :, ::1]))('
+        'f8[:, :], f8, f8[:, :, ::1], f8[:, :, ::1], f8[:, :, :, ::1], f8[:, :, ::1], i8[:], '
+        'i8[:], i8[::1])')
+def _reachable_pairs(centre, reach2, shape_lower, shape_upper, shape_rotation, shape_centre,
+                     obstacle, pair_obstacle, pair_other):
+    """The pairs of a branch whose other shape it can reach during the step, and that shape's
+    poses and boxes at every frame.
+
+    An ``obstacle`` shape (O,) is within reach when its box comes within ``sqrt(reach2)`` of
+    ``centre`` (k, 3) at some frame; pair p's obstacle is ``pair_obstacle[p]`` and its other
+    shape ``pair_other[p]``. Returns the kept pairs' indices and (k, kept, ...) copies of
+    ``shape_rotation``, ``shape_centre``, ``shape_lower`` and ``shape_upper`` at their other
+    shapes.
+    """
+    k, count = centre.shape[0], obstacle.shape[0]
+    reachable = np.zeros(count, dtype=np.bool_)
+    for o in range(count):
+        s = obstacle[o]
+        for f in range(k):
+            total = 0.0
+            for e in range(3):
+                gap = max(max(shape_lower[f, s, e] - centre[f, e], 0.0),
+                          centre[f, e] - shape_upper[f, s, e])
+                total += gap * gap
+            if total <= reach2:
+                reachable[o] = True
+                break
+    kept = np.empty(pair_obstacle.shape[0], dtype=np.int64)
+    n = 0
+    for p in range(pair_obstacle.shape[0]):
+        if reachable[pair_obstacle[p]]:
+            kept[n] = p
+            n += 1
+    kept = kept[:n].copy()
+    rotation = np.empty((k, n, 3, 3))
+    middle = np.empty((k, n, 3))
+    lower = np.empty((k, n, 3))
+    upper = np.empty((k, n, 3))
+    for f in range(k):
+        for i in range(n):
+            s = pair_other[kept[i]]
+            for e in range(3):
+                for j in range(3):
+                    rotation[f, i, e, j] = shape_rotation[f, s, e, j]
+                middle[f, i, e] = shape_centre[f, s, e]
+                lower[f, i, e] = shape_lower[f, s, e]
+                upper[f, i, e] = shape_upper[f, s, e]
+    return kept, rotation, middle, lower, upper
 
 
 @kernel('Tuple((f8[:, ::1], i8))(f8[:, :], f8[:], f8[:, :], f8[:], f8[:], i8, f8[:], i8)')
@@ -1159,7 +1230,9 @@ class TimedBody:
             frames, np.asarray(checked, dtype=np.int64), self.shape_lower, self.shape_upper,
             self.shape_rotation, self.shape_centre, self.shapes.box_half, environment.lower,
             environment.upper, environment.owner, environment.corners,
-            self._step_near(*self._swept_box()),
+            # The boxes swept over the whole step hold those at the frames checked.
+            self.triangles_near(self.swept_lower[checked].min(axis=0),
+                                self.swept_upper[checked].max(axis=0)),
             environment.mesh_count, np.asarray(pairs, dtype=np.int64).reshape(-1, 2),
             self.swept_lower, self.swept_upper, SAT_MARGIN)
         if not len(shapes):
@@ -1184,10 +1257,6 @@ class TimedBody:
                     if not left:
                         return found
         return found
-
-    def _swept_box(self) -> Tuple[np.ndarray, np.ndarray]:
-        """Corners (3,) of the box around every shape's box over the step, m."""
-        return self.swept_lower.min(axis=0), self.swept_upper.max(axis=0)
 
     def posed_shape(self, frame: int, shape: int) -> fcl.CollisionObject:
         """The FCL object of body shape ``shape``, placed where it is at ``frame``."""
@@ -1362,6 +1431,68 @@ def branch_layout(kinematics: BodyKinematics, shapes: BodyShapes, branch: str,
     return layout
 
 
+@dataclass(frozen=True)
+class _BranchModel:
+    """What a branch's CT-space needs that depends on the model only (see
+    :func:`branch_model`)."""
+
+    layout: tuple
+    indices: np.ndarray
+    joint_names: Tuple[str, ...]
+    lower: np.ndarray
+    upper: np.ndarray
+    speed_limit: np.ndarray
+    lower_tolerant: np.ndarray
+    upper_tolerant: np.ndarray
+    speed_cap: np.ndarray
+    #: Per pair of the layout: its other shape and the column of its branch shape.
+    pair_other: np.ndarray
+    pair_column: np.ndarray
+    checked_list: List[int]
+    checked_box_half: np.ndarray
+    chain: _Chain
+    chain_links: np.ndarray
+    #: _branch_boxes' arguments after the body's: the checked shapes and where they sit.
+    shape_tables: tuple
+
+
+def branch_model(kinematics: BodyKinematics, shapes: BodyShapes, branch: str,
+                 checked_links: Sequence[str], obstacle_links: Sequence[str]) -> _BranchModel:
+    """The branch's layout (:func:`branch_layout`) and the tables its CT-space builds from it,
+    built once and kept in ``shapes.branch_layouts``."""
+    key = ('model', branch, tuple(checked_links), tuple(obstacle_links), id(kinematics))
+    model = shapes.branch_layouts.get(key)
+    if model is not None:
+        return model
+    layout = branch_layout(kinematics, shapes, branch, checked_links, obstacle_links)
+    skeleton = kinematics.skeleton
+    indices = np.asarray(skeleton.branch(branch), dtype=np.int64)
+    checked, check_steps, pairs = layout[1], layout[2], layout[3]
+    lower, upper = skeleton.lower[indices], skeleton.upper[indices]
+    speed_limit = skeleton.velocity_limit[indices]
+    chain = kinematics.chain(check_steps)
+    place = {link: i for i, link in enumerate(chain.links.tolist())}
+    model = _BranchModel(
+        layout=layout, indices=indices,
+        joint_names=tuple(skeleton.joint_names[i] for i in indices),
+        lower=lower, upper=upper, speed_limit=speed_limit,
+        lower_tolerant=lower - 1e-9, upper_tolerant=upper + 1e-9,
+        speed_cap=speed_limit * (1 + SPEED_TOLERANCE),
+        pair_other=np.ascontiguousarray(pairs[:, 1], dtype=np.int64),
+        pair_column=np.searchsorted(checked, pairs[:, 0]),
+        checked_list=checked.tolist(), checked_box_half=shapes.box_half[checked],
+        chain=chain, chain_links=np.asarray(chain.links, dtype=np.int64),
+        shape_tables=(
+            np.asarray(checked, dtype=np.int64),
+            np.array([place[link] for link in shapes.link[checked]], dtype=np.int64),
+            np.ascontiguousarray(shapes.origin_translation[checked]),
+            np.ascontiguousarray(shapes.origin_rotation[checked]),
+            ~shapes.identity_origin[checked], shapes.kind_code[checked],
+            shapes.half[checked]))
+    shapes.branch_layouts[key] = model
+    return model
+
+
 def _reach_bound(shapes: BodyShapes, steps: Sequence[_Step],
                  checked: np.ndarray) -> Tuple[int, float]:
     """Link at the centre and radius (m) of a ball holding the checked shapes at any pose.
@@ -1409,49 +1540,41 @@ class CTSpace:
     def __init__(self, branch: str, body: TimedBody, times: np.ndarray, objective: np.ndarray,
                  checked_links: Sequence[str], obstacle_links: Sequence[str],
                  time_weight: float = 1.0):
-        skeleton = body.kinematics.skeleton
         self.branch = branch
         self.body = body
-        self.indices = skeleton.branch(branch)
-        self.joint_names = tuple(skeleton.joint_names[i] for i in self.indices)
+        # What depends on the model only is worked out once per branch and reused every step.
+        model = branch_model(body.kinematics, body.shapes, branch, checked_links,
+                             obstacle_links)
+        self.indices = model.indices.copy()
+        self.joint_names = model.joint_names
         self.times = np.asarray(times, dtype=float)
         self.objective = np.asarray(objective, dtype=float)
         k, d = self.objective.shape
         if self.times.shape != (k,) or d != len(self.indices):
             raise ValueError(f'objective shape {self.objective.shape} does not match times '
                              f'{self.times.shape} and branch {branch!r} ({len(self.indices)})')
-        self.lower = skeleton.lower[self.indices]
-        self.upper = skeleton.upper[self.indices]
-        self.speed_limit = skeleton.velocity_limit[self.indices]
+        self.lower, self.upper, self.speed_limit = model.lower, model.upper, model.speed_limit
         # The joint limits with the tolerance of within_bounds, worked out once.
-        self._lower_tolerant = self.lower - 1e-9
-        self._upper_tolerant = self.upper + 1e-9
-        self._speed_cap = self.speed_limit * (1 + SPEED_TOLERANCE)
+        self._lower_tolerant, self._upper_tolerant = model.lower_tolerant, model.upper_tolerant
+        self._speed_cap = model.speed_cap
         #: (k - 1, 1) time from each frame to the next, s.
-        self._frame_step = np.diff(self.times)[:, None]
+        self._frame_step = (self.times[1:] - self.times[:-1])[:, None]
         self.time_weight = float(time_weight)
-        # What depends on the model only is worked out once per branch and reused every step.
-        layout = branch_layout(body.kinematics, body.shapes, branch, checked_links,
-                               obstacle_links)
         #: steps: the steps to re-evaluate when the branch moves (all links it carries).
-        (self.steps, self.checked, self._check_steps, self.pairs, first, self._reach, obstacle,
-         pair_obstacle, other_checked) = layout
+        (self.steps, self.checked, self._check_steps, pairs, first, self._reach, obstacle,
+         pair_obstacle, other_checked) = model.layout
         self._reach_centre = body.positions[:, first]
         # Body shapes the branch can never reach during the step need no checks (each obstacle
-        # shape tested once, however many of the branch's shapes it pairs with).
-        centre = self._reach_centre[:, None]
-        gap = np.maximum(np.maximum(body.shape_lower.take(obstacle, axis=1) - centre, 0.0),
-                         centre - body.shape_upper.take(obstacle, axis=1))
-        reachable = np.any(np.sum(gap * gap, axis=-1) <= self._reach ** 2, axis=0)
-        kept = reachable[pair_obstacle]
-        self.pairs = self.pairs[kept]
-        # The obstacle shapes do not move while this branch is planned.
-        other = self.pairs[:, 1]
-        self._pair_rotation = body.shape_rotation.take(other, axis=1)
-        self._pair_centre = body.shape_centre.take(other, axis=1)
-        self._pair_lower = body.shape_lower.take(other, axis=1)
-        self._pair_upper = body.shape_upper.take(other, axis=1)
-        self._pair_column = np.searchsorted(self.checked, self.pairs[:, 0])
+        # shape tested once, however many of the branch's shapes it pairs with); the pairs
+        # kept, with their other shapes' poses and boxes over the step (they do not move while
+        # this branch is planned).
+        (kept, self._pair_rotation, self._pair_centre, self._pair_lower,
+         self._pair_upper) = _reachable_pairs(
+            self._reach_centre, self._reach ** 2, body.shape_lower, body.shape_upper,
+            body.shape_rotation, body.shape_centre, obstacle, pair_obstacle, model.pair_other)
+        self.pairs = pairs[kept]
+        other = model.pair_other[kept]
+        self._pair_column = model.pair_column[kept]
         # For the narrow phase, as Python ints and objects.
         self._pair_other = other.tolist()
         self._pair_other_checked = other_checked[kept].tolist()
@@ -1459,28 +1582,17 @@ class CTSpace:
         # narrow phase meets the same ones again and again.
         self._pair_transforms: Dict[Tuple[int, int], fcl.Transform] = {}
         self._result = fcl.CollisionResult()
-        self._checked_list = self.checked.tolist()
-        self._checked_box_half = body.shapes.box_half[self.checked]
+        self._checked_list = model.checked_list
+        self._checked_box_half = model.checked_box_half
         self._pair_box_half = body.shapes.box_half[other]
         # The links the checks need, in a compact layout, and where the checked shapes sit on
         # them (kinematics of the branch's few links, not of the whole body, per batch).
-        self._chain = body.kinematics.chain(self._check_steps)
-        place = {link: i for i, link in enumerate(self._chain.links.tolist())}
-        shapes = body.shapes
-        self._shape_links = np.array([place[link] for link in shapes.link[self.checked]],
-                                     dtype=np.int64)
-        self._shape_offsets = np.ascontiguousarray(shapes.origin_translation[self.checked])
-        self._shape_turns = np.ascontiguousarray(shapes.origin_rotation[self.checked])
-        self._shape_turned = ~shapes.identity_origin[self.checked]
+        self._chain = model.chain
         # _branch_boxes' arguments that stay the same while the branch is planned (the body's
         # arrays are only ever written in place).
-        self._box_tables = (
-            body.frames, np.asarray(self.indices, dtype=np.int64), body.rotations,
-            body.positions, np.asarray(self._chain.links, dtype=np.int64), body.shape_rotation,
-            body.shape_centre, body.shape_lower, body.shape_upper,
-            np.asarray(self.checked, dtype=np.int64), self._shape_links, self._shape_offsets,
-            self._shape_turns, self._shape_turned, shapes.kind_code[self.checked],
-            shapes.half[self.checked])
+        self._box_tables = (body.frames, model.indices, body.rotations, body.positions,
+                            model.chain_links, body.shape_rotation, body.shape_centre,
+                            body.shape_lower, body.shape_upper) + model.shape_tables
         self._prepare_environment()
         self.checks = 0
         # A motion whose broad phase ran ahead (see best_valid_rows), or None.

@@ -293,6 +293,14 @@ class UpperBodyPlanner:
                 prefer_lasting=f'{side}_arm' in config.lasting_branches)
         self.indices = {name: skeleton.branch(name) for name in BRANCH_ORDER}
         self.upper_indices = np.concatenate([self.indices[name] for name in BRANCH_ORDER])
+        # The same columns as slices where they are contiguous (views, not copies, on the
+        # per-step hot path): the branches' and the whole upper body's.
+        self._columns = {name: _columns(self.indices[name]) for name in BRANCH_ORDER}
+        self._upper_columns = _columns(self.upper_indices)
+        upper = self.upper_indices
+        self._upper_lower = skeleton.lower[upper] - 1e-9
+        self._upper_upper = skeleton.upper[upper] + 1e-9
+        self._upper_speed = skeleton.velocity_limit[upper] * (1 + 1e-6)
         self._checked = {'waist': _TRUNK_LINKS, 'left_arm': _ARM_LINKS['left'],
                          'right_arm': _ARM_LINKS['right']}
         self._obstacles = {'waist': _LEG_LINKS,
@@ -317,15 +325,15 @@ class UpperBodyPlanner:
         if frames.shape != (len(times), len(skeleton.joint_names)):
             raise ValueError(f'frames must have shape ({len(times)}, '
                              f'{len(skeleton.joint_names)}), got {frames.shape}')
-        if not (np.all(np.isfinite(times)) and np.all(np.isfinite(frames))):
+        if not (np.isfinite(times).all() and np.isfinite(frames).all()):
             raise ValueError('times or frames contain NaN or infinite values')
-        if not np.all(np.diff(times) > 0):
+        if not (times[1:] > times[:-1]).all():
             bad = int(np.flatnonzero(np.diff(times) <= 0)[0])
             raise ValueError(f'times must increase strictly, got {times[bad]} then '
                              f'{times[bad + 1]} at index {bad}')
         upper = self.upper_indices
-        values = frames[:, upper]
-        outside = (values < skeleton.lower[upper] - 1e-9) | (values > skeleton.upper[upper] + 1e-9)
+        values = frames[:, self._upper_columns]
+        outside = (values < self._upper_lower) | (values > self._upper_upper)
         if outside.any():
             row, column = np.argwhere(outside)[0]
             name = skeleton.joint_names[upper[column]]
@@ -398,12 +406,13 @@ class UpperBodyPlanner:
         for name in BRANCH_ORDER:
             tic = time.perf_counter()
             indices = self.indices[name]
-            start = frames[0, indices].copy()
-            objective = frames[:, indices].copy()
+            columns = self._columns[name]
+            start = frames[0, columns].copy()
+            objective = frames[:, columns].copy()
             # Frame 0 holds the start, not the pattern: continue the pattern back one frame.
-            objective[0] = np.clip(2 * objective[1] - objective[2] if last >= 2
-                                   else objective[1], self.skeleton.lower[indices],
-                                   self.skeleton.upper[indices])
+            objective[0] = np.minimum(np.maximum(
+                2 * objective[1] - objective[2] if last >= 2 else objective[1],
+                self.skeleton.lower[columns]), self.skeleton.upper[columns])
             record = dict(ok=True, fast=False, nodes=0, backtracks=0, grown=0)
             path = None
             checks = 0
@@ -444,19 +453,20 @@ class UpperBodyPlanner:
                         ' (in the preview)' if result.gave_up_in_preview else '')
             if path is not None and record['ok']:
                 path[0] = start
-                out[:, indices] = path
+                out[:, columns] = path
                 if not record['fast'] and name != BRANCH_ORDER[-1]:
                     # The branches planned after this one see it where it now is.
                     body.set_branch(indices, path, steps)
                     moved = True
-            record['deviation'] = float(np.max(np.abs(out[1:, indices] - frames[1:, indices])))
+            record['deviation'] = (0.0 if record['fast'] or path is None else
+                                   float(np.abs(out[1:, columns] - frames[1:, columns]).max()))
             record['checks'] = checks
             record['time'] = time.perf_counter() - tic
             per_branch[name] = record
             if not ok:
                 break
-        upper = self.upper_indices
-        deviation = float(np.max(np.abs(out[1:, upper] - frames[1:, upper])))
+        upper = self._upper_columns
+        deviation = float(np.abs(out[1:, upper] - frames[1:, upper]).max())
         return UpperBodyPlan(frames=out, ok=ok, reason=reason, deviation=deviation,
                              planning_time=time.perf_counter() - began, per_branch=per_branch,
                              blocked_frame=blocked_frame)
@@ -488,13 +498,13 @@ class UpperBodyPlanner:
         layout = branch_layout(self.kinematics, self.shapes, name, self._checked[name],
                                self._obstacles[name])
         checked, pairs = layout[1], layout[3]
-        indices = self.indices[name]
-        path = body.frames[:, indices]
+        columns = self._columns[name]
+        path = body.frames[:, columns]
         skeleton = self.skeleton
-        inside = np.all((path >= skeleton.lower[indices] - 1e-9)
-                        & (path <= skeleton.upper[indices] + 1e-9), axis=1)
-        speed = np.abs(np.diff(path, axis=0)) / np.diff(times)[:, None]
-        if np.any(speed > skeleton.velocity_limit[indices] * (1 + 1e-6)) or not inside.all():
+        inside = ((path >= skeleton.lower[columns] - 1e-9)
+                  & (path <= skeleton.upper[columns] + 1e-9)).all(axis=1)
+        speed = np.abs(path[1:] - path[:-1]) / (times[1:] - times[:-1])[:, None]
+        if (speed > skeleton.velocity_limit[columns] * (1 + 1e-6)).any() or not inside.all():
             # The motion is not legal whatever it touches: only the start is left to check.
             return bool(inside[0]) and body.first_collision(checked, pairs, [0]) < 0, False
         bad = body.first_collision(checked, pairs)
@@ -517,13 +527,10 @@ class UpperBodyPlanner:
             Branch name -> (start legal at frame 0, the whole motion legal: start included).
 
         """
-        skeleton = self.skeleton
-        upper = self.upper_indices
-        path = body.frames[:, upper]
-        inside = ((path >= skeleton.lower[upper] - 1e-9)
-                  & (path <= skeleton.upper[upper] + 1e-9))
-        speed = np.abs(np.diff(path, axis=0)) / np.diff(times)[:, None]
-        too_fast = speed > skeleton.velocity_limit[upper] * (1 + 1e-6)
+        path = body.frames[:, self._upper_columns]
+        inside = (path >= self._upper_lower) & (path <= self._upper_upper)
+        speed = np.abs(path[1:] - path[:-1]) / (times[1:] - times[:-1])[:, None]
+        too_fast = speed > self._upper_speed
         first = body.first_collisions(self._pattern_checked, self._pattern_pairs,
                                       self._pattern_group, len(BRANCH_ORDER))
         out = {}
@@ -541,3 +548,11 @@ class UpperBodyPlanner:
             return list(self.body_collision.links_in_collision(q, self._checked[branch]))
         except (AttributeError, ValueError):
             return []
+
+
+def _columns(indices: np.ndarray):
+    """``indices`` as a slice when they are consecutive (the same columns), else as they are."""
+    indices = np.asarray(indices)
+    if len(indices) and np.array_equal(indices, np.arange(indices[0], indices[0] + len(indices))):
+        return slice(int(indices[0]), int(indices[0]) + len(indices))
+    return indices
