@@ -482,3 +482,31 @@ def test_first_collisions_per_group_agree_with_every_pair_checked_frame_by_frame
         hit = at[touching[at].any(axis=1)]
         assert body.first_collision(checked, pairs, at) == (hit[0] if len(hit) else -1), trial
     assert 6 <= found_any <= 30, found_any  # collisions and clear groups both occur
+
+
+@pytest.mark.parametrize('branch', ['waist', 'left_arm', 'right_arm'])
+def test_a_space_keeps_exactly_the_pairs_its_branch_can_reach(skeleton, branch):
+    # The legs swing wide and the arms move, so some body shapes come within a branch's reach
+    # during the step and others never do.
+    environment = Environment([box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0])], resolution=0.05)
+    times, frames = walk(skeleton, 50)
+    frames += np.random.default_rng(4).normal(0.0, 0.3, frames.shape)
+    body = timed_body(skeleton, environment, frames)
+    obstacles = LEGS + (TRUNK if branch != 'waist' else ())
+    space = CTSpace(branch, body, times, frames[:, skeleton.branch(branch)], TRUNK
+                    if branch == 'waist' else (f'{branch[:-4]}_upper_arm',
+                                               f'{branch[:-4]}_forearm'), obstacles)
+    every = body.shapes.pairs(space.checked, body.shapes.shapes_of(obstacles))
+    centre = space._reach_centre
+    gap = np.maximum(np.maximum(body.shape_lower - centre[:, None], 0.0),
+                     centre[:, None] - body.shape_upper)
+    near = (np.sqrt((gap ** 2).sum(axis=-1)) <= space._reach).any(axis=0)
+    expected = every[near[every[:, 1]]]
+    assert 0 < len(expected) < len(every) or branch == 'waist'
+    assert np.array_equal(space.pairs, expected)
+    other = expected[:, 1]
+    assert np.array_equal(space._pair_rotation, body.shape_rotation[:, other])
+    assert np.array_equal(space._pair_centre, body.shape_centre[:, other])
+    assert np.array_equal(space._pair_lower, body.shape_lower[:, other])
+    assert np.array_equal(space._pair_upper, body.shape_upper[:, other])
+    assert np.array_equal(space._pair_column, np.searchsorted(space.checked, expected[:, 0]))
