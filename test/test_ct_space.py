@@ -273,17 +273,28 @@ def test_batched_checks_agree_with_every_pair_checked_frame_by_frame(skeleton, b
 def test_triangles_near_the_step_are_those_of_the_whole_environment(skeleton):
     # The per-step list of nearby triangles is a shortcut: any box, near the actor or not,
     # gives the same triangles as a scan of the whole environment.
-    environment = Environment([box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0]),
-                               box([0.3, -1.0, 1.60], [0.5, 1.0, 1.80]),
-                               box([2.6, 1.0, 0.0], [2.9, 1.4, 2.0])], resolution=0.05)
-    times, frames = walk(skeleton, 60)
-    body = timed_body(skeleton, environment, frames)
-    rng = np.random.default_rng(3)
-    for _ in range(30):
-        centre = rng.uniform([-1.5, -1.0, -0.2], [3.0, 1.5, 2.0])
-        half = rng.uniform(0.01, 1.5, size=3)
-        expected = body.environment.triangles_near(centre - half, centre + half)
-        assert np.array_equal(body.triangles_near(centre - half, centre + half), expected)
+    # Both are checked against a plain test of every triangle's box, on few and on many
+    # (a subdivided bumpy floor) triangles.
+    floor = trimesh.creation.box(extents=[5.5, 3.0, 0.1])
+    for _ in range(4):
+        floor = floor.subdivide()
+    floor.vertices += [0.25, 0.0, -0.05]
+    floor.vertices[:, 2] += np.random.default_rng(1).uniform(0.0, 0.02, len(floor.vertices))
+    for ground in (box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0]), floor):
+        environment = Environment([ground, box([0.3, -1.0, 1.60], [0.5, 1.0, 1.80]),
+                                   box([2.6, 1.0, 0.0], [2.9, 1.4, 2.0])], resolution=0.05)
+        times, frames = walk(skeleton, 60)
+        body = timed_body(skeleton, environment, frames)
+        index = body.environment
+        rng = np.random.default_rng(3)
+        for _ in range(30):
+            centre = rng.uniform([-1.5, -1.0, -0.2], [3.0, 1.5, 2.0])
+            half = rng.uniform(0.01, 1.5, size=3)
+            lower, upper = centre - half, centre + half
+            expected = np.flatnonzero(np.all((index.upper >= lower) & (index.lower <= upper),
+                                             axis=1))
+            assert np.array_equal(index.triangles_near(lower, upper), expected)
+            assert np.array_equal(body.triangles_near(lower, upper), expected)
 
 
 def test_first_legal_motion_agrees_with_goals_checked_one_by_one(beam_world):

@@ -53,11 +53,11 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    gait._leg_violation, gait._sole_points, gait._across_sole,
                    collision._quaternions,
                    ct_space._link_poses, ct_space._place_shapes,
-                   ct_space._mesh_contacts, ct_space._branch_boxes,
-                   ct_space._suspect_table, ct_space._boxes_apart,
+                   ct_space._branch_boxes, ct_space._row_collisions, ct_space._boxes_apart,
                    ct_space._box_triangle_apart, ct_space._motion_path,
-                   ct_space._frame_suspects, ct_space._pose_shapes,
-                   ct_space._reachable_pairs):
+                   ct_space._first_contacts, ct_space._pose_shapes,
+                   ct_space._reachable_pairs, ct_space._boxes_meeting,
+                   ct_space._candidates_meeting):
         assert kernel.py_func is not kernel
 
 
@@ -185,46 +185,6 @@ def test_the_upper_body_kinematics_and_boxes(skeleton):
         assert tuple(q) == collision._quaternion(r.ravel().tolist())
 
 
-def test_the_contacts_of_shape_boxes_with_triangle_boxes():
-    """Which (row, shape, mesh) boxes meet: compiled, as Python, with and without the cut by
-    the swept boxes, and by brute force over every triangle."""
-    rng = np.random.default_rng(8)
-    centre = rng.uniform(0.0, 1.0, (12, 5, 3))
-    low, high = centre - 0.05, centre + 0.05
-    corner = rng.uniform(0.0, 1.0, (300, 3))
-    triangle_lower, triangle_upper = corner, corner + rng.uniform(0.0, 0.1, (300, 3))
-    owner = rng.integers(0, 4, 300)
-    brute = np.zeros((12, 5, 4), dtype=bool)
-    meets = ((high[:, :, None] >= triangle_lower) & (low[:, :, None] <= triangle_upper)).all(-1)
-    for t in range(300):
-        brute[:, :, owner[t]] |= meets[:, :, t]
-    expected = np.nonzero(brute)
-    assert 0 < len(expected[0]) < brute.size
-    for swept in (True, False):
-        arguments = (low, high, triangle_lower, triangle_upper, owner, 4, swept,
-                     False) + ct_space._NOT_ORIENTED
-        found = ct_space._mesh_contacts(*arguments)
-        same(found, ct_space._mesh_contacts.py_func(*arguments))
-        same(found, expected)
-    # With the oriented boxes inside the axis-aligned ones: a triangle counts only if the
-    # separating axis test does not put it apart from the shape's box.
-    rotation = np.array([[_rotation(rng) for _ in range(5)] for _ in range(12)])
-    half = rng.uniform(0.01, 0.03, (5, 3))
-    corners = triangle_lower[:, None] + rng.uniform(0.0, 0.1, (300, 3, 3))
-    oriented = np.zeros_like(brute)
-    for r, c, t in zip(*np.nonzero(meets)):
-        if not ct_space._box_triangle_apart.py_func(rotation[r, c], centre[r, c], half[c],
-                                                    corners[t], 1e-3):
-            oriented[r, c, owner[t]] = True
-    assert 0 < oriented.sum() < brute.sum()
-    for swept in (True, False):
-        arguments = (low, high, triangle_lower, triangle_upper, owner, 4, swept, True,
-                     rotation, centre, half, corners, 1e-3)
-        found = ct_space._mesh_contacts(*arguments)
-        same(found, ct_space._mesh_contacts.py_func(*arguments))
-        same(found, np.nonzero(oriented))
-
-
 def _rotation(rng) -> np.ndarray:
     """A random rotation matrix."""
     q, r = np.linalg.qr(rng.normal(size=(3, 3)))
@@ -257,61 +217,69 @@ def test_the_separating_axis_tests():
     assert 0 < sum(apart) < count
 
 
-def test_the_suspect_table_of_a_branch_batch():
-    """Per row, the meshes then the body-shape pairs whose boxes meet, as CSR arrays: compiled,
-    as Python, and by brute force."""
+def test_the_contacts_of_a_branch_batch():
+    """Per row, whether a shape touches a triangle or its pair's other shape: compiled, as
+    Python, with and without the cut by the swept boxes, and by FCL on every pair."""
+    import fcl
     rng = np.random.default_rng(10)
-    m, n, k, pairs = 15, 4, 30, 7
-    centre = rng.uniform(0.0, 1.0, (m, n, 3))
-    low, high = centre - 0.04, centre + 0.04
-    corner = rng.uniform(0.0, 1.0, (150, 3))
-    triangle_lower, triangle_upper = corner, corner + rng.uniform(0.0, 0.1, (150, 3))
-    owner = rng.integers(0, 3, 150)
+    m, n, k, pairs = 40, 4, 30, 6
+    kinds = np.array([0, 1, 2, 1])
+    shape_half = np.array([[0.03, 0.02, 0.05], [0.02, 0.06, 0.0], [0.03, 0.0, 0.0],
+                           [0.015, 0.04, 0.0]])
+    box_half = np.array([h if kind == 0 else (h[0], h[0], h[1]) if kind == 1
+                         else (h[0], h[0], h[0]) for kind, h in zip(kinds, shape_half)])
+    centre = rng.uniform(0.0, 0.6, (m, n, 3))
+    rotation = np.array([[_rotation(rng) for _ in range(n)] for _ in range(m)])
+    extent = np.abs(rotation) @ box_half[:, :, None]
+    low, high = centre - extent[..., 0], centre + extent[..., 0]
+    corners = rng.uniform(0.0, 0.6, (60, 1, 3)) + rng.uniform(-0.05, 0.05, (60, 3, 3))
+    triangle_lower, triangle_upper = corners.min(axis=1), corners.max(axis=1)
     frames = rng.integers(0, k, m)
     pair_column = rng.integers(0, n, pairs)
-    # The other shapes near the branch's, so that many boxes meet.
-    other = centre[rng.integers(0, m, (k, pairs)), pair_column] + rng.normal(0.0, 0.03,
-                                                                             (k, pairs, 3))
-    pair_lower, pair_upper = other - 0.05, other + 0.05
-    # Oriented boxes inside the axis-aligned ones: the separating axis tests part some pairs
-    # whose axis-aligned boxes meet.
-    rotation = np.array([[_rotation(rng) for _ in range(n)] for _ in range(m)])
-    half = rng.uniform(0.01, 0.023, (n, 3))
-    corners = triangle_lower[:, None] + rng.uniform(0.0, 0.1, (150, 3, 3))
+    pair_kinds = np.array([0, 1, 2, 0, 1, 2])
+    pair_shape_half = np.array([[0.02, 0.03, 0.04], [0.03, 0.05, 0.0], [0.04, 0.0, 0.0],
+                                [0.05, 0.01, 0.02], [0.02, 0.08, 0.0], [0.02, 0.0, 0.0]])
+    pair_half = np.array([h if kind == 0 else (h[0], h[0], h[1]) if kind == 1
+                          else (h[0], h[0], h[0]) for kind, h in zip(pair_kinds,
+                                                                     pair_shape_half)])
+    # The other shapes near the branch's, so that many meet.
+    pair_centre = (centre[rng.integers(0, m, (k, pairs)), pair_column]
+                   + rng.normal(0.0, 0.06, (k, pairs, 3)))
     pair_rotation = np.array([[_rotation(rng) for _ in range(pairs)] for _ in range(k)])
-    pair_half = rng.uniform(0.005, 0.028, (pairs, 3))
-    expected = []
-    mesh_rows = ct_space._mesh_contacts.py_func(low, high, triangle_lower, triangle_upper,
-                                                owner, 3, False, True, rotation, centre, half,
-                                                corners, 1e-3)
-    parted = 0
-    for row in range(m):
-        entries = [(column, -1 - mesh) for r, column, mesh in zip(*mesh_rows) if r == row]
-        for p in range(pairs):
-            c, f = pair_column[p], frames[row]
-            if np.all((high[row, c] >= pair_lower[f, p]) & (low[row, c] <= pair_upper[f, p])):
-                if ct_space._boxes_apart.py_func(rotation[row, c], centre[row, c], half[c],
-                                                 pair_rotation[f, p], other[f, p],
-                                                 pair_half[p], 1e-3):
-                    parted += 1
-                else:
-                    entries.append((c, p))
-        expected.append(entries)
-    assert parted
-    kinds = {(any(c < 0 for _, c in entries), any(c >= 0 for _, c in entries))
-             for entries in expected}
-    # Rows with meshes, with pairs, and with none.
-    assert {any(a for a, _ in kinds), any(b for _, b in kinds), (False, False) in kinds} == {
-        True}, kinds
+    pair_extent = (np.abs(pair_rotation) @ pair_half[:, :, None])[..., 0]
+    pair_lower, pair_upper = pair_centre - pair_extent, pair_centre + pair_extent
+
+    def fcl_object(kind, half, r, c):
+        geometry = (fcl.Box(*(2 * half)) if kind == 0 else fcl.Cylinder(half[0], 2 * half[1])
+                    if kind == 1 else fcl.Sphere(half[0]))
+        return fcl.CollisionObject(geometry, fcl.Transform(r, c))
+
+    triangles = []
+    for corner in corners:
+        model = fcl.BVHModel()
+        model.beginModel(3, 1)
+        model.addSubModel(corner, np.array([[0, 1, 2]]))
+        model.endModel()
+        triangles.append(fcl.CollisionObject(model, fcl.Transform()))
+    expected = np.zeros(m, dtype=bool)
+    for r in range(m):
+        for c in range(n):
+            shape = fcl_object(kinds[c], shape_half[c], rotation[r, c], centre[r, c])
+            targets = triangles + [
+                fcl_object(pair_kinds[p], pair_shape_half[p], pair_rotation[frames[r], p],
+                           pair_centre[frames[r], p]) for p in range(pairs)
+                if pair_column[p] == c]
+            expected[r] |= any(fcl.collide(shape, target, fcl.CollisionRequest(),
+                                           fcl.CollisionResult()) for target in targets)
+    assert 0.2 < expected.mean() < 0.8
     for swept in (True, False):
-        arguments = (low, high, triangle_lower, triangle_upper, owner, 3, swept, frames,
-                     pair_column, pair_lower, pair_upper, rotation, centre, half, corners,
-                     pair_rotation, other, pair_half, 1e-3)
-        found = ct_space._suspect_table(*arguments)
-        same(found, ct_space._suspect_table.py_func(*arguments))
-        starts, columns, targets = found
-        assert [list(zip(columns[a:b].tolist(), targets[a:b].tolist()))
-                for a, b in zip(starts[:-1], starts[1:])] == expected
+        arguments = (low, high, triangle_lower, triangle_upper, swept, frames, pair_column,
+                     pair_lower, pair_upper, rotation, centre, box_half, corners,
+                     pair_rotation, pair_centre, pair_half, 1e-3, kinds, shape_half,
+                     pair_kinds, pair_shape_half)
+        found = ct_space._row_collisions(*arguments)
+        same(found, ct_space._row_collisions.py_func(*arguments))
+        same(found, expected)
 
 
 def test_the_leg_triangle():

@@ -29,7 +29,8 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import fcl
 import numpy as np
 
-from .collision import _half_extents, _KIND_CODES, _quaternions
+from .collision import _half_extents, _KIND_CODES
+from .convex import touching, TRIANGLE
 from .jit import float_array, kernel
 from .skeleton import Skeleton
 
@@ -40,9 +41,6 @@ ADJACENT_JOINTS = 2
 UPPER_BODY_BRANCHES = ('waist', 'left_arm', 'right_arm')
 #: Kept triangles up to which a batch's boxes are tested against all of them at once.
 FEW_TRIANGLES = 64
-#: Triangles above which one box is tested against them coordinate by coordinate (contiguous
-#: rows; below it, fewer NumPy calls over interleaved coordinates are faster).
-MANY_TRIANGLES = 256
 #: Rows x shapes x triangles above which contacts are first cut by the shapes' swept boxes.
 SWEPT_CONTACTS = 4096
 #: Room around the actor's shapes over a step for the triangles kept per step, m (about the
@@ -387,18 +385,27 @@ def _box_triangle_apart(rotation, centre, half, corners, margin):
     return False
 
 
-@kernel('UniTuple(i8[::1], 3)(f8[:, :, :], f8[:, :, :], f8[:, :], f8[:, :], i8[:], i8, b1, '
-        'b1, f8[:, :, :, :], f8[:, :, :], f8[:, :], f8[:, :, :], f8)')
-def _mesh_contacts(low, high, triangle_lower, triangle_upper, owner, mesh_count, swept,
-                   oriented, rotation, centre, half, corners, margin):
-    """:func:`mesh_contacts`: the (row, shape, mesh) triples where a shape's box meets a box of
-    one of the mesh's triangles, in row, shape, mesh order. With ``swept`` each shape is first
-    tested against the triangles its box swept over all rows meets (the same triples). With
-    ``oriented`` a triangle counts only if the shape's oriented box (``rotation`` (m, n, 3, 3),
-    ``centre`` (m, n, 3), ``half`` (n, 3)) is not more than ``margin`` apart from it
-    (:func:`_box_triangle_apart` on its ``corners`` (T, 3, 3))."""
+@kernel('b1[::1](f8[:, :, ::1], f8[:, :, ::1], f8[:, :], f8[:, :], b1, i8[::1], i8[::1], '
+        'f8[:, :, ::1], f8[:, :, ::1], f8[:, :, :, ::1], f8[:, :, ::1], f8[:, ::1], '
+        'f8[:, :, :], f8[:, :, :, :], f8[:, :, :], f8[:, :], f8, i8[::1], f8[:, :], i8[::1], '
+        'f8[:, :])')
+def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pair_column,
+                    pair_lower, pair_upper, rotation, centre, half, corners, pair_rotation,
+                    pair_centre, pair_half, margin, kinds, shape_half, pair_kinds,
+                    pair_shape_half):
+    """Whether each row of a branch's batch touches the environment or the body: (m,) bool.
+
+    The broad phase (the boxes along the world axes, cut by each shape's box swept over the
+    rows when ``swept``, then the separating axis test of the oriented boxes holding the
+    shapes, ``margin`` apart) and, for what it leaves, the exact test of the shapes
+    themselves (:func:`convex.touching`): the branch's shape (``kinds`` (n,), ``shape_half``
+    (n, 3)) against a triangle, or against a pair's other shape (``pair_kinds`` (P,),
+    ``pair_shape_half`` (P, 3)) at the row's frame. A row stops at its first contact.
+    """
     m, n, count = low.shape[0], low.shape[1], triangle_lower.shape[0]
-    hit = np.zeros((m, n, mesh_count), dtype=np.bool_)
+    pairs = pair_column.shape[0]
+    hit = np.zeros(m, dtype=np.bool_)
+    no_corners = np.zeros((3, 3))
     candidates = np.empty(count, dtype=np.int64)
     lowest, highest = np.empty(3), np.empty(3)
     for c in range(n):
@@ -424,137 +431,70 @@ def _mesh_contacts(low, high, triangle_lower, triangle_upper, owner, mesh_count,
                 candidates[found] = t
                 found += 1
         for r in range(m):
+            if hit[r]:
+                continue
             for k in range(found):
                 t = candidates[k]
-                if hit[r, c, owner[t]]:
-                    continue
                 meets = True
                 for axis in range(3):
                     if not (high[r, c, axis] >= triangle_lower[t, axis]
                             and low[r, c, axis] <= triangle_upper[t, axis]):
                         meets = False
                         break
-                if meets and oriented and _box_triangle_apart(rotation[r, c], centre[r, c],
-                                                              half[c], corners[t], margin):
-                    meets = False
-                if meets:
-                    hit[r, c, owner[t]] = True
-    total = 0
+                if (meets and not _box_triangle_apart(rotation[r, c], centre[r, c], half[c],
+                                                      corners[t], margin)
+                        and touching(kinds[c], shape_half[c], rotation[r, c], centre[r, c],
+                                     no_corners, TRIANGLE, shape_half[c], rotation[r, c],
+                                     centre[r, c], corners[t])):
+                    hit[r] = True
+                    break
     for r in range(m):
-        for c in range(n):
-            for g in range(mesh_count):
-                total += hit[r, c, g]
-    rows = np.empty(total, dtype=np.int64)
-    columns = np.empty(total, dtype=np.int64)
-    meshes = np.empty(total, dtype=np.int64)
-    i = 0
-    for r in range(m):
-        for c in range(n):
-            for g in range(mesh_count):
-                if hit[r, c, g]:
-                    rows[i], columns[i], meshes[i] = r, c, g
-                    i += 1
-    return rows, columns, meshes
-
-
-@kernel('UniTuple(i8[::1], 3)(f8[:, :, ::1], f8[:, :, ::1], f8[:, :], f8[:, :], i8[:], i8, b1, '
-        'i8[::1], i8[::1], f8[:, :, ::1], f8[:, :, ::1], f8[:, :, :, ::1], f8[:, :, ::1], '
-        'f8[:, ::1], f8[:, :, :], f8[:, :, :, :], f8[:, :, :], f8[:, :], f8)')
-def _suspect_table(low, high, triangle_lower, triangle_upper, owner, mesh_count, swept, frames,
-                   pair_column, pair_lower, pair_upper, rotation, centre, half, corners,
-                   pair_rotation, pair_centre, pair_half, margin):
-    """The broad phase of a batch of a branch's rows: which (shape, target) pairs each row must
-    check in FCL.
-
-    ``low``, ``high``: (m, n, 3) boxes of the branch's n shapes. A target is a mesh (the
-    contacts of :func:`_mesh_contacts`) or pair p of body shapes, whose other shape's box at
-    each frame is ``pair_lower``/``pair_upper`` (k, P, 3) and whose branch shape is column
-    ``pair_column[p]``; its boxes must meet at the row's frame (``frames`` (m,)). Then, for
-    both kinds, the oriented boxes holding the shapes must not be found more than ``margin``
-    apart by the separating axis test (:func:`_box_triangle_apart` on a mesh's triangles'
-    ``corners`` (T, 3, 3), :func:`_boxes_apart` on a pair): the branch's shapes posed at
-    ``rotation`` (m, n, 3, 3) and ``centre`` (m, n, 3) with half extents ``half`` (n, 3), the
-    pairs' other shapes at ``pair_rotation`` (k, P, 3, 3) and ``pair_centre`` (k, P, 3) with
-    ``pair_half`` (P, 3).
-
-    Returns
-    -------
-    starts, columns, targets
-        Row r's suspects are entries ``starts[r]:starts[r + 1]``: the branch shape's column
-        and the target, ``-1 - mesh`` or the pair index; per row the meshes first, in shape
-        then mesh order, then the pairs in order.
-
-    """
-    m, pairs = low.shape[0], pair_column.shape[0]
-    rows, columns, meshes = _mesh_contacts(low, high, triangle_lower, triangle_upper, owner,
-                                           mesh_count, swept, True, rotation, centre, half,
-                                           corners, margin)
-    meets = np.zeros((m, pairs), dtype=np.bool_)
-    counts = np.zeros(m + 1, dtype=np.int64)
-    for i in range(rows.shape[0]):
-        counts[rows[i] + 1] += 1
-    for r in range(m):
+        if hit[r]:
+            continue
         f = frames[r]
         for p in range(pairs):
             c = pair_column[p]
-            touching = True
+            meets = True
             for axis in range(3):
                 if not (high[r, c, axis] >= pair_lower[f, p, axis]
                         and low[r, c, axis] <= pair_upper[f, p, axis]):
-                    touching = False
+                    meets = False
                     break
-            if touching and not _boxes_apart(rotation[r, c], centre[r, c], half[c],
-                                             pair_rotation[f, p], pair_centre[f, p],
-                                             pair_half[p], margin):
-                meets[r, p] = True
-                counts[r + 1] += 1
-    starts = np.cumsum(counts)
-    out_columns = np.empty(starts[m], dtype=np.int64)
-    out_targets = np.empty(starts[m], dtype=np.int64)
-    filled = starts[:m].copy()
-    for i in range(rows.shape[0]):
-        r = rows[i]
-        out_columns[filled[r]] = columns[i]
-        out_targets[filled[r]] = -1 - meshes[i]
-        filled[r] += 1
-    for r in range(m):
-        for p in range(pairs):
-            if meets[r, p]:
-                out_columns[filled[r]] = pair_column[p]
-                out_targets[filled[r]] = p
-                filled[r] += 1
-    return starts, out_columns, out_targets
+            if (meets and not _boxes_apart(rotation[r, c], centre[r, c], half[c],
+                                           pair_rotation[f, p], pair_centre[f, p],
+                                           pair_half[p], margin)
+                    and touching(kinds[c], shape_half[c], rotation[r, c], centre[r, c],
+                                 no_corners, pair_kinds[p], pair_shape_half[p],
+                                 pair_rotation[f, p], pair_centre[f, p], no_corners)):
+                hit[r] = True
+                break
+    return hit
 
 
-@kernel('UniTuple(i8[::1], 3)(i8[::1], i8[::1], f8[:, :, ::1], f8[:, :, ::1], '
-        'f8[:, :, :, ::1], f8[:, :, ::1], f8[:, ::1], f8[:, :], f8[:, :], i8[:], f8[:, :, :], '
-        'i8[::1], i8, i8[:, :], f8[:, ::1], f8[:, ::1], f8)')
-def _frame_suspects(frames, checked, shape_lower, shape_upper, shape_rotation, shape_centre,
-                    box_half, triangle_lower, triangle_upper, owner, corners, near, mesh_count,
-                    pairs, swept_lower, swept_upper, margin):
-    """The broad phase of :meth:`TimedBody.first_collisions`: per row (frame ``frames[r]``)
-    the (shape, target) pairs to check in FCL, read from the poses and boxes the body holds.
+@kernel('i8[::1](i8[::1], i8[::1], i8[::1], i8, f8[:, :, ::1], f8[:, :, ::1], '
+        'f8[:, :, :, ::1], f8[:, :, ::1], f8[:, ::1], i8[::1], f8[:, ::1], f8[:, :], f8[:, :], '
+        'f8[:, :, :], i8[::1], i8[:, :], f8[:, ::1], f8[:, ::1], f8)')
+def _first_contacts(frames, checked, group, count, shape_lower, shape_upper, shape_rotation,
+                    shape_centre, box_half, kinds, halves, triangle_lower, triangle_upper,
+                    corners, near, pairs, swept_lower, swept_upper, margin):
+    """:meth:`TimedBody.first_collisions` on the poses and boxes the body holds: per group
+    (``group[s]`` in [0, ``count``) for each ``checked`` shape s), the first of the
+    ``frames`` (m,) where one of its shapes touches an environment triangle of ``near``
+    (indices into ``triangle_lower`` ... ``corners``) or the other shape of one of its
+    ``pairs`` (P, 2) of body shapes, or -1.
 
-    ``checked`` (n,) body shapes, each against the environment's triangles ``near`` (indices
-    into ``triangle_lower`` ... ``corners``; once per mesh ``owner[t]`` < ``mesh_count``) and
-    as the first shape of its ``pairs`` (P, 2) of body shapes. A pair is a suspect where the
-    boxes meet and the separating axis test does not find the oriented boxes holding the
-    shapes (half extents ``box_half`` (S, 3)) more than ``margin`` apart: the suspects of
-    :func:`_suspect_table`, cut first by each shape's box swept over the rows (a pair: by
-    the boxes ``swept_lower``/``swept_upper`` (S, 3) its shapes sweep over every frame).
-
-    Returns
-    -------
-    starts, shapes, targets
-        Row r's suspects are entries ``starts[r]:starts[r + 1]``: the checked body shape and
-        the target, ``-1 - mesh`` or the other body shape; per row the meshes first, in
-        ``checked`` then mesh order, then the pairs in order.
-
+    The tests of :func:`_row_collisions` (boxes, cut first by each shape's box swept over the
+    frames, and a pair by the boxes ``swept_lower``/``swept_upper`` (S, 3) its shapes sweep
+    over every frame; the separating axis test ``margin`` apart; then the shapes themselves,
+    ``kinds`` and padded ``halves`` (S, 3), :func:`convex.touching`), frame by frame, a group
+    left out once it has touched, stopping when every group has.
     """
-    m, n, count = frames.shape[0], checked.shape[0], pairs.shape[0]
-    hit = np.zeros((m, n, mesh_count), dtype=np.bool_)
-    counts = np.zeros(m + 1, dtype=np.int64)
-    candidates = np.empty(near.shape[0], dtype=np.int64)
+    m, n, count_pairs = frames.shape[0], checked.shape[0], pairs.shape[0]
+    found = np.full(count, -1, dtype=np.int64)
+    no_corners = np.zeros((3, 3))
+    # Per checked shape, the triangles its box swept over the frames meets.
+    starts = np.zeros(n + 1, dtype=np.int64)
+    candidates = np.empty(n * near.shape[0], dtype=np.int64)
     lowest, highest = np.empty(3), np.empty(3)
     for c in range(n):
         s = checked[c]
@@ -563,7 +503,7 @@ def _frame_suspects(frames, checked, shape_lower, shape_upper, shape_rotation, s
             for r in range(m):
                 lowest[axis] = min(lowest[axis], shape_lower[frames[r], s, axis])
                 highest[axis] = max(highest[axis], shape_upper[frames[r], s, axis])
-        found = 0
+        total = starts[c]
         for i in range(near.shape[0]):
             t = near[i]
             meets = True
@@ -573,62 +513,66 @@ def _frame_suspects(frames, checked, shape_lower, shape_upper, shape_rotation, s
                     meets = False
                     break
             if meets:
-                candidates[found] = t
-                found += 1
-        for r in range(m):
-            f = frames[r]
-            for k in range(found):
+                candidates[total] = t
+                total += 1
+        starts[c + 1] = total
+    # The pairs whose shapes' boxes over every frame meet.
+    active = np.zeros(count_pairs, dtype=np.bool_)
+    for p in range(count_pairs):
+        a, b = pairs[p, 0], pairs[p, 1]
+        active[p] = True
+        for axis in range(3):
+            if not (swept_upper[a, axis] >= swept_lower[b, axis]
+                    and swept_lower[a, axis] <= swept_upper[b, axis]):
+                active[p] = False
+    left = count
+    for r in range(m):
+        f = frames[r]
+        for c in range(n):
+            s = checked[c]
+            g = group[s]
+            if found[g] >= 0:
+                continue
+            for k in range(starts[c], starts[c + 1]):
                 t = candidates[k]
-                if hit[r, c, owner[t]]:
-                    continue
                 meets = True
                 for axis in range(3):
                     if not (shape_upper[f, s, axis] >= triangle_lower[t, axis]
                             and shape_lower[f, s, axis] <= triangle_upper[t, axis]):
                         meets = False
                         break
-                if meets and not _box_triangle_apart(shape_rotation[f, s], shape_centre[f, s],
-                                                     box_half[s], corners[t], margin):
-                    hit[r, c, owner[t]] = True
-                    counts[r + 1] += 1
-    meets_pair = np.zeros((m, count), dtype=np.bool_)
-    for p in range(count):
-        a, b = pairs[p, 0], pairs[p, 1]
-        apart = False
-        for axis in range(3):
-            if not (swept_upper[a, axis] >= swept_lower[b, axis]
-                    and swept_lower[a, axis] <= swept_upper[b, axis]):
-                apart = True
-        if apart:
-            continue
-        for r in range(m):
-            f = frames[r]
-            touching = True
+                if (meets and not _box_triangle_apart(shape_rotation[f, s], shape_centre[f, s],
+                                                      box_half[s], corners[t], margin)
+                        and touching(kinds[s], halves[s], shape_rotation[f, s],
+                                     shape_centre[f, s], no_corners, TRIANGLE, halves[s],
+                                     shape_rotation[f, s], shape_centre[f, s], corners[t])):
+                    found[g] = f
+                    left -= 1
+                    break
+        for p in range(count_pairs):
+            if not active[p]:
+                continue
+            a, b = pairs[p, 0], pairs[p, 1]
+            g = group[a]
+            if found[g] >= 0:
+                continue
+            meets = True
             for axis in range(3):
                 if not (shape_upper[f, a, axis] >= shape_lower[f, b, axis]
                         and shape_lower[f, a, axis] <= shape_upper[f, b, axis]):
-                    touching = False
+                    meets = False
                     break
-            if touching and not _boxes_apart(shape_rotation[f, a], shape_centre[f, a],
-                                             box_half[a], shape_rotation[f, b],
-                                             shape_centre[f, b], box_half[b], margin):
-                meets_pair[r, p] = True
-                counts[r + 1] += 1
-    starts = np.cumsum(counts)
-    shapes = np.empty(starts[m], dtype=np.int64)
-    targets = np.empty(starts[m], dtype=np.int64)
-    i = 0
-    for r in range(m):
-        for c in range(n):
-            for g in range(mesh_count):
-                if hit[r, c, g]:
-                    shapes[i], targets[i] = checked[c], -1 - g
-                    i += 1
-        for p in range(count):
-            if meets_pair[r, p]:
-                shapes[i], targets[i] = pairs[p, 0], pairs[p, 1]
-                i += 1
-    return starts, shapes, targets
+            if (meets and not _boxes_apart(shape_rotation[f, a], shape_centre[f, a],
+                                           box_half[a], shape_rotation[f, b],
+                                           shape_centre[f, b], box_half[b], margin)
+                    and touching(kinds[a], halves[a], shape_rotation[f, a], shape_centre[f, a],
+                                 no_corners, kinds[b], halves[b], shape_rotation[f, b],
+                                 shape_centre[f, b], no_corners)):
+                found[g] = f
+                left -= 1
+        if left == 0:
+            break
+    return found
 
 
 @kernel('Tuple((i8[::1], f8[:, :, :, ::1], f8[:, :, ::1], f8[:, :, ::1], f8[:, :, ::1]))('
@@ -679,6 +623,38 @@ def _reachable_pairs(centre, reach2, shape_lower, shape_upper, shape_rotation, s
                 lower[f, i, e] = shape_lower[f, s, e]
                 upper[f, i, e] = shape_upper[f, s, e]
     return kept, rotation, middle, lower, upper
+
+
+@kernel('i8[::1](f8[::1], f8[::1], f8[:, ::1], f8[:, ::1])')
+def _boxes_meeting(lower, upper, lower_by_axis, upper_by_axis):
+    """Indices, in order, of the T boxes given as (3, T) corners that meet the box [lower,
+    upper] (3,): the answers of a test of every box."""
+    count = lower_by_axis.shape[1]
+    out = np.empty(count, dtype=np.int64)
+    n = 0
+    for t in range(count):
+        if (upper_by_axis[0, t] >= lower[0] and lower_by_axis[0, t] <= upper[0]
+                and upper_by_axis[1, t] >= lower[1] and lower_by_axis[1, t] <= upper[1]
+                and upper_by_axis[2, t] >= lower[2] and lower_by_axis[2, t] <= upper[2]):
+            out[n] = t
+            n += 1
+    return out[:n].copy()
+
+
+@kernel('i8[::1](f8[::1], f8[::1], f8[:, ::1], f8[:, ::1], i8[::1])')
+def _candidates_meeting(lower, upper, box_lower, box_upper, candidates):
+    """The ``candidates`` (indices into the (T, 3) box corners), in order, whose boxes meet the
+    box [lower, upper] (3,): the answers of a test of every box."""
+    out = np.empty(candidates.shape[0], dtype=np.int64)
+    n = 0
+    for i in range(candidates.shape[0]):
+        t = candidates[i]
+        if (box_upper[t, 0] >= lower[0] and box_lower[t, 0] <= upper[0]
+                and box_upper[t, 1] >= lower[1] and box_lower[t, 1] <= upper[1]
+                and box_upper[t, 2] >= lower[2] and box_lower[t, 2] <= upper[2]):
+            out[n] = t
+            n += 1
+    return out[:n].copy()
 
 
 @kernel('Tuple((f8[:, ::1], i8))(f8[:, :], f8[:], f8[:, :], f8[:], f8[:], i8, f8[:], i8)')
@@ -1107,10 +1083,10 @@ class EnvironmentIndex:
         return self.objects[self._object_of[mesh]]
 
     def triangles_near(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
-        """Indices of triangles whose boxes overlap the box [lower, upper] (3,) m."""
-        if len(self.lower) <= MANY_TRIANGLES:
-            return np.flatnonzero(boxes_overlap(lower, upper, self.lower, self.upper))
-        return np.flatnonzero(_box_meets(lower, upper, self.lower_by_axis, self.upper_by_axis))
+        """Indices (int64, in order) of triangles whose boxes overlap the box [lower, upper]
+        (3,) m."""
+        return _boxes_meeting(float_array(lower).reshape(3), float_array(upper).reshape(3),
+                              self.lower_by_axis, self.upper_by_axis)
 
 
 class TimedBody:
@@ -1149,14 +1125,10 @@ class TimedBody:
         among the triangles near the actor during the step (found once per step, with room for
         the branches' reach) instead of among all the environment's triangles.
         """
-        lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
+        lower, upper = float_array(lower).reshape(3), float_array(upper).reshape(3)
         environment = self.environment
-        near = self._step_near(lower, upper)
-        if len(near) <= MANY_TRIANGLES:
-            return near[boxes_overlap(lower, upper, environment.lower[near],
-                                      environment.upper[near])]
-        return near[_box_meets(lower, upper, environment.lower_by_axis.take(near, axis=1),
-                               environment.upper_by_axis.take(near, axis=1))]
+        return _candidates_meeting(lower, upper, environment.lower, environment.upper,
+                                   self._step_near(lower, upper))
 
     def _step_near(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
         """The triangles near the actor over the step: (N,) int64 indices, a superset of those
@@ -1166,8 +1138,7 @@ class TimedBody:
                 or np.any(upper > self._near_upper)):
             box_lower = np.minimum(lower, self.swept_lower.min(axis=0) - NEAR_MARGIN)
             box_upper = np.maximum(upper, self.swept_upper.max(axis=0) + NEAR_MARGIN)
-            self._near = self.environment.triangles_near(box_lower, box_upper).astype(
-                np.int64, copy=False)
+            self._near = self.environment.triangles_near(box_lower, box_upper)
             self._near_lower, self._near_upper = box_lower, box_upper
         return self._near
 
@@ -1196,9 +1167,9 @@ class TimedBody:
                          frames: Optional[np.ndarray] = None) -> List[int]:
         """Per group of checked shapes, the first frame at which one of them touches something.
 
-        Uses the poses the body already holds (no kinematics): one broad phase over all the
-        frames and groups at once, the narrow phase in FCL in frame order, each group left out
-        once it has collided, stopping when every group has.
+        Uses the poses the body already holds (no kinematics), in one compiled pass
+        (:func:`_first_contacts`): the broad phase, then the exact test of the shapes, frame by
+        frame, each group left out once it has collided, stopping when every group has.
 
         Parameters
         ----------
@@ -1220,43 +1191,24 @@ class TimedBody:
             Per group, the first frame in collision, or -1.
 
         """
-        found = [-1] * count
         frames = (np.arange(len(self.frames)) if frames is None
                   else np.asarray(frames, dtype=np.int64))
         if not len(frames) or not len(checked):
-            return found
+            return [-1] * count
         environment = self.environment
-        starts, shapes, targets = _frame_suspects(
-            frames, np.asarray(checked, dtype=np.int64), self.shape_lower, self.shape_upper,
-            self.shape_rotation, self.shape_centre, self.shapes.box_half, environment.lower,
-            environment.upper, environment.owner, environment.corners,
+        shapes = self.shapes
+        checked = np.asarray(checked, dtype=np.int64)
+        group = (np.zeros(len(shapes.kind), dtype=np.int64) if group is None
+                 else np.asarray(group, dtype=np.int64))
+        return _first_contacts(
+            frames, checked, group, count, self.shape_lower, self.shape_upper,
+            self.shape_rotation, self.shape_centre, shapes.box_half, shapes.kind_code,
+            shapes.half, environment.lower, environment.upper, environment.corners,
             # The boxes swept over the whole step hold those at the frames checked.
             self.triangles_near(self.swept_lower[checked].min(axis=0),
                                 self.swept_upper[checked].max(axis=0)),
-            environment.mesh_count, np.asarray(pairs, dtype=np.int64).reshape(-1, 2),
-            self.swept_lower, self.swept_upper, SAT_MARGIN)
-        if not len(shapes):
-            return found
-        groups = [0] * len(self.shapes.kind) if group is None else group.tolist()
-        frames, starts = frames.tolist(), starts.tolist()
-        shapes, targets = shapes.tolist(), targets.tolist()
-        left = count
-        for row in np.flatnonzero(np.diff(starts)).tolist():
-            frame = frames[row]
-            for entry in range(starts[row], starts[row + 1]):
-                shape = shapes[entry]
-                which = groups[shape]
-                if found[which] >= 0:
-                    continue
-                other = targets[entry]
-                target = (environment.object_of(-1 - other) if other < 0
-                          else self.posed_shape(frame, other))
-                if self.collides(frame, shape, target):
-                    found[which] = frame
-                    left -= 1
-                    if not left:
-                        return found
-        return found
+            np.asarray(pairs, dtype=np.int64).reshape(-1, 2), self.swept_lower,
+            self.swept_upper, SAT_MARGIN).tolist()
 
     def posed_shape(self, frame: int, shape: int) -> fcl.CollisionObject:
         """The FCL object of body shape ``shape``, placed where it is at ``frame``."""
@@ -1286,43 +1238,6 @@ class TimedBody:
         self.shapes.place(moved, self.rotations, self.positions, self)
 
 
-def boxes_overlap(lower_a: np.ndarray, upper_a: np.ndarray, lower_b: np.ndarray,
-                  upper_b: np.ndarray) -> np.ndarray:
-    """Whether axis-aligned boxes overlap: corners (..., 3) broadcast together, -> (...) bool.
-
-    Never ``np.all(..., axis=-1)``: reducing a last axis of 3 is one of NumPy's slow paths.
-    """
-    if lower_a.ndim == 1 or lower_b.ndim == 1 or lower_a.shape[-2:] == lower_b.shape[-2:]:
-        # Broadcast along leading axes only: two comparisons over all three axes, then the
-        # three columns joined (5 NumPy calls instead of 11; about twice as fast on a branch's
-        # rows x pairs).
-        both = upper_a >= lower_b
-        both &= lower_a <= upper_b
-        return both[..., 0] & both[..., 1] & both[..., 2]
-    # Broadcast inside (boxes against triangles): one comparison per axis keeps the long axis
-    # innermost.
-    out = (upper_a[..., 0] >= lower_b[..., 0]) & (lower_a[..., 0] <= upper_b[..., 0])
-    for axis in (1, 2):
-        out &= upper_a[..., axis] >= lower_b[..., axis]
-        out &= lower_a[..., axis] <= upper_b[..., axis]
-    return out
-
-
-def _box_meets(lower: np.ndarray, upper: np.ndarray, lower_by_axis: np.ndarray,
-               upper_by_axis: np.ndarray) -> np.ndarray:
-    """Whether one box [lower, upper] (3,) meets each of T boxes given as (3, T) corners: (T,).
-
-    The same answers as :func:`boxes_overlap`, several times faster for thousands of boxes
-    (38k triangles of uneven ground: 0.14 instead of 0.98 ms).
-    """
-    out = upper_by_axis[0] >= lower[0]
-    out &= lower_by_axis[0] <= upper[0]
-    for axis in (1, 2):
-        out &= upper_by_axis[axis] >= lower[axis]
-        out &= lower_by_axis[axis] <= upper[axis]
-    return out
-
-
 def _same_motion(a: tuple, b: tuple) -> bool:
     """Whether two motions ((qa, ia), (qb, ib)) are the same."""
     return all(ia == ib and np.array_equal(qa, qb) for (qa, ia), (qb, ib) in zip(a, b))
@@ -1334,61 +1249,6 @@ def _watched_rows(inside: np.ndarray, broad: tuple) -> List[int]:
     if not outside:
         return sorted(broad[0])
     return sorted(set(outside).union(broad[0]))
-
-
-def span(lower: np.ndarray, upper: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
-    """The box around boxes with corners (m, n, 3): lower and upper corners (3,), m.
-
-    Reduces over the rows first: reducing a large array straight to 3 values is one of
-    NumPy's slow paths (a short innermost output), about 10x slower.
-    """
-    m = len(lower)
-    if m > 1:
-        lower = lower.reshape(m, -1).min(axis=0).reshape(-1, 3)
-        upper = upper.reshape(m, -1).max(axis=0).reshape(-1, 3)
-    else:
-        lower, upper = lower.reshape(-1, 3), upper.reshape(-1, 3)
-    return lower.min(axis=0), upper.max(axis=0)
-
-
-def mesh_contacts(low: np.ndarray, high: np.ndarray, triangle_lower: np.ndarray,
-                  triangle_upper: np.ndarray, triangle_owner: np.ndarray,
-                  mesh_count: int, swept: Optional[bool] = None) -> tuple:
-    """Which shape boxes meet a triangle box of which mesh, once per (row, shape, mesh).
-
-    Parameters
-    ----------
-    low, high
-        (m, n, 3) box corners of n shapes in m rows (frames or configurations), m.
-    triangle_lower, triangle_upper
-        (T, 3) triangle box corners, m.
-    triangle_owner
-        (T,) mesh index of each triangle (< ``mesh_count``).
-    swept
-        Whether to cut the (shape, triangle) pairs first by the shapes' boxes swept over the
-        rows (None: when there are many rows x shapes x triangles). The contacts are the same
-        either way; only the work differs.
-
-    Returns
-    -------
-    rows, columns, meshes
-        Index arrays in row, shape, mesh order (a scatter, not a sort).
-
-    """
-    return _mesh_contacts(float_array(low), float_array(high), float_array(triangle_lower),
-                          float_array(triangle_upper),
-                          np.asarray(triangle_owner, dtype=np.int64), int(mesh_count),
-                          bool(low.shape[0] > 1 and (
-                              swept if swept is not None
-                              else low.shape[0] * low.shape[1] * len(triangle_lower)
-                              > SWEPT_CONTACTS)),
-                          False, *_NOT_ORIENTED)
-
-
-# _mesh_contacts' oriented arguments when there are none (empty arrays of the kernel's types;
-# the CT-space's broad phase passes real ones, see _suspect_table).
-_NOT_ORIENTED = (np.zeros((0, 0, 3, 3)), np.zeros((0, 0, 3)), np.zeros((0, 3)),
-                 np.zeros((0, 3, 3)), 0.0)
 
 
 def branch_layout(kinematics: BodyKinematics, shapes: BodyShapes, branch: str,
@@ -1448,7 +1308,6 @@ class _BranchModel:
     #: Per pair of the layout: its other shape and the column of its branch shape.
     pair_other: np.ndarray
     pair_column: np.ndarray
-    checked_list: List[int]
     checked_box_half: np.ndarray
     chain: _Chain
     chain_links: np.ndarray
@@ -1480,7 +1339,7 @@ def branch_model(kinematics: BodyKinematics, shapes: BodyShapes, branch: str,
         speed_cap=speed_limit * (1 + SPEED_TOLERANCE),
         pair_other=np.ascontiguousarray(pairs[:, 1], dtype=np.int64),
         pair_column=np.searchsorted(checked, pairs[:, 0]),
-        checked_list=checked.tolist(), checked_box_half=shapes.box_half[checked],
+        checked_box_half=shapes.box_half[checked],
         chain=chain, chain_links=np.asarray(chain.links, dtype=np.int64),
         shape_tables=(
             np.asarray(checked, dtype=np.int64),
@@ -1562,7 +1421,7 @@ class CTSpace:
         self.time_weight = float(time_weight)
         #: steps: the steps to re-evaluate when the branch moves (all links it carries).
         (self.steps, self.checked, self._check_steps, pairs, first, self._reach, obstacle,
-         pair_obstacle, other_checked) = model.layout
+         pair_obstacle, _) = model.layout
         self._reach_centre = body.positions[:, first]
         # Body shapes the branch can never reach during the step need no checks (each obstacle
         # shape tested once, however many of the branch's shapes it pairs with); the pairs
@@ -1575,16 +1434,12 @@ class CTSpace:
         self.pairs = pairs[kept]
         other = model.pair_other[kept]
         self._pair_column = model.pair_column[kept]
-        # For the narrow phase, as Python ints and objects.
-        self._pair_other = other.tolist()
-        self._pair_other_checked = other_checked[kept].tolist()
-        # FCL transforms of the obstacle shapes, per (frame, pair), made on first use: the
-        # narrow phase meets the same ones again and again.
-        self._pair_transforms: Dict[Tuple[int, int], fcl.Transform] = {}
-        self._result = fcl.CollisionResult()
-        self._checked_list = model.checked_list
         self._checked_box_half = model.checked_box_half
         self._pair_box_half = body.shapes.box_half[other]
+        # The shapes themselves, for the exact tests (kind codes and padded half extents).
+        self._checked_kinds, self._checked_half = model.shape_tables[5], model.shape_tables[6]
+        self._pair_kinds = body.shapes.kind_code[other]
+        self._pair_half = body.shapes.half[other]
         # The links the checks need, in a compact layout, and where the checked shapes sit on
         # them (kinematics of the branch's few links, not of the whole body, per batch).
         self._chain = model.chain
@@ -1607,24 +1462,7 @@ class CTSpace:
         near = self.body.triangles_near(lower, upper)
         self._triangle_lower = env.lower[near]
         self._triangle_upper = env.upper[near]
-        self._triangle_owner = env.owner[near]
         self._triangle_corners = env.corners[near]
-        self._mesh_count = int(self._triangle_owner.max()) + 1 if len(near) else 1
-        owners = set(self._triangle_owner.tolist())
-        self._mesh_objects = [env.object_of(mesh) if mesh in owners else None
-                              for mesh in range(self._mesh_count)]
-
-    def _triangles_near(self, low: np.ndarray, high: np.ndarray) -> np.ndarray:
-        """Indices of the kept triangles whose boxes meet the box around all boxes (m, n, 3).
-
-        A cheap first cut: one (T, 3) test instead of an (m, n, T, 3) one, and most triangles
-        (the ground, obstacles behind the actor) are far from every shape of a motion.
-        """
-        if not len(self._triangle_lower) or not low.size:
-            return np.zeros(0, dtype=int)
-        lower, upper = span(low, high)
-        return np.flatnonzero(boxes_overlap(lower, upper, self._triangle_lower,
-                                            self._triangle_upper))
 
     # -- OMPL-shaped space ---------------------------------------------------------------
     @property
@@ -1922,11 +1760,8 @@ class CTSpace:
         self.checks += len(frames)
         suspects = self._broad_phase(q, frames)
         if extra is not None:
-            rows, starts, columns, targets, quaternion, centre = suspects
-            # The motion's rows as a broad phase of their own (rows numbered from 0).
-            own = ([row - m for row in rows if row >= m], None, None, None, None, centre[m:])
-            if starts is not None:
-                own = own[:1] + (starts[m:], columns, targets, quaternion[m:], centre[m:])
+            # The motion's rows as a batch of their own (rows numbered from 0).
+            own = ([row - m for row in suspects[0] if row >= m], suspects[1][m:])
             self._prefetched = extra + (self.within_bounds(extra[1]), own)
         checked = set()
         found = 0
@@ -2037,70 +1872,29 @@ class CTSpace:
         return rotation, centre, low, high
 
     def _broad_phase(self, q: np.ndarray, frames: np.ndarray) -> tuple:
-        """Boxes of the branch's shapes against triangles and body shapes, all rows at once.
+        """Which rows of a batch touch the environment or the body, all rows at once.
 
-        Returns what the narrow phase reads: (the rows with suspect pairs in increasing order;
-        per row r its pairs at ``starts[r]:starts[r + 1]`` of the lists of the branch shape's
-        column and the target (``-1 - mesh`` or the pair index), as in :func:`_suspect_table`;
-        the shapes' rotations as (m, n, 4) quaternions; their centres (m, n, 3)). Without any
-        suspect only the rows (none) and the centres are there.
+        The broad phase (boxes, the separating axis test) and the exact test of the shapes it
+        leaves, in one kernel (:func:`_row_collisions`). Returns (the rows in contact, in
+        increasing order; per row whether it is in contact), what :meth:`_narrow_phase` reads.
         """
         frames = frames.astype(np.int64, copy=False)  # the kernels' index type, once
         rotation, centre, low, high = self._shape_boxes(q, frames)
         m = len(frames)
         triangles = len(self._triangle_lower)
         # Many triangles: the pairs (shape, triangle) are first cut by each shape's box swept
-        # over the rows, which also drops the triangles far from every box (see mesh_contacts).
+        # over the rows, which also drops the triangles far from every box.
         swept = m > 1 and (triangles > FEW_TRIANGLES
                            or m * len(self.checked) * triangles > SWEPT_CONTACTS)
-        starts, columns, targets = _suspect_table(
-            low, high, self._triangle_lower, self._triangle_upper, self._triangle_owner,
-            self._mesh_count, swept, frames, self._pair_column,
-            self._pair_lower, self._pair_upper, rotation, centre, self._checked_box_half,
-            self._triangle_corners, self._pair_rotation, self._pair_centre,
-            self._pair_box_half, SAT_MARGIN)
-        if not len(columns):
-            return [], None, None, None, None, centre
-        # As Python lists: the narrow phase reads them one number at a time. It poses the
-        # branch's shapes by quaternion (see _quaternions).
-        return (np.flatnonzero(starts[1:] > starts[:-1]).tolist(), starts.tolist(),
-                columns.tolist(), targets.tolist(), _quaternions(rotation), centre)
+        colliding = _row_collisions(
+            low, high, self._triangle_lower, self._triangle_upper, swept, frames,
+            self._pair_column, self._pair_lower, self._pair_upper, rotation, centre,
+            self._checked_box_half, self._triangle_corners, self._pair_rotation,
+            self._pair_centre, self._pair_box_half, SAT_MARGIN, self._checked_kinds,
+            self._checked_half, self._pair_kinds, self._pair_half)
+        return np.flatnonzero(colliding).tolist(), colliding.tolist()
 
-    def _narrow_phase(self, row: int, frame: int, broad: tuple) -> bool:
-        """Whether any suspect pair of one row really collides (FCL)."""
-        _, starts, columns, targets, quaternion, centre = broad
-        if starts is None or starts[row] == starts[row + 1]:
-            return False
-        shapes = self.body.shapes
-        objects, request = shapes.objects, shapes._request
-        transforms = self._pair_transforms
-        result = self._result
-        posed = -1
-        for entry in range(starts[row], starts[row + 1]):
-            column, other = columns[entry], targets[entry]
-            if other < 0:
-                target = self._mesh_objects[-1 - other]
-            else:
-                target = objects[self._pair_other[other]]
-                key = (frame, other)
-                transform = transforms.get(key)
-                if transform is None:
-                    transform = transforms[key] = fcl.Transform(
-                        self._pair_rotation[frame, other], self._pair_centre[frame, other])
-                target.setTransform(transform)
-                if self._pair_other_checked[other]:
-                    posed = -1  # the target is one of the branch's shapes, now moved
-            # BodyShapes.collides, inline: this is the innermost loop of every search. A row's
-            # successive suspects often share the branch's shape: it is placed when it changes.
-            shape = objects[self._checked_list[column]]
-            if column != posed:
-                shape.setQuatRotation(quaternion[row, column])
-                shape.setTranslation(centre[row, column])
-                posed = column
-            # collide() returns the number of contacts, > 0 exactly when the shapes touch (FCL's
-            # isCollision); one result object serves every call (a new one costs as much as
-            # the arithmetic around it), emptied when it receives a contact.
-            if fcl.collide(shape, target, request, result):
-                del result.contacts[:]
-                return True
-        return False
+    @staticmethod
+    def _narrow_phase(row: int, frame: int, broad: tuple) -> bool:
+        """Whether a row of a batch touches anything (its answer from :meth:`_broad_phase`)."""
+        return broad[1][row]
