@@ -169,6 +169,21 @@ def test_motion_rows_are_the_interpolated_motion_up_to_its_first_speed_violation
             assert plain[0].tobytes() == rows.tobytes() and plain[1] == late
         late_seen.add(late < 0)
     assert late_seen == {True, False}  # motions within the limits and too fast ones
+    # A batch of motions (one of them backwards in time) is their rows one after the other.
+    motions = []
+    for trial in range(6):
+        ia, ib = sorted(int(f) for f in rng.integers(0, 200, 2))
+        if trial == 3:
+            ia, ib = ib, ia
+        motions.append(((space.objective[ia] + rng.normal(0.0, 0.2, 2), ia),
+                        (space.objective[ib] + rng.normal(0.0, 0.2, 2), ib)))
+    q, frames, segments, early = space._motion_batch(motions)
+    for ((qa, ia), (qb, ib)), (begin, end), late in zip(motions, segments, early):
+        rows, expected_late = space._motion_rows(qa, ia, qb, ib)
+        assert q[begin:end].tobytes() == rows.tobytes()
+        assert frames[begin:end].tolist() == list(range(ia + 1, ia + 1 + len(rows)))
+        assert late == expected_late
+    assert segments[-1][1] == len(q) == len(frames)
 
 
 def test_motion_between_objective_states_follows_the_objective(skeleton):

@@ -691,6 +691,37 @@ def _motion_path(objective, times, frame_step, speed_cap, qa, ia, qb, ib):
     return rows, -1
 
 
+@kernel('Tuple((f8[:, ::1], i8[::1], i8[::1], i8[::1]))(f8[:, :], f8[:], f8[:, :], f8[:], '
+        'f8[:, ::1], i8[::1], f8[:, ::1], i8[::1])')
+def _motion_paths(objective, times, frame_step, speed_cap, qa, ia, qb, ib):
+    """:func:`_motion_path` of several motions (qa[i], ia[i]) -> (qb[i], ib[i]) in one batch:
+    their rows one after the other (m, d), each row's frame (m,), where each motion's rows
+    end (M,), and each motion's first speed violation, -1 or, for a motion that does not go
+    forward in time (no rows), its start frame (M,)."""
+    count, d = ia.shape[0], objective.shape[1]
+    total = 0
+    for i in range(count):
+        total += max(ib[i] - ia[i], 0)
+    rows = np.empty((total, d))
+    frames = np.empty(total, dtype=np.int64)
+    ends = np.empty(count, dtype=np.int64)
+    late = np.empty(count, dtype=np.int64)
+    n = 0
+    for i in range(count):
+        if ib[i] <= ia[i]:
+            late[i] = ia[i]
+        else:
+            path, late[i] = _motion_path(objective, times, frame_step, speed_cap, qa[i], ia[i],
+                                         qb[i], ib[i])
+            for r in range(path.shape[0]):
+                for j in range(d):
+                    rows[n, j] = path[r, j]
+                frames[n] = ia[i] + 1 + r
+                n += 1
+        ends[i] = n
+    return rows[:n].copy(), frames[:n].copy(), ends, late
+
+
 @dataclass(frozen=True)
 class _Step:
     parent: int
@@ -1624,35 +1655,34 @@ class CTSpace:
             return self.valid_rows(q, frames), -1
         path, path_frames, segments, early = self._motion_batch(
             list(zip(waypoints[:-1], waypoints[1:])))
-        # The rows first, one segment each, then the motions: the narrow phase of the path
-        # stops at its first illegal frame.
-        segments = [(row, row + 1) for row in range(m)] + [
-            (begin + m, end + m) for begin, end in segments]
-        early = [-1] * m + list(early)
-        legal = np.ones(m, dtype=bool)
-        bad = -1
-        for i, frame in enumerate(self._check_segments(
-                np.concatenate([q, path]), np.concatenate([frames, path_frames]), segments,
-                early, stop_at_legal=False)):
-            if i < m:
-                legal[i] = frame < 0
-            elif frame >= 0:
-                bad = frame
-                break
-        return legal, bad
+        # The rows, then the motions, in one batch (the counts of _check_segments).
+        rows = np.concatenate([q, path])
+        self.checks += len(rows)
+        illegal = ~self.within_bounds(rows)
+        if len(rows):
+            illegal |= self._broad_phase(rows, np.concatenate([frames, path_frames]))[2]
+        legal = ~illegal[:m]
+        for (begin, end), late in zip(segments, early):
+            along = np.flatnonzero(illegal[m + begin:m + end])
+            if len(along):
+                return legal, int(path_frames[begin + along[0]])
+            if late >= 0:
+                return legal, int(late)
+        return legal, -1
 
     def _motion_batch(self, motions: Sequence[tuple]) -> tuple:
         """The rows of motions ((qa, ia), (qb, ib)) for one check: (q (m, d) rad, frames (m,),
         segments [(begin, end)] per motion, early: each motion's speed violation frame or -1,
         its start frame for one that does not go forward in time)."""
-        batch = [self._motion_rows(qa, ia, qb, ib) for (qa, ia), (qb, ib) in motions]
-        lengths = np.array([len(rows) for rows, _ in batch])
-        ends = np.cumsum(lengths)
-        segments = list(zip((ends - lengths).tolist(), ends.tolist()))
-        q = np.concatenate([rows for rows, _ in batch])
-        frames = np.concatenate([np.arange(ia + 1, ia + 1 + n)
-                                 for ((_, ia), _), n in zip(motions, lengths.tolist())])
-        return q, frames, segments, [late for _, late in batch]
+        count = len(motions)
+        qa, qb = np.empty((count, self.dimension)), np.empty((count, self.dimension))
+        ia, ib = np.empty(count, dtype=np.int64), np.empty(count, dtype=np.int64)
+        for i, ((a, frame_a), (b, frame_b)) in enumerate(motions):
+            qa[i], ia[i], qb[i], ib[i] = a, frame_a, b, frame_b
+        q, frames, ends, late = _motion_paths(self.objective, self.times, self._frame_step,
+                                              self._speed_cap, qa, ia, qb, ib)
+        ends = ends.tolist()
+        return q, frames, list(zip([0] + ends[:-1], ends)), late.tolist()
 
     def _motion_rows(self, qa: np.ndarray, ia: int, qb: np.ndarray,
                      ib: int) -> Tuple[np.ndarray, int]:
@@ -1761,7 +1791,8 @@ class CTSpace:
         suspects = self._broad_phase(q, frames)
         if extra is not None:
             # The motion's rows as a batch of their own (rows numbered from 0).
-            own = ([row - m for row in suspects[0] if row >= m], suspects[1][m:])
+            own = ([row - m for row in suspects[0] if row >= m], suspects[1][m:],
+                   suspects[2][m:])
             self._prefetched = extra + (self.within_bounds(extra[1]), own)
         checked = set()
         found = 0
@@ -1876,7 +1907,8 @@ class CTSpace:
 
         The broad phase (boxes, the separating axis test) and the exact test of the shapes it
         leaves, in one kernel (:func:`_row_collisions`). Returns (the rows in contact, in
-        increasing order; per row whether it is in contact), what :meth:`_narrow_phase` reads.
+        increasing order; per row whether it is in contact, as a list, what
+        :meth:`_narrow_phase` reads, and as an (m,) bool array).
         """
         frames = frames.astype(np.int64, copy=False)  # the kernels' index type, once
         rotation, centre, low, high = self._shape_boxes(q, frames)
@@ -1892,7 +1924,7 @@ class CTSpace:
             self._checked_box_half, self._triangle_corners, self._pair_rotation,
             self._pair_centre, self._pair_box_half, SAT_MARGIN, self._checked_kinds,
             self._checked_half, self._pair_kinds, self._pair_half)
-        return np.flatnonzero(colliding).tolist(), colliding.tolist()
+        return np.flatnonzero(colliding).tolist(), colliding.tolist(), colliding
 
     @staticmethod
     def _narrow_phase(row: int, frame: int, broad: tuple) -> bool:
