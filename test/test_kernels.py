@@ -242,12 +242,16 @@ def test_the_contacts_of_a_branch_batch():
     pair_half = np.array([h if kind == 0 else (h[0], h[0], h[1]) if kind == 1
                           else (h[0], h[0], h[0]) for kind, h in zip(pair_kinds,
                                                                      pair_shape_half)])
-    # The other shapes near the branch's, so that many meet.
+    # The other shapes near the branch's, so that many meet (body shapes 2 + p of 2 + P: the
+    # kernel reads the pairs' other shapes where the body holds them).
+    pair_other = np.arange(2, 2 + pairs)
     pair_centre = (centre[rng.integers(0, m, (k, pairs)), pair_column]
                    + rng.normal(0.0, 0.06, (k, pairs, 3)))
     pair_rotation = np.array([[_rotation(rng) for _ in range(pairs)] for _ in range(k)])
     pair_extent = (np.abs(pair_rotation) @ pair_half[:, :, None])[..., 0]
     pair_lower, pair_upper = pair_centre - pair_extent, pair_centre + pair_extent
+    body = [np.concatenate([rng.normal(size=(k, 2) + a.shape[2:]), a], axis=1)
+            for a in (pair_lower, pair_upper, pair_rotation, pair_centre)]
 
     def fcl_object(kind, half, r, c):
         geometry = (fcl.Box(*(2 * half)) if kind == 0 else fcl.Cylinder(half[0], 2 * half[1])
@@ -274,9 +278,9 @@ def test_the_contacts_of_a_branch_batch():
     assert 0.2 < expected.mean() < 0.8
     for swept in (True, False):
         arguments = (low, high, triangle_lower, triangle_upper, swept, frames, pair_column,
-                     pair_lower, pair_upper, rotation, centre, box_half, corners,
-                     pair_rotation, pair_centre, pair_half, 1e-3, kinds, shape_half,
-                     pair_kinds, pair_shape_half)
+                     body[0], body[1], rotation, centre, box_half, corners, body[2], body[3],
+                     pair_half, 1e-3, kinds, shape_half, pair_kinds, pair_shape_half,
+                     pair_other)
         found = ct_space._row_collisions(*arguments)
         same(found, ct_space._row_collisions.py_func(*arguments))
         same(found, expected)

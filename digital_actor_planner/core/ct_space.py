@@ -388,11 +388,11 @@ def _box_triangle_apart(rotation, centre, half, corners, margin):
 @kernel('b1[::1](f8[:, :, ::1], f8[:, :, ::1], f8[:, :], f8[:, :], b1, i8[::1], i8[::1], '
         'f8[:, :, ::1], f8[:, :, ::1], f8[:, :, :, ::1], f8[:, :, ::1], f8[:, ::1], '
         'f8[:, :, :], f8[:, :, :, :], f8[:, :, :], f8[:, :], f8, i8[::1], f8[:, :], i8[::1], '
-        'f8[:, :])')
+        'f8[:, :], i8[::1])')
 def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pair_column,
                     pair_lower, pair_upper, rotation, centre, half, corners, pair_rotation,
                     pair_centre, pair_half, margin, kinds, shape_half, pair_kinds,
-                    pair_shape_half):
+                    pair_shape_half, pair_other):
     """Whether each row of a branch's batch touches the environment or the body: (m,) bool.
 
     The broad phase (the boxes along the world axes, cut by each shape's box swept over the
@@ -400,7 +400,10 @@ def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pa
     shapes, ``margin`` apart) and, for what it leaves, the exact test of the shapes
     themselves (:func:`convex.touching`): the branch's shape (``kinds`` (n,), ``shape_half``
     (n, 3)) against a triangle, or against a pair's other shape (``pair_kinds`` (P,),
-    ``pair_shape_half`` (P, 3)) at the row's frame. A row stops at its first contact.
+    ``pair_shape_half`` (P, 3)) at the row's frame. Pair p's branch shape is column
+    ``pair_column[p]``, its other shape is body shape ``pair_other[p]`` of the body's
+    (k, S, ...) boxes ``pair_lower``/``pair_upper`` and poses ``pair_rotation``/
+    ``pair_centre``, with box half extents ``pair_half[p]``. A row stops at its first contact.
     """
     m, n, count = low.shape[0], low.shape[1], triangle_lower.shape[0]
     pairs = pair_column.shape[0]
@@ -453,19 +456,19 @@ def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pa
             continue
         f = frames[r]
         for p in range(pairs):
-            c = pair_column[p]
+            c, o = pair_column[p], pair_other[p]
             meets = True
             for axis in range(3):
-                if not (high[r, c, axis] >= pair_lower[f, p, axis]
-                        and low[r, c, axis] <= pair_upper[f, p, axis]):
+                if not (high[r, c, axis] >= pair_lower[f, o, axis]
+                        and low[r, c, axis] <= pair_upper[f, o, axis]):
                     meets = False
                     break
             if (meets and not _boxes_apart(rotation[r, c], centre[r, c], half[c],
-                                           pair_rotation[f, p], pair_centre[f, p],
+                                           pair_rotation[f, o], pair_centre[f, o],
                                            pair_half[p], margin)
                     and touching(kinds[c], shape_half[c], rotation[r, c], centre[r, c],
                                  no_corners, pair_kinds[p], pair_shape_half[p],
-                                 pair_rotation[f, p], pair_centre[f, p], no_corners)):
+                                 pair_rotation[f, o], pair_centre[f, o], no_corners)):
                 hit[r] = True
                 break
     return hit
@@ -575,19 +578,12 @@ def _first_contacts(frames, checked, group, count, shape_lower, shape_upper, sha
     return found
 
 
-@kernel('Tuple((i8[::1], f8[:, :, :, ::1], f8[:, :, ::1], f8[:, :, ::1], f8[:, :, ::1]))('
-        'f8[:, :], f8, f8[:, :, ::1], f8[:, :, ::1], f8[:, :, :, ::1], f8[:, :, ::1], i8[:], '
-        'i8[:], i8[::1])')
-def _reachable_pairs(centre, reach2, shape_lower, shape_upper, shape_rotation, shape_centre,
-                     obstacle, pair_obstacle, pair_other):
-    """The pairs of a branch whose other shape it can reach during the step, and that shape's
-    poses and boxes at every frame.
+@kernel('i8[::1](f8[:, :], f8, f8[:, :, ::1], f8[:, :, ::1], i8[:], i8[:])')
+def _reachable_pairs(centre, reach2, shape_lower, shape_upper, obstacle, pair_obstacle):
+    """Indices of the pairs of a branch whose other shape it can reach during the step.
 
     An ``obstacle`` shape (O,) is within reach when its box comes within ``sqrt(reach2)`` of
-    ``centre`` (k, 3) at some frame; pair p's obstacle is ``pair_obstacle[p]`` and its other
-    shape ``pair_other[p]``. Returns the kept pairs' indices and (k, kept, ...) copies of
-    ``shape_rotation``, ``shape_centre``, ``shape_lower`` and ``shape_upper`` at their other
-    shapes.
+    ``centre`` (k, 3) at some frame; pair p's obstacle is ``pair_obstacle[p]``.
     """
     k, count = centre.shape[0], obstacle.shape[0]
     reachable = np.zeros(count, dtype=np.bool_)
@@ -608,21 +604,7 @@ def _reachable_pairs(centre, reach2, shape_lower, shape_upper, shape_rotation, s
         if reachable[pair_obstacle[p]]:
             kept[n] = p
             n += 1
-    kept = kept[:n].copy()
-    rotation = np.empty((k, n, 3, 3))
-    middle = np.empty((k, n, 3))
-    lower = np.empty((k, n, 3))
-    upper = np.empty((k, n, 3))
-    for f in range(k):
-        for i in range(n):
-            s = pair_other[kept[i]]
-            for e in range(3):
-                for j in range(3):
-                    rotation[f, i, e, j] = shape_rotation[f, s, e, j]
-                middle[f, i, e] = shape_centre[f, s, e]
-                lower[f, i, e] = shape_lower[f, s, e]
-                upper[f, i, e] = shape_upper[f, s, e]
-    return kept, rotation, middle, lower, upper
+    return kept[:n].copy()
 
 
 @kernel('i8[::1](f8[::1], f8[::1], f8[:, ::1], f8[:, ::1])')
@@ -1455,15 +1437,12 @@ class CTSpace:
          pair_obstacle, _) = model.layout
         self._reach_centre = body.positions[:, first]
         # Body shapes the branch can never reach during the step need no checks (each obstacle
-        # shape tested once, however many of the branch's shapes it pairs with); the pairs
-        # kept, with their other shapes' poses and boxes over the step (they do not move while
-        # this branch is planned).
-        (kept, self._pair_rotation, self._pair_centre, self._pair_lower,
-         self._pair_upper) = _reachable_pairs(
-            self._reach_centre, self._reach ** 2, body.shape_lower, body.shape_upper,
-            body.shape_rotation, body.shape_centre, obstacle, pair_obstacle, model.pair_other)
+        # shape tested once, however many of the branch's shapes it pairs with). The others
+        # are read where the body holds them (they do not move while this branch is planned).
+        kept = _reachable_pairs(self._reach_centre, self._reach ** 2, body.shape_lower,
+                                body.shape_upper, obstacle, pair_obstacle)
         self.pairs = pairs[kept]
-        other = model.pair_other[kept]
+        self._pair_other = other = model.pair_other[kept]
         self._pair_column = model.pair_column[kept]
         self._checked_box_half = model.checked_box_half
         self._pair_box_half = body.shapes.box_half[other]
@@ -1918,12 +1897,13 @@ class CTSpace:
         # over the rows, which also drops the triangles far from every box.
         swept = m > 1 and (triangles > FEW_TRIANGLES
                            or m * len(self.checked) * triangles > SWEPT_CONTACTS)
+        body = self.body
         colliding = _row_collisions(
             low, high, self._triangle_lower, self._triangle_upper, swept, frames,
-            self._pair_column, self._pair_lower, self._pair_upper, rotation, centre,
-            self._checked_box_half, self._triangle_corners, self._pair_rotation,
-            self._pair_centre, self._pair_box_half, SAT_MARGIN, self._checked_kinds,
-            self._checked_half, self._pair_kinds, self._pair_half)
+            self._pair_column, body.shape_lower, body.shape_upper, rotation, centre,
+            self._checked_box_half, self._triangle_corners, body.shape_rotation,
+            body.shape_centre, self._pair_box_half, SAT_MARGIN, self._checked_kinds,
+            self._checked_half, self._pair_kinds, self._pair_half, self._pair_other)
         return np.flatnonzero(colliding).tolist(), colliding.tolist(), colliding
 
     @staticmethod
