@@ -392,3 +392,25 @@ def test_horizon_tables_follow_their_definitions():
                 while start > 0 and not free[start] and not free[start - 1]:
                     start -= 1
                 assert horizon.run_start[i] == start, (k, density, i)
+
+
+def test_the_path_along_a_stack_is_its_motions_then_the_last_state_held(beam_space):
+    # The path kernel against motion_frames motion by motion, bit for bit: states off the
+    # objective, two at the same frame, one beyond the joint limits (clipped).
+    space = beam_space
+    rng = np.random.default_rng(7)
+    last = space.frame_count - 1
+    for trial in range(20):
+        frames = np.unique(np.concatenate([[0], rng.integers(1, last, rng.integers(1, 6))]))
+        if trial % 5 == 0:
+            frames = np.append(frames, frames[-1])  # a hold of zero length
+        stack = [_State(rng.normal(0.0, 0.3 if trial % 3 else 2.0, 2), int(f)) for f in frames]
+        expected = np.array(space.objective, dtype=float)
+        expected[0] = space.objective[0] + stack[0].deviation
+        for a, b in zip(stack[:-1], stack[1:]):
+            expected[a.frame:b.frame + 1] = space.motion_frames(
+                (space.objective[a.frame] + a.deviation, a.frame),
+                (space.objective[b.frame] + b.deviation, b.frame))
+        expected[stack[-1].frame:] = space.objective[stack[-1].frame:] + stack[-1].deviation
+        expected = np.clip(expected, space.lower, space.upper)
+        assert CTRoadmap._path(space, stack).tobytes() == expected.tobytes(), trial

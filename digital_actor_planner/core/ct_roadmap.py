@@ -38,6 +38,7 @@ from typing import Dict, List, Optional, Tuple
 import numpy as np
 
 from .ct_space import CTSpace
+from .jit import kernel
 
 
 @dataclass(frozen=True)
@@ -107,6 +108,43 @@ class _State:
 COARSE_STRIDE = 4
 # (last frame, spacing) -> CTRoadmap._objective_grid.
 _GRIDS: Dict[Tuple[int, int], np.ndarray] = {}
+
+
+@kernel('f8[:, ::1](f8[:, :], f8[:], f8[:, ::1], i8[::1], f8[:], f8[:])')
+def _stack_path(objective, times, deviations, frames, lower, upper):
+    """:meth:`CTRoadmap._path` of states (``deviations`` (s, d) from the ``objective`` (k, d)
+    at ``frames`` (s,)): each motion between successive states interpolated as
+    :meth:`CTSpace.motion_frames` does it (the same operations in the same order, so the
+    same numbers), a later motion writing over the frame it shares with the one before, the
+    last state held to the final frame, then clipped to [lower, upper]."""
+    k, d = objective.shape
+    out = np.empty((k, d))
+    for i in range(k):
+        for j in range(d):
+            out[i, j] = objective[i, j]
+    for j in range(d):
+        out[0, j] = objective[0, j] + deviations[0, j]
+    da = np.empty(d)
+    db = np.empty(d)
+    for n in range(frames.shape[0] - 1):
+        fa, fb = frames[n], frames[n + 1]
+        for j in range(d):
+            # motion_frames' deviations of its end points, from their configurations.
+            da[j] = (objective[fa, j] + deviations[n, j]) - objective[fa, j]
+            db[j] = (objective[fb, j] + deviations[n + 1, j]) - objective[fb, j]
+        span = times[fb] - times[fa]
+        for i in range(fa, fb + 1):
+            share = (times[i] - times[fa]) / span if span > 0 else 0.0
+            for j in range(d):
+                out[i, j] = objective[i, j] + da[j] + share * (db[j] - da[j])
+    end = frames[frames.shape[0] - 1]
+    for i in range(end, k):
+        for j in range(d):
+            out[i, j] = objective[i, j] + deviations[frames.shape[0] - 1, j]
+    for i in range(k):
+        for j in range(d):
+            out[i, j] = min(max(out[i, j], lower[j]), upper[j])
+    return out
 
 
 class _Horizon:
@@ -899,13 +937,13 @@ class CTRoadmap:
 
     @staticmethod
     def _path(space: CTSpace, stack: List[_State]) -> np.ndarray:
-        """Configurations at every frame along the states of the stack: (k, d), rad."""
-        out = np.array(space.objective, dtype=float)
-        out[0] = space.objective[0] + stack[0].deviation
-        for a, b in zip(stack[:-1], stack[1:]):
-            out[a.frame:b.frame + 1] = space.motion_frames(
-                (space.objective[a.frame] + a.deviation, a.frame),
-                (space.objective[b.frame] + b.deviation, b.frame))
-        end = stack[-1]
-        out[end.frame:] = space.objective[end.frame:] + end.deviation
-        return np.clip(out, space.lower, space.upper)
+        """Configurations at every frame along the states of the stack: (k, d), rad.
+
+        The motions between the states as :meth:`CTSpace.motion_frames` gives them (one
+        kernel, the same arithmetic), then the last state held to the final frame, within the
+        joint limits.
+        """
+        deviations = np.array([state.deviation for state in stack], dtype=float)
+        frames = np.array([state.frame for state in stack], dtype=np.int64)
+        return _stack_path(space.objective, space.times, deviations, frames, space.lower,
+                           space.upper)
