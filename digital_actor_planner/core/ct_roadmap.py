@@ -147,6 +147,21 @@ def _stack_path(objective, times, deviations, frames, lower, upper):
     return out
 
 
+@kernel('UniTuple(i8[::1], 2)(b1[::1])')
+def _horizon_tables(free):
+    """:class:`_Horizon`'s ``next_free`` (k + 1,) and ``run_start`` (k,) for ``free`` (k,)."""
+    k = free.shape[0]
+    last = k - 1
+    next_free = np.empty(k + 1, dtype=np.int64)
+    next_free[k] = last
+    for i in range(k - 1, -1, -1):
+        next_free[i] = i if free[i] else next_free[i + 1]
+    run_start = np.empty(k, dtype=np.int64)
+    for i in range(k):
+        run_start[i] = run_start[i - 1] if i > 0 and not free[i] and not free[i - 1] else i
+    return next_free, run_start
+
+
 class _Horizon:
     """Per search: where the objective is legal, and how far a posture is held from a frame.
 
@@ -166,16 +181,9 @@ class _Horizon:
         last = len(free) - 1
         self.last = last
         self.free = free
-        frames = np.arange(last + 1)
-        # next_free[i]: the first frame >= i where the objective is legal (last if none).
-        self.next_free = np.full(last + 2, last, dtype=int)
-        self.next_free[:-1] = np.minimum.accumulate(np.where(free, frames, last)[::-1])[::-1]
-        # run_start[i]: the first frame of the blocked stretch holding i (i itself if free):
-        # the latest frame up to i that is free or follows a free one (or is the first).
-        begins = free.copy()
-        begins[1:] |= free[:-1]
-        begins[0] = True
-        self.run_start = np.maximum.accumulate(np.where(begins, frames, 0))
+        # next_free[i]: the first frame >= i where the objective is legal (last if none);
+        # run_start[i]: the first frame of the blocked stretch holding i (i itself if free).
+        self.next_free, self.run_start = _horizon_tables(np.asarray(free, dtype=np.bool_))
 
     def hold_end(self, here: int) -> int:
         """Frame a posture held from ``here`` is held to: ``hold_frames`` on, then on to where

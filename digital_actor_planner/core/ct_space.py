@@ -704,6 +704,20 @@ def _motion_paths(objective, times, frame_step, speed_cap, qa, ia, qb, ib):
     return rows[:n].copy(), frames[:n].copy(), ends, late
 
 
+@kernel('b1[::1](f8[:, :], f8[::1], f8[::1])')
+def _within(q, lower, upper):
+    """Whether each row of ``q`` (m, d) lies in [lower, upper] (d,): (m,) bool."""
+    out = np.empty(q.shape[0], dtype=np.bool_)
+    for r in range(q.shape[0]):
+        inside = True
+        for j in range(q.shape[1]):
+            if not (q[r, j] >= lower[j] and q[r, j] <= upper[j]):
+                inside = False
+                break
+        out[r] = inside
+    return out
+
+
 @dataclass(frozen=True)
 class _Step:
     parent: int
@@ -1527,6 +1541,8 @@ class CTSpace:
 
     def within_bounds(self, q: np.ndarray) -> np.ndarray:
         """Whether each configuration is within the joint limits: (...,) bool."""
+        if q.ndim == 2 and q.dtype == np.float64:
+            return _within(q, self._lower_tolerant, self._upper_tolerant)
         return np.all((q >= self._lower_tolerant) & (q <= self._upper_tolerant), axis=-1)
 
     def is_valid(self, q: np.ndarray, i: int) -> bool:
