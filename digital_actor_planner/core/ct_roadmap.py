@@ -603,8 +603,11 @@ class CTRoadmap:
         # enough are legal (holding the current posture is kept whatever its rank).
         motion = None
         if visited is not None and not on_objective and not state.followed:
+            # The keys _advance marks tried neighbours with (rounded once for all rows: the
+            # same numbers, as Python floats, which hash and compare as NumPy's do).
+            rounded = np.round(targets, 3).tolist()
             for i in order.tolist():
-                if (int(frames[i]), tuple(np.round(targets[i], 3))) not in visited:
+                if (int(frames[i]), tuple(rounded[i])) not in visited:
                     motion = ((space.objective[here] + state.deviation, here),
                               (space.objective[frames[i]] + targets[i], int(frames[i])))
                     break
@@ -664,17 +667,19 @@ class CTRoadmap:
         end = int(horizon.next_free[begin])
         spacing = horizon.hold_frames
         grids = {}
-        for i, (target, arrival) in enumerate(zip(targets, arrivals.tolist())):
+        rounded = np.round(targets, 4).tolist()
+        moved = targets.any(axis=1).tolist()
+        for i, arrival in enumerate(arrivals.tolist()):
             if arrival > end:
                 continue
-            if not target.any():
+            if not moved[i]:
                 lasting[i] = bool(horizon.free[arrival:end + 1].all())
                 continue
             # The arrival frame itself is checked with the neighbour's endpoint.
             first = max(arrival, begin)
             grid = [begin] if arrival < begin else []
             grid += list(range(first // spacing * spacing + spacing, end, spacing)) + [end]
-            grids[i] = (tuple(np.round(target, 4).tolist()), grid)
+            grids[i] = (tuple(rounded[i]), grid)
         # A coarse pass first (most postures that do not last fail it), then the rest of the
         # grid for the postures left.
         for coarse in (True, False):
