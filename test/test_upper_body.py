@@ -351,3 +351,34 @@ def test_bad_seeds_name_the_branch_and_the_shape(skeleton, seeds, match):
     times, frames = walk(skeleton, 30)
     with pytest.raises(ValueError, match=match):
         planner.plan(times, frames, seeds=seeds)
+
+
+def test_limit_checks_of_a_motion_per_group_of_columns():
+    # Starts and motions inside the limits, a start outside them, a later frame outside them
+    # and a joint too fast, per group: the kernel against NumPy over the whole motion.
+    from digital_actor_planner.core.upper_body import _within_limits
+    rng = np.random.default_rng(12)
+    times = np.arange(30) / 100.0
+    lower, upper, cap = -np.ones(6), np.ones(6), np.full(6, 2.0)
+    groups = np.array([0, 2, 6])
+    seen = set()
+    for trial in range(300):
+        path = np.cumsum(rng.normal(0.0, 0.005, (30, 6)), axis=0) + rng.uniform(-0.9, 0.9, 6)
+        kind = trial % 4
+        if kind == 1:
+            path[0, rng.integers(6)] = 1.5
+        elif kind == 2:
+            path[rng.integers(1, 30), rng.integers(6)] = -1.2
+        elif kind == 3:
+            frame = rng.integers(1, 30)
+            path[frame:, rng.integers(6)] += 0.05
+        inside = (path >= lower) & (path <= upper)
+        fast = np.vstack([np.zeros((1, 6), dtype=bool),
+                          np.abs(np.diff(path, axis=0)) / np.diff(times)[:, None] > cap])
+        start, legal = _within_limits(path, times, (lower, upper, cap, groups))
+        for g in range(2):
+            columns = slice(groups[g], groups[g + 1])
+            assert start[g] == inside[0, columns].all(), trial
+            assert legal[g] == (inside[:, columns].all() and not fast[:, columns].any()), trial
+            seen.add((bool(start[g]), bool(legal[g])))
+    assert seen == {(True, True), (True, False), (False, False)}

@@ -16,6 +16,7 @@ import numpy as np
 from .ct_roadmap import CTRoadmap
 from .ct_space import (
     BodyKinematics, BodyShapes, branch_layout, CTSpace, EnvironmentIndex, TimedBody)
+from .jit import kernel
 from .skeleton import Skeleton
 
 #: Shoulder roll that keeps a hanging arm clear of the torso and the thigh, rad.
@@ -316,7 +317,17 @@ class UpperBodyPlanner:
         for group, layout in enumerate(layouts):
             self._pattern_group[layout[1]] = group
         first = np.cumsum([0] + [len(self.indices[name]) for name in BRANCH_ORDER])
-        self._pattern_columns = [slice(a, b) for a, b in zip(first[:-1], first[1:])]
+        # _within_limits' tables: the upper body's limits with its branches as column groups,
+        # and each branch's own.
+        lower, upper_limit = skeleton.lower - 1e-9, skeleton.upper + 1e-9
+        speed = skeleton.velocity_limit * (1 + 1e-6)
+        upper = self.upper_indices
+        self._pattern_limits = (lower[upper], upper_limit[upper], speed[upper],
+                                first.astype(np.int64))
+        self._branch_limits = {
+            name: (lower[self.indices[name]], upper_limit[self.indices[name]],
+                   speed[self.indices[name]], np.array([0, len(self.indices[name])]))
+            for name in BRANCH_ORDER}
 
     def _check_input(self, times: np.ndarray, frames: np.ndarray) -> None:
         skeleton = self.skeleton
@@ -498,15 +509,11 @@ class UpperBodyPlanner:
         layout = branch_layout(self.kinematics, self.shapes, name, self._checked[name],
                                self._obstacles[name])
         checked, pairs = layout[1], layout[3]
-        columns = self._columns[name]
-        path = body.frames[:, columns]
-        skeleton = self.skeleton
-        inside = ((path >= skeleton.lower[columns] - 1e-9)
-                  & (path <= skeleton.upper[columns] + 1e-9)).all(axis=1)
-        speed = np.abs(path[1:] - path[:-1]) / (times[1:] - times[:-1])[:, None]
-        if (speed > skeleton.velocity_limit[columns] * (1 + 1e-6)).any() or not inside.all():
+        start_inside, within = _within_limits(
+            body.frames[:, self._columns[name]], times, self._branch_limits[name])
+        if not within[0]:
             # The motion is not legal whatever it touches: only the start is left to check.
-            return bool(inside[0]) and body.first_collision(checked, pairs, [0]) < 0, False
+            return bool(start_inside[0]) and body.first_collision(checked, pairs, [0]) < 0, False
         bad = body.first_collision(checked, pairs)
         return bad != 0, bad < 0
 
@@ -527,17 +534,16 @@ class UpperBodyPlanner:
             Branch name -> (start legal at frame 0, the whole motion legal: start included).
 
         """
-        path = body.frames[:, self._upper_columns]
-        inside = (path >= self._upper_lower) & (path <= self._upper_upper)
-        speed = np.abs(path[1:] - path[:-1]) / (times[1:] - times[:-1])[:, None]
-        too_fast = speed > self._upper_speed
+        start_inside, within = _within_limits(body.frames[:, self._upper_columns], times,
+                                              self._pattern_limits)
         first = body.first_collisions(self._pattern_checked, self._pattern_pairs,
                                       self._pattern_group, len(BRANCH_ORDER))
         out = {}
-        for name, columns, bad in zip(BRANCH_ORDER, self._pattern_columns, first):
-            if too_fast[:, columns].any() or not inside[:, columns].all():
+        for name, bad, start, legal in zip(BRANCH_ORDER, first, start_inside.tolist(),
+                                           within.tolist()):
+            if not legal:
                 # The motion is not legal whatever it touches: only the start is left.
-                out[name] = (bool(inside[0, columns].all()) and bad != 0, False)
+                out[name] = (start and bad != 0, False)
             else:
                 out[name] = (bad != 0, bad < 0)
         return out
@@ -556,3 +562,32 @@ def _columns(indices: np.ndarray):
     if len(indices) and np.array_equal(indices, np.arange(indices[0], indices[0] + len(indices))):
         return slice(int(indices[0]), int(indices[0]) + len(indices))
     return indices
+
+
+@kernel('Tuple((b1[::1], b1[::1]))(f8[:, :], f8[:], UniTuple(f8[::1], 3), i8[::1])')
+def _within_limits_kernel(path, times, bounds, groups):
+    """:func:`_within_limits` with the limits as one tuple (lower, upper, speed cap)."""
+    lower, upper, cap = bounds
+    count = groups.shape[0] - 1
+    start = np.ones(count, dtype=np.bool_)
+    legal = np.ones(count, dtype=np.bool_)
+    k = path.shape[0]
+    for g in range(count):
+        for j in range(groups[g], groups[g + 1]):
+            for i in range(k):
+                if not (path[i, j] >= lower[j] and path[i, j] <= upper[j]):
+                    legal[g] = False
+                    if i == 0:
+                        start[g] = False
+                if i > 0 and abs(path[i, j] - path[i - 1, j]) / (times[i] - times[i - 1]) > cap[j]:
+                    legal[g] = False
+    return start, legal
+
+
+def _within_limits(path: np.ndarray, times: np.ndarray, limits: tuple) -> tuple:
+    """Per group of columns of a motion ``path`` (k, c) over ``times`` (k,): whether its first
+    frame is within the joint limits, and whether every frame is and no joint moves faster
+    than its cap between frames. ``limits``: (lower (c,), upper (c,), speed cap (c,), the
+    groups' first columns and the end (G + 1,)), the limits' tolerances included."""
+    lower, upper, cap, groups = limits
+    return _within_limits_kernel(path, times, (lower, upper, cap), groups)
