@@ -718,6 +718,15 @@ def _within(q, lower, upper):
     return out
 
 
+@kernel('b1(f8[::1], f8[::1], f8[::1], f8[::1])')
+def _box_within(lower, upper, outer_lower, outer_upper):
+    """Whether the box [lower, upper] (3,) lies within [outer_lower, outer_upper]."""
+    for e in range(3):
+        if lower[e] < outer_lower[e] or upper[e] > outer_upper[e]:
+            return False
+    return True
+
+
 @dataclass(frozen=True)
 class _Step:
     parent: int
@@ -1161,8 +1170,8 @@ class TimedBody:
         """The triangles near the actor over the step: (N,) int64 indices, a superset of those
         meeting the box [lower, upper] or any shape's box swept over the step (found once
         per step, again only when a box reaches past where they were searched)."""
-        if (self._near is None or np.any(lower < self._near_lower)
-                or np.any(upper > self._near_upper)):
+        if self._near is None or not _box_within(lower, upper, self._near_lower,
+                                                 self._near_upper):
             box_lower = np.minimum(lower, self.swept_lower.min(axis=0) - NEAR_MARGIN)
             box_upper = np.maximum(upper, self.swept_upper.max(axis=0) + NEAR_MARGIN)
             self._near = self.environment.triangles_near(box_lower, box_upper)

@@ -476,8 +476,8 @@ class UpperBodyPlanner:
             per_branch[name] = record
             if not ok:
                 break
-        upper = self._upper_columns
-        deviation = float(np.abs(out[1:, upper] - frames[1:, upper]).max())
+        # Only the branches' own columns changed: the largest of their deviations.
+        deviation = max([record['deviation'] for record in per_branch.values()], default=0.0)
         return UpperBodyPlan(frames=out, ok=ok, reason=reason, deviation=deviation,
                              planning_time=time.perf_counter() - began, per_branch=per_branch,
                              blocked_frame=blocked_frame)
