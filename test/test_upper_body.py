@@ -382,3 +382,25 @@ def test_limit_checks_of_a_motion_per_group_of_columns():
             assert legal[g] == (inside[:, columns].all() and not fast[:, columns].any()), trial
             seen.add((bool(start[g]), bool(legal[g])))
     assert seen == {(True, True), (True, False), (False, False)}
+
+
+@pytest.mark.parametrize('where', ['time', 'leg', 'arm'])
+@pytest.mark.parametrize('value', [np.nan, np.inf])
+def test_non_finite_input_is_refused_wherever_it_is(skeleton, where, value):
+    planner, _ = planner_for(skeleton)
+    times, frames = walk(skeleton, 30)
+    if where == 'time':
+        times[29] = value
+    else:
+        frames[17, skeleton.index['left_knee' if where == 'leg' else 'left_elbow']] = value
+    with pytest.raises(ValueError, match='NaN or infinite'):
+        planner.plan(times, frames)
+
+
+def test_objective_outside_limits_at_either_end_names_the_joint(skeleton):
+    planner, _ = planner_for(skeleton)
+    for frame, joint in ((0, 'waist_pitch'), (29, 'left_shoulder_roll')):
+        times, frames = walk(skeleton, 30)
+        frames[frame, skeleton.index[joint]] = skeleton.upper[skeleton.index[joint]] + 0.01
+        with pytest.raises(ValueError, match=joint):
+            planner.plan(times, frames)

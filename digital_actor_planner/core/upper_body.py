@@ -8,6 +8,7 @@ configuration-time space with the earlier branches fixed.
 from __future__ import annotations
 
 from dataclasses import dataclass
+import math
 import time
 from typing import Dict, Optional, Tuple
 
@@ -299,6 +300,7 @@ class UpperBodyPlanner:
         self._columns = {name: _columns(self.indices[name]) for name in BRANCH_ORDER}
         self._upper_columns = _columns(self.upper_indices)
         upper = self.upper_indices
+        self._upper_index = np.asarray(upper, dtype=np.int64)
         self._upper_lower = skeleton.lower[upper] - 1e-9
         self._upper_upper = skeleton.upper[upper] + 1e-9
         self._upper_speed = skeleton.velocity_limit[upper] * (1 + 1e-6)
@@ -336,6 +338,9 @@ class UpperBodyPlanner:
         if frames.shape != (len(times), len(skeleton.joint_names)):
             raise ValueError(f'frames must have shape ({len(times)}, '
                              f'{len(skeleton.joint_names)}), got {frames.shape}')
+        if _input_sound(times, frames, self._upper_index, self._upper_lower,
+                        self._upper_upper):
+            return  # the usual case, in one pass; else find what is wrong and say it
         if not (np.isfinite(times).all() and np.isfinite(frames).all()):
             raise ValueError('times or frames contain NaN or infinite values')
         if not (times[1:] > times[:-1]).all():
@@ -591,3 +596,21 @@ def _within_limits(path: np.ndarray, times: np.ndarray, limits: tuple) -> tuple:
     groups' first columns and the end (G + 1,)), the limits' tolerances included."""
     lower, upper, cap, groups = limits
     return _within_limits_kernel(path, times, (lower, upper, cap), groups)
+
+
+@kernel('b1(f8[:], f8[:, :], i8[::1], f8[::1], f8[::1])')
+def _input_sound(times, frames, columns, lower, upper):
+    """Whether ``times`` (k,) and ``frames`` (k, J) are finite, the times strictly increase
+    and the ``columns`` of every frame lie in [lower, upper] (the checks of
+    :meth:`UpperBodyPlanner._check_input`)."""
+    for i in range(times.shape[0]):
+        if not math.isfinite(times[i]) or (i > 0 and not times[i] > times[i - 1]):
+            return False
+        for j in range(frames.shape[1]):
+            if not math.isfinite(frames[i, j]):
+                return False
+        for c in range(columns.shape[0]):
+            value = frames[i, columns[c]]
+            if value < lower[c] or value > upper[c]:
+                return False
+    return True
