@@ -13,11 +13,11 @@ Motions are interpolated in deviation from the objective O(t) (§5.1) rather tha
 joint values, so a motion between two states on the objective follows the objective exactly and
 a constant deviation rides on top of the swinging arm pattern.
 
-Collision checking is a broad phase in compiled kernels (per row, axis-aligned boxes of the
-branch's shapes against the environment's triangles and the rest of the body, then the
-separating axis test of the oriented boxes holding them) and a narrow phase in FCL, using the
-shapes and environment models of :class:`~digital_actor_planner.core.collision.BodyCollision`
-when it provides them.
+Collision checking is compiled, a batch of rows at a time: a broad phase (per row, axis-aligned
+boxes of the branch's shapes against the environment's triangles and the rest of the body, then
+the separating axis test of the oriented boxes holding them) and the exact test of the shapes it
+leaves (:func:`.convex.touching`, GJK), using the shapes and environment meshes of
+:class:`~digital_actor_planner.core.collision.BodyCollision` when it provides them.
 """
 from __future__ import annotations
 
