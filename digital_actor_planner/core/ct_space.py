@@ -289,6 +289,17 @@ def _branch_boxes(q, frames, body_frames, indices, body_rotations, body_position
                     high[r, c, e] = placed_centre[i, c, e] + extent[i, c, e]
 
 
+@kernel('UniTuple(f8, 3)(f8[:, :], f8[:, :], i8)')
+def _column_dots(rotation_a, rotation_b, i):
+    """Column i of A's rotation dotted with each column of B's."""
+    return ((rotation_a[0, i] * rotation_b[0, 0] + rotation_a[1, i] * rotation_b[1, 0]
+             + rotation_a[2, i] * rotation_b[2, 0]),
+            (rotation_a[0, i] * rotation_b[0, 1] + rotation_a[1, i] * rotation_b[1, 1]
+             + rotation_a[2, i] * rotation_b[2, 1]),
+            (rotation_a[0, i] * rotation_b[0, 2] + rotation_a[1, i] * rotation_b[1, 2]
+             + rotation_a[2, i] * rotation_b[2, 2]))
+
+
 @kernel('b1(f8[:, :], f8[:], f8[:], f8[:, :], f8[:], f8[:], f8)')
 def _boxes_apart(rotation_a, centre_a, half_a, rotation_b, centre_b, half_b, margin):
     """Whether two oriented boxes are more than ``margin`` apart along one of the 15 axes of
@@ -298,91 +309,108 @@ def _boxes_apart(rotation_a, centre_a, half_a, rotation_b, centre_b, half_b, mar
     gap is less than ``margin`` (m). Near-parallel edge axes are skipped (their face axes
     decide).
     """
-    # The centre offset and the axes of B in A's frame.
-    offset = np.empty(3)
-    for i in range(3):
-        offset[i] = ((centre_b[0] - centre_a[0]) * rotation_a[0, i]
-                     + (centre_b[1] - centre_a[1]) * rotation_a[1, i]
-                     + (centre_b[2] - centre_a[2]) * rotation_a[2, i])
-    turn = np.empty((3, 3))
-    size = np.empty((3, 3))
-    for i in range(3):
-        for j in range(3):
-            turn[i, j] = (rotation_a[0, i] * rotation_b[0, j]
-                          + rotation_a[1, i] * rotation_b[1, j]
-                          + rotation_a[2, i] * rotation_b[2, j])
-            size[i, j] = abs(turn[i, j])
+    # The centre offset and the axes of B in A's frame, as tuples (no arrays to allocate:
+    # this runs for every pair of boxes that meet).
+    dx, dy, dz = (centre_b[0] - centre_a[0], centre_b[1] - centre_a[1],
+                  centre_b[2] - centre_a[2])
+    offset = (dx * rotation_a[0, 0] + dy * rotation_a[1, 0] + dz * rotation_a[2, 0],
+              dx * rotation_a[0, 1] + dy * rotation_a[1, 1] + dz * rotation_a[2, 1],
+              dx * rotation_a[0, 2] + dy * rotation_a[1, 2] + dz * rotation_a[2, 2])
+    turn = (_column_dots(rotation_a, rotation_b, 0), _column_dots(rotation_a, rotation_b, 1),
+            _column_dots(rotation_a, rotation_b, 2))
+    size = ((abs(turn[0][0]), abs(turn[0][1]), abs(turn[0][2])),
+            (abs(turn[1][0]), abs(turn[1][1]), abs(turn[1][2])),
+            (abs(turn[2][0]), abs(turn[2][1]), abs(turn[2][2])))
     for i in range(3):  # A's axes
-        reach = (half_a[i] + half_b[0] * size[i, 0] + half_b[1] * size[i, 1]
-                 + half_b[2] * size[i, 2])
+        reach = (half_a[i] + half_b[0] * size[i][0] + half_b[1] * size[i][1]
+                 + half_b[2] * size[i][2])
         if abs(offset[i]) > reach + margin:
             return True
     for j in range(3):  # B's axes
-        reach = (half_b[j] + half_a[0] * size[0, j] + half_a[1] * size[1, j]
-                 + half_a[2] * size[2, j])
-        distance = offset[0] * turn[0, j] + offset[1] * turn[1, j] + offset[2] * turn[2, j]
+        reach = (half_b[j] + half_a[0] * size[0][j] + half_a[1] * size[1][j]
+                 + half_a[2] * size[2][j])
+        distance = offset[0] * turn[0][j] + offset[1] * turn[1][j] + offset[2] * turn[2][j]
         if abs(distance) > reach + margin:
             return True
     for i in range(3):  # A's axis i x B's axis j, in A's frame
         i1, i2 = (i + 1) % 3, (i + 2) % 3
         for j in range(3):
             j1, j2 = (j + 1) % 3, (j + 2) % 3
-            length = np.sqrt(max(1.0 - size[i, j] * size[i, j], 0.0))
+            length = np.sqrt(max(1.0 - size[i][j] * size[i][j], 0.0))
             if length < 1e-6:
                 continue
-            reach = (half_a[i1] * size[i2, j] + half_a[i2] * size[i1, j]
-                     + half_b[j1] * size[i, j2] + half_b[j2] * size[i, j1])
-            distance = offset[i2] * turn[i1, j] - offset[i1] * turn[i2, j]
+            reach = (half_a[i1] * size[i2][j] + half_a[i2] * size[i1][j]
+                     + half_b[j1] * size[i][j2] + half_b[j2] * size[i][j1])
+            distance = offset[i2] * turn[i1][j] - offset[i1] * turn[i2][j]
             if abs(distance) > reach + margin * length:
                 return True
     return False
+
+
+@kernel('b1(f8, f8, f8, f8, f8, f8, f8, f8, f8, f8, f8, f8, f8[:], f8)')
+def _triangle_apart_along(x, y, z, a0, a1, a2, b0, b1, b2, d0, d1, d2, half, margin):
+    """Whether a box (half extents ``half``, centred at the origin of its frame) and a
+    triangle (corners a, b, d in that frame) are more than ``margin`` apart along the axis
+    (x, y, z), which need not be a unit vector (a near-zero one parts nothing)."""
+    length = np.sqrt(x * x + y * y + z * z)
+    if length < 1e-12:
+        return False
+    reach = half[0] * abs(x) + half[1] * abs(y) + half[2] * abs(z)
+    p0 = a0 * x + a1 * y + a2 * z
+    p1 = b0 * x + b1 * y + b2 * z
+    p2 = d0 * x + d1 * y + d2 * z
+    return (min(p0, p1, p2) > reach + margin * length
+            or max(p0, p1, p2) < -reach - margin * length)
 
 
 @kernel('b1(f8[:, :], f8[:], f8[:], f8[:, :], f8)')
 def _box_triangle_apart(rotation, centre, half, corners, margin):
     """Whether an oriented box and a triangle (corners (3, 3), m) are more than ``margin``
     apart along one of the 13 axes of the separating axis test (a conservative test, as in
-    :func:`_boxes_apart`)."""
-    # The corners and edges in the box's frame.
-    local = np.empty((3, 3))
-    for k in range(3):
-        for i in range(3):
-            local[k, i] = ((corners[k, 0] - centre[0]) * rotation[0, i]
-                           + (corners[k, 1] - centre[1]) * rotation[1, i]
-                           + (corners[k, 2] - centre[2]) * rotation[2, i])
-    for i in range(3):  # the box's axes
-        low = min(local[0, i], local[1, i], local[2, i])
-        high = max(local[0, i], local[1, i], local[2, i])
-        if low > half[i] + margin or high < -half[i] - margin:
-            return True
-    edge = np.empty((3, 3))
-    for k in range(3):
-        for i in range(3):
-            edge[k, i] = local[(k + 1) % 3, i] - local[k, i]
-    axis = np.empty(3)
-    for a in range(4):  # the triangle's normal, then each box axis x each edge
-        for b in range(3 if a > 0 else 1):
-            if a == 0:
-                axis[0] = edge[0, 1] * edge[1, 2] - edge[0, 2] * edge[1, 1]
-                axis[1] = edge[0, 2] * edge[1, 0] - edge[0, 0] * edge[1, 2]
-                axis[2] = edge[0, 0] * edge[1, 1] - edge[0, 1] * edge[1, 0]
-            else:
-                i = a - 1
-                axis[i] = 0.0
-                axis[(i + 1) % 3] = -edge[b, (i + 2) % 3]
-                axis[(i + 2) % 3] = edge[b, (i + 1) % 3]
-            length = np.sqrt(axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2])
-            if length < 1e-12:
-                continue
-            reach = (half[0] * abs(axis[0]) + half[1] * abs(axis[1])
-                     + half[2] * abs(axis[2]))
-            p0 = local[0, 0] * axis[0] + local[0, 1] * axis[1] + local[0, 2] * axis[2]
-            p1 = local[1, 0] * axis[0] + local[1, 1] * axis[1] + local[1, 2] * axis[2]
-            p2 = local[2, 0] * axis[0] + local[2, 1] * axis[1] + local[2, 2] * axis[2]
-            if (min(p0, p1, p2) > reach + margin * length
-                    or max(p0, p1, p2) < -reach - margin * length):
-                return True
-    return False
+    :func:`_boxes_apart`). Scalars only: it runs for every box and triangle that meet."""
+    # The corners in the box's frame: a, b, d.
+    x, y, z = corners[0, 0] - centre[0], corners[0, 1] - centre[1], corners[0, 2] - centre[2]
+    a0 = x * rotation[0, 0] + y * rotation[1, 0] + z * rotation[2, 0]
+    a1 = x * rotation[0, 1] + y * rotation[1, 1] + z * rotation[2, 1]
+    a2 = x * rotation[0, 2] + y * rotation[1, 2] + z * rotation[2, 2]
+    x, y, z = corners[1, 0] - centre[0], corners[1, 1] - centre[1], corners[1, 2] - centre[2]
+    b0 = x * rotation[0, 0] + y * rotation[1, 0] + z * rotation[2, 0]
+    b1 = x * rotation[0, 1] + y * rotation[1, 1] + z * rotation[2, 1]
+    b2 = x * rotation[0, 2] + y * rotation[1, 2] + z * rotation[2, 2]
+    x, y, z = corners[2, 0] - centre[0], corners[2, 1] - centre[1], corners[2, 2] - centre[2]
+    d0 = x * rotation[0, 0] + y * rotation[1, 0] + z * rotation[2, 0]
+    d1 = x * rotation[0, 1] + y * rotation[1, 1] + z * rotation[2, 1]
+    d2 = x * rotation[0, 2] + y * rotation[1, 2] + z * rotation[2, 2]
+    # The box's axes.
+    if (min(a0, b0, d0) > half[0] + margin or max(a0, b0, d0) < -half[0] - margin
+            or min(a1, b1, d1) > half[1] + margin or max(a1, b1, d1) < -half[1] - margin
+            or min(a2, b2, d2) > half[2] + margin or max(a2, b2, d2) < -half[2] - margin):
+        return True
+    # The edges a -> b, b -> d, d -> a.
+    e0, e1, e2 = b0 - a0, b1 - a1, b2 - a2
+    f0, f1, f2 = d0 - b0, d1 - b1, d2 - b2
+    g0, g1, g2 = a0 - d0, a1 - d1, a2 - d2
+    # The triangle's normal, then each box axis crossed with each edge.
+    return (_triangle_apart_along(e1 * f2 - e2 * f1, e2 * f0 - e0 * f2, e0 * f1 - e1 * f0,
+                                  a0, a1, a2, b0, b1, b2, d0, d1, d2, half, margin)
+            or _triangle_apart_along(0.0, -e2, e1, a0, a1, a2, b0, b1, b2, d0, d1, d2, half,
+                                     margin)
+            or _triangle_apart_along(0.0, -f2, f1, a0, a1, a2, b0, b1, b2, d0, d1, d2, half,
+                                     margin)
+            or _triangle_apart_along(0.0, -g2, g1, a0, a1, a2, b0, b1, b2, d0, d1, d2, half,
+                                     margin)
+            or _triangle_apart_along(e2, 0.0, -e0, a0, a1, a2, b0, b1, b2, d0, d1, d2, half,
+                                     margin)
+            or _triangle_apart_along(f2, 0.0, -f0, a0, a1, a2, b0, b1, b2, d0, d1, d2, half,
+                                     margin)
+            or _triangle_apart_along(g2, 0.0, -g0, a0, a1, a2, b0, b1, b2, d0, d1, d2, half,
+                                     margin)
+            or _triangle_apart_along(-e1, e0, 0.0, a0, a1, a2, b0, b1, b2, d0, d1, d2, half,
+                                     margin)
+            or _triangle_apart_along(-f1, f0, 0.0, a0, a1, a2, b0, b1, b2, d0, d1, d2, half,
+                                     margin)
+            or _triangle_apart_along(-g1, g0, 0.0, a0, a1, a2, b0, b1, b2, d0, d1, d2, half,
+                                     margin))
 
 
 @kernel('b1[::1](f8[:, :, ::1], f8[:, :, ::1], f8[:, :], f8[:, :], b1, i8[::1], i8[::1], '
