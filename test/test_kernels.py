@@ -11,8 +11,8 @@ import sys
 import numpy as np
 import pytest
 
-from digital_actor_planner.core import (collision, ct_roadmap, ct_space, environment, footsteps,
-                                        gait)
+from digital_actor_planner.core import (collision, convex, ct_roadmap, ct_space, environment,
+                                        footsteps, gait)
 from digital_actor_planner.core import skeleton as skeleton_module, upper_body
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment, start_configuration
@@ -61,6 +61,7 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    ct_roadmap._stack_path, ct_roadmap._horizon_tables, ct_space._within,
                    upper_body._within_limits_kernel, ct_space._box_within,
                    upper_body._input_sound, ct_space._column_dots, ct_space._triangle_apart_along,
+                   ct_space._shape_pose, ct_space._turned, convex._middle,
                    ct_space._candidates_meeting):
         assert kernel.py_func is not kernel
 

@@ -77,6 +77,16 @@ def _cross(ax, ay, az, bx, by, bz):
     return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
 
+@kernel('UniTuple(f8, 3)(i8, f8[:], f8[:, :])')
+def _middle(kind, centre, corners):
+    """A point inside the shape: its centre, a triangle's centroid."""
+    if kind != TRIANGLE:
+        return centre[0], centre[1], centre[2]
+    return ((corners[0, 0] + corners[1, 0] + corners[2, 0]) / 3.0,
+            (corners[0, 1] + corners[1, 1] + corners[2, 1]) / 3.0,
+            (corners[0, 2] + corners[1, 2] + corners[2, 2]) / 3.0)
+
+
 @kernel('b1(i8, f8[:], f8[:, :], f8[:], f8[:, :], i8, f8[:], f8[:, :], f8[:], f8[:, :])')
 def touching(kind_a, half_a, rotation_a, centre_a, corners_a, kind_b, half_b, rotation_b,
              centre_b, corners_b):
@@ -87,19 +97,9 @@ def touching(kind_a, half_a, rotation_a, centre_a, corners_a, kind_b, half_b, ro
     the origin; a support point that does not pass the origin proves the shapes apart.
     """
     points = np.empty((4, 3))
-    # Start along the line between the shapes' centres (a triangle's: its centroid).
-    if kind_a == TRIANGLE:
-        ax = (corners_a[0, 0] + corners_a[1, 0] + corners_a[2, 0]) / 3.0
-        ay = (corners_a[0, 1] + corners_a[1, 1] + corners_a[2, 1]) / 3.0
-        az = (corners_a[0, 2] + corners_a[1, 2] + corners_a[2, 2]) / 3.0
-    else:
-        ax, ay, az = centre_a[0], centre_a[1], centre_a[2]
-    if kind_b == TRIANGLE:
-        bx = (corners_b[0, 0] + corners_b[1, 0] + corners_b[2, 0]) / 3.0
-        by = (corners_b[0, 1] + corners_b[1, 1] + corners_b[2, 1]) / 3.0
-        bz = (corners_b[0, 2] + corners_b[1, 2] + corners_b[2, 2]) / 3.0
-    else:
-        bx, by, bz = centre_b[0], centre_b[1], centre_b[2]
+    # Start along the line between the shapes' middles.
+    ax, ay, az = _middle(kind_a, centre_a, corners_a)
+    bx, by, bz = _middle(kind_b, centre_b, corners_b)
     dx, dy, dz = bx - ax, by - ay, bz - az
     if dx * dx + dy * dy + dz * dz < _TINY:
         dx, dy, dz = 1.0, 0.0, 0.0
