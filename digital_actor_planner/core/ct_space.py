@@ -47,8 +47,9 @@ SWEPT_CONTACTS = 4096
 #: reach of a bending trunk or a raised arm beyond its place in the motion pattern).
 NEAR_MARGIN = 0.6
 #: Gap, m, beyond which the separating axis test of oriented boxes lets a pair that the boxes
-#: along the world axes could not tell apart skip FCL: far more than FCL's tolerances, so a
-#: pair it skips is one FCL would find apart (the same plans, fewer FCL calls).
+#: along the world axes could not tell apart skip the exact test: far more than its
+#: tolerances, so a pair it skips is one the exact test would find apart (the same plans,
+#: fewer exact tests).
 SAT_MARGIN = 1e-3
 
 
@@ -1330,7 +1331,7 @@ def _same_motion(a: tuple, b: tuple) -> bool:
 
 
 def _watched_rows(inside: np.ndarray, broad: tuple) -> List[int]:
-    """Rows of a checked batch that can be illegal: outside the limits or with suspects."""
+    """Rows of a checked batch that are illegal: outside the limits or in contact."""
     outside = np.flatnonzero(~inside).tolist()
     if not outside:
         return sorted(broad[0])
@@ -1626,8 +1627,8 @@ class CTSpace:
                            goals: Sequence[Tuple[np.ndarray, int]]) -> Tuple[int, List[int]]:
         """Check motions from ``a`` to each goal in order; stop at the first legal one.
 
-        The first goal (the best one, usually legal) is checked alone; the broad phase of all
-        the others then runs in one batch and their narrow phase goal by goal.
+        The first goal (the best one, usually legal) is checked alone; all the others then in
+        one batch, its answers read goal by goal.
 
         Returns
         -------
@@ -1673,8 +1674,8 @@ class CTSpace:
         """First illegal frame along a chain of motions through ``waypoints``, or -1.
 
         Each motion is checked as :meth:`first_invalid_motion` checks it (forward in time,
-        speeds, collisions at every frame after its start), all of them in one broad phase;
-        the narrow phase goes motion by motion and stops at the first illegal frame.
+        speeds, collisions at every frame after its start), all of them in one batch, read
+        motion by motion up to the first illegal frame.
 
         Parameters
         ----------
@@ -1790,7 +1791,7 @@ class CTSpace:
             return np.zeros(0, dtype=bool)
         legal = self.within_bounds(q)
         broad = self._broad_phase(q, frames)
-        # Only rows with suspect pairs need the narrow phase.
+        # Only rows in contact are illegal within the limits.
         for row in broad[0]:
             if legal[row] and self._narrow_phase(row, frames[row], broad):
                 legal[row] = False
@@ -1802,10 +1803,9 @@ class CTSpace:
                                                Tuple[np.ndarray, int]]] = None) -> np.ndarray:
         """Legality of the first ``count`` legal rows of a batch in a given order: (m,) bool.
 
-        The broad phase runs over all rows at once, the narrow phase row by row in ``order``
-        until ``count`` rows are legal; the rows in ``also`` are always checked. Rows left
-        unchecked are reported illegal. This is what a search that keeps only its ``count``
-        best neighbours needs, without the narrow phase of the others.
+        All rows are checked in one batch, then read row by row in ``order`` until ``count``
+        rows are legal; the rows in ``also`` are always read. Rows left unread are reported
+        illegal: a search that keeps only its ``count`` best neighbours needs no more.
 
         Parameters
         ----------
@@ -1821,7 +1821,7 @@ class CTSpace:
             Rows checked whatever their rank.
         motion
             A motion (a, b) likely to be checked next (by :meth:`first_legal_motion`, as its
-            first goal): its frames share this broad phase, and only its narrow phase is left
+            first goal): its frames share this batch, and only reading its answers is left
             for then.
 
         """
@@ -1842,11 +1842,11 @@ class CTSpace:
                 q = np.concatenate([q, rows])
                 frames = np.concatenate([frames, extra[3]])
         self.checks += len(frames)
-        suspects = self._broad_phase(q, frames)
+        answers = self._broad_phase(q, frames)
         if extra is not None:
             # The motion's rows as a batch of their own (rows numbered from 0).
-            own = ([row - m for row in suspects[0] if row >= m], suspects[1][m:],
-                   suspects[2][m:])
+            own = ([row - m for row in answers[0] if row >= m], answers[1][m:],
+                   answers[2][m:])
             self._prefetched = extra + (self.within_bounds(extra[1]), own)
         checked = set()
         found = 0
@@ -1854,11 +1854,11 @@ class CTSpace:
             if found >= count:
                 break
             checked.add(row)
-            legal[row] = inside[row] and not self._narrow_phase(row, frames[row], suspects)
+            legal[row] = inside[row] and not self._narrow_phase(row, frames[row], answers)
             found += int(legal[row])
         for row in also:
             if row not in checked:
-                legal[row] = inside[row] and not self._narrow_phase(row, frames[row], suspects)
+                legal[row] = inside[row] and not self._narrow_phase(row, frames[row], answers)
         return legal
 
     def _check_segments(self, q: np.ndarray, frames: np.ndarray,
@@ -1866,24 +1866,24 @@ class CTSpace:
                         stop_at_legal: bool):
         """Yield, per segment of rows, the frame of its first illegal row or -1.
 
-        The broad phase (limits, boxes) runs over all rows at once; the narrow phase in FCL runs
-        segment by segment, in row order, stopping a segment at its first collision. A segment
-        with ``early[i] >= 0`` is illegal at that frame if its rows are all legal. With
-        ``stop_at_legal`` nothing after the first legal segment is checked.
+        All rows are checked in one batch (limits, collisions), its answers read segment by
+        segment, in row order, up to a segment's first illegal row. A segment with
+        ``early[i] >= 0`` is illegal at that frame if its rows are all legal. With
+        ``stop_at_legal`` nothing after the first legal segment is read.
         """
         m = len(frames)
         self.checks += m
         watch: List[int] = []
         if m:
             inside = self.within_bounds(q)
-            suspects = self._broad_phase(q, frames)
-            watch = _watched_rows(inside, suspects)
+            answers = self._broad_phase(q, frames)
+            watch = _watched_rows(inside, answers)
         for (begin, end), late in zip(segments, early):
             bad = -1
             for row in watch[bisect.bisect_left(watch, begin):]:
                 if row >= end:
                     break
-                if not inside[row] or self._narrow_phase(row, frames[row], suspects):
+                if not inside[row] or self._narrow_phase(row, frames[row], answers):
                     bad = int(frames[row])
                     break
             if bad < 0 and late >= 0:
@@ -1895,7 +1895,7 @@ class CTSpace:
     def _check_progressively(self, q: np.ndarray, frames: np.ndarray,
                              segments: Sequence[Tuple[int, int]], early: Sequence[int],
                              stop_at_legal: bool, first: int = 8):
-        """Like :meth:`_check_segments`, with the broad phase in waves along the segments.
+        """Like :meth:`_check_segments`, with the checks in waves along the segments.
 
         Each wave takes the next rows of every segment still open (``first`` rows, then twice
         as many each wave), so rows after a segment's first illegal one are seldom boxed. The
@@ -1913,15 +1913,15 @@ class CTSpace:
                     wave.append((i, position[i], min(position[i] + size, segments[i][1])))
             rows = np.concatenate([np.arange(begin, end) for _, begin, end in wave])
             self.checks += len(rows)
-            suspects = self._broad_phase(q[rows], frames[rows]) if len(rows) else None
-            watch = _watched_rows(inside[rows], suspects) if len(rows) else []
+            answers = self._broad_phase(q[rows], frames[rows]) if len(rows) else None
+            watch = _watched_rows(inside[rows], answers) if len(rows) else []
             local = 0
             for i, begin, end in wave:
                 for row in watch[bisect.bisect_left(watch, local):]:
                     if row >= local + end - begin:
                         break
                     if not inside[begin + row - local] or self._narrow_phase(
-                            row, frames[begin + row - local], suspects):
+                            row, frames[begin + row - local], answers):
                         results[i] = int(frames[begin + row - local])
                         break
                 if results[i] is None:

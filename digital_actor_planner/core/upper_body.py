@@ -301,9 +301,15 @@ class UpperBodyPlanner:
         self._upper_columns = _columns(self.upper_indices)
         upper = self.upper_indices
         self._upper_index = np.asarray(upper, dtype=np.int64)
-        self._upper_lower = skeleton.lower[upper] - 1e-9
-        self._upper_upper = skeleton.upper[upper] + 1e-9
-        self._upper_speed = skeleton.velocity_limit[upper] * (1 + 1e-6)
+        # The joint limits with their tolerances and the speed caps: the upper body's, with
+        # its branches as column groups (_within_limits), and each branch's own.
+        lower, upper_limit = skeleton.lower - 1e-9, skeleton.upper + 1e-9
+        speed = skeleton.velocity_limit * (1 + 1e-6)
+        self._upper_lower, self._upper_upper = lower[upper], upper_limit[upper]
+        self._branch_limits = {
+            name: (lower[self.indices[name]], upper_limit[self.indices[name]],
+                   speed[self.indices[name]], np.array([0, len(self.indices[name])]))
+            for name in BRANCH_ORDER}
         self._checked = {'waist': _TRUNK_LINKS, 'left_arm': _ARM_LINKS['left'],
                          'right_arm': _ARM_LINKS['right']}
         self._obstacles = {'waist': _LEG_LINKS,
@@ -319,17 +325,8 @@ class UpperBodyPlanner:
         for group, layout in enumerate(layouts):
             self._pattern_group[layout[1]] = group
         first = np.cumsum([0] + [len(self.indices[name]) for name in BRANCH_ORDER])
-        # _within_limits' tables: the upper body's limits with its branches as column groups,
-        # and each branch's own.
-        lower, upper_limit = skeleton.lower - 1e-9, skeleton.upper + 1e-9
-        speed = skeleton.velocity_limit * (1 + 1e-6)
-        upper = self.upper_indices
-        self._pattern_limits = (lower[upper], upper_limit[upper], speed[upper],
+        self._pattern_limits = (self._upper_lower, self._upper_upper, speed[upper],
                                 first.astype(np.int64))
-        self._branch_limits = {
-            name: (lower[self.indices[name]], upper_limit[self.indices[name]],
-                   speed[self.indices[name]], np.array([0, len(self.indices[name])]))
-            for name in BRANCH_ORDER}
 
     def _check_input(self, times: np.ndarray, frames: np.ndarray) -> None:
         skeleton = self.skeleton
@@ -493,8 +490,8 @@ class UpperBodyPlanner:
 
         Before the branch is planned its columns of ``body`` hold its start at frame 0, then
         its objective: the motion its fast path would take. Checked on the poses ``body``
-        already holds (no kinematics), in one batch for both answers, with the shapes, pairs
-        and narrow phase of the branch's :class:`CTSpace`.
+        already holds (no kinematics), in one batch for both answers, with the shapes and
+        pairs of the branch's :class:`CTSpace` and the same tests.
 
         Parameters
         ----------
@@ -527,9 +524,9 @@ class UpperBodyPlanner:
 
         The input upper-body motion is the start at frame 0, then the objective: the motion
         every branch's fast path would take. Each branch's answer is the one
-        :meth:`start_and_objective` gives on ``body`` as it is, with one broad phase for all
-        three (the poses and boxes of every shape at every frame are already in ``body``) and
-        FCL only where boxes meet, each branch's shapes left out once they have collided. The
+        :meth:`start_and_objective` gives on ``body`` as it is, with one batch for all three
+        (the poses and boxes of every shape at every frame are already in ``body``), each
+        branch's shapes left out once they have collided. The
         answers hold for a branch as long as the branches before it keep the motion ``body``
         holds.
 
