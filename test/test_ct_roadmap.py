@@ -414,3 +414,20 @@ def test_the_path_along_a_stack_is_its_motions_then_the_last_state_held(beam_spa
         expected[stack[-1].frame:] = space.objective[stack[-1].frame:] + stack[-1].deviation
         expected = np.clip(expected, space.lower, space.upper)
         assert CTRoadmap._path(space, stack).tobytes() == expected.tobytes(), trial
+
+
+def test_travel_frames_follow_the_slowest_joint(beam_space):
+    # Frames to change a deviation at a fraction of the joint speed limits: the kernel
+    # against the NumPy definition, for one change and for a batch (zero changes included).
+    space = beam_space
+    rng = np.random.default_rng(8)
+    step = (space.times[-1] - space.times[0]) / (space.frame_count - 1)
+    changes = rng.normal(0.0, 0.4, (200, 2)) * (rng.random((200, 1)) > 0.1)
+    for fraction in (0.8, 1.0):
+        seconds = np.max(np.abs(changes) / (fraction * space.speed_limit), axis=-1)
+        expected = np.maximum(1, np.ceil(seconds / step - 1e-9).astype(int))
+        found = CTRoadmap._travel_frames(space, 0, changes, fraction)
+        assert found.tolist() == expected.tolist()
+        assert [CTRoadmap._travel_frames(space, 0, c, fraction) for c in changes[:20]] == (
+            expected[:20].tolist())
+    assert set(expected.tolist()) > {1}  # some changes take one frame, others several

@@ -32,6 +32,7 @@ up and reports the block as one in the preview, so the caller can plan the step 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import math
 import time
 from typing import Dict, List, Optional, Tuple
 
@@ -162,6 +163,20 @@ def _horizon_tables(free):
     return next_free, run_start
 
 
+@kernel('i8[::1](f8[:, :], f8[:], f8)')
+def _travel(change, rate, step):
+    """:meth:`CTRoadmap._travel_frames` of changes (n, d) at joint speeds ``rate`` (d,), frames
+    ``step`` s apart: the same arithmetic as NumPy's (largest time over the joints, rounded
+    up to whole frames, at least 1)."""
+    out = np.empty(change.shape[0], dtype=np.int64)
+    for i in range(change.shape[0]):
+        seconds = 0.0
+        for j in range(change.shape[1]):
+            seconds = max(seconds, abs(change[i, j]) / rate[j])
+        out[i] = max(1, int(math.ceil(seconds / step - 1e-9)))
+    return out
+
+
 class _Horizon:
     """Per search: where the objective is legal, and how far a posture is held from a frame.
 
@@ -266,9 +281,10 @@ class CTRoadmap:
         Returns an int (or an int array for a batch of changes), at least 1.
         """
         step = (space.times[-1] - space.times[0]) / max(space.frame_count - 1, 1)
-        seconds = np.max(np.abs(change) / (speed_fraction * space.speed_limit), axis=-1)
-        frames = np.maximum(1, np.ceil(seconds / step - 1e-9).astype(int))
-        return int(frames) if np.ndim(frames) == 0 else frames
+        change = np.asarray(change, dtype=np.float64)
+        frames = _travel(change.reshape(-1, change.shape[-1]),
+                         speed_fraction * space.speed_limit, float(step))
+        return int(frames[0]) if change.ndim == 1 else frames.reshape(change.shape[:-1])
 
     # -- search --------------------------------------------------------------------------
     def solve(self, space: CTSpace, start: np.ndarray, hold_frames: int = 5,
