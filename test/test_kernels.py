@@ -61,7 +61,7 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    ct_roadmap._stack_path, ct_roadmap._horizon_tables, ct_space._within,
                    upper_body._within_limits_kernel, ct_space._box_within,
                    upper_body._input_sound, ct_space._column_dots, ct_space._triangle_apart_along,
-                   ct_space._shape_pose, ct_space._turned, convex._middle, ct_roadmap._travel,
+                   convex._middle, ct_roadmap._travel,
                    ct_space._candidates_meeting):
         assert kernel.py_func is not kernel
 

@@ -137,45 +137,6 @@ def _link_poses(q, rotations, positions, parent, child, origin_rotation, turned,
                                                + base[r, 2] * turn[2, col])
 
 
-@kernel('f8(f8[:, :, :, :], i8, i8, f8[:, :, ::1], i8, i8, i8)')
-def _turned(rotations, f, link, turns, i, r, c):
-    """Entry (r, c) of a link's rotation times shape i's turn."""
-    return (rotations[f, link, r, 0] * turns[i, 0, c] + rotations[f, link, r, 1] * turns[i, 1, c]
-            + rotations[f, link, r, 2] * turns[i, 2, c])
-
-
-@kernel('UniTuple(f8, 12)(f8[:, :, :, :], f8[:, :, :], i8, i8, f8[:, ::1], f8[:, :, ::1], '
-        'b1[::1], i8)')
-def _shape_pose(rotations, positions, f, link, offsets, turns, turned, i):
-    """World pose at frame ``f`` of shape i of the tables ``offsets``, ``turns``, ``turned``
-    (see :func:`_place_shapes`) on link row ``link``: its centre (3 values), then its
-    rotation row by row (9)."""
-    centre = (positions[f, link, 0] + (rotations[f, link, 0, 0] * offsets[i, 0]
-                                       + rotations[f, link, 0, 1] * offsets[i, 1]
-                                       + rotations[f, link, 0, 2] * offsets[i, 2]),
-              positions[f, link, 1] + (rotations[f, link, 1, 0] * offsets[i, 0]
-                                       + rotations[f, link, 1, 1] * offsets[i, 1]
-                                       + rotations[f, link, 1, 2] * offsets[i, 2]),
-              positions[f, link, 2] + (rotations[f, link, 2, 0] * offsets[i, 0]
-                                       + rotations[f, link, 2, 1] * offsets[i, 1]
-                                       + rotations[f, link, 2, 2] * offsets[i, 2]))
-    if not turned[i]:
-        return centre + (rotations[f, link, 0, 0], rotations[f, link, 0, 1],
-                         rotations[f, link, 0, 2], rotations[f, link, 1, 0],
-                         rotations[f, link, 1, 1], rotations[f, link, 1, 2],
-                         rotations[f, link, 2, 0], rotations[f, link, 2, 1],
-                         rotations[f, link, 2, 2])
-    return centre + (_turned(rotations, f, link, turns, i, 0, 0),
-                     _turned(rotations, f, link, turns, i, 0, 1),
-                     _turned(rotations, f, link, turns, i, 0, 2),
-                     _turned(rotations, f, link, turns, i, 1, 0),
-                     _turned(rotations, f, link, turns, i, 1, 1),
-                     _turned(rotations, f, link, turns, i, 1, 2),
-                     _turned(rotations, f, link, turns, i, 2, 0),
-                     _turned(rotations, f, link, turns, i, 2, 1),
-                     _turned(rotations, f, link, turns, i, 2, 2))
-
-
 @kernel('void(f8[:, :, :, :], f8[:, :, :], i8[::1], f8[:, ::1], f8[:, :, ::1], b1[::1], '
         'f8[:, :, :, ::1], f8[:, :, ::1])')
 def _place_shapes(rotations, positions, links, offsets, turns, turned, rotation, centre):
@@ -184,11 +145,19 @@ def _place_shapes(rotations, positions, links, offsets, turns, turned, rotation,
     frame), turned by ``turns[i]`` where ``turned[i]``."""
     for f in range(rotations.shape[0]):
         for i in range(links.shape[0]):
-            pose = _shape_pose(rotations, positions, f, links[i], offsets, turns, turned, i)
+            link = links[i]
             for r in range(3):
-                centre[f, i, r] = pose[r]
+                centre[f, i, r] = positions[f, link, r] + (
+                    rotations[f, link, r, 0] * offsets[i, 0]
+                    + rotations[f, link, r, 1] * offsets[i, 1]
+                    + rotations[f, link, r, 2] * offsets[i, 2])
                 for c in range(3):
-                    rotation[f, i, r, c] = pose[3 + 3 * r + c]
+                    if turned[i]:
+                        rotation[f, i, r, c] = (rotations[f, link, r, 0] * turns[i, 0, c]
+                                                + rotations[f, link, r, 1] * turns[i, 1, c]
+                                                + rotations[f, link, r, 2] * turns[i, 2, c])
+                    else:
+                        rotation[f, i, r, c] = rotations[f, link, r, c]
 
 
 @kernel('void(f8[:, :, :, ::1], f8[:, :, ::1], i8[::1], i8[::1], f8[:, ::1], f8[:, :, ::1], '
@@ -202,31 +171,41 @@ def _pose_shapes(rotations, positions, shapes, links, offsets, turns, turned, ki
     :meth:`BodyShapes.bounds` with the shapes' tables (``links`` ... ``halves``, one row per
     listed shape), the same arithmetic, in one pass."""
     k, n = rotations.shape[0], shapes.shape[0]
+    turn = np.empty((3, 3))
     for c in range(n):
         for e in range(3):
             swept_lower[shapes[c], e], swept_upper[shapes[c], e] = np.inf, -np.inf
     for f in range(k):  # frame by frame: the arrays are read and written in memory order
         for c in range(n):
-            s = shapes[c]
+            s, link = shapes[c], links[c]
             kind, half = kinds[c], halves[c]
-            pose = _shape_pose(rotations, positions, f, links[c], offsets, turns, turned, c)
+            # _place_shapes' arithmetic, then _extent's, written out here: as a shared helper
+            # called per shape (not inlined by numba) it made _place_shapes 3x slower.
             for r in range(3):
-                shape_centre[f, s, r] = pose[r]
+                shape_centre[f, s, r] = positions[f, link, r] + (
+                    rotations[f, link, r, 0] * offsets[c, 0]
+                    + rotations[f, link, r, 1] * offsets[c, 1]
+                    + rotations[f, link, r, 2] * offsets[c, 2])
                 for j in range(3):
-                    shape_rotation[f, s, r, j] = pose[3 + 3 * r + j]
+                    if turned[c]:
+                        turn[r, j] = (rotations[f, link, r, 0] * turns[c, 0, j]
+                                      + rotations[f, link, r, 1] * turns[c, 1, j]
+                                      + rotations[f, link, r, 2] * turns[c, 2, j])
+                    else:
+                        turn[r, j] = rotations[f, link, r, j]
+                    shape_rotation[f, s, r, j] = turn[r, j]
             for e in range(3):
-                # collision._extent's arithmetic.
                 if kind == 0:
-                    extent = (abs(pose[3 + 3 * e]) * half[0] + abs(pose[4 + 3 * e]) * half[1]
-                              + abs(pose[5 + 3 * e]) * half[2])
+                    extent = (abs(turn[e, 0]) * half[0] + abs(turn[e, 1]) * half[1]
+                              + abs(turn[e, 2]) * half[2])
                 elif kind == 1:
-                    along = abs(pose[5 + 3 * e])
+                    along = abs(turn[e, 2])
                     extent = (half[0] * math.sqrt(min(max(1.0 - along * along, 0.0), 1.0))
                               + half[1] * along)
                 else:
                     extent = half[0]
-                low = pose[e] - extent
-                high = pose[e] + extent
+                low = shape_centre[f, s, e] - extent
+                high = shape_centre[f, s, e] + extent
                 shape_lower[f, s, e] = low
                 shape_upper[f, s, e] = high
                 if low < swept_lower[s, e]:
