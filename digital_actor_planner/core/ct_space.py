@@ -160,60 +160,6 @@ def _place_shapes(rotations, positions, links, offsets, turns, turned, rotation,
                         rotation[f, i, r, c] = rotations[f, link, r, c]
 
 
-@kernel('void(f8[:, :, :, ::1], f8[:, :, ::1], i8[::1], i8[::1], f8[:, ::1], f8[:, :, ::1], '
-        'b1[::1], i8[::1], f8[:, ::1], f8[:, :, :, ::1], f8[:, :, ::1], f8[:, :, ::1], '
-        'f8[:, :, ::1], f8[:, ::1], f8[:, ::1])')
-def _pose_shapes(rotations, positions, shapes, links, offsets, turns, turned, kinds, halves,
-                 shape_rotation, shape_centre, shape_lower, shape_upper, swept_lower,
-                 swept_upper):
-    """World poses, boxes and boxes swept over the frames of the body's ``shapes`` (n,), in
-    place in the (k, S, ...) and (S, 3) arrays: :meth:`BodyShapes.poses` and
-    :meth:`BodyShapes.bounds` with the shapes' tables (``links`` ... ``halves``, one row per
-    listed shape), the same arithmetic, in one pass."""
-    k, n = rotations.shape[0], shapes.shape[0]
-    turn = np.empty((3, 3))
-    for c in range(n):
-        for e in range(3):
-            swept_lower[shapes[c], e], swept_upper[shapes[c], e] = np.inf, -np.inf
-    for f in range(k):  # frame by frame: the arrays are read and written in memory order
-        for c in range(n):
-            s, link = shapes[c], links[c]
-            kind, half = kinds[c], halves[c]
-            # _place_shapes' arithmetic, then _extent's, written out here: as a shared helper
-            # called per shape (not inlined by numba) it made _place_shapes 3x slower.
-            for r in range(3):
-                shape_centre[f, s, r] = positions[f, link, r] + (
-                    rotations[f, link, r, 0] * offsets[c, 0]
-                    + rotations[f, link, r, 1] * offsets[c, 1]
-                    + rotations[f, link, r, 2] * offsets[c, 2])
-                for j in range(3):
-                    if turned[c]:
-                        turn[r, j] = (rotations[f, link, r, 0] * turns[c, 0, j]
-                                      + rotations[f, link, r, 1] * turns[c, 1, j]
-                                      + rotations[f, link, r, 2] * turns[c, 2, j])
-                    else:
-                        turn[r, j] = rotations[f, link, r, j]
-                    shape_rotation[f, s, r, j] = turn[r, j]
-            for e in range(3):
-                if kind == 0:
-                    extent = (abs(turn[e, 0]) * half[0] + abs(turn[e, 1]) * half[1]
-                              + abs(turn[e, 2]) * half[2])
-                elif kind == 1:
-                    along = abs(turn[e, 2])
-                    extent = (half[0] * math.sqrt(min(max(1.0 - along * along, 0.0), 1.0))
-                              + half[1] * along)
-                else:
-                    extent = half[0]
-                low = shape_centre[f, s, e] - extent
-                high = shape_centre[f, s, e] + extent
-                shape_lower[f, s, e] = low
-                shape_upper[f, s, e] = high
-                if low < swept_lower[s, e]:
-                    swept_lower[s, e] = low
-                if high > swept_upper[s, e]:
-                    swept_upper[s, e] = high
-
-
 # numba types of a step table (_step_table's arrays, in order), as _link_poses takes them.
 _STEP_TABLE_TYPES = ('i8[::1], i8[::1], f8[:, :, ::1], b1[::1], f8[:, ::1], i8[::1], f8[::1], '
                      'b1[::1], i8[::1], i8[::1], i8[::1], f8[::1], f8[:, ::1]')
@@ -415,6 +361,28 @@ def _box_triangle_apart(rotation, centre, half, corners, margin):
                                      margin))
 
 
+@kernel('b1(i8, f8[:], f8[:], f8[:, :], f8[:], f8[:, :], f8)')
+def _touches_triangle(kind, half, box_half, rotation, centre, corners, margin):
+    """Whether a shape (kind code, padded ``half`` extents, its box's ``box_half``, posed at
+    ``rotation``, ``centre``) touches a triangle (``corners`` (3, 3)): the separating axis
+    test of the box holding the shape (``margin`` apart), then the exact test."""
+    # A shape's corners are not read: the triangle's stand in for them.
+    return (not _box_triangle_apart(rotation, centre, box_half, corners, margin)
+            and touching(kind, half, rotation, centre, corners, TRIANGLE, half, rotation,
+                         centre, corners))
+
+
+@kernel('b1(i8, f8[:], f8[:], f8[:, :], f8[:], i8, f8[:], f8[:], f8[:, :], f8[:], f8)')
+def _touches_shape(kind_a, half_a, box_a, rotation_a, centre_a, kind_b, half_b, box_b,
+                   rotation_b, centre_b, margin):
+    """Whether two shapes (as in :func:`_touches_triangle`) touch: the separating axis test
+    of their boxes, then the exact test."""
+    # A shape's corners are not read: its rotation stands in for them.
+    return (not _boxes_apart(rotation_a, centre_a, box_a, rotation_b, centre_b, box_b, margin)
+            and touching(kind_a, half_a, rotation_a, centre_a, rotation_a, kind_b, half_b,
+                         rotation_b, centre_b, rotation_b))
+
+
 @kernel('b1[::1](f8[:, :, ::1], f8[:, :, ::1], f8[:, :], f8[:, :], b1, i8[::1], i8[::1], '
         'f8[:, :, ::1], f8[:, :, ::1], f8[:, :, :, ::1], f8[:, :, ::1], f8[:, ::1], '
         'f8[:, :, :], f8[:, :, :, :], f8[:, :, :], f8[:, :], f8, i8[::1], f8[:, :], i8[::1], '
@@ -438,7 +406,6 @@ def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pa
     m, n, count = low.shape[0], low.shape[1], triangle_lower.shape[0]
     pairs = pair_column.shape[0]
     hit = np.zeros(m, dtype=np.bool_)
-    no_corners = np.zeros((3, 3))
     candidates = np.empty(count, dtype=np.int64)
     lowest, highest = np.empty(3), np.empty(3)
     for c in range(n):
@@ -474,11 +441,9 @@ def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pa
                             and low[r, c, axis] <= triangle_upper[t, axis]):
                         meets = False
                         break
-                if (meets and not _box_triangle_apart(rotation[r, c], centre[r, c], half[c],
-                                                      corners[t], margin)
-                        and touching(kinds[c], shape_half[c], rotation[r, c], centre[r, c],
-                                     no_corners, TRIANGLE, shape_half[c], rotation[r, c],
-                                     centre[r, c], corners[t])):
+                if meets and _touches_triangle(kinds[c], shape_half[c], half[c],
+                                               rotation[r, c], centre[r, c], corners[t],
+                                               margin):
                     hit[r] = True
                     break
     for r in range(m):
@@ -493,12 +458,10 @@ def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pa
                         and low[r, c, axis] <= pair_upper[f, o, axis]):
                     meets = False
                     break
-            if (meets and not _boxes_apart(rotation[r, c], centre[r, c], half[c],
-                                           pair_rotation[f, o], pair_centre[f, o],
-                                           pair_half[p], margin)
-                    and touching(kinds[c], shape_half[c], rotation[r, c], centre[r, c],
-                                 no_corners, pair_kinds[p], pair_shape_half[p],
-                                 pair_rotation[f, o], pair_centre[f, o], no_corners)):
+            if meets and _touches_shape(kinds[c], shape_half[c], half[c], rotation[r, c],
+                                        centre[r, c], pair_kinds[p], pair_shape_half[p],
+                                        pair_half[p], pair_rotation[f, o], pair_centre[f, o],
+                                        margin):
                 hit[r] = True
                 break
     return hit
@@ -524,7 +487,6 @@ def _first_contacts(frames, checked, group, count, shape_lower, shape_upper, sha
     """
     m, n, count_pairs = frames.shape[0], checked.shape[0], pairs.shape[0]
     found = np.full(count, -1, dtype=np.int64)
-    no_corners = np.zeros((3, 3))
     # Per checked shape, the triangles its box swept over the frames meets.
     starts = np.zeros(n + 1, dtype=np.int64)
     candidates = np.empty(n * near.shape[0], dtype=np.int64)
@@ -574,11 +536,9 @@ def _first_contacts(frames, checked, group, count, shape_lower, shape_upper, sha
                             and shape_lower[f, s, axis] <= triangle_upper[t, axis]):
                         meets = False
                         break
-                if (meets and not _box_triangle_apart(shape_rotation[f, s], shape_centre[f, s],
-                                                      box_half[s], corners[t], margin)
-                        and touching(kinds[s], halves[s], shape_rotation[f, s],
-                                     shape_centre[f, s], no_corners, TRIANGLE, halves[s],
-                                     shape_rotation[f, s], shape_centre[f, s], corners[t])):
+                if meets and _touches_triangle(kinds[s], halves[s], box_half[s],
+                                               shape_rotation[f, s], shape_centre[f, s],
+                                               corners[t], margin):
                     found[g] = f
                     left -= 1
                     break
@@ -595,12 +555,9 @@ def _first_contacts(frames, checked, group, count, shape_lower, shape_upper, sha
                         and shape_lower[f, a, axis] <= shape_upper[f, b, axis]):
                     meets = False
                     break
-            if (meets and not _boxes_apart(shape_rotation[f, a], shape_centre[f, a],
-                                           box_half[a], shape_rotation[f, b],
-                                           shape_centre[f, b], box_half[b], margin)
-                    and touching(kinds[a], halves[a], shape_rotation[f, a], shape_centre[f, a],
-                                 no_corners, kinds[b], halves[b], shape_rotation[f, b],
-                                 shape_centre[f, b], no_corners)):
+            if meets and _touches_shape(kinds[a], halves[a], box_half[a], shape_rotation[f, a],
+                                        shape_centre[f, a], kinds[b], halves[b], box_half[b],
+                                        shape_rotation[f, b], shape_centre[f, b], margin):
                 found[g] = f
                 left -= 1
         if left == 0:
@@ -993,8 +950,7 @@ class BodyShapes:
         self._tree_distance = self._link_tree_distances()
         #: Per branch CT-space, the data that depends on the model only (built once).
         self.branch_layouts: Dict[tuple, tuple] = {}
-        # Per set of shapes, the tables place() poses them with; per set of links, its shapes.
-        self._place_tables: Dict[tuple, tuple] = {}
+        # Per set of links, the shapes on them (see TimedBody.set_branch).
         self._link_shapes: Dict[frozenset, np.ndarray] = {}
 
     def _link_tree_distances(self) -> np.ndarray:
@@ -1034,23 +990,6 @@ class BodyShapes:
         a, b = a.ravel(), b.ravel()
         keep = self._tree_distance[self.link[a], self.link[b]] > ADJACENT_JOINTS
         return np.stack([a[keep], b[keep]], axis=1)
-
-    def place(self, shapes: np.ndarray, rotations: np.ndarray, positions: np.ndarray,
-              body: 'TimedBody') -> None:
-        """Pose the ``shapes`` (n,) int64 on links posed at ``rotations`` (k, L, 3, 3) and
-        ``positions`` (k, L, 3): their poses, boxes and swept boxes written into ``body``'s
-        arrays (:func:`_pose_shapes`; :meth:`poses` and :meth:`bounds`, the same numbers)."""
-        key = tuple(shapes.tolist())
-        table = self._place_tables.get(key)
-        if table is None:
-            table = self._place_tables[key] = (
-                shapes, self.link[shapes].astype(np.int64),
-                np.ascontiguousarray(self.origin_translation[shapes]),
-                np.ascontiguousarray(self.origin_rotation[shapes]),
-                ~self.identity_origin[shapes], self.kind_code[shapes],
-                np.ascontiguousarray(self.half[shapes]))
-        _pose_shapes(rotations, positions, *table, body.shape_rotation, body.shape_centre,
-                     body.shape_lower, body.shape_upper, body.swept_lower, body.swept_upper)
 
     def poses(self, rotations: np.ndarray, positions: np.ndarray,
               shapes: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
@@ -1209,17 +1148,16 @@ class TimedBody:
         return self._near
 
     def _shape_poses(self) -> None:
-        k, count = len(self.frames), len(self.shapes.kind)
+        shapes = self.shapes
+        every = np.arange(len(shapes.kind))
         #: (k, S, 3, 3), (k, S, 3) world poses and (k, S, 3) box corners of every shape.
-        self.shape_rotation = np.empty((k, count, 3, 3))
-        self.shape_centre = np.empty((k, count, 3))
-        self.shape_lower = np.empty((k, count, 3))
-        self.shape_upper = np.empty((k, count, 3))
+        self.shape_rotation, self.shape_centre = shapes.poses(self.rotations, self.positions,
+                                                              every)
+        self.shape_lower, self.shape_upper = shapes.bounds(self.shape_rotation,
+                                                           self.shape_centre, every)
         #: (S, 3) box corners of every shape swept over the step, m.
-        self.swept_lower = np.empty((count, 3))
-        self.swept_upper = np.empty((count, 3))
-        self.shapes.place(np.arange(count, dtype=np.int64), self.rotations, self.positions,
-                          self)
+        self.swept_lower = self.shape_lower.min(axis=0)
+        self.swept_upper = self.shape_upper.max(axis=0)
 
     def first_collision(self, checked: np.ndarray, pairs: np.ndarray,
                         frames: Optional[np.ndarray] = None) -> int:
@@ -1299,9 +1237,14 @@ class TimedBody:
         links = frozenset(step.child for step in steps)
         moved = self.shapes._link_shapes.get(links)
         if moved is None:
-            moved = self.shapes._link_shapes[links] = self.shapes.shapes_of_links(
-                links).astype(np.int64)
-        self.shapes.place(moved, self.rotations, self.positions, self)
+            moved = self.shapes._link_shapes[links] = self.shapes.shapes_of_links(links)
+        rotation, centre = self.shapes.poses(self.rotations, self.positions, moved)
+        lower, upper = self.shapes.bounds(rotation, centre, moved)
+        self.shape_rotation[:, moved] = rotation
+        self.shape_centre[:, moved] = centre
+        self.shape_lower[:, moved], self.shape_upper[:, moved] = lower, upper
+        self.swept_lower[moved] = lower.min(axis=0)
+        self.swept_upper[moved] = upper.max(axis=0)
 
 
 def _same_motion(a: tuple, b: tuple) -> bool:
