@@ -1000,7 +1000,7 @@ class BodyShapes:
         """Narrow phase: does shape ``shape`` posed at (rotation, centre) touch ``other``?"""
         obj = self.objects[shape]
         obj.setTransform(fcl.Transform(rotation, centre))
-        # The contact count says it (see CTSpace._narrow_phase); one result serves every call.
+        # The contact count says it (see CTSpace._in_contact); one result serves every call.
         if fcl.collide(obj, other, self._request, self._result):
             del self._result.contacts[:]
             return True
@@ -1438,7 +1438,7 @@ class CTSpace:
                             body.shape_lower, body.shape_upper) + model.shape_tables
         self._prepare_environment()
         self.checks = 0
-        # A motion whose broad phase ran ahead (see best_valid_rows), or None.
+        # A motion whose check ran ahead (see best_valid_rows), or None.
         self._prefetched: Optional[tuple] = None
 
     def _prepare_environment(self) -> None:
@@ -1545,11 +1545,11 @@ class CTSpace:
         failures: List[int] = []
         prefetched, self._prefetched = self._prefetched, None
         if goals and prefetched is not None and _same_motion(prefetched[0], (a, goals[0])):
-            # The first goal's broad phase ran with the neighbours' (best_valid_rows).
+            # The first goal was checked with the neighbours (best_valid_rows).
             _, _, late, frames, inside, broad = prefetched
             bad = -1
             for row in _watched_rows(inside, broad):
-                if not inside[row] or self._narrow_phase(row, frames[row], broad):
+                if not inside[row] or self._in_contact(row, frames[row], broad):
                     bad = int(frames[row])
                     break
             if bad < 0 and late >= 0:
@@ -1599,7 +1599,7 @@ class CTSpace:
 
     def rows_and_path(self, q: np.ndarray, frames: np.ndarray,
                       waypoints: Sequence[Tuple[np.ndarray, int]]) -> Tuple[np.ndarray, int]:
-        """:meth:`valid_rows` of a batch and :meth:`first_invalid_path`, in one broad phase.
+        """:meth:`valid_rows` of a batch and :meth:`first_invalid_path`, in one batch.
 
         Returns
         -------
@@ -1619,7 +1619,7 @@ class CTSpace:
         self.checks += len(rows)
         illegal = ~self.within_bounds(rows)
         if len(rows):
-            illegal |= self._broad_phase(rows, np.concatenate([frames, path_frames]))[2]
+            illegal |= self._batch_contacts(rows, np.concatenate([frames, path_frames]))[2]
         legal = ~illegal[:m]
         for (begin, end), late in zip(segments, early):
             along = np.flatnonzero(illegal[m + begin:m + end])
@@ -1694,10 +1694,10 @@ class CTSpace:
         if not m:
             return np.zeros(0, dtype=bool)
         legal = self.within_bounds(q)
-        broad = self._broad_phase(q, frames)
+        broad = self._batch_contacts(q, frames)
         # Only rows in contact are illegal within the limits.
         for row in broad[0]:
-            if legal[row] and self._narrow_phase(row, frames[row], broad):
+            if legal[row] and self._in_contact(row, frames[row], broad):
                 legal[row] = False
         return legal
 
@@ -1746,7 +1746,7 @@ class CTSpace:
                 q = np.concatenate([q, rows])
                 frames = np.concatenate([frames, extra[3]])
         self.checks += len(frames)
-        answers = self._broad_phase(q, frames)
+        answers = self._batch_contacts(q, frames)
         if extra is not None:
             # The motion's rows as a batch of their own (rows numbered from 0).
             own = ([row - m for row in answers[0] if row >= m], answers[1][m:],
@@ -1758,11 +1758,11 @@ class CTSpace:
             if found >= count:
                 break
             checked.add(row)
-            legal[row] = inside[row] and not self._narrow_phase(row, frames[row], answers)
+            legal[row] = inside[row] and not self._in_contact(row, frames[row], answers)
             found += int(legal[row])
         for row in also:
             if row not in checked:
-                legal[row] = inside[row] and not self._narrow_phase(row, frames[row], answers)
+                legal[row] = inside[row] and not self._in_contact(row, frames[row], answers)
         return legal
 
     def _check_segments(self, q: np.ndarray, frames: np.ndarray,
@@ -1780,14 +1780,14 @@ class CTSpace:
         watch: List[int] = []
         if m:
             inside = self.within_bounds(q)
-            answers = self._broad_phase(q, frames)
+            answers = self._batch_contacts(q, frames)
             watch = _watched_rows(inside, answers)
         for (begin, end), late in zip(segments, early):
             bad = -1
             for row in watch[bisect.bisect_left(watch, begin):]:
                 if row >= end:
                     break
-                if not inside[row] or self._narrow_phase(row, frames[row], answers):
+                if not inside[row] or self._in_contact(row, frames[row], answers):
                     bad = int(frames[row])
                     break
             if bad < 0 and late >= 0:
@@ -1817,14 +1817,14 @@ class CTSpace:
                     wave.append((i, position[i], min(position[i] + size, segments[i][1])))
             rows = np.concatenate([np.arange(begin, end) for _, begin, end in wave])
             self.checks += len(rows)
-            answers = self._broad_phase(q[rows], frames[rows]) if len(rows) else None
+            answers = self._batch_contacts(q[rows], frames[rows]) if len(rows) else None
             watch = _watched_rows(inside[rows], answers) if len(rows) else []
             local = 0
             for i, begin, end in wave:
                 for row in watch[bisect.bisect_left(watch, local):]:
                     if row >= local + end - begin:
                         break
-                    if not inside[begin + row - local] or self._narrow_phase(
+                    if not inside[begin + row - local] or self._in_contact(
                             row, frames[begin + row - local], answers):
                         results[i] = int(frames[begin + row - local])
                         break
@@ -1860,13 +1860,13 @@ class CTSpace:
                       centre, low, high, *self._chain.step_table)
         return rotation, centre, low, high
 
-    def _broad_phase(self, q: np.ndarray, frames: np.ndarray) -> tuple:
+    def _batch_contacts(self, q: np.ndarray, frames: np.ndarray) -> tuple:
         """Which rows of a batch touch the environment or the body, all rows at once.
 
         The broad phase (boxes, the separating axis test) and the exact test of the shapes it
         leaves, in one kernel (:func:`_row_collisions`). Returns (the rows in contact, in
         increasing order; per row whether it is in contact, as a list, what
-        :meth:`_narrow_phase` reads, and as an (m,) bool array).
+        :meth:`_in_contact` reads, and as an (m,) bool array).
         """
         frames = frames.astype(np.int64, copy=False)  # the kernels' index type, once
         rotation, centre, low, high = self._shape_boxes(q, frames)
@@ -1886,6 +1886,6 @@ class CTSpace:
         return np.flatnonzero(colliding).tolist(), colliding.tolist(), colliding
 
     @staticmethod
-    def _narrow_phase(row: int, frame: int, broad: tuple) -> bool:
-        """Whether a row of a batch touches anything (its answer from :meth:`_broad_phase`)."""
+    def _in_contact(row: int, frame: int, broad: tuple) -> bool:
+        """Whether a row of a batch touches anything (its answer from :meth:`_batch_contacts`)."""
         return broad[1][row]
