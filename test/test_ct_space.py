@@ -443,24 +443,6 @@ def test_fixing_a_branch_moves_the_body_as_if_built_with_it(skeleton):
             assert np.allclose(getattr(body, name), getattr(fresh, name), atol=1e-12), name
 
 
-def test_body_poses_are_those_of_its_shapes_posed_one_by_one(skeleton):
-    # TimedBody poses and boxes every shape in one kernel; BodyShapes.poses and .bounds are
-    # the reference, bit for bit, and the swept boxes hold every frame's box.
-    environment = Environment([box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0])], resolution=0.05)
-    times, frames = walk(skeleton, 30)
-    frames += np.random.default_rng(5).normal(0.0, 0.2, frames.shape)
-    body = timed_body(skeleton, environment, frames, padding=0.01)
-    every = np.arange(len(body.shapes.kind))
-    rotation, centre = body.shapes.poses(body.rotations, body.positions, every)
-    lower, upper = body.shapes.bounds(rotation, centre, every)
-    assert np.array_equal(body.shape_rotation, rotation)
-    assert np.array_equal(body.shape_centre, centre)
-    assert np.array_equal(body.shape_lower, lower)
-    assert np.array_equal(body.shape_upper, upper)
-    assert np.array_equal(body.swept_lower, lower.min(axis=0))
-    assert np.array_equal(body.swept_upper, upper.max(axis=0))
-
-
 def test_first_collisions_per_group_agree_with_every_pair_checked_frame_by_frame(skeleton):
     # The upper body swings close to a bumpy table, a beam and its own legs: the one-batch
     # check (compiled broad phase and separating axis cut, FCL after) must find, per group of
