@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from digital_actor_planner.core import ct_space
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.ct_space import (
     BodyKinematics, BodyShapes, CTSpace, EnvironmentIndex, TimedBody)
@@ -146,7 +147,6 @@ def test_motion_through_an_obstacle_is_invalid_though_its_ends_are_legal(beam_wo
 def test_motion_rows_are_the_interpolated_motion_up_to_its_first_speed_violation(beam_world):
     # _motion_rows is one kernel (_motion_path); the reference is motion_frames and a NumPy
     # speed check over the whole motion: the same numbers to the last bit.
-    from digital_actor_planner.core import ct_space
     space, _, _ = beam_world
     rng = np.random.default_rng(6)
     late_seen = set()
@@ -372,7 +372,6 @@ def test_separating_axis_tests_never_part_shapes_that_fcl_finds_touching(skeleto
     # The broad phase skips FCL for a pair whose oriented boxes are apart by more than
     # SAT_MARGIN: every shape kind of the actor (box, cylinder, sphere, padded) against the
     # others and against triangles, posed at random, often touching.
-    from digital_actor_planner.core import ct_space
     shapes = BodyShapes(skeleton, padding=0.01)
     rng = np.random.default_rng(12)
     request, result = fcl.CollisionRequest(), fcl.CollisionResult()
@@ -438,9 +437,49 @@ def test_fixing_a_branch_moves_the_body_as_if_built_with_it(skeleton):
         body.set_branch(skeleton.branch(branch), values, first.steps)
         frames[:, skeleton.branch(branch)] = values
         fresh = timed_body(skeleton, environment, frames)
-        for name in ('rotations', 'positions', 'shape_rotation', 'shape_centre', 'shape_lower',
-                     'shape_upper', 'swept_lower', 'swept_upper'):
-            assert np.allclose(getattr(body, name), getattr(fresh, name), atol=1e-12), name
+        for name in ('frames', 'rotations', 'positions', 'shape_rotation', 'shape_centre',
+                     'shape_lower', 'shape_upper', 'swept_lower', 'swept_upper'):
+            # Bit for bit: the plans after a branch depend on these numbers.
+            assert getattr(body, name).tobytes() == getattr(fresh, name).tobytes(), name
+        # Fixing the branch again at the same values changes nothing.
+        before = body.shape_lower.copy()
+        body.shape_lower[:] = np.nan
+        body.set_branch(skeleton.branch(branch), values, first.steps)
+        assert np.isnan(body.shape_lower).all()
+        body.shape_lower[:] = before
+
+
+def test_the_body_poses_every_shape_as_the_shape_model_does(skeleton):
+    """TimedBody's shape poses and boxes, written in place by one kernel, are those of
+    BodyShapes.poses and .bounds, and its swept boxes their extremes over the frames."""
+    environment = Environment([box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0])], resolution=0.05)
+    _, frames = walk(skeleton, 30)
+    frames[:, skeleton.branch('left_arm')] += np.linspace(-0.5, 0.5, 30)[:, None]
+    body = timed_body(skeleton, environment, frames)
+    every = np.arange(len(body.shapes.kind))
+    rotation, centre = body.shapes.poses(body.rotations, body.positions, every)
+    lower, upper = body.shapes.bounds(rotation, centre, every)
+    for name, expected in (('shape_rotation', rotation), ('shape_centre', centre),
+                           ('shape_lower', lower), ('shape_upper', upper),
+                           ('swept_lower', lower.min(axis=0)),
+                           ('swept_upper', upper.max(axis=0))):
+        assert getattr(body, name).tobytes() == expected.tobytes(), name
+
+
+@pytest.mark.parametrize('kernel', [ct_space._write_columns, ct_space._write_columns.py_func])
+def test_writing_a_branch_into_the_frames_says_whether_anything_changed(kernel):
+    frames = np.arange(12.0).reshape(4, 3)
+    columns = np.array([2, 0])
+    assert not kernel(frames, columns, frames[:, [2, 0]].copy())
+    values = frames[:, [2, 0]].copy()
+    values[3, 1] = -1.0
+    assert kernel(frames, columns, values)
+    assert np.array_equal(frames[:, [2, 0]], values)
+    assert np.array_equal(frames[:, 1], [1, 4, 7, 10])
+    # As np.array_equal: a NaN never equals itself, so it is written again.
+    values[0, 0] = np.nan
+    assert kernel(frames, columns, values)
+    assert kernel(frames, columns, values) and np.isnan(frames[0, 2])
 
 
 def test_first_collisions_per_group_agree_with_every_pair_checked_frame_by_frame(skeleton):

@@ -62,7 +62,8 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    upper_body._within_limits_kernel, ct_space._box_within,
                    upper_body._input_sound, ct_space._column_dots, ct_space._triangle_apart_along,
                    convex._middle, ct_roadmap._travel,
-                   ct_space._candidates_meeting):
+                   ct_space._candidates_meeting, ct_space._turn_entry,
+                   ct_space._pose_shapes_into, ct_space._write_columns):
         assert kernel.py_func is not kernel
 
 

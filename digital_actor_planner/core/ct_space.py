@@ -61,6 +61,18 @@ def _axis_code(axis: np.ndarray) -> Tuple[int, float]:
     return -1, 0.0
 
 
+@kernel('f8(i8, i8, i8, f8, f8)')
+def _turn_entry(coordinate, row, col, cos, sin):
+    """Entry (row, col) of the rotation by an angle (its ``cos``, ``sin``) about coordinate
+    axis ``coordinate``: 1 on the axis, 0 off it in its row and column, cos on the diagonal,
+    sin at (a + 1, a) and -sin at (a, a + 1) of the other two axes a, a + 1 (mod 3)."""
+    if row == coordinate or col == coordinate:
+        return 1.0 if row == col else 0.0
+    if row == col:
+        return cos
+    return sin if row == (coordinate + 2) % 3 else -sin
+
+
 @kernel('void(f8[:, :], f8[:, :, :, :], f8[:, :, :], i8[::1], i8[::1], f8[:, :, ::1], '
         'b1[::1], f8[:, ::1], i8[::1], f8[::1], b1[::1], i8[::1], i8[::1], i8[::1], f8[::1], '
         'f8[:, ::1])')
@@ -90,15 +102,20 @@ def _link_poses(q, rotations, positions, parent, child, origin_rotation, turned,
                 else:
                     shift = 0.0
                 positions[f, c, r] = positions[f, p, r] + shift
-                for col in range(3):
-                    if turned[i]:
+            if turned[i]:
+                for r in range(3):
+                    for col in range(3):
                         base[r, col] = (rotations[f, p, r, 0] * origin_rotation[i, 0, col]
                                         + rotations[f, p, r, 1] * origin_rotation[i, 1, col]
                                         + rotations[f, p, r, 2] * origin_rotation[i, 2, col])
-                    else:
+            else:
+                for r in range(3):
+                    for col in range(3):
                         base[r, col] = rotations[f, p, r, col]
             if joint[i] < 0 or kind[i] == 2:
-                rotations[f, c] = base
+                for r in range(3):
+                    for col in range(3):
+                        rotations[f, c, r, col] = base[r, col]
                 if joint[i] >= 0:
                     value = q[f, joint[i]]
                     for r in range(3):
@@ -109,27 +126,28 @@ def _link_poses(q, rotations, positions, parent, child, origin_rotation, turned,
                                      + base[r, 2] * axis[i, 2])
                         positions[f, c, r] += along * value
                 continue
-            # A revolute joint: about a coordinate axis the rotation mixes two columns.
-            if axis_coordinate[i] >= 0:
+            coordinate = axis_coordinate[i]
+            if coordinate >= 0:
+                # A revolute joint about a coordinate axis: the product with its rotation
+                # matrix, entry by entry (the same sums as with the matrix written out).
                 angle = q[f, joint[i]] * axis_sign[i]
                 cos, sin = math.cos(angle), math.sin(angle)
-                a, b = (axis_coordinate[i] + 1) % 3, (axis_coordinate[i] + 2) % 3
-                turn[:, :] = 0.0
-                turn[axis_coordinate[i], axis_coordinate[i]] = 1.0
-                turn[a, a] = cos
-                turn[b, b] = cos
-                turn[b, a] = sin
-                turn[a, b] = -sin
-            else:
-                x, y, z = axis[i, 0], axis[i, 1], axis[i, 2]
-                cos, sin = math.cos(q[f, joint[i]]), math.sin(q[f, joint[i]])
-                t = 1.0 - cos
-                turn[0, 0], turn[0, 1], turn[0, 2] = t * x * x + cos, t * x * y - sin * z, \
-                    t * x * z + sin * y
-                turn[1, 0], turn[1, 1], turn[1, 2] = t * x * y + sin * z, t * y * y + cos, \
-                    t * y * z - sin * x
-                turn[2, 0], turn[2, 1], turn[2, 2] = t * x * z - sin * y, t * y * z + sin * x, \
-                    t * z * z + cos
+                for r in range(3):
+                    for col in range(3):
+                        rotations[f, c, r, col] = (
+                            base[r, 0] * _turn_entry(coordinate, 0, col, cos, sin)
+                            + base[r, 1] * _turn_entry(coordinate, 1, col, cos, sin)
+                            + base[r, 2] * _turn_entry(coordinate, 2, col, cos, sin))
+                continue
+            x, y, z = axis[i, 0], axis[i, 1], axis[i, 2]
+            cos, sin = math.cos(q[f, joint[i]]), math.sin(q[f, joint[i]])
+            t = 1.0 - cos
+            turn[0, 0], turn[0, 1], turn[0, 2] = t * x * x + cos, t * x * y - sin * z, \
+                t * x * z + sin * y
+            turn[1, 0], turn[1, 1], turn[1, 2] = t * x * y + sin * z, t * y * y + cos, \
+                t * y * z - sin * x
+            turn[2, 0], turn[2, 1], turn[2, 2] = t * x * z - sin * y, t * y * z + sin * x, \
+                t * z * z + cos
             for r in range(3):
                 for col in range(3):
                     rotations[f, c, r, col] = (base[r, 0] * turn[0, col]
@@ -158,6 +176,58 @@ def _place_shapes(rotations, positions, links, offsets, turns, turned, rotation,
                                                 + rotations[f, link, r, 2] * turns[i, 2, c])
                     else:
                         rotation[f, i, r, c] = rotations[f, link, r, c]
+
+
+@kernel('void(f8[:, :, :, :], f8[:, :, :], i8[::1], f8[:, ::1], f8[:, :, ::1], b1[::1], '
+        'i8[::1], f8[:, ::1], i8[::1], f8[:, :, :, ::1], f8[:, :, ::1], f8[:, :, ::1], '
+        'f8[:, :, ::1], f8[:, ::1], f8[:, ::1])')
+def _pose_shapes_into(rotations, positions, links, offsets, turns, turned, kinds, halves,
+                      slots, shape_rotation, shape_centre, shape_lower, shape_upper,
+                      swept_lower, swept_upper):
+    """:meth:`BodyShapes.poses` and :meth:`BodyShapes.bounds` of some shapes (their links,
+    origins, kind codes and half extents; one row each) written in place at their ``slots``
+    of a body's (k, S, ...) pose and box arrays, and their boxes swept over the k frames into
+    ``swept_lower``/``swept_upper`` (S, 3): the same kernels and arithmetic, without the
+    copies of scattering the results from Python."""
+    k, n = rotations.shape[0], links.shape[0]
+    rotation = np.empty((k, n, 3, 3))
+    centre = np.empty((k, n, 3))
+    _place_shapes(rotations, positions, links, offsets, turns, turned, rotation, centre)
+    extent = _half_extents(kinds, halves, rotation)
+    for i in range(n):
+        s = slots[i]
+        for e in range(3):
+            swept_lower[s, e] = np.inf
+            swept_upper[s, e] = -np.inf
+    for f in range(k):
+        for i in range(n):
+            s = slots[i]
+            shape_rotation[f, s] = rotation[f, i]
+            for e in range(3):
+                low = centre[f, i, e] - extent[f, i, e]
+                high = centre[f, i, e] + extent[f, i, e]
+                shape_centre[f, s, e] = centre[f, i, e]
+                shape_lower[f, s, e] = low
+                shape_upper[f, s, e] = high
+                swept_lower[s, e] = min(swept_lower[s, e], low)
+                swept_upper[s, e] = max(swept_upper[s, e], high)
+
+
+@kernel('b1(f8[:, ::1], i8[::1], f8[:, :])')
+def _write_columns(frames, indices, values):
+    """Write ``values`` (k, d) into the ``indices`` columns of ``frames`` (k, n); False (and
+    nothing written) when they already hold them (as ``np.array_equal``: a NaN differs)."""
+    same = True
+    for f in range(values.shape[0]):
+        for j in range(indices.shape[0]):
+            if not frames[f, indices[j]] == values[f, j]:
+                same = False
+    if same:
+        return False
+    for f in range(values.shape[0]):
+        for j in range(indices.shape[0]):
+            frames[f, indices[j]] = values[f, j]
+    return True
 
 
 # numba types of a step table (_step_table's arrays, in order), as _link_poses takes them.
@@ -936,8 +1006,10 @@ class BodyShapes:
         self._tree_distance = self._link_tree_distances()
         #: Per branch CT-space, the data that depends on the model only (built once).
         self.branch_layouts: Dict[tuple, tuple] = {}
-        # Per set of links, the shapes on them (see TimedBody.set_branch).
-        self._link_shapes: Dict[frozenset, np.ndarray] = {}
+        # Per set of links, the shape table of the shapes on them (see TimedBody.set_branch).
+        self._link_shapes: Dict[frozenset, tuple] = {}
+        #: The shape table of every shape (TimedBody's poses).
+        self.every_table = self.shape_table(np.arange(len(shapes)))
 
     def _link_tree_distances(self) -> np.ndarray:
         names = self.skeleton.link_names
@@ -987,6 +1059,15 @@ class BodyShapes:
                       self.origin_rotation[shapes], ~self.identity_origin[shapes], rotation,
                       centre)
         return rotation, centre
+
+    def shape_table(self, shapes: np.ndarray) -> tuple:
+        """What :func:`_pose_shapes_into` reads of some shapes (kept per set of shapes by the
+        caller): (links, origin translations, origin rotations, whether turned, kind codes,
+        half extents, the shapes' indices)."""
+        shapes = np.asarray(shapes, dtype=np.int64)
+        return (self.link[shapes], self.origin_translation[shapes],
+                self.origin_rotation[shapes], ~self.identity_origin[shapes],
+                self.kind_code[shapes], self.half[shapes], shapes)
 
     def bounds(self, rotation: np.ndarray, centre: np.ndarray,
                shapes: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
@@ -1130,16 +1211,23 @@ class TimedBody:
         return self._near
 
     def _shape_poses(self) -> None:
-        shapes = self.shapes
-        every = np.arange(len(shapes.kind))
+        k, count = self.frames.shape[0], len(self.shapes.kind)
         #: (k, S, 3, 3), (k, S, 3) world poses and (k, S, 3) box corners of every shape.
-        self.shape_rotation, self.shape_centre = shapes.poses(self.rotations, self.positions,
-                                                              every)
-        self.shape_lower, self.shape_upper = shapes.bounds(self.shape_rotation,
-                                                           self.shape_centre, every)
+        self.shape_rotation = np.empty((k, count, 3, 3))
+        self.shape_centre = np.empty((k, count, 3))
+        self.shape_lower = np.empty((k, count, 3))
+        self.shape_upper = np.empty((k, count, 3))
         #: (S, 3) box corners of every shape swept over the step, m.
-        self.swept_lower = self.shape_lower.min(axis=0)
-        self.swept_upper = self.shape_upper.max(axis=0)
+        self.swept_lower = np.empty((count, 3))
+        self.swept_upper = np.empty((count, 3))
+        self._pose_shapes(self.shapes.every_table)
+
+    def _pose_shapes(self, table: tuple) -> None:
+        """Pose the shapes of a :meth:`BodyShapes.shape_table` at every frame, with their boxes
+        and swept boxes, in place."""
+        _pose_shapes_into(self.rotations, self.positions, *table, self.shape_rotation,
+                          self.shape_centre, self.shape_lower, self.shape_upper,
+                          self.swept_lower, self.swept_upper)
 
     def first_collision(self, checked: np.ndarray, pairs: np.ndarray,
                         frames: Optional[np.ndarray] = None) -> int:
@@ -1211,22 +1299,17 @@ class TimedBody:
     def set_branch(self, indices: np.ndarray, values: np.ndarray,
                    steps: Sequence[_Step]) -> None:
         """Fix a planned branch: write its (k, d) values and update the poses of its subtree."""
-        if np.array_equal(self.frames[:, indices], values):
+        if not _write_columns(self.frames, np.asarray(indices, dtype=np.int64),
+                              float_array(values)):
             return  # the branch follows the motion already in place (its fast path)
-        self.frames[:, indices] = values
         self.kinematics.poses(self.frames, self.rotations, self.positions, steps)
         # Only the shapes the branch carries have moved.
         links = frozenset(step.child for step in steps)
-        moved = self.shapes._link_shapes.get(links)
-        if moved is None:
-            moved = self.shapes._link_shapes[links] = self.shapes.shapes_of_links(links)
-        rotation, centre = self.shapes.poses(self.rotations, self.positions, moved)
-        lower, upper = self.shapes.bounds(rotation, centre, moved)
-        self.shape_rotation[:, moved] = rotation
-        self.shape_centre[:, moved] = centre
-        self.shape_lower[:, moved], self.shape_upper[:, moved] = lower, upper
-        self.swept_lower[moved] = lower.min(axis=0)
-        self.swept_upper[moved] = upper.max(axis=0)
+        table = self.shapes._link_shapes.get(links)
+        if table is None:
+            table = self.shapes._link_shapes[links] = self.shapes.shape_table(
+                self.shapes.shapes_of_links(links))
+        self._pose_shapes(table)
 
 
 def _same_motion(a: tuple, b: tuple) -> bool:
