@@ -172,9 +172,14 @@ def test_the_upper_body_kinematics_and_boxes(skeleton):
     placed = []
     for kernel in (ct_space._place_shapes, ct_space._place_shapes.py_func):
         rotation, centre = np.empty((25, every.size, 3, 3)), np.empty((25, every.size, 3))
-        kernel(*arguments, rotation, centre)
+        kernel(*arguments, every, rotation, centre)
         placed.append((rotation, centre))
     same(placed[0], placed[1])
+    # Written at other slots (a body's arrays hold every shape; a branch moves some of them).
+    slots = every[::-1].copy()
+    rotation, centre = np.empty((25, every.size, 3, 3)), np.empty((25, every.size, 3))
+    ct_space._place_shapes(*arguments, slots, rotation, centre)
+    same((rotation[:, slots], centre[:, slots]), placed[0])
     extents = [kernel(shapes.kind_code, shapes.half, placed[0][0])
                for kernel in (collision._half_extents, collision._half_extents.py_func)]
     same(extents[0], extents[1])

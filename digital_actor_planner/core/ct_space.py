@@ -29,7 +29,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import fcl
 import numpy as np
 
-from .collision import _half_extents, _KIND_CODES
+from .collision import _extent, _half_extents, _KIND_CODES
 from .convex import touching, TRIANGLE
 from .jit import float_array, kernel
 from .skeleton import Skeleton
@@ -156,26 +156,27 @@ def _link_poses(q, rotations, positions, parent, child, origin_rotation, turned,
 
 
 @kernel('void(f8[:, :, :, :], f8[:, :, :], i8[::1], f8[:, ::1], f8[:, :, ::1], b1[::1], '
-        'f8[:, :, :, ::1], f8[:, :, ::1])')
-def _place_shapes(rotations, positions, links, offsets, turns, turned, rotation, centre):
-    """Shapes' world poses over frames, into ``rotation`` (k, n, 3, 3) and ``centre``
-    (k, n, 3): shape i hangs from link row ``links[i]`` at ``offsets[i]`` (m, in the link's
-    frame), turned by ``turns[i]`` where ``turned[i]``."""
+        'i8[::1], f8[:, :, :, ::1], f8[:, :, ::1])')
+def _place_shapes(rotations, positions, links, offsets, turns, turned, slots, rotation,
+                  centre):
+    """Shapes' world poses over frames, into ``rotation`` (k, S, 3, 3) and ``centre``
+    (k, S, 3) at their ``slots``: shape i hangs from link row ``links[i]`` at ``offsets[i]``
+    (m, in the link's frame), turned by ``turns[i]`` where ``turned[i]``."""
     for f in range(rotations.shape[0]):
         for i in range(links.shape[0]):
-            link = links[i]
+            link, s = links[i], slots[i]
             for r in range(3):
-                centre[f, i, r] = positions[f, link, r] + (
+                centre[f, s, r] = positions[f, link, r] + (
                     rotations[f, link, r, 0] * offsets[i, 0]
                     + rotations[f, link, r, 1] * offsets[i, 1]
                     + rotations[f, link, r, 2] * offsets[i, 2])
                 for c in range(3):
                     if turned[i]:
-                        rotation[f, i, r, c] = (rotations[f, link, r, 0] * turns[i, 0, c]
+                        rotation[f, s, r, c] = (rotations[f, link, r, 0] * turns[i, 0, c]
                                                 + rotations[f, link, r, 1] * turns[i, 1, c]
                                                 + rotations[f, link, r, 2] * turns[i, 2, c])
                     else:
-                        rotation[f, i, r, c] = rotations[f, link, r, c]
+                        rotation[f, s, r, c] = rotations[f, link, r, c]
 
 
 @kernel('void(f8[:, :, :, :], f8[:, :, :], i8[::1], f8[:, ::1], f8[:, :, ::1], b1[::1], '
@@ -188,12 +189,11 @@ def _pose_shapes_into(rotations, positions, links, offsets, turns, turned, kinds
     origins, kind codes and half extents; one row each) written in place at their ``slots``
     of a body's (k, S, ...) pose and box arrays, and their boxes swept over the k frames into
     ``swept_lower``/``swept_upper`` (S, 3): the same kernels and arithmetic, without the
-    copies of scattering the results from Python."""
+    copies of scattering the results from Python, nor temporary arrays (the memory a
+    step's body takes is much of what a first plan after other work waits for)."""
     k, n = rotations.shape[0], links.shape[0]
-    rotation = np.empty((k, n, 3, 3))
-    centre = np.empty((k, n, 3))
-    _place_shapes(rotations, positions, links, offsets, turns, turned, rotation, centre)
-    extent = _half_extents(kinds, halves, rotation)
+    _place_shapes(rotations, positions, links, offsets, turns, turned, slots, shape_rotation,
+                  shape_centre)
     for i in range(n):
         s = slots[i]
         for e in range(3):
@@ -202,11 +202,10 @@ def _pose_shapes_into(rotations, positions, links, offsets, turns, turned, kinds
     for f in range(k):
         for i in range(n):
             s = slots[i]
-            shape_rotation[f, s] = rotation[f, i]
             for e in range(3):
-                low = centre[f, i, e] - extent[f, i, e]
-                high = centre[f, i, e] + extent[f, i, e]
-                shape_centre[f, s, e] = centre[f, i, e]
+                extent = _extent(kinds[i], halves[i], shape_rotation[f, s], e)
+                low = shape_centre[f, s, e] - extent
+                high = shape_centre[f, s, e] + extent
                 shape_lower[f, s, e] = low
                 shape_upper[f, s, e] = high
                 swept_lower[s, e] = min(swept_lower[s, e], low)
@@ -294,8 +293,8 @@ def _branch_boxes(q, frames, body_frames, indices, body_rotations, body_position
                     axis_coordinate, axis_sign, axis)
         placed = np.empty((count, n, 3, 3))
         placed_centre = np.empty((count, n, 3))
-        _place_shapes(rotations, positions, shape_links, offsets, turns, turned, placed,
-                      placed_centre)
+        _place_shapes(rotations, positions, shape_links, offsets, turns, turned, np.arange(n),
+                      placed, placed_centre)
         extent = _half_extents(kinds, halves, placed)
         for i in range(count):
             r = moved[i]
@@ -1056,8 +1055,8 @@ class BodyShapes:
         k = rotations.shape[0]
         rotation, centre = np.empty((k, len(shapes), 3, 3)), np.empty((k, len(shapes), 3))
         _place_shapes(rotations, positions, self.link[shapes], self.origin_translation[shapes],
-                      self.origin_rotation[shapes], ~self.identity_origin[shapes], rotation,
-                      centre)
+                      self.origin_rotation[shapes], ~self.identity_origin[shapes],
+                      np.arange(len(shapes)), rotation, centre)
         return rotation, centre
 
     def shape_table(self, shapes: np.ndarray) -> tuple:
