@@ -80,7 +80,9 @@ def test_branch_boxes_are_those_of_the_whole_body_posed_row_by_row(skeleton, bra
     rows = rng.integers(0, 40, 25)
     q = frames[rows][:, indices] + rng.normal(0.0, 0.3, (25, len(indices))) * (
         np.arange(25) % 3 > 0)[:, None]
-    rotation, centre, low, high = space._shape_boxes(q, rows)
+    rotation, centre, low, high, held = space._shape_boxes(q, rows)
+    # Every third row is where the body holds the branch.
+    assert held.tolist() == (np.arange(25) % 3 == 0).tolist()
     for row, (frame, values) in enumerate(zip(rows, q)):
         full = frames[frame].copy()
         full[indices] = values

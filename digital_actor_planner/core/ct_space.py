@@ -238,14 +238,15 @@ _STEP_TABLE_TYPES = ('i8[::1], i8[::1], f8[:, :, ::1], b1[::1], f8[:, ::1], i8[:
         'f8[:, :, :, ::1], f8[:, :, ::1], i8[::1], f8[:, :, :, ::1], f8[:, :, ::1], '
         'f8[:, :, ::1], f8[:, :, ::1], i8[::1], i8[::1], f8[:, ::1], f8[:, :, ::1], b1[::1], '
         'i8[::1], f8[:, ::1], f8[:, :, :, ::1], f8[:, :, ::1], f8[:, :, ::1], f8[:, :, ::1], '
-        + _STEP_TABLE_TYPES + ')')
+        'b1[::1], ' + _STEP_TABLE_TYPES + ')')
 def _branch_boxes(q, frames, body_frames, indices, body_rotations, body_positions, links,
                   shape_rotation, shape_centre, shape_lower, shape_upper, checked, shape_links,
-                  offsets, turns, turned, kinds, halves, rotation, centre, low, high,
+                  offsets, turns, turned, kinds, halves, rotation, centre, low, high, held,
                   parent, child, origin_rotation, step_turned, origin_translation, offset_axis,
                   offset_length, has_offset, joint, kind, axis_coordinate, axis_sign, axis):
     """:meth:`CTSpace._shape_boxes` in one pass, into ``rotation`` (m, n, 3, 3), ``centre``,
-    ``low`` and ``high`` (m, n, 3).
+    ``low`` and ``high`` (m, n, 3), and ``held`` (m,): whether the row is where the body holds
+    the branch.
 
     A row whose branch values ``q`` (m, d) are the body's at its frame (``body_frames`` at
     ``indices``) takes the body's poses and boxes of the ``checked`` shapes; the others are
@@ -259,12 +260,12 @@ def _branch_boxes(q, frames, body_frames, indices, body_rotations, body_position
     count = 0
     for r in range(m):
         f = frames[r]
-        held = True
+        held[r] = True
         for j in range(d):
             if not q[r, j] == body_frames[f, indices[j]]:
-                held = False
+                held[r] = False
                 break
-        if not held:
+        if not held[r]:
             moved[count] = r
             count += 1
             continue
@@ -455,11 +456,11 @@ def _touches_shape(kind_a, half_a, box_a, rotation_a, centre_a, kind_b, half_b, 
 @kernel('b1[::1](f8[:, :, ::1], f8[:, :, ::1], f8[:, :], f8[:, :], b1, i8[::1], i8[::1], '
         'f8[:, :, ::1], f8[:, :, ::1], f8[:, :, :, ::1], f8[:, :, ::1], f8[:, ::1], '
         'f8[:, :, :], f8[:, :, :, :], f8[:, :, :], f8[:, :], f8, i8[::1], f8[:, :], i8[::1], '
-        'f8[:, :], i8[::1])')
+        'f8[:, :], i8[::1], b1[::1])')
 def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pair_column,
                     pair_lower, pair_upper, rotation, centre, half, corners, pair_rotation,
                     pair_centre, pair_half, margin, kinds, shape_half, pair_kinds,
-                    pair_shape_half, pair_other):
+                    pair_shape_half, pair_other, skip):
     """Whether each row of a branch's batch touches the environment or the body: (m,) bool.
 
     The broad phase (the boxes along the world axes, cut by each shape's box swept over the
@@ -471,6 +472,8 @@ def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pa
     ``pair_column[p]``, its other shape is body shape ``pair_other[p]`` of the body's
     (k, S, ...) boxes ``pair_lower``/``pair_upper`` and poses ``pair_rotation``/
     ``pair_centre``, with box half extents ``pair_half[p]``. A row stops at its first contact.
+    Rows where ``skip`` are known to touch nothing: reported so without a test (nor a part in
+    the swept boxes).
     """
     m, n, count = low.shape[0], low.shape[1], triangle_lower.shape[0]
     pairs = pair_column.shape[0]
@@ -481,10 +484,11 @@ def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pa
         found = 0
         if swept:
             for axis in range(3):
-                lowest[axis], highest[axis] = low[0, c, axis], high[0, c, axis]
-                for r in range(1, m):
-                    lowest[axis] = min(lowest[axis], low[r, c, axis])
-                    highest[axis] = max(highest[axis], high[r, c, axis])
+                lowest[axis], highest[axis] = np.inf, -np.inf
+                for r in range(m):
+                    if not skip[r]:
+                        lowest[axis] = min(lowest[axis], low[r, c, axis])
+                        highest[axis] = max(highest[axis], high[r, c, axis])
             for t in range(count):
                 meets = True
                 for axis in range(3):
@@ -500,7 +504,7 @@ def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pa
                 candidates[found] = t
                 found += 1
         for r in range(m):
-            if hit[r]:
+            if hit[r] or skip[r]:
                 continue
             for k in range(found):
                 t = candidates[k]
@@ -516,7 +520,7 @@ def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pa
                     hit[r] = True
                     break
     for r in range(m):
-        if hit[r]:
+        if hit[r] or skip[r]:
             continue
         f = frames[r]
         for p in range(pairs):
@@ -1180,6 +1184,11 @@ class TimedBody:
         self.frames = np.array(frames, dtype=float)
         self.rotations, self.positions = kinematics.poses(self.frames)
         self._shape_poses()
+        #: Branch name -> frame f: at frames [0, f) the branch's checked shapes, where the
+        #: body holds them, touch neither the environment nor the body (set by the planner
+        #: that checked the body's own motion; forgotten when a branch is fixed). A branch's
+        #: CT-space does not test such rows again.
+        self.clear_until: Dict[str, int] = {}
         # The environment's triangles near the actor over the step, and the box they were
         # found for: one scan of the whole environment per step.
         self._near = None
@@ -1301,6 +1310,8 @@ class TimedBody:
         if not _write_columns(self.frames, np.asarray(indices, dtype=np.int64),
                               float_array(values)):
             return  # the branch follows the motion already in place (its fast path)
+        # What was found of the body's motion no longer holds for the other branches.
+        self.clear_until.clear()
         self.kinematics.poses(self.frames, self.rotations, self.positions, steps)
         # Only the shapes the branch carries have moved.
         links = frozenset(step.child for step in steps)
@@ -1519,6 +1530,8 @@ class CTSpace:
                             model.chain_links, body.shape_rotation, body.shape_centre,
                             body.shape_lower, body.shape_upper) + model.shape_tables
         self._prepare_environment()
+        # Frames [0, clear_until) where the branch, where the body holds it, touches nothing.
+        self._clear_until = body.clear_until.get(branch, 0)
         self.checks = 0
         # A motion whose check ran ahead (see best_valid_rows), or None.
         self._prefetched: Optional[tuple] = None
@@ -1932,15 +1945,17 @@ class CTSpace:
         Returns
         -------
         tuple of numpy.ndarray
-            Rotations (m, n, 3, 3), centres (m, n, 3) and box corners (m, n, 3) x 2, m.
+            Rotations (m, n, 3, 3), centres (m, n, 3), box corners (m, n, 3) x 2, m, and
+            whether each row is where the body holds the branch (m,).
 
         """
         m, n = len(frames), len(self.checked)
         rotation, centre = np.empty((m, n, 3, 3)), np.empty((m, n, 3))
         low, high = np.empty((m, n, 3)), np.empty((m, n, 3))
+        held = np.empty(m, dtype=np.bool_)
         _branch_boxes(q, frames.astype(np.int64, copy=False), *self._box_tables, rotation,
-                      centre, low, high, *self._chain.step_table)
-        return rotation, centre, low, high
+                      centre, low, high, held, *self._chain.step_table)
+        return rotation, centre, low, high, held
 
     def _batch_contacts(self, q: np.ndarray, frames: np.ndarray) -> tuple:
         """Which rows of a batch touch the environment or the body, all rows at once.
@@ -1949,9 +1964,15 @@ class CTSpace:
         leaves, in one kernel (:func:`_row_collisions`). Returns (the rows in contact, in
         increasing order; per row whether it is in contact, as a list, what
         :meth:`_in_contact` reads, and as an (m,) bool array).
+
+        Rows where the body holds the branch, at frames where the check of the body's own
+        motion found that the branch touches nothing (``TimedBody.clear_until``), are not
+        tested again: the same tests gave that answer (the same poses; the pairs and triangles
+        here are among those checked there).
         """
         frames = frames.astype(np.int64, copy=False)  # the kernels' index type, once
-        rotation, centre, low, high = self._shape_boxes(q, frames)
+        rotation, centre, low, high, held = self._shape_boxes(q, frames)
+        known = held & (frames < self._clear_until)
         m = len(frames)
         triangles = len(self._triangle_lower)
         # Many triangles: the pairs (shape, triangle) are first cut by each shape's box swept
@@ -1964,7 +1985,7 @@ class CTSpace:
             self._pair_column, body.shape_lower, body.shape_upper, rotation, centre,
             self._checked_box_half, self._triangle_corners, body.shape_rotation,
             body.shape_centre, self._pair_box_half, SAT_MARGIN, self._checked_kinds,
-            self._checked_half, self._pair_kinds, self._pair_half, self._pair_other)
+            self._checked_half, self._pair_kinds, self._pair_half, self._pair_other, known)
         return np.flatnonzero(colliding).tolist(), colliding.tolist(), colliding
 
     @staticmethod
