@@ -469,19 +469,23 @@ def test_the_body_poses_every_shape_as_the_shape_model_does(skeleton):
 
 
 @pytest.mark.parametrize('kernel', [ct_space._write_columns, ct_space._write_columns.py_func])
-def test_writing_a_branch_into_the_frames_says_whether_anything_changed(kernel):
+def test_writing_a_branch_into_the_frames_says_what_changed(kernel):
     frames = np.arange(12.0).reshape(4, 3)
     columns = np.array([2, 0])
-    assert not kernel(frames, columns, frames[:, [2, 0]].copy())
+    changed = np.zeros(4, dtype=bool)
+    assert not kernel(frames, columns, frames[:, [2, 0]].copy(), changed)
+    assert not changed.any()
     values = frames[:, [2, 0]].copy()
     values[3, 1] = -1.0
-    assert kernel(frames, columns, values)
+    assert kernel(frames, columns, values, changed)
+    assert changed.tolist() == [False, False, False, True]
     assert np.array_equal(frames[:, [2, 0]], values)
     assert np.array_equal(frames[:, 1], [1, 4, 7, 10])
     # As np.array_equal: a NaN never equals itself, so it is written again.
     values[0, 0] = np.nan
-    assert kernel(frames, columns, values)
-    assert kernel(frames, columns, values) and np.isnan(frames[0, 2])
+    assert kernel(frames, columns, values, changed)
+    assert kernel(frames, columns, values, changed) and np.isnan(frames[0, 2])
+    assert changed.tolist() == [True, False, False, True]
 
 
 def test_first_collisions_per_group_agree_with_every_pair_checked_frame_by_frame(skeleton):

@@ -266,6 +266,48 @@ def test_one_batch_pattern_check_agrees_with_the_branch_fast_paths(skeleton):
     assert any(mixed)  # and branches with different answers in one batch
 
 
+def test_rechecking_a_branch_after_others_moved_agrees_with_a_fresh_check(skeleton):
+    # After the pattern check, fixing the waist or an arm away from its pattern over part of
+    # the step changes the other branches' surroundings only there: their re-check looks at
+    # those frames and the ones from their first contact on, and must answer what a full
+    # check of a body built with the new frames answers (and know the same clear frames).
+    from digital_actor_planner.core.ct_space import CTSpace, TimedBody
+    from digital_actor_planner.core.upper_body import BRANCH_ORDER
+    planner, _ = planner_for(skeleton, box([0.6, -1.0, 1.55], [0.8, 1.0, 1.75]),
+                             box([1.3, 0.2, 0.0], [2.0, 1.0, 0.8]))
+    times, frames = walk(skeleton, 320)
+    rng = np.random.default_rng(8)
+    partial, answers = 0, set()
+    for trial in range(40):
+        begin = int(rng.integers(0, 320 - 61))
+        window = frames[begin:begin + 61].copy()
+        body = TimedBody(planner.kinematics, planner.shapes, planner.environment, window)
+        planner.pattern_checks(times[:61], body)
+        moved = BRANCH_ORDER[:int(rng.integers(1, 3))]
+        for name in moved:
+            indices = planner.indices[name]
+            span = np.zeros(61)
+            first, last = sorted(rng.integers(0, 61, 2))
+            span[first:last + 1] = rng.normal(0.0, 0.4)
+            values = np.clip(window[:, indices] + span[:, None] * rng.normal(size=len(indices)),
+                             skeleton.lower[indices], skeleton.upper[indices])
+            space = CTSpace(name, body, times[:61], window[:, indices], planner._checked[name],
+                            planner._obstacles[name])
+            body.set_branch(indices, values, space.steps)
+            window[:, indices] = values
+        for name in BRANCH_ORDER[len(moved):]:
+            partial += body.frames_to_recheck(name) is not None
+            got = planner.start_and_objective(times[:61], body, name)
+            fresh = TimedBody(planner.kinematics, planner.shapes, planner.environment, window)
+            assert got == planner.start_and_objective(times[:61], fresh, name), (trial, name)
+            assert body.clear_until.get(name) == fresh.clear_until.get(name), (trial, name)
+            answers.add(got)
+            # Once re-checked, nothing about it is stale.
+            assert body.frames_to_recheck(name) is None
+    assert partial > 10
+    assert len(answers) >= 2  # legal and illegal motions both occur
+
+
 def test_arm_roadmap_starts_with_the_arm_held_in_against_the_side(skeleton):
     # Between two pillars with the waist turned, a flexed or abducted arm sticks out sideways;
     # the roadmap starts with the arm held in, nearly straight, legal at any swing (§5.2).

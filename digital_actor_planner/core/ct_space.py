@@ -212,15 +212,17 @@ def _pose_shapes_into(rotations, positions, links, offsets, turns, turned, kinds
                 swept_upper[s, e] = max(swept_upper[s, e], high)
 
 
-@kernel('b1(f8[:, ::1], i8[::1], f8[:, :])')
-def _write_columns(frames, indices, values):
+@kernel('b1(f8[:, ::1], i8[::1], f8[:, :], b1[::1])')
+def _write_columns(frames, indices, values, changed):
     """Write ``values`` (k, d) into the ``indices`` columns of ``frames`` (k, n); False (and
-    nothing written) when they already hold them (as ``np.array_equal``: a NaN differs)."""
+    nothing written) when they already hold them (as ``np.array_equal``: a NaN differs).
+    ``changed`` (k,): set where a frame's values differ (left as it is elsewhere)."""
     same = True
     for f in range(values.shape[0]):
         for j in range(indices.shape[0]):
             if not frames[f, indices[j]] == values[f, j]:
                 same = False
+                changed[f] = True
     if same:
         return False
     for f in range(values.shape[0]):
@@ -1186,9 +1188,12 @@ class TimedBody:
         self._shape_poses()
         #: Branch name -> frame f: at frames [0, f) the branch's checked shapes, where the
         #: body holds them, touch neither the environment nor the body (set by the planner
-        #: that checked the body's own motion; forgotten when a branch is fixed). A branch's
-        #: CT-space does not test such rows again.
+        #: that checked the body's own motion, :meth:`set_clear`; forgotten when a branch is
+        #: fixed). A branch's CT-space does not test such rows again.
         self.clear_until: Dict[str, int] = {}
+        # Branch name -> (f, frames changed since): a clear_until forgotten when branches were
+        # fixed, with the frames they changed (see frames_to_recheck).
+        self._stale: Dict[str, Tuple[int, np.ndarray]] = {}
         # The environment's triangles near the actor over the step, and the box they were
         # found for: one scan of the whole environment per step.
         self._near = None
@@ -1299,6 +1304,24 @@ class TimedBody:
                                           self.shape_centre[frame, shape]))
         return target
 
+    def set_clear(self, name: str, first: int) -> None:
+        """Record that branch ``name``'s shapes, where the body holds them, first touch
+        something at frame ``first`` (-1: at none), every frame before it checked."""
+        self.clear_until[name] = len(self.frames) if first < 0 else int(first)
+        self._stale.pop(name, None)
+
+    def frames_to_recheck(self, name: str) -> Optional[np.ndarray]:
+        """Frames where branch ``name``'s contacts are not known since branches were fixed:
+        those they changed before the first contact found earlier, and every frame from that
+        contact on (sorted, int64); None when nothing is known (check every frame). The
+        first contact among them is the body's first contact for the branch."""
+        stale = self._stale.get(name)
+        if stale is None:
+            return None
+        clear, changed = stale
+        return np.concatenate([np.flatnonzero(changed[:clear]),
+                               np.arange(clear, len(self.frames))]).astype(np.int64)
+
     def collides(self, frame: int, shape: int, target: fcl.CollisionObject) -> bool:
         """Whether body shape ``shape``, where it is at ``frame``, touches ``target``."""
         return self.shapes.collides(shape, self.shape_rotation[frame, shape],
@@ -1307,10 +1330,16 @@ class TimedBody:
     def set_branch(self, indices: np.ndarray, values: np.ndarray,
                    steps: Sequence[_Step]) -> None:
         """Fix a planned branch: write its (k, d) values and update the poses of its subtree."""
+        changed = np.zeros(len(self.frames), dtype=np.bool_)
         if not _write_columns(self.frames, np.asarray(indices, dtype=np.int64),
-                              float_array(values)):
+                              float_array(values), changed):
             return  # the branch follows the motion already in place (its fast path)
-        # What was found of the body's motion no longer holds for the other branches.
+        # What was found of the body's motion no longer holds for the other branches where
+        # this one moved.
+        for name, clear in self.clear_until.items():
+            self._stale[name] = (clear, changed.copy())
+        for name, (clear, before) in self._stale.items():
+            before |= changed
         self.clear_until.clear()
         self.kinematics.poses(self.frames, self.rotations, self.positions, steps)
         # Only the shapes the branch carries have moved.

@@ -516,9 +516,12 @@ class UpperBodyPlanner:
         if not within[0]:
             # The motion is not legal whatever it touches: only the start is left to check.
             return bool(start_inside[0]) and body.first_collision(checked, pairs, [0]) < 0, False
-        bad = body.first_collision(checked, pairs)
+        # Where the branches fixed since the last check of this one left it clear, it still is:
+        # only the frames they changed, and those from its first contact on, are checked.
+        frames = body.frames_to_recheck(name)
+        bad = body.first_collision(checked, pairs, frames)
         # Every frame was checked up to the first contact (the branch's CT-space skips them).
-        body.clear_until[name] = len(body.frames) if bad < 0 else bad
+        body.set_clear(name, bad)
         return bad != 0, bad < 0
 
     def pattern_checks(self, times: np.ndarray, body: TimedBody) -> Dict[str, Tuple[bool, bool]]:
@@ -543,10 +546,9 @@ class UpperBodyPlanner:
         first = body.first_collisions(self._pattern_checked, self._pattern_pairs,
                                       self._pattern_group, len(BRANCH_ORDER))
         out = {}
-        k = len(body.frames)
         for name, bad in zip(BRANCH_ORDER, first):
             # Every frame was checked up to the first contact (the CT-spaces skip them).
-            body.clear_until[name] = k if bad < 0 else bad
+            body.set_clear(name, bad)
         for name, bad, start, legal in zip(BRANCH_ORDER, first, start_inside.tolist(),
                                            within.tolist()):
             if not legal:
