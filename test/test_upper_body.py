@@ -308,6 +308,39 @@ def test_rechecking_a_branch_after_others_moved_agrees_with_a_fresh_check(skelet
     assert len(answers) >= 2  # legal and illegal motions both occur
 
 
+def test_a_branch_space_answers_the_same_with_the_pattern_checks_clear_frames(skeleton):
+    # The CT-spaces do not test again the rows where the body holds a branch at frames the
+    # pattern check found clear: every batch must answer as a space that knows nothing.
+    from digital_actor_planner.core.ct_space import CTSpace, TimedBody
+    from digital_actor_planner.core.upper_body import BRANCH_ORDER
+    planner, _ = planner_for(skeleton, box([0.6, -1.0, 1.55], [0.8, 1.0, 1.75]),
+                             box([1.3, 0.2, 0.0], [2.0, 1.0, 0.8]))
+    times, frames = walk(skeleton, 320)
+    rng = np.random.default_rng(12)
+    skipped = contacts = 0
+    for trial in range(30):
+        begin = int(rng.integers(0, 320 - 61))
+        window = frames[begin:begin + 61]
+        knowing = TimedBody(planner.kinematics, planner.shapes, planner.environment, window)
+        planner.pattern_checks(times[:61], knowing)
+        plain = TimedBody(planner.kinematics, planner.shapes, planner.environment, window)
+        for name in BRANCH_ORDER:
+            indices = planner.indices[name]
+            spaces = [CTSpace(name, body, times[:61], window[:, indices],
+                              planner._checked[name], planner._obstacles[name])
+                      for body in (knowing, plain)]
+            rows = rng.integers(0, 61, 40)
+            # Half the rows where the body holds the branch, half moved off it.
+            q = window[rows][:, indices] + rng.normal(0.0, 0.4, (40, len(indices))) * (
+                np.arange(40) % 2)[:, None]
+            answers = [space.valid_rows(q, rows) for space in spaces]
+            assert answers[0].tolist() == answers[1].tolist(), (trial, name)
+            held = np.arange(40) % 2 == 0
+            skipped += int((held & (rows < knowing.clear_until[name])).sum())
+            contacts += int((~answers[1]).sum())
+    assert skipped > 100 and contacts > 20
+
+
 def test_arm_roadmap_starts_with_the_arm_held_in_against_the_side(skeleton):
     # Between two pillars with the waist turned, a flexed or abducted arm sticks out sideways;
     # the roadmap starts with the arm held in, nearly straight, legal at any swing (§5.2).
