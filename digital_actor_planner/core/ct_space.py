@@ -455,7 +455,25 @@ def _touches_shape(kind_a, half_a, box_a, rotation_a, centre_a, kind_b, half_b, 
                          rotation_b, centre_b, rotation_b))
 
 
-@kernel('b1[::1](f8[:, :, ::1], f8[:, :, ::1], f8[:, :], f8[:, :], b1, i8[::1], i8[::1], '
+@kernel('i8[::1](f8[::1], f8[::1], f8[:, ::1], f8[:, ::1], i8[::1])')
+def _candidates_meeting(lower, upper, box_lower, box_upper, candidates):
+    """The ``candidates`` (indices into the (T, 3) box corners), in order, whose boxes meet the
+    box [lower, upper] (3,): the answers of a test of every box."""
+    out = np.empty(candidates.shape[0], dtype=np.int64)
+    n = 0
+    for i in range(candidates.shape[0]):
+        t = candidates[i]
+        # Branches (and, not &): a mesh's triangles lie near each other, so the answers come
+        # in runs and the branches are predicted (3.5x faster than without on uneven ground).
+        if (box_upper[t, 0] >= lower[0] and box_lower[t, 0] <= upper[0]
+                and box_upper[t, 1] >= lower[1] and box_lower[t, 1] <= upper[1]
+                and box_upper[t, 2] >= lower[2] and box_lower[t, 2] <= upper[2]):
+            out[n] = t
+            n += 1
+    return out[:n].copy()
+
+
+@kernel('b1[::1](f8[:, :, ::1], f8[:, :, ::1], f8[:, ::1], f8[:, ::1], b1, i8[::1], i8[::1], '
         'f8[:, :, ::1], f8[:, :, ::1], f8[:, :, :, ::1], f8[:, :, ::1], f8[:, ::1], '
         'f8[:, :, :], f8[:, :, :, :], f8[:, :, :], f8[:, :], f8, i8[::1], f8[:, :], i8[::1], '
         'f8[:, :], i8[::1], b1[::1])')
@@ -480,10 +498,10 @@ def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pa
     m, n, count = low.shape[0], low.shape[1], triangle_lower.shape[0]
     pairs = pair_column.shape[0]
     hit = np.zeros(m, dtype=np.bool_)
-    candidates = np.empty(count, dtype=np.int64)
+    every = np.arange(count)
     lowest, highest = np.empty(3), np.empty(3)
     for c in range(n):
-        found = 0
+        candidates = every
         if swept:
             for axis in range(3):
                 lowest[axis], highest[axis] = np.inf, -np.inf
@@ -491,24 +509,12 @@ def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pa
                     if not skip[r]:
                         lowest[axis] = min(lowest[axis], low[r, c, axis])
                         highest[axis] = max(highest[axis], high[r, c, axis])
-            for t in range(count):
-                meets = True
-                for axis in range(3):
-                    if not (highest[axis] >= triangle_lower[t, axis]
-                            and lowest[axis] <= triangle_upper[t, axis]):
-                        meets = False
-                        break
-                if meets:
-                    candidates[found] = t
-                    found += 1
-        else:
-            for t in range(count):
-                candidates[found] = t
-                found += 1
+            candidates = _candidates_meeting(lowest, highest, triangle_lower, triangle_upper,
+                                             every)
         for r in range(m):
             if hit[r] or skip[r]:
                 continue
-            for k in range(found):
+            for k in range(candidates.shape[0]):
                 t = candidates[k]
                 meets = True
                 for axis in range(3):
@@ -543,8 +549,8 @@ def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pa
 
 
 @kernel('i8[::1](i8[::1], i8[::1], i8[::1], i8, f8[:, :, ::1], f8[:, :, ::1], '
-        'f8[:, :, :, ::1], f8[:, :, ::1], f8[:, ::1], i8[::1], f8[:, ::1], f8[:, :], f8[:, :], '
-        'f8[:, :, :], i8[::1], i8[:, :], f8[:, ::1], f8[:, ::1], f8)')
+        'f8[:, :, :, ::1], f8[:, :, ::1], f8[:, ::1], i8[::1], f8[:, ::1], f8[:, ::1], '
+        'f8[:, ::1], f8[:, :, :], i8[::1], i8[:, :], f8[:, ::1], f8[:, ::1], f8)')
 def _first_contacts(frames, checked, group, count, shape_lower, shape_upper, shape_rotation,
                     shape_centre, box_half, kinds, halves, triangle_lower, triangle_upper,
                     corners, near, pairs, swept_lower, swept_upper, margin):
@@ -573,18 +579,9 @@ def _first_contacts(frames, checked, group, count, shape_lower, shape_upper, sha
             for r in range(m):
                 lowest[axis] = min(lowest[axis], shape_lower[frames[r], s, axis])
                 highest[axis] = max(highest[axis], shape_upper[frames[r], s, axis])
-        total = starts[c]
-        for i in range(near.shape[0]):
-            t = near[i]
-            meets = True
-            for axis in range(3):
-                if not (highest[axis] >= triangle_lower[t, axis]
-                        and lowest[axis] <= triangle_upper[t, axis]):
-                    meets = False
-                    break
-            if meets:
-                candidates[total] = t
-                total += 1
+        meeting = _candidates_meeting(lowest, highest, triangle_lower, triangle_upper, near)
+        total = starts[c] + meeting.shape[0]
+        candidates[starts[c]:total] = meeting
         starts[c + 1] = total
     # The pairs whose shapes' boxes over every frame meet.
     active = np.zeros(count_pairs, dtype=np.bool_)
@@ -667,24 +664,6 @@ def _reachable_pairs(centre, reach2, shape_lower, shape_upper, obstacle, pair_ob
             kept[n] = p
             n += 1
     return kept[:n].copy()
-
-
-@kernel('i8[::1](f8[::1], f8[::1], f8[:, ::1], f8[:, ::1], i8[::1])')
-def _candidates_meeting(lower, upper, box_lower, box_upper, candidates):
-    """The ``candidates`` (indices into the (T, 3) box corners), in order, whose boxes meet the
-    box [lower, upper] (3,): the answers of a test of every box."""
-    out = np.empty(candidates.shape[0], dtype=np.int64)
-    n = 0
-    for i in range(candidates.shape[0]):
-        t = candidates[i]
-        # Branches (and, not &): a mesh's triangles lie near each other, so the answers come
-        # in runs and the branches are predicted (3.5x faster than without on uneven ground).
-        if (box_upper[t, 0] >= lower[0] and box_lower[t, 0] <= upper[0]
-                and box_upper[t, 1] >= lower[1] and box_lower[t, 1] <= upper[1]
-                and box_upper[t, 2] >= lower[2] and box_lower[t, 2] <= upper[2]):
-            out[n] = t
-            n += 1
-    return out[:n].copy()
 
 
 @kernel('Tuple((f8[:, ::1], i8))(f8[:, :], f8[:], f8[:, :], f8[:], f8[:], i8, f8[:], i8)')
