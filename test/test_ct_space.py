@@ -27,6 +27,19 @@ def beam_world(skeleton):
     return space, collision, frames
 
 
+def _bumpy_table_and_beam(rng, subdivisions: int, top_y: float, beam_z: float) -> Environment:
+    """Floor, a table top of many small triangles with random bumps up to 3 cm (centred at
+    x 0.4, y ``top_y``, z 0.85, ``subdivisions`` times subdivided) and a 20 cm beam at
+    ``beam_z`` m across the path."""
+    top = trimesh.creation.box(extents=[1.2, 1.6, 0.1])
+    for _ in range(subdivisions):
+        top = top.subdivide()
+    top.vertices += [0.4, top_y, 0.85]
+    top.vertices[:, 2] += rng.uniform(0.0, 0.03, len(top.vertices))
+    return Environment([box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0]), top,
+                        box([0.3, -1.0, beam_z], [0.5, 1.0, beam_z + 0.2])], resolution=0.05)
+
+
 def test_kinematics_match_the_skeleton(skeleton):
     rng = np.random.default_rng(0)
     q = skeleton.lower + rng.random((40, 22)) * (np.minimum(skeleton.upper, 3)
@@ -250,13 +263,7 @@ def test_batched_checks_agree_with_every_pair_checked_frame_by_frame(skeleton, b
     # Many small triangles (a bumpy table top in reach of the arm and of a bent trunk) and a
     # beam: broad-phase culling matters, and contacts graze a few small triangles.
     rng = np.random.default_rng(3)
-    top = trimesh.creation.box(extents=[1.2, 1.6, 0.1])
-    for _ in range(4):
-        top = top.subdivide()
-    top.vertices += [0.4, 0.6, 0.85]
-    top.vertices[:, 2] += rng.uniform(0.0, 0.03, len(top.vertices))
-    environment = Environment([box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0]), top,
-                               box([0.3, -1.0, 1.45], [0.5, 1.0, 1.65])], resolution=0.05)
+    environment = _bumpy_table_and_beam(rng, 4, 0.6, 1.45)
     k = 120
     times, frames = walk(skeleton, k, x0=-0.6, swing_legs=False)
     body = timed_body(skeleton, environment, frames, padding=0.01)
@@ -493,13 +500,7 @@ def test_first_collisions_per_group_agree_with_every_pair_checked_frame_by_frame
     # check (compiled broad phase and separating axis cut, FCL after) must find, per group of
     # shapes, the first frame a straightforward FCL check of every pair finds.
     rng = np.random.default_rng(11)
-    top = trimesh.creation.box(extents=[1.2, 1.6, 0.1])
-    for _ in range(3):
-        top = top.subdivide()
-    top.vertices += [0.4, 0.7, 0.85]
-    top.vertices[:, 2] += rng.uniform(0.0, 0.03, len(top.vertices))
-    environment = Environment([box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0]), top,
-                               box([0.3, -1.0, 1.50], [0.5, 1.0, 1.70])], resolution=0.05)
+    environment = _bumpy_table_and_beam(rng, 3, 0.7, 1.50)
     k = 60
     times, frames = walk(skeleton, k, x0=-0.6)
     upper = np.concatenate([skeleton.branch(name)
