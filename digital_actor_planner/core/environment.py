@@ -781,8 +781,9 @@ class Environment:
         xy = float_array(xy)
         if xy.ndim != 2 or xy.shape[1] != 2:
             raise ValueError(f'xy must have shape (N, 2), got {xy.shape}')
-        return _tops_near(self._top_pyramid, *self.top_near_grid(), xy,
-                          np.array(np.broadcast_to(float_array(half_extent), xy.shape[:1])))
+        half = np.empty(xy.shape[:1])
+        half[...] = float_array(half_extent)  # broadcast by assignment (np.broadcast_to's rules)
+        return _tops_near(self._top_pyramid, *self.top_near_grid(), xy, half)
 
     def top_near_grid(self) -> tuple:
         """The top map's pyramid layout for the compiled :func:`_top_near`: cells per level,
@@ -923,7 +924,9 @@ class Environment:
             raise ValueError(f'xy must have shape (N, 2), got {xy.shape}')
         z = np.asarray(z_ref, dtype=float)
         if z.ndim == 0:
-            z = np.full(len(xy), float(z))
+            value = float(z)
+            z = np.empty(len(xy))
+            z.fill(value)
         elif z.shape != (len(xy),):
             raise ValueError(f'z_ref must be a scalar or shape ({len(xy)},), got {z.shape}')
         return _ground_heights(float_array(xy), float_array(z), float(self._origin[0]),

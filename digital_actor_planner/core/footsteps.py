@@ -409,7 +409,11 @@ class FootstepPlanner:
         cfg, leg = self.config, self.leg
         # The kernel's exact argument types (it is compiled for those alone): fresh arrays.
         s = np.array(s, dtype=np.float64)
-        side = np.array(np.broadcast_to(np.asarray(side, dtype=np.int64), s.shape))
+        # Filled by assignment, which broadcasts as np.broadcast_to would (the same errors) at
+        # a fraction of its cost.
+        sides = np.empty(s.shape, dtype=np.int64)
+        sides[...] = np.asarray(side, dtype=np.int64)
+        side = sides
         ok, height, slope = _footholds(float_array(profile.height), float_array(profile.low),
                                        float_array(profile.headroom),
                                        float(profile.s0), float(profile.ds), side, s,

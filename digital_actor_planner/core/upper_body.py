@@ -60,7 +60,7 @@ def motion_patterns(skeleton: Skeleton, frames: np.ndarray,
     if frames.ndim != 2 or frames.shape[1] != len(skeleton.joint_names):
         raise ValueError(f'frames must have shape (k, {len(skeleton.joint_names)}), '
                          f'got {frames.shape}')
-    if not np.all(np.isfinite(frames)):
+    if not np.isfinite(frames).all():
         raise ValueError('frames contain NaN or infinite values')
     if not (np.isfinite(swing_amplitude) and 0.0 <= swing_amplitude <= 1.0):
         raise ValueError(f'swing_amplitude must be in [0, 1] rad, got {swing_amplitude}')
