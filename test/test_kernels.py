@@ -63,7 +63,8 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    upper_body._input_sound, ct_space._column_dots, ct_space._triangle_apart_along,
                    convex._middle, ct_roadmap._travel,
                    ct_space._candidates_meeting, ct_space._turn_entry,
-                   ct_space._pose_shapes_into, ct_space._write_columns):
+                   ct_space._pose_shapes_into, ct_space._write_columns,
+                   upper_body._write_patterns, upper_body._clipped):
         assert kernel.py_func is not kernel
 
 
@@ -419,3 +420,48 @@ def test_a_kernel_compiles_without_a_cache_when_numba_can_cache_it_nowhere(monke
 
     assert total(np.arange(4.0)) == 6.0
     assert total.py_func is not total
+
+
+def test_motion_patterns_kernel(skeleton):
+    """The patterns' columns, compiled and as Python, against the pattern written in NumPy
+    (each column of each arm, then np.clip's arithmetic over the upper body), to the last bit:
+    strides past the tanh's knee, one frame, a Fortran array; and with limits narrow enough
+    that the clip cuts every arm column (the skeleton's own never cut the pattern)."""
+    rng = np.random.default_rng(5)
+    index = skeleton.index
+    upper = np.concatenate([skeleton.branch(name)
+                            for name in ('waist', 'left_arm', 'right_arm')])
+    waist, arms, _, _, lower, upper_limit = upper_body._pattern_layout(skeleton)
+    narrow_lower, narrow_upper = lower.copy(), upper_limit.copy()
+    narrow_lower[arms] = [-0.1, 0.08, 0.01, 0.3] * 2
+    narrow_upper[arms] = [0.1, 0.5, 0.5, 0.28] * 2
+    for k, spread in ((1, 0.3), (61, 0.3), (127, 3.0)):
+        frames = rng.uniform(-spread, spread, (k, 22))
+        for amplitude in (0.0, 0.35, 1.0):
+            stride = 0.5 * (frames[:, index['right_hip_pitch']]
+                            - frames[:, index['left_hip_pitch']])
+            swing = amplitude * np.tanh(stride / upper_body.NOMINAL_HIP_SWING)
+            for low, high in ((lower, upper_limit), (narrow_lower, narrow_upper)):
+                expected = frames.copy()
+                expected[:, waist] = 0.0
+                for side, sign in (('left', 1.0), ('right', -1.0)):
+                    pitch = sign * swing
+                    expected[:, index[f'{side}_shoulder_pitch']] = pitch
+                    expected[:, index[f'{side}_shoulder_roll']] = upper_body.ARM_CLEARANCE_ROLL
+                    expected[:, index[f'{side}_shoulder_yaw']] = 0.0
+                    expected[:, index[f'{side}_elbow']] = (
+                        upper_body.RELAXED_ELBOW + upper_body.ELBOW_SWING_GAIN * pitch)
+                expected[:, upper] = np.minimum(np.maximum(expected[:, upper], low[upper]),
+                                                high[upper])
+                for run in (upper_body._write_patterns, upper_body._write_patterns.py_func):
+                    got = frames.copy()
+                    run(got, swing, waist, arms, low, high)
+                    assert got.tobytes() == expected.tobytes()
+                if low is lower:
+                    got = upper_body.motion_patterns(skeleton, np.asfortranarray(frames),
+                                                     amplitude)
+                    assert got.tobytes() == expected.tobytes()
+                elif amplitude == 1.0 and k > 1:
+                    # The narrow limits did cut: every arm column sits on a bound somewhere.
+                    for j in arms:
+                        assert np.isin(expected[:, j], (low[j], high[j])).any()

@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 import math
 import time
+import weakref
 from typing import Dict, Optional, Tuple
 
 import numpy as np
@@ -65,24 +66,59 @@ def motion_patterns(skeleton: Skeleton, frames: np.ndarray,
     if not (np.isfinite(swing_amplitude) and 0.0 <= swing_amplitude <= 1.0):
         raise ValueError(f'swing_amplitude must be in [0, 1] rad, got {swing_amplitude}')
     out = frames.copy()
-    index = skeleton.index
-    out[:, skeleton.branch('waist')] = 0.0
+    waist, arms, right_hip, left_hip, lower, upper = _pattern_layout(skeleton)
     # Half the difference is zero-mean over a stride, so no per-block centring is needed and
     # successive blocks join continuously.
-    stride = 0.5 * (frames[:, index['right_hip_pitch']] - frames[:, index['left_hip_pitch']])
+    stride = 0.5 * (frames[:, right_hip] - frames[:, left_hip])
     swing = swing_amplitude * np.tanh(stride / NOMINAL_HIP_SWING)
-    for side, sign in (('left', 1.0), ('right', -1.0)):
-        pitch = sign * swing
-        out[:, index[f'{side}_shoulder_pitch']] = pitch
-        out[:, index[f'{side}_shoulder_roll']] = ARM_CLEARANCE_ROLL
-        out[:, index[f'{side}_shoulder_yaw']] = 0.0
-        out[:, index[f'{side}_elbow']] = RELAXED_ELBOW + ELBOW_SWING_GAIN * pitch
-    upper = np.concatenate([skeleton.branch(name)
-                            for name in ('waist', 'left_arm', 'right_arm')])
-    # np.clip's arithmetic without its wrapper (which cost as much as the rest of this).
-    out[:, upper] = np.minimum(np.maximum(out[:, upper], skeleton.lower[upper]),
-                               skeleton.upper[upper])
+    _write_patterns(out, swing, waist, arms, lower, upper)
     return out
+
+
+_PATTERN_LAYOUTS = weakref.WeakKeyDictionary()
+
+
+def _pattern_layout(skeleton: Skeleton) -> tuple:
+    """The columns and limits :func:`motion_patterns` writes, built once per skeleton: the
+    waist's columns, the left then the right arm's (shoulder pitch, roll, yaw, elbow), the
+    right and the left hip pitch, and every joint's lower and upper limit."""
+    layout = _PATTERN_LAYOUTS.get(skeleton)
+    if layout is None:
+        index = skeleton.index
+        arms = [index[f'{side}_{joint}'] for side in ('left', 'right')
+                for joint in ('shoulder_pitch', 'shoulder_roll', 'shoulder_yaw', 'elbow')]
+        layout = (np.asarray(skeleton.branch('waist'), dtype=np.int64),
+                  np.array(arms, dtype=np.int64), index['right_hip_pitch'],
+                  index['left_hip_pitch'], np.array(skeleton.lower, dtype=np.float64),
+                  np.array(skeleton.upper, dtype=np.float64))
+        _PATTERN_LAYOUTS[skeleton] = layout
+    return layout
+
+
+@kernel('f8(f8, f8, f8)')
+def _clipped(value, low, high):
+    """np.minimum(np.maximum(value, low), high) of one finite number."""
+    value = value if value >= low else low
+    return value if value <= high else high
+
+
+@kernel('void(f8[:, ::1], f8[::1], i8[::1], i8[::1], f8[::1], f8[::1])')
+def _write_patterns(out, swing, waist, arms, lower, upper):
+    """:func:`motion_patterns`' columns of ``out`` (k, 22): the ``waist`` columns erect; each
+    arm's ``arms`` columns (the left arm's shoulder pitch, roll, yaw and elbow, then the
+    right's) swinging with ``swing`` (k,) rad, the left arm forward where it is positive,
+    the elbow flexing more as its arm swings forward; every value clipped to its joint's
+    [``lower``, ``upper``] as np.minimum(np.maximum(value, lower), upper) would."""
+    for f in range(out.shape[0]):
+        for j in waist:
+            out[f, j] = _clipped(0.0, lower[j], upper[j])
+        for side in range(2):
+            pitch = (1.0 if side == 0 else -1.0) * swing[f]
+            first = 4 * side
+            values = (pitch, ARM_CLEARANCE_ROLL, 0.0, RELAXED_ELBOW + ELBOW_SWING_GAIN * pitch)
+            for i in range(4):
+                j = arms[first + i]
+                out[f, j] = _clipped(values[i], lower[j], upper[j])
 
 
 # -- prioritized planning (§5) ------------------------------------------------------------
