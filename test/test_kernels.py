@@ -63,7 +63,7 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    upper_body._input_sound, ct_space._column_dots, ct_space._triangle_apart_along,
                    convex._middle, ct_roadmap._travel,
                    ct_space._candidates_meeting, ct_space._turn_entry,
-                   ct_space._pose_shapes_into, ct_space._write_columns,
+                   ct_space._pose_shapes_into, ct_space._write_columns, gait._sagittal_joints,
                    upper_body._write_patterns, upper_body._clipped):
         assert kernel.py_func is not kernel
 
@@ -311,6 +311,35 @@ def test_the_leg_triangle():
     forward[:3] = down[:3] = 0.0
     same(gait._leg_triangle(forward, down, 0.45, 0.43),
          gait._leg_triangle.py_func(forward, down, 0.45, 0.43))
+
+
+def test_the_leg_in_its_plane(skeleton):
+    """The in-plane leg solution, compiled and as Python, to the last bit, for a sole pitch
+    per frame and one for all; and against the same formulas in NumPy (arccos, arctan2),
+    to 1e-12 rad (the same bits where NumPy calls the C library, as on the development
+    machine)."""
+    rng = np.random.default_rng(6)
+    leg = skeleton.leg
+    forward = rng.uniform(-0.6, 0.6, 300)
+    down = rng.uniform(-0.1, 1.0, 300)
+    forward[:2] = down[:2] = 0.0
+    for pitch in (rng.uniform(-0.4, 0.4, 300), np.float64(0.1), 0.0):
+        wide = np.asarray(pitch, dtype=float).reshape(-1)
+        step = int(np.ndim(pitch) > 0)
+        compiled, plain = np.zeros((300, 4)), np.zeros((300, 4))
+        reach = gait._sagittal_joints(forward, down, wide, step, leg.thigh, leg.shank, compiled)
+        same((reach, compiled), (gait._sagittal_joints.py_func(
+            forward, down, wide, step, leg.thigh, leg.shank, plain), plain))
+        through = np.zeros((300, 4))
+        same(gait._sagittal_leg(leg, forward, down, pitch, through), reach)
+        same(through, compiled)
+        _, cos_knee, cos_beta = gait._leg_triangle(forward, down, leg.thigh, leg.shank)
+        knee = np.pi - np.arccos(cos_knee)
+        hip_pitch = np.arctan2(forward, down) + np.arccos(cos_beta)
+        np.testing.assert_allclose(compiled[:, 1], hip_pitch, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(compiled[:, 2], knee, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(compiled[:, 3], pitch - (hip_pitch - knee), rtol=0,
+                                   atol=1e-12)
 
 
 def test_the_gait_checks_and_the_sole_points():

@@ -292,15 +292,10 @@ def _sagittal_leg(leg: LegGeometry, forward: np.ndarray, down: np.ndarray,
     """
     forward = np.asarray(forward, dtype=np.float64)
     down = np.asarray(down, dtype=np.float64)
-    reach, cos_knee, cos_beta = _leg_triangle(forward, down, float(leg.thigh),
-                                              float(leg.shank))
-    # NumPy's arccos and arctan2, not the kernel's: the two may differ in the last bit.
-    knee = np.pi - np.arccos(cos_knee)
-    hip_pitch = np.arctan2(forward, down) + np.arccos(cos_beta)
-    joints[:, 1] = hip_pitch
-    joints[:, 2] = knee
-    joints[:, 3] = foot_pitch - (hip_pitch - knee)
-    return reach
+    # A sole pitch for every frame, or one for all (the stance foot's): read with stride 0.
+    pitch = np.asarray(foot_pitch, dtype=np.float64)
+    return _sagittal_joints(forward, down, pitch.reshape(-1), int(pitch.ndim > 0),
+                            float(leg.thigh), float(leg.shank), joints)
 
 
 @kernel('b1(f8[:, :], f8[:, :], f8[:], f8, f8, f8, f8, f8, f8, f8, f8, f8)')
@@ -405,6 +400,25 @@ def _leg_triangle(forward, down, l1, l2):
         cos_knee[i] = min(max((l1 * l1 + l2 * l2 - squared) / (2 * l1 * l2), -1.0), 1.0)
         cos_beta[i] = min(max((l1 * l1 + squared - l2 * l2) / (2 * l1 * d), -1.0), 1.0)
     return reach, cos_knee, cos_beta
+
+
+@kernel('f8[::1](f8[:], f8[:], f8[:], i8, f8, f8, f8[:, :])')
+def _sagittal_joints(forward, down, foot_pitch, pitch_step, l1, l2, joints):
+    """:func:`_sagittal_leg`'s arithmetic: :func:`_leg_triangle`, then per frame the knee
+    (pi less the triangle's inner angle), the hip pitch (the hip-ankle line's angle off the
+    vertical plus the thigh's off that line) and the ankle that gives the sole pitch
+    ``foot_pitch[i * pitch_step]``, into columns 1..3 of ``joints``; returns the reach. The
+    C library's acos and atan2: on the development machine NumPy's float64 arccos and arctan2
+    give the same bits (every course's frames are unchanged); a NumPy built with other
+    vector maths may differ in the last bit."""
+    reach, cos_knee, cos_beta = _leg_triangle(forward, down, l1, l2)
+    for i in range(forward.shape[0]):
+        knee = np.pi - math.acos(cos_knee[i])
+        hip_pitch = math.atan2(forward[i], down[i]) + math.acos(cos_beta[i])
+        joints[i, 1] = hip_pitch
+        joints[i, 2] = knee
+        joints[i, 3] = foot_pitch[i * pitch_step] - (hip_pitch - knee)
+    return reach
 
 
 @kernel('f8[::1](f8[:, :], readonly(f8[::1]), f8[::1], f8[::1], f8, readonly(f8[:]))')
