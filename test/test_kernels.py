@@ -64,6 +64,8 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    convex._middle, ct_roadmap._travel,
                    ct_space._candidates_meeting, ct_space._turn_entry,
                    ct_space._pose_shapes_into, ct_space._write_columns, gait._sagittal_joints,
+                   gait._pelvis_track, gait._yaw_and_slide, gait._swing_plane,
+                   gait._wrapped,
                    upper_body._write_patterns, upper_body._clipped):
         assert kernel.py_func is not kernel
 
@@ -494,3 +496,90 @@ def test_motion_patterns_kernel(skeleton):
                     # The narrow limits did cut: every arm column sits on a bound somewhere.
                     for j in arms:
                         assert np.isin(expected[:, j], (low[j], high[j])).any()
+
+
+def _swing_plane_in_numpy(progress, plane_turn, pinned, release, take, swing_hip, yaw, foot_x,
+                          foot_y, foot_yaw, turn, landing_x, landing_y, turning, inward,
+                          stance_yaw, toe_in, low, high, lift_pitch, landing_pitch):
+    """The swing foot's plane as WalkGenerator.step computed it with NumPy before session 25
+    (the reference of gait._swing_plane); also says which corrections applied."""
+    wrap = gait._wrap
+    foot_xy, landing_xy = np.array([foot_x, foot_y]), np.array([landing_x, landing_y])
+    plane_yaw = foot_yaw + turn * plane_turn
+    wanted_xy = foot_xy + progress[:, None] * (landing_xy - foot_xy)
+    direction = np.empty((len(yaw), 2))
+    direction[:, 0] = np.cos(plane_yaw)
+    direction[:, 1] = np.sin(plane_yaw)
+    applied = set()
+    if turning:
+        toward = wanted_xy - swing_hip
+        length = np.hypot(toward[:, 0], toward[:, 1])
+        sign = np.where(toward[:, 0] * direction[:, 0] + toward[:, 1] * direction[:, 1] < 0,
+                        -1.0, 1.0)
+        through = toward * (sign / np.maximum(length, 1e-9))[:, None]
+        weight = pinned * np.minimum(np.maximum((length - 0.15) / 0.1, 0.0), 1.0)
+        direction = direction + weight[:, None] * (through - direction)
+        direction /= np.hypot(direction[:, 0], direction[:, 1])[:, None]
+        plane_yaw = np.arctan2(direction[:, 1], direction[:, 0])
+        excess = inward * wrap(plane_yaw - stance_yaw) - toe_in
+        if excess.max() > 0.0:
+            applied.add('toe in')
+            plane_yaw = plane_yaw - inward * np.maximum(excess, 0.0) * (1.0 - pinned)
+            direction[:, 0] = np.cos(plane_yaw)
+            direction[:, 1] = np.sin(plane_yaw)
+        hip_yaw = wrap(plane_yaw - yaw)
+        if hip_yaw.min() < low or hip_yaw.max() > high:
+            applied.add('hip range')
+            plane_yaw = yaw + hip_yaw + ((np.clip(hip_yaw, low, high) - hip_yaw)
+                                         * (1.0 - pinned))
+            direction[:, 0] = np.cos(plane_yaw)
+            direction[:, 1] = np.sin(plane_yaw)
+    reach_xy = wanted_xy - swing_hip
+    forward = reach_xy[:, 0] * direction[:, 0] + reach_xy[:, 1] * direction[:, 1]
+    swing_xy = swing_hip + forward[:, None] * direction
+    pitch = lift_pitch * release + landing_pitch * take
+    return (plane_yaw, direction, forward, swing_xy, pitch), applied
+
+
+def test_the_pelvis_track_and_the_swing_plane():
+    """The pelvis and the swing foot's plane over a step, compiled and as Python, against the
+    NumPy code they replace, to the last bit: straight steps and turns, with and without the
+    toe-in bound and the hip yaw range cutting in, and the angle wrap at exact multiples."""
+    rng = np.random.default_rng(12)
+    k = 64
+    ramp = np.linspace(1.0 / k, 1.0, k)
+    for angle in (-3 * np.pi, -np.pi, 0.0, np.pi, 2 * np.pi, -0.0, 7.5, -7.5):
+        assert gait._wrapped(angle) == gait._wrapped.py_func(angle) == gait._wrap(angle)
+    applied = []
+    for trial in range(60):
+        turn_rate = rng.uniform(-0.9, 0.9) * (trial % 3 > 0)
+        yaw0 = rng.uniform(-np.pi, np.pi)
+        yaw1 = yaw0 + turn_rate
+        args = (np.clip(ramp * 1.3 - 0.15, 0.0, 1.0), ramp ** 2, yaw0, yaw1,
+                rng.uniform(-0.3, 0.0), rng.uniform(0.2, 0.5), rng.uniform(-2, 2),
+                rng.uniform(-2, 2), np.cos(yaw0), np.sin(yaw0), 0.1, -0.1)
+        track = gait._pelvis_track(*args)
+        same(track, gait._pelvis_track.py_func(*args))
+        yaw, lam = args[2] + (args[3] - args[2]) * args[0], args[4] + (args[5] - args[4]) * args[1]
+        hip = np.array([args[6], args[7]]) + lam[:, None] * np.array([args[8], args[9]])
+        pelvis = np.stack([hip[:, 0] - -np.sin(yaw) * 0.1, hip[:, 1] - np.cos(yaw) * 0.1], axis=1)
+        swing_hip = np.stack([pelvis[:, 0] + -np.sin(yaw) * -0.1,
+                              pelvis[:, 1] + np.cos(yaw) * -0.1], axis=1)
+        same(track, (yaw, lam, hip, pelvis, swing_hip))
+        pinned = np.clip(1.0 - 4.0 * np.minimum(ramp, 1.0 - ramp), 0.0, 1.0)
+        inward = 1.0 if trial % 2 else -1.0
+        plane = (np.clip(ramp * 1.2 - 0.1, 0.0, 1.0), ramp ** 1.5, pinned, 1.0 - ramp, ramp,
+                 swing_hip, yaw, float(swing_hip[0, 0] - 0.2), float(swing_hip[0, 1]),
+                 yaw0 + rng.uniform(-0.5, 0.5), float(gait._wrap(turn_rate * 1.5)),
+                 float(swing_hip[-1, 0] + 0.3), float(swing_hip[-1, 1] + rng.uniform(-0.1, 0.1)),
+                 turn_rate != 0.0, inward, yaw0 + rng.uniform(-0.6, 0.6),
+                 rng.uniform(0.05, 0.3), -rng.uniform(0.1, 0.5), rng.uniform(0.1, 0.6),
+                 rng.uniform(-0.3, 0.0), rng.uniform(-0.1, 0.1))
+        expected, used = _swing_plane_in_numpy(*plane)
+        same(gait._swing_plane(*plane), expected)
+        same(gait._swing_plane.py_func(*plane), expected)
+        applied.append(used)
+    # Every branch of the turn was taken somewhere, and straight steps skipped it.
+    assert any('toe in' in used for used in applied)
+    assert any('hip range' in used for used in applied)
+    assert any(not used for used in applied)

@@ -298,6 +298,131 @@ def _sagittal_leg(leg: LegGeometry, forward: np.ndarray, down: np.ndarray,
                             float(leg.thigh), float(leg.shank), joints)
 
 
+@kernel('UniTuple(f8[::1], 2)(readonly(f8[::1]), readonly(f8[::1]), f8, f8, f8, f8)')
+def _yaw_and_slide(turn, progress, yaw0, yaw1, lam0, lam1):
+    """The pelvis yaw (k,) turning from ``yaw0`` to ``yaw1`` as ``turn`` and the stance
+    hip's place (k,) along its foot's line from ``lam0`` to ``lam1`` as ``progress``, m."""
+    count = turn.shape[0]
+    yaw, lam = np.empty(count), np.empty(count)
+    for i in range(count):
+        yaw[i] = yaw0 + (yaw1 - yaw0) * turn[i]
+        lam[i] = lam0 + (lam1 - lam0) * progress[i]
+    return yaw, lam
+
+
+@kernel('Tuple((f8[::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1]))(readonly(f8[::1]), '
+        'readonly(f8[::1]), f8, f8, f8, f8, f8, f8, f8, f8, f8, f8)')
+def _pelvis_track(turn, progress, yaw0, yaw1, lam0, lam1, foot_x, foot_y, along_x, along_y,
+                  stance_offset, swing_offset):
+    """:meth:`WalkGenerator.step`'s pelvis over a step: the yaw (k,) and the stance hip's
+    place (k,) along its foot's line (:func:`_yaw_and_slide`), then the stance hip (k, 2)
+    on that line (from the foot at (``foot_x``, ``foot_y``) along (``along_x``,
+    ``along_y``)), the pelvis (k, 2) ``stance_offset`` m to its right of the heading and the
+    swing hip (k, 2) ``swing_offset`` m to the pelvis' left (what _lateral gives, from one
+    sine and cosine of the yaw)."""
+    yaw, lam = _yaw_and_slide(turn, progress, yaw0, yaw1, lam0, lam1)
+    count = yaw.shape[0]
+    stance_hip, pelvis, swing_hip = np.empty((count, 2)), np.empty((count, 2)), np.empty(
+        (count, 2))
+    for i in range(count):
+        stance_hip[i, 0] = foot_x + lam[i] * along_x
+        stance_hip[i, 1] = foot_y + lam[i] * along_y
+        sin_yaw, cos_yaw = math.sin(yaw[i]), math.cos(yaw[i])
+        pelvis[i, 0] = stance_hip[i, 0] - -sin_yaw * stance_offset
+        pelvis[i, 1] = stance_hip[i, 1] - cos_yaw * stance_offset
+        swing_hip[i, 0] = pelvis[i, 0] + -sin_yaw * swing_offset
+        swing_hip[i, 1] = pelvis[i, 1] + cos_yaw * swing_offset
+    return yaw, lam, stance_hip, pelvis, swing_hip
+
+
+@kernel('f8(f8)')
+def _wrapped(angle):
+    """:func:`_wrap` of one angle (Python's and NumPy's remainder: the divisor's sign)."""
+    return (angle + np.pi) % (2.0 * np.pi) - np.pi
+
+
+@kernel('Tuple((f8[::1], f8[:, ::1], f8[::1], f8[:, ::1], f8[::1]))(readonly(f8[::1]), '
+        'readonly(f8[::1]), readonly(f8[::1]), readonly(f8[::1]), readonly(f8[::1]), '
+        'f8[:, ::1], f8[::1], f8, f8, f8, f8, f8, f8, b1, f8, f8, f8, f8, f8, f8, f8)')
+def _swing_plane(progress, plane_turn, pinned, pitch_release, pitch_take, swing_hip, yaw,
+                 foot_x, foot_y, foot_yaw, turn, landing_x, landing_y, turning, inward,
+                 stance_yaw, toe_in, low, high, lift_pitch, landing_pitch):
+    """:meth:`WalkGenerator.step`'s swing foot over a step, before its heights: the leg's
+    plane heading (k,), its direction (k, 2) as cosine and sine, the ankle's reach along it
+    from the hip (k,), the ankle (k, 2) and the sole pitch (k,).
+
+    The foot (at (``foot_x``, ``foot_y``), heading ``foot_yaw``) travels to the landing
+    (``landing_x``, ``landing_y``) as ``progress`` and turns by ``turn`` as ``plane_turn``
+    (once it is off the ground, §4: hip yaw); the ankle lies in the plane through the swing
+    hip (``swing_hip`` (k, 2)). In a turn (``turning``) near lift-off and touchdown, as
+    ``pinned``, the plane turns through the foot instead of carrying it sideways (where the
+    foot is farther from the hip than the sole's ends are from the ankle); in the air the
+    foot points at most ``toe_in`` towards the stance foot (heading ``stance_yaw``; ``inward``
+    +1 for a right swing foot, -1 for a left), as the thighs would meet; and where the hip
+    yaw off the pelvis ``yaw`` passes [``low``, ``high``] in mid-swing the foot lags, as
+    far as the hip allows. Each correction, when some frame needs it, recomputes every
+    frame's direction from its heading, as the NumPy code did. The sole levels out early in
+    the swing (after a heel-off) and takes the landing pitch late: ``lift_pitch`` x
+    ``pitch_release`` + ``landing_pitch`` x ``pitch_take``.
+    """
+    count = yaw.shape[0]
+    plane = np.empty(count)
+    direction = np.empty((count, 2))
+    wanted = np.empty((count, 2))
+    step_x, step_y = landing_x - foot_x, landing_y - foot_y
+    for i in range(count):
+        plane[i] = foot_yaw + turn * plane_turn[i]
+        wanted[i, 0] = foot_x + progress[i] * step_x
+        wanted[i, 1] = foot_y + progress[i] * step_y
+        direction[i, 0] = math.cos(plane[i])
+        direction[i, 1] = math.sin(plane[i])
+    if turning:
+        worst = -np.inf
+        for i in range(count):
+            toward_x = wanted[i, 0] - swing_hip[i, 0]
+            toward_y = wanted[i, 1] - swing_hip[i, 1]
+            length = np.hypot(toward_x, toward_y)
+            sign = -1.0 if toward_x * direction[i, 0] + toward_y * direction[i, 1] < 0 else 1.0
+            scale = sign / max(length, 1e-9)
+            through_x, through_y = toward_x * scale, toward_y * scale
+            weight = pinned[i] * min(max((length - 0.15) / 0.1, 0.0), 1.0)
+            x = direction[i, 0] + weight * (through_x - direction[i, 0])
+            y = direction[i, 1] + weight * (through_y - direction[i, 1])
+            norm = np.hypot(x, y)
+            direction[i, 0], direction[i, 1] = x / norm, y / norm
+            plane[i] = math.atan2(direction[i, 1], direction[i, 0])
+            worst = max(worst, inward * _wrapped(plane[i] - stance_yaw) - toe_in)
+        if worst > 0.0:
+            for i in range(count):
+                excess = inward * _wrapped(plane[i] - stance_yaw) - toe_in
+                plane[i] = plane[i] - inward * (excess if excess >= 0.0 else 0.0) * (
+                    1.0 - pinned[i])
+                direction[i, 0] = math.cos(plane[i])
+                direction[i, 1] = math.sin(plane[i])
+        outside = False
+        for i in range(count):
+            hip_yaw = _wrapped(plane[i] - yaw[i])
+            outside = outside or hip_yaw < low or hip_yaw > high
+        if outside:
+            for i in range(count):
+                hip_yaw = _wrapped(plane[i] - yaw[i])
+                clipped = min(max(hip_yaw, low), high)
+                plane[i] = yaw[i] + hip_yaw + (clipped - hip_yaw) * (1.0 - pinned[i])
+                direction[i, 0] = math.cos(plane[i])
+                direction[i, 1] = math.sin(plane[i])
+    forward = np.empty(count)
+    ankle = np.empty((count, 2))
+    pitch = np.empty(count)
+    for i in range(count):
+        # A two-term dot product written out.
+        forward[i] = ((wanted[i, 0] - swing_hip[i, 0]) * direction[i, 0]
+                      + (wanted[i, 1] - swing_hip[i, 1]) * direction[i, 1])
+        ankle[i, 0] = swing_hip[i, 0] + forward[i] * direction[i, 0]
+        ankle[i, 1] = swing_hip[i, 1] + forward[i] * direction[i, 1]
+        pitch[i] = lift_pitch * pitch_release[i] + landing_pitch * pitch_take[i]
+    return plane, direction, forward, ankle, pitch
+
+
 @kernel('b1(f8[:, :], f8[:, :], f8[:], f8, f8, f8, f8, f8, f8, f8, f8, f8)')
 def _feet_meet(swing_xy, direction, swing_z, stance_x, stance_y, top, ux, uy, shift,
                half_length, half_width, far):
@@ -740,17 +865,9 @@ class WalkGenerator:
             progress = tau + ease_start * timing.ease_in + ease_end * timing.ease_out
         # The pelvis turns once the swing foot is off the ground: turning it moves the swing
         # hip's plane sideways, which would drag a foot still on the ground.
-        yaw = yaw0 + (yaw1 - yaw0) * timing.turn
-        lam = lam0 + (lam1 - lam0) * progress
-        stance_hip_xy = foot_s.xy + lam[:, None] * d_s
-        # _lateral(yaw, w_s) and _lateral(yaw, w_w) from one sine and cosine of the yaw.
-        sin_yaw, cos_yaw = np.sin(yaw), np.cos(yaw)
-        pelvis_xy = np.empty((k, 2))
-        pelvis_xy[:, 0] = stance_hip_xy[:, 0] - -sin_yaw * w_s
-        pelvis_xy[:, 1] = stance_hip_xy[:, 1] - cos_yaw * w_s
-        swing_hip_xy = np.empty((k, 2))
-        swing_hip_xy[:, 0] = pelvis_xy[:, 0] + -sin_yaw * w_w
-        swing_hip_xy[:, 1] = pelvis_xy[:, 1] + cos_yaw * w_w
+        yaw, lam, stance_hip_xy, pelvis_xy, swing_hip_xy = _pelvis_track(
+            timing.turn, progress, float(yaw0), float(yaw1), lam0, lam1,
+            float(foot_s.xy[0]), float(foot_s.xy[1]), float(d_s[0]), float(d_s[1]), w_s, w_w)
 
         # Touchdown: the landing ankle lies in the swing hip's plane at the end of the step.
         d_l = np.array([np.cos(landing_yaw), np.sin(landing_yaw)])
@@ -769,59 +886,20 @@ class WalkGenerator:
         delay = 0.0 if foot_w.pitch < -0.05 else 0.12
         p = timing.lift[delay]
         # The foot turns to its new heading only once it is off the ground (§4: hip yaw).
-        plane_yaw = foot_w.yaw + _wrap(landing.yaw - foot_w.yaw) * timing.plane_turn
-        wanted_xy = foot_w.xy + p[:, None] * (landing.xy - foot_w.xy)
-        direction = np.empty((k, 2))
-        direction[:, 0] = np.cos(plane_yaw)
-        direction[:, 1] = np.sin(plane_yaw)
         # Near lift-off and touchdown the sole is within millimetres of the ground: there the
         # leg's plane turns through the foot (hip yaw) rather than carrying it sideways with the
         # hip, which in a turn moves across the foot's own plane (2-DOF hip, no hip roll). Where
         # both feet, the landing and the pelvis share one heading the hip moves along that
-        # plane and nothing changes: straight walking skips it.
+        # plane and nothing changes: straight walking skips it (see _swing_plane).
         turning = max(abs(_wrap(other - foot_w.yaw))
                       for other in (landing.yaw, foot_s.yaw, yaw0, yaw1)) > 1e-9
-        if turning:
-            toward = wanted_xy - swing_hip_xy
-            length = np.hypot(toward[:, 0], toward[:, 1])
-            sign = np.where(toward[:, 0] * direction[:, 0] + toward[:, 1] * direction[:, 1] < 0,
-                            -1.0, 1.0)
-            through = toward * (sign / np.maximum(length, 1e-9))[:, None]
-            # Turning the plane swings the sole about the ankle: that moves its ends less than
-            # carrying it sideways only where the foot is farther from the hip than they are
-            # from the ankle.
-            pinned = timing.pinned * np.minimum(np.maximum((length - 0.15) / 0.1, 0.0), 1.0)
-            direction = direction + pinned[:, None] * (through - direction)
-            direction /= np.hypot(direction[:, 0], direction[:, 1])[:, None]
-            plane_yaw = np.arctan2(direction[:, 1], direction[:, 0])
-            # The foot turns on its own ramp and the pelvis on another: in a large turn the
-            # hip yaw between them overshoots the range in mid-swing though it starts and ends
-            # inside it (after a zigzag, 0.44 -> 0.74 -> 0.45 rad was seen). In the air the
-            # foot may lag: it points as far as the hip allows. Not near the ground (where
-            # the plane turns through the foot), so it still leaves and lands as planned.
-            # Toes in, both thighs turn in, and as the swinging knee passes the stance knee
-            # with both hips flexed the two would meet: in the air the swinging foot points
-            # at most swing_toe_in towards the stance foot (it turns further in as it lands).
-            inward = 1.0 if swing_side == RIGHT else -1.0
-            excess = inward * _wrap(plane_yaw - foot_s.yaw) - cfg.swing_toe_in
-            if excess.max() > 0.0:
-                plane_yaw = plane_yaw - inward * np.maximum(excess, 0.0) * (1.0 - timing.pinned)
-                direction[:, 0] = np.cos(plane_yaw)
-                direction[:, 1] = np.sin(plane_yaw)
-            hip_yaw = _wrap(plane_yaw - yaw)
-            low, high = self._swing_yaw_range[swing_side]
-            if hip_yaw.min() < low or hip_yaw.max() > high:
-                plane_yaw = yaw + hip_yaw + ((np.clip(hip_yaw, low, high) - hip_yaw)
-                                             * (1.0 - timing.pinned))
-                direction[:, 0] = np.cos(plane_yaw)
-                direction[:, 1] = np.sin(plane_yaw)
-        # A two-term dot product written out (a reduction over an axis of 2 is slow).
-        reach_xy = wanted_xy - swing_hip_xy
-        forward = reach_xy[:, 0] * direction[:, 0] + reach_xy[:, 1] * direction[:, 1]
-        swing_xy = swing_hip_xy + forward[:, None] * direction
-        # The sole levels out early in the swing (after a heel-off) and takes the landing
-        # pitch late, so it is flat while it travels over the ground.
-        swing_pitch = foot_w.pitch * timing.pitch_release + landing.pitch * timing.pitch_take
+        low, high = self._swing_yaw_range[swing_side]
+        plane_yaw, direction, forward, swing_xy, swing_pitch = _swing_plane(
+            p, timing.plane_turn, timing.pinned, timing.pitch_release, timing.pitch_take,
+            swing_hip_xy, yaw, float(foot_w.xy[0]), float(foot_w.xy[1]), float(foot_w.yaw),
+            float(_wrap(landing.yaw - foot_w.yaw)), float(landing.xy[0]), float(landing.xy[1]),
+            turning, 1.0 if swing_side == RIGHT else -1.0, float(foot_s.yaw),
+            float(cfg.swing_toe_in), low, high, float(foot_w.pitch), float(landing.pitch))
         # Pelvis height: key-frame shape by category, bounded by what both legs can reach.
         rise = landing.sole - foot_s.sole
         if rise > 0.03:
