@@ -65,7 +65,7 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    ct_space._candidates_meeting, ct_space._turn_entry,
                    ct_space._pose_shapes_into, ct_space._write_columns, gait._sagittal_joints,
                    gait._pelvis_track, gait._yaw_and_slide, gait._swing_plane,
-                   gait._wrapped,
+                   gait._wrapped, gait._swing_bounds, gait._swing_pass,
                    upper_body._write_patterns, upper_body._clipped):
         assert kernel.py_func is not kernel
 
@@ -583,3 +583,66 @@ def test_the_pelvis_track_and_the_swing_plane():
     assert any('toe in' in used for used in applied)
     assert any('hip range' in used for used in applied)
     assert any(not used for used in applied)
+
+
+def test_the_swing_passes(skeleton):
+    """The swing's shared bounds and one swing pass, compiled and as Python, against the
+    NumPy code they replace, to the last bit: with and without the pelvis raised over the
+    swing, passes that converge and that do not, and a hip out of reach."""
+    rng = np.random.default_rng(13)
+    leg = skeleton.leg
+    k = 64
+    ramp = np.linspace(1.0 / k, 1.0, k)
+    hump = np.sin(np.pi * ramp) ** 2
+    fade = 1.0 - ramp ** 3
+    r = 0.97 * (leg.thigh + leg.shank)
+    closest = 0.25
+    seen = set()
+    for trial in range(60):
+        lam = np.linspace(-0.3, 0.3, k) * rng.uniform(0.5, 3.0 if trial % 10 == 0 else 1.2)
+        forward = np.linspace(-0.35, 0.4, k) * rng.uniform(0.5, 1.2)
+        swing_hip = rng.normal(0.0, 1.0, (k, 2))
+        yaw = rng.uniform(-np.pi, np.pi) + 0.2 * ramp
+        plane_yaw = yaw + rng.uniform(-0.4, 0.4)
+        direction = np.stack([np.cos(plane_yaw), np.sin(plane_yaw)], axis=1)
+        swing_xy = swing_hip + forward[:, None] * direction + rng.normal(0, 0.01, (k, 2))
+        weight = np.clip(ramp * 1.5 - 0.2, 0.0, 1.0)
+        z0, nominal, stance_z = 0.9, rng.uniform(0.8, 1.0), rng.uniform(-0.05, 0.05)
+        args = (lam, forward, swing_xy, swing_hip, direction, plane_yaw, yaw, weight, z0,
+                nominal, r, stance_z, closest)
+        bounds = gait._swing_bounds(*args)
+        same(bounds, gait._swing_bounds.py_func(*args))
+        stance_bound = stance_z + np.sqrt(np.maximum(r * r - lam * lam, 0.0))
+        swing_x = swing_xy[:, 0] - swing_hip[:, 0]
+        swing_y = swing_xy[:, 1] - swing_hip[:, 1]
+        swing_forward = swing_x * direction[:, 0] + swing_y * direction[:, 1]
+        expected = ((np.abs(lam) > r).any() or (np.abs(forward) > r).any(), stance_bound,
+                    np.minimum(z0 + (nominal - z0) * weight, stance_bound),
+                    np.sqrt(np.maximum(r * r - forward * forward, 0.0)), swing_forward,
+                    gait._wrap(plane_yaw - yaw),
+                    np.sqrt(np.maximum(closest * closest - swing_forward * swing_forward, 0.0)),
+                    float(swing_x[-1]) * -direction[-1, 1] + float(swing_y[-1]) * direction[-1, 0])
+        same(bounds, expected)
+        seen.add('out of reach' if bounds[0] else 'in reach')
+        _, stance_bound, z_bound, swing_reach, swing_forward, hip_yaw, hip_over_ankle, _ = bounds
+        swing_z = rng.uniform(0.05, 0.15) + rng.uniform(0.0, 0.25) * hump
+        swing_pitch = rng.uniform(-0.6, 0.6) * np.ones(k)
+        low, high = -0.7, 0.6
+        args = (swing_z, z_bound, swing_reach, hip_over_ankle, hump, stance_bound, hip_yaw,
+                swing_forward, swing_pitch, fade, low, high, leg.thigh, leg.shank)
+        result = gait._swing_pass(*args)
+        same(result, gait._swing_pass.py_func(*args))
+        z = np.minimum(z_bound, swing_z + swing_reach)
+        short = swing_z + hip_over_ankle - z
+        if short.max() > 0.0:
+            seen.add('raised')
+            scale = float((short / np.maximum(hump, 1e-3)).max())
+            z = np.minimum(z + scale * hump, np.maximum(z, stance_bound))
+        joints = np.empty((k, 4))
+        joints[:, 0] = hip_yaw
+        reach = gait._sagittal_leg(leg, swing_forward, -(swing_z - z), swing_pitch, joints)
+        correction = (np.minimum(np.maximum(joints[:, 3], low), high) - joints[:, 3]) * fade
+        converged = bool(np.abs(correction).max() < 0.005)
+        seen.add('converged' if converged else 'corrected')
+        same(result, (z, joints, reach, converged, swing_pitch + correction))
+    assert seen == {'out of reach', 'in reach', 'raised', 'converged', 'corrected'}

@@ -546,6 +546,88 @@ def _sagittal_joints(forward, down, foot_pitch, pitch_step, l1, l2, joints):
     return reach
 
 
+@kernel('Tuple((b1, f8[::1], f8[::1], f8[::1], f8[::1], f8[::1], f8[::1], f8))(f8[::1], '
+        'f8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], readonly(f8[::1]), f8, '
+        'f8, f8, f8, f8)')
+def _swing_bounds(lam, forward, swing_xy, swing_hip, direction, plane_yaw, yaw, weight, z0,
+                  nominal, r, stance_z, closest):
+    """What :meth:`WalkGenerator.step`'s swing passes share: whether either hip is farther
+    than ``r`` from its ankle along the legs' lines (``lam``, ``forward``: out of reach);
+    the highest pelvis the stance leg allows (its ankle at ``stance_z``); the pelvis height
+    bound of both legs' reach and the key frames' height (``z0`` + (``nominal`` - ``z0``) x
+    ``weight``); how far above the swing ankle its leg reaches; the swing ankle's reach in
+    the leg's plane, the hip yaw of that plane off the pelvis ``yaw``, and how far above the
+    ankle the hip must stay so the knee bends no more than the knee's limit allows
+    (``closest``: the hip-ankle distance there); and the ankle's distance from the plane at
+    the last frame."""
+    count = lam.shape[0]
+    out_of_reach = False
+    for i in range(count):
+        out_of_reach = out_of_reach or abs(lam[i]) > r or abs(forward[i]) > r
+    stance_bound, z_bound = np.empty(count), np.empty(count)
+    swing_reach, swing_forward = np.empty(count), np.empty(count)
+    hip_yaw, hip_over_ankle = np.empty(count), np.empty(count)
+    for i in range(count):
+        stance_bound[i] = stance_z + math.sqrt(max(r * r - lam[i] * lam[i], 0.0))
+        swing_reach[i] = math.sqrt(max(r * r - forward[i] * forward[i], 0.0))
+        wanted = z0 + (nominal - z0) * weight[i]
+        z_bound[i] = min(wanted, stance_bound[i])
+        swing_x = swing_xy[i, 0] - swing_hip[i, 0]
+        swing_y = swing_xy[i, 1] - swing_hip[i, 1]
+        swing_forward[i] = swing_x * direction[i, 0] + swing_y * direction[i, 1]
+        hip_yaw[i] = _wrapped(plane_yaw[i] - yaw[i])
+        hip_over_ankle[i] = math.sqrt(max(closest * closest
+                                          - swing_forward[i] * swing_forward[i], 0.0))
+    last = count - 1
+    lateral = ((swing_xy[last, 0] - swing_hip[last, 0]) * -direction[last, 1]
+               + (swing_xy[last, 1] - swing_hip[last, 1]) * direction[last, 0])
+    return (out_of_reach, stance_bound, z_bound, swing_reach, swing_forward, hip_yaw,
+            hip_over_ankle, lateral)
+
+
+@kernel('Tuple((f8[::1], f8[:, ::1], f8[::1], b1, f8[::1]))(f8[::1], f8[::1], f8[::1], '
+        'f8[::1], readonly(f8[::1]), f8[::1], f8[::1], f8[::1], f8[::1], readonly(f8[::1]), '
+        'f8, f8, f8, f8)')
+def _swing_pass(swing_z, z_bound, swing_reach, hip_over_ankle, hump, stance_bound, hip_yaw,
+                swing_forward, swing_pitch, fade, ankle_low, ankle_high, l1, l2):
+    """One pass of :meth:`WalkGenerator.step`'s swing: for swing ankle heights ``swing_z``
+    (k,), the pelvis height (the lowest of ``z_bound`` and what the swing leg reaches,
+    raised by a smooth ``hump`` over the swing, scaled to cover any shortfall below
+    ``hip_over_ankle``, up to the stance leg's ``stance_bound``: a frame-by-frame maximum
+    jerked the pelvis up, and the arms swinging with the hips past their speed limit), the
+    swing leg's joints (k, 4) (hip yaw ``hip_yaw``, then :func:`_sagittal_joints` for the
+    sole pitch ``swing_pitch``) and reach; whether the ankle keeps within [``ankle_low``,
+    ``ankle_high``] (a correction, faded by ``fade``, under 5 mm-rad everywhere), and the
+    sole pitch that corrects it."""
+    count = swing_z.shape[0]
+    z = np.empty(count)
+    most = -np.inf
+    for i in range(count):
+        z[i] = min(z_bound[i], swing_z[i] + swing_reach[i])
+        most = max(most, swing_z[i] + hip_over_ankle[i] - z[i])
+    if most > 0.0:
+        scale = -np.inf
+        for i in range(count):
+            short = swing_z[i] + hip_over_ankle[i] - z[i]
+            scale = max(scale, short / max(hump[i], 1e-3))
+        for i in range(count):
+            z[i] = min(z[i] + scale * hump[i], max(z[i], stance_bound[i]))
+    joints = np.empty((count, 4))
+    down = np.empty(count)
+    for i in range(count):
+        joints[i, 0] = hip_yaw[i]
+        down[i] = -(swing_z[i] - z[i])
+    reach = _sagittal_joints(swing_forward, down, swing_pitch, 1, l1, l2, joints)
+    converged = True
+    next_pitch = np.empty(count)
+    for i in range(count):
+        ankle = joints[i, 3]
+        correction = (min(max(ankle, ankle_low), ankle_high) - ankle) * fade[i]
+        converged = converged and abs(correction) < 0.005
+        next_pitch[i] = swing_pitch[i] + correction
+    return z, joints, reach, converged, next_pitch
+
+
 @kernel('f8[::1](f8[:, :], readonly(f8[::1]), f8[::1], f8[::1], f8, readonly(f8[:]))')
 def _swing_need(tops, along, sin_pitch, cos_pitch, ankle_height, clearance):
     """Height the swinging ankle must keep at each sampled frame (s,), m: the highest of the
@@ -909,11 +991,23 @@ class WalkGenerator:
         else:
             category = 'level'
         nominal = 0.5 * (foot_s.z + landing.z) + leg.thigh + leg.shank - cfg.pelvis_height_drop
-        wanted_z = z0 + (nominal - z0) * timing.weight[category]
         r = cfg.reach_fraction * (leg.thigh + leg.shank)
-        if (np.abs(lam) > r).any() or (np.abs(forward) > r).any():
+        # The swinging knee bends at most to its limit (less a margin), so an ankle lifted
+        # close under the hip holds the hip up, as far as the stance leg reaches: up steep
+        # stairs the rear foot passes over the front foot's tread in mid-swing while the pelvis
+        # rises late (Figure 4), and the knee would pass its limit.
+        knee_limit = self._leg_upper[swing_side][2] - 0.02
+        closest = math.sqrt(leg.thigh ** 2 + leg.shank ** 2
+                            + 2.0 * leg.thigh * leg.shank * math.cos(knee_limit))
+        # Only the heights change between passes: the pelvis height bounds, the swing leg's
+        # hip yaw and its horizontal reach in and across its plane (leg_inverse_kinematics'
+        # first part) are solved once (see _swing_bounds).
+        (out_of_reach, stance_bound, z_bound, swing_reach, swing_forward, swing_hip_yaw,
+         hip_over_ankle, swing_lateral) = _swing_bounds(
+            lam, forward, swing_xy, swing_hip_xy, direction, plane_yaw, yaw,
+            timing.weight[category], float(z0), float(nominal), r, float(foot_s.z), closest)
+        if out_of_reach:
             raise GaitError('footstep out of leg reach')
-        stance_bound = foot_s.z + np.sqrt(np.maximum(r * r - lam * lam, 0.0))
         fade = timing.fade
         ankle_low = self._leg_lower[swing_side][3] + 0.02
         ankle_high = self._leg_upper[swing_side][3] - 0.02
@@ -923,48 +1017,16 @@ class WalkGenerator:
                                           swing_profile)
         # The swing leg's IK of the last pass, when its inputs are final (the pass converged).
         swing_solution = None
-        # The parts of the pelvis height bound that do not change between passes (a minimum
-        # of three is the same in any order).
-        swing_reach = np.sqrt(np.maximum(r * r - forward * forward, 0.0))
-        z_bound = np.minimum(wanted_z, stance_bound)
-        # Only the heights change between passes: the swing leg's hip yaw and its horizontal
-        # reach in and across its plane (leg_inverse_kinematics' first part) are solved once.
-        swing_x = swing_xy[:, 0] - swing_hip_xy[:, 0]
-        swing_y = swing_xy[:, 1] - swing_hip_xy[:, 1]
-        swing_forward = swing_x * direction[:, 0] + swing_y * direction[:, 1]
-        # Only the last frame's distance from the leg's plane is reported.
-        cos_end, sin_end = direction[-1].tolist()
-        swing_lateral = float(swing_x[-1]) * -sin_end + float(swing_y[-1]) * cos_end
-        swing_hip_yaw = _wrap(plane_yaw - yaw)
-        # The swinging knee bends at most to its limit (less a margin), so an ankle lifted
-        # close under the hip holds the hip up, as far as the stance leg reaches: up steep
-        # stairs the rear foot passes over the front foot's tread in mid-swing while the pelvis
-        # rises late (Figure 4), and the knee would pass its limit.
-        knee_limit = self._leg_upper[swing_side][2] - 0.02
-        closest = math.sqrt(leg.thigh ** 2 + leg.shank ** 2
-                            + 2.0 * leg.thigh * leg.shank * math.cos(knee_limit))
-        hip_over_ankle = np.sqrt(np.maximum(closest * closest - swing_forward * swing_forward,
-                                            0.0))
         for _ in range(5):
             swing_z, lift = self._swing_heights(bezier, foot_w, landing, swing_pitch, footprint)
-            z = np.minimum(z_bound, swing_z + swing_reach)
-            short = swing_z + hip_over_ankle - z
-            if short.max() > 0.0:
-                # Raised by a smooth hump over the swing, scaled to cover the shortfall (a
-                # frame-by-frame maximum jerked the pelvis up, and the arms swinging with the
-                # hips past their speed limit).
-                hump = timing.hump
-                scale = float((short / np.maximum(hump, 1e-3)).max())
-                z = np.minimum(z + scale * hump, np.maximum(z, stance_bound))
-            joints = np.empty((k, 4))
-            joints[:, 0] = swing_hip_yaw
-            reach = _sagittal_leg(leg, swing_forward, -(swing_z - z), swing_pitch, joints)
-            correction = (np.minimum(np.maximum(joints[:, 3], ankle_low), ankle_high)
-                          - joints[:, 3]) * fade
-            if np.abs(correction).max() < 0.005:
+            z, joints, reach, converged, next_pitch = _swing_pass(
+                swing_z, z_bound, swing_reach, hip_over_ankle, timing.hump, stance_bound,
+                swing_hip_yaw, swing_forward, swing_pitch, fade, float(ankle_low),
+                float(ankle_high), float(leg.thigh), float(leg.shank))
+            if converged:
                 swing_solution = (joints, reach)
                 break
-            swing_pitch = swing_pitch + correction
+            swing_pitch = next_pitch
 
         self._check_feet_apart(foot_s, swing_xy, direction, swing_z)
         foot_end = [None, None]
