@@ -65,7 +65,8 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    ct_space._candidates_meeting, ct_space._turn_entry,
                    ct_space._pose_shapes_into, ct_space._write_columns, gait._sagittal_joints,
                    gait._pelvis_track, gait._yaw_and_slide, gait._swing_plane,
-                   gait._wrapped, gait._swing_bounds, gait._swing_pass,
+                   gait._wrapped, gait._swing_bounds, gait._swing_pass, gait._stance_leg,
+                   gait._fade_ankle,
                    upper_body._write_patterns, upper_body._clipped):
         assert kernel.py_func is not kernel
 
@@ -646,3 +647,46 @@ def test_the_swing_passes(skeleton):
         seen.add('converged' if converged else 'corrected')
         same(result, (z, joints, reach, converged, swing_pitch + correction))
     assert seen == {'out of reach', 'in reach', 'raised', 'converged', 'corrected'}
+
+
+def test_the_stance_leg_and_the_ankle_fade(skeleton):
+    """The stance leg over a step and the swinging ankle's fade into its range, compiled and
+    as Python, against the NumPy code they replace, to the last bit; a heel-off is flagged
+    where the ankle passes its limit, and only there."""
+    rng = np.random.default_rng(14)
+    leg = skeleton.leg
+    k = 64
+    ramp = np.linspace(1.0 / k, 1.0, k)
+    flagged = set()
+    for trial in range(40):
+        foot_yaw = rng.uniform(-np.pi, np.pi)
+        cos_s, sin_s = np.cos(foot_yaw), np.sin(foot_yaw)
+        foot = np.array([rng.uniform(-2, 2), rng.uniform(-2, 2)])
+        lam = -0.25 + 0.6 * ramp * rng.uniform(0.8, 1.2)
+        hip = foot + lam[:, None] * np.array([cos_s, sin_s]) + rng.normal(0, 0.01, (k, 2))
+        yaw = foot_yaw + rng.uniform(-0.3, 0.3) * ramp
+        foot_z, pitch = rng.uniform(0.0, 0.3), rng.uniform(-0.2, 0.2)
+        z = foot_z + 0.8 + 0.03 * np.sin(np.pi * ramp)
+        limit = rng.uniform(0.2, 0.6)
+        args = (hip, yaw, z, foot[0], foot[1], foot_yaw, foot_z, pitch, cos_s, sin_s,
+                leg.thigh, leg.shank, limit)
+        result = gait._stance_leg(*args)
+        same(result, gait._stance_leg.py_func(*args))
+        stance_x, stance_y = foot[0] - hip[:, 0], foot[1] - hip[:, 1]
+        joints = np.empty((k, 4))
+        joints[:, 0] = gait._wrap(foot_yaw - yaw)
+        reach = gait._sagittal_leg(leg, stance_x * cos_s + stance_y * sin_s, -(foot_z - z),
+                                   pitch, joints)
+        lateral = float(stance_x[-1]) * -sin_s + float(stance_y[-1]) * cos_s
+        over = bool((joints[:, 3] > limit).any())
+        same(result, (joints, reach, lateral, over))
+        flagged.add(over)
+        fade = 1.0 - ramp ** 2
+        low, high = -0.2, 0.1
+        compiled, plain = joints.copy(), joints.copy()
+        gait._fade_ankle(compiled, low, high, fade)
+        gait._fade_ankle.py_func(plain, low, high, fade)
+        wanted = np.minimum(np.maximum(joints[:, 3], low), high)
+        joints[:, 3] += (wanted - joints[:, 3]) * fade
+        same((compiled, plain), (joints, joints))
+    assert flagged == {True, False}

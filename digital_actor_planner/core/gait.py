@@ -546,6 +546,43 @@ def _sagittal_joints(forward, down, foot_pitch, pitch_step, l1, l2, joints):
     return reach
 
 
+@kernel('Tuple((f8[:, ::1], f8[::1], f8, b1))(f8[:, ::1], f8[::1], f8[::1], f8, f8, f8, f8, f8, '
+        'f8, f8, f8, f8, f8)')
+def _stance_leg(stance_hip, yaw, z, foot_x, foot_y, foot_yaw, foot_z, foot_pitch, cos_s, sin_s,
+                l1, l2, limit):
+    """The stance leg over a step (leg_inverse_kinematics written out): its ankle at
+    (``foot_x``, ``foot_y``, ``foot_z``), its plane along (``cos_s``, ``sin_s``) heading
+    ``foot_yaw`` and its sole pitch ``foot_pitch`` stay put while the hip moves
+    (``stance_hip`` (k, 2) at pelvis heights ``z``, pelvis ``yaw``). Returns the joints
+    (k, 4), the reach, the ankle's distance from the hip's plane at the last frame, and
+    whether the ankle passes ``limit`` anywhere (a heel-off)."""
+    count = yaw.shape[0]
+    joints = np.empty((count, 4))
+    forward, down = np.empty(count), np.empty(count)
+    for i in range(count):
+        joints[i, 0] = _wrapped(foot_yaw - yaw[i])
+        forward[i] = (foot_x - stance_hip[i, 0]) * cos_s + (foot_y - stance_hip[i, 1]) * sin_s
+        down[i] = -(foot_z - z[i])
+    pitch = np.empty(1)
+    pitch[0] = foot_pitch
+    reach = _sagittal_joints(forward, down, pitch, 0, l1, l2, joints)
+    last = count - 1
+    lateral = (foot_x - stance_hip[last, 0]) * -sin_s + (foot_y - stance_hip[last, 1]) * cos_s
+    over = False
+    for i in range(count):
+        over = over or joints[i, 3] > limit
+    return joints, reach, lateral, over
+
+
+@kernel('void(f8[:, :], f8, f8, readonly(f8[::1]))')
+def _fade_ankle(joints, low, high, fade):
+    """A swinging foot's ankle (column 3 of ``joints``) brought into [``low``, ``high``] by
+    the share ``fade`` of each frame (none at touchdown), in place."""
+    for i in range(joints.shape[0]):
+        ankle = joints[i, 3]
+        joints[i, 3] = ankle + (min(max(ankle, low), high) - ankle) * fade[i]
+
+
 @kernel('Tuple((b1, f8[::1], f8[::1], f8[::1], f8[::1], f8[::1], f8[::1], f8))(f8[::1], '
         'f8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[::1], f8[::1], readonly(f8[::1]), f8, '
         'f8, f8, f8, f8)')
@@ -1040,16 +1077,12 @@ class WalkGenerator:
         # The stance leg (leg_inverse_kinematics written out): its ankle, plane and sole pitch
         # stay put over the step, so they enter as numbers, not as columns of k equal values.
         cos_s, sin_s = d_s.tolist()
-        stance_x = foot_s.xy[0] - stance_hip_xy[:, 0]
-        stance_y = foot_s.xy[1] - stance_hip_xy[:, 1]
-        joints = np.empty((k, 4))
-        joints[:, 0] = _wrap(foot_s.yaw - yaw)
-        reach = _sagittal_leg(leg, stance_x * cos_s + stance_y * sin_s, -(foot_s.z - z),
-                              foot_s.pitch, joints)
-        # Only the last frame's distance from the leg's plane is reported.
-        stance_lateral = float(stance_x[-1]) * -sin_s + float(stance_y[-1]) * cos_s
         limit = self._leg_upper[stance_side][3] - 0.03
-        if (joints[:, 3] > limit).any():
+        joints, reach, stance_lateral, over_limit = _stance_leg(
+            stance_hip_xy, yaw, z, float(foot_s.xy[0]), float(foot_s.xy[1]), float(foot_s.yaw),
+            float(foot_s.z), float(foot_s.pitch), cos_s, sin_s, float(leg.thigh),
+            float(leg.shank), float(limit))
+        if over_limit:
             # Heel-off: the stance foot rolls about its toe instead of over-flexing the ankle.
             joints, foot_s_end = self._heel_off(leg, _points(stance_hip_xy, z), foot_s, yaw,
                                                 joints, limit,
@@ -1072,9 +1105,8 @@ class WalkGenerator:
         # the ankle stays inside its range; contact frames are unchanged. It rolls on from a
         # heel-off at lift-off; the correction fades out towards touchdown, where the sole
         # must meet its foothold flat.
-        wanted = np.minimum(np.maximum(joints[:, 3], self._leg_lower[swing_side][3] + 0.02),
-                            self._leg_upper[swing_side][3] - 0.02)
-        joints[:, 3] += (wanted - joints[:, 3]) * fade
+        _fade_ankle(joints, float(self._leg_lower[swing_side][3] + 0.02),
+                    float(self._leg_upper[swing_side][3] - 0.02), fade)
         self._check_leg(swing_side, joints, reach)
         if turning:
             # Legs in parallel planes a hip width apart cannot meet: only turns are tested.
