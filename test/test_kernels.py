@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from digital_actor_planner.core import (collision, convex, ct_roadmap, ct_space, environment,
-                                        footsteps, gait)
+                                        footsteps, gait, path as path_module)
 from digital_actor_planner.core import skeleton as skeleton_module, upper_body
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment, start_configuration
@@ -66,7 +66,7 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    ct_space._pose_shapes_into, ct_space._write_columns, gait._sagittal_joints,
                    gait._pelvis_track, gait._yaw_and_slide, gait._swing_plane,
                    gait._wrapped, gait._swing_bounds, gait._swing_pass, gait._stance_leg,
-                   gait._fade_ankle,
+                   gait._fade_ankle, path_module._arc_offsets,
                    upper_body._write_patterns, upper_body._clipped):
         assert kernel.py_func is not kernel
 
@@ -690,3 +690,30 @@ def test_the_stance_leg_and_the_ankle_fade(skeleton):
         joints[:, 3] += (wanted - joints[:, 3]) * fade
         same((compiled, plain), (joints, joints))
     assert flagged == {True, False}
+
+
+def test_points_beside_the_path():
+    """Points beside a predicted path, compiled and as Python, against the NumPy code they
+    replace (PredictedPath._points and the offset along the normal), to the last bit: straight
+    and curved paths, arc lengths past both ends, one offset for all points, one per point,
+    and one per track."""
+    rng = np.random.default_rng(15)
+    for curvature in (0.0, 1e-10, 0.8, -2.5):
+        path = path_module.PredictedPath(rng.uniform(-3, 3), rng.uniform(-3, 3),
+                                         rng.uniform(-np.pi, np.pi), curvature, 2.0)
+        s = rng.uniform(-0.5, 2.5, 40)
+        x, y, heading, sin, cos = path._points(s)
+        for lateral in (np.float64(0.0), np.float64(0.09), rng.uniform(-0.1, 0.1, 40)):
+            expected = np.stack([x - lateral * sin, y + lateral * cos, heading], axis=1)
+            same(path.offset_poses(s, lateral), expected)
+            paired = np.asarray(lateral).reshape(-1).copy()
+            args = (s, paired, True, path.x, path.y, path.heading, path.curvature)
+            same(path_module._arc_offsets(*args)[0], expected)
+            same(path_module._arc_offsets.py_func(*args)[0], expected)
+        tracks = rng.uniform(-0.2, 0.2, 6)[:, None]
+        expected = np.stack([x - tracks * sin, y + tracks * cos], axis=-1)
+        same(path.offset_points(s, tracks), expected)
+        args = (s, tracks.ravel().copy(), False, path.x, path.y, path.heading, path.curvature)
+        same(path_module._arc_offsets.py_func(*args)[:, :, :2], expected)
+        # Other shapes still broadcast as before (the NumPy code).
+        same(path.offset_points(s, 0.05), np.stack([x - 0.05 * sin, y + 0.05 * cos], axis=-1))

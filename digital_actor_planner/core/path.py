@@ -11,6 +11,8 @@ import math
 
 import numpy as np
 
+from .jit import kernel
+
 
 @dataclass(frozen=True)
 class PredictedPath:
@@ -67,6 +69,11 @@ class PredictedPath:
         """
         s = np.asarray(s, dtype=float)
         lateral = np.asarray(lateral, dtype=float)
+        if s.ndim == 1 and lateral.ndim == 2 and lateral.shape[1] == 1:
+            # T tracks of N points, the way the ground profile asks: one compiled pass.
+            tracks = _arc_offsets(np.ascontiguousarray(s), lateral.ravel().copy(), False,
+                                  self.x, self.y, self.heading, self.curvature)
+            return tracks[:, :, :2].copy()
         x, y, _, sin, cos = self._points(s)
         # The track's normal (left of the heading) is (-sin, cos).
         track_x = x - lateral * sin
@@ -93,6 +100,11 @@ class PredictedPath:
 
         """
         s = np.asarray(s, dtype=float)
+        offsets = np.asarray(lateral, dtype=float)
+        if s.ndim == 1 and (offsets.ndim == 0 or offsets.shape == s.shape):
+            # The usual call: one compiled pass, the same arithmetic as below.
+            return _arc_offsets(np.ascontiguousarray(s), offsets.reshape(-1).copy(), True,
+                                self.x, self.y, self.heading, self.curvature)[0]
         x, y, heading, sin, cos = self._points(s)
         out = np.empty(s.shape + (3,))
         out[..., 0] = x - lateral * sin
@@ -126,6 +138,37 @@ class PredictedPath:
         a1 = np.arctan2(xy[1] - cy, xy[0] - cx)
         swept = (a1 - a0 + np.pi) % (2 * np.pi) - np.pi
         return float(swept * radius)
+
+
+@kernel('f8[:, :, ::1](f8[::1], f8[::1], b1, f8, f8, f8, f8)')
+def _arc_offsets(s, lateral, paired, x0, y0, heading0, curvature):
+    """Points beside a path (:meth:`PredictedPath._points`, then the offset along the
+    normal, as :meth:`PredictedPath.offset_poses` computes them): x, y (m) and the path's
+    heading (rad) at arc lengths ``s`` (N,), ``lateral`` m to the left of the path. With
+    ``paired`` one row (1, N, 3) with ``lateral`` (N,) per point, or (1,) for all; else a
+    row per track, (T, N, 3) for ``lateral`` (T,)."""
+    rows = 1 if paired else lateral.shape[0]
+    out = np.empty((rows, s.shape[0], 3))
+    straight = abs(curvature) < 1e-9
+    cos0, sin0 = math.cos(heading0), math.sin(heading0)
+    for n in range(s.shape[0]):
+        heading = heading0 + curvature * s[n]
+        sin, cos = math.sin(heading), math.cos(heading)
+        if straight:
+            x = x0 + s[n] * cos0
+            y = y0 + s[n] * sin0
+        else:
+            x = x0 + (sin - sin0) / curvature
+            y = y0 - (cos - cos0) / curvature
+        for t in range(rows):
+            if paired:
+                offset = lateral[n] if lateral.shape[0] > 1 else lateral[0]
+            else:
+                offset = lateral[t]
+            out[t, n, 0] = x - offset * sin
+            out[t, n, 1] = y + offset * cos
+            out[t, n, 2] = heading
+    return out
 
 
 def predict_path(x: float, y: float, heading: float, linear: float, angular: float,
