@@ -66,7 +66,7 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    ct_space._pose_shapes_into, ct_space._write_columns, gait._sagittal_joints,
                    gait._pelvis_track, gait._yaw_and_slide, gait._swing_plane,
                    gait._wrapped, gait._swing_bounds, gait._swing_pass, gait._stance_leg,
-                   gait._fade_ankle, path_module._arc_offsets,
+                   gait._fade_ankle, path_module._arc_offsets, gait._rolled_stance,
                    upper_body._write_patterns, upper_body._clipped):
         assert kernel.py_func is not kernel
 
@@ -717,3 +717,73 @@ def test_points_beside_the_path():
         same(path_module._arc_offsets.py_func(*args)[:, :, :2], expected)
         # Other shapes still broadcast as before (the NumPy code).
         same(path.offset_points(s, 0.05), np.stack([x - 0.05 * sin, y + 0.05 * cos], axis=-1))
+
+
+def _heel_off_in_numpy(leg, hip, foot, pelvis_yaw, joints, limit, toe):
+    """WalkGenerator._heel_off as it was written with NumPy before session 25 (the reference
+    of gait._rolled_stance)."""
+    direction = np.array([np.cos(foot.yaw), np.sin(foot.yaw)])
+    p0 = foot.pitch
+    toe_xy = foot.xy + (toe * np.cos(p0) + leg.ankle_height * np.sin(p0)) * direction
+    toe_z = foot.z + toe * np.sin(p0) - leg.ankle_height * np.cos(p0)
+    over = joints[:, 3] > limit
+    shank = joints[over, 1] - joints[over, 2]
+    plane = np.full(int(np.count_nonzero(over)), foot.yaw)
+    for _ in range(5):
+        p = np.minimum(limit + shank, p0)
+        ankle = np.column_stack([
+            toe_xy - (toe * np.cos(p) + leg.ankle_height * np.sin(p))[:, None] * direction,
+            toe_z - (toe * np.sin(p) - leg.ankle_height * np.cos(p))])
+        solved, _, _ = gait.leg_inverse_kinematics(leg, hip[over], ankle, plane,
+                                                   pelvis_yaw[over], p)
+        shank = solved[:, 1] - solved[:, 2]
+    joints = joints.copy()
+    joints[over] = solved
+    return joints, ankle[-1], float(p[-1])
+
+
+def test_the_heel_off_roll(skeleton):
+    """A stance foot rolling about its toe where its ankle would pass its limit, compiled and
+    as Python, against the NumPy code it replaces, to the last bit (joints, the last rolled
+    frame's ankle and pitch), with the roll reaching the last frame and not."""
+    rng = np.random.default_rng(16)
+    leg = skeleton.leg
+    k = 64
+    ramp = np.linspace(1.0 / k, 1.0, k)
+    for trial in range(20):
+        yaw = rng.uniform(-np.pi, np.pi)
+        foot = gait.FootPose(np.array([rng.uniform(-1, 1), rng.uniform(-1, 1)]),
+                             rng.uniform(0.05, 0.3), float(yaw), float(rng.uniform(-0.1, 0.1)),
+                             0.0)
+        pelvis_yaw = yaw + rng.uniform(-0.2, 0.2) * ramp
+        lam = -0.1 + 0.5 * ramp
+        hip = np.column_stack([foot.xy[0] + lam * np.cos(yaw), foot.xy[1] + lam * np.sin(yaw),
+                               foot.z + 0.8 - 0.05 * ramp])
+        joints = np.empty((k, 4))
+        joints[:, 0] = gait._wrap(foot.yaw - pelvis_yaw)
+        v = np.array([foot.xy[0], foot.xy[1], foot.z]) - hip
+        gait._sagittal_leg(leg, v[:, 0] * np.cos(yaw) + v[:, 1] * np.sin(yaw), -v[:, 2],
+                           foot.pitch, joints)
+        # The ankle rises over the step; the limit cuts it from some frame on (or mid-way).
+        limit = float(np.quantile(joints[:, 3], rng.uniform(0.5, 0.9)))
+        if trial % 4 == 0:
+            joints[-5:, 3] = limit - 0.01
+        toe = leg.toe
+        expected = _heel_off_in_numpy(leg, hip, foot, pelvis_yaw, joints, limit, toe)
+        over = np.flatnonzero(joints[:, 3] > limit)
+        args = (hip, pelvis_yaw, joints, over, limit, foot.pitch, foot.yaw,
+                float(np.cos(foot.yaw)), float(np.sin(foot.yaw)),
+                *(foot.xy + (toe * np.cos(foot.pitch) + leg.ankle_height * np.sin(foot.pitch))
+                  * np.array([np.cos(foot.yaw), np.sin(foot.yaw)])).tolist(),
+                foot.z + toe * np.sin(foot.pitch) - leg.ankle_height * np.cos(foot.pitch),
+                toe, leg.ankle_height, leg.thigh, leg.shank)
+        compiled = gait._rolled_stance(*args)
+        same(compiled, gait._rolled_stance.py_func(*args))
+        same(compiled, expected)
+        rolled, end = gait.WalkGenerator._heel_off(leg, hip, foot, pelvis_yaw, joints, limit,
+                                                   toe)
+        same(rolled, expected[0])
+        if over[-1] == k - 1:
+            same((end.xy, end.z, end.pitch), (expected[1][:2], expected[1][2], expected[2]))
+        else:
+            assert end is foot

@@ -546,6 +546,55 @@ def _sagittal_joints(forward, down, foot_pitch, pitch_step, l1, l2, joints):
     return reach
 
 
+@kernel('Tuple((f8[:, ::1], f8[::1], f8))(f8[:, :], f8[::1], f8[:, :], i8[::1], f8, f8, f8, f8, '
+        'f8, f8, f8, f8, f8, f8, f8, f8)')
+def _rolled_stance(hip, pelvis_yaw, joints, over, limit, p0, foot_yaw, direction_x,
+                   direction_y, toe_x, toe_y, toe_z, toe, ankle_height, l1, l2):
+    """:meth:`WalkGenerator._heel_off`'s roll: at the frames ``over`` (where the ankle of
+    ``joints`` (k, 4) passes ``limit``) the sole pitches about the toe line at (``toe_x``,
+    ``toe_y``, ``toe_z``), ``toe`` m ahead of the ankle along the foot's heading, by as much
+    as brings the ankle back to its limit (at most to the foot's own pitch ``p0``): five
+    rounds of the pitch from the last round's shank angle and the leg solved again
+    (leg_inverse_kinematics written out, hips ``hip`` (k, 3), pelvis ``pelvis_yaw``).
+    Returns a copy of the joints with those frames replaced, the ankle of the last of them
+    (3,) and its sole pitch."""
+    count = over.shape[0]
+    shank = np.empty(count)
+    for m in range(count):
+        shank[m] = joints[over[m], 1] - joints[over[m], 2]
+    solved = np.empty((count, 4))
+    pitch = np.empty(count)
+    ankle = np.empty((count, 3))
+    forward, down = np.empty(count), np.empty(count)
+    cos_yaw, sin_yaw = math.cos(foot_yaw), math.sin(foot_yaw)
+    for _ in range(5):
+        for m in range(count):
+            f = over[m]
+            p = min(limit + shank[m], p0)
+            pitch[m] = p
+            along = toe * math.cos(p) + ankle_height * math.sin(p)
+            ankle[m, 0] = toe_x - along * direction_x
+            ankle[m, 1] = toe_y - along * direction_y
+            ankle[m, 2] = toe_z - (toe * math.sin(p) - ankle_height * math.cos(p))
+            vx, vy = ankle[m, 0] - hip[f, 0], ankle[m, 1] - hip[f, 1]
+            forward[m] = vx * cos_yaw + vy * sin_yaw
+            down[m] = -(ankle[m, 2] - hip[f, 2])
+            solved[m, 0] = _wrapped(foot_yaw - pelvis_yaw[f])
+        _sagittal_joints(forward, down, pitch, 1, l1, l2, solved)
+        for m in range(count):
+            shank[m] = solved[m, 1] - solved[m, 2]
+    out = joints.copy()
+    for m in range(count):
+        for c in range(4):
+            out[over[m], c] = solved[m, c]
+    last = np.empty(3)
+    end_pitch = p0
+    if count:
+        last[:] = ankle[count - 1]
+        end_pitch = pitch[count - 1]
+    return np.ascontiguousarray(out), last, end_pitch
+
+
 @kernel('Tuple((f8[:, ::1], f8[::1], f8, b1))(f8[:, ::1], f8[::1], f8[::1], f8, f8, f8, f8, f8, '
         'f8, f8, f8, f8, f8)')
 def _stance_leg(stance_hip, yaw, z, foot_x, foot_y, foot_yaw, foot_z, foot_pitch, cos_s, sin_s,
@@ -1244,29 +1293,19 @@ class WalkGenerator:
 
         Returns the corrected (k, 4) leg joints and the foot pose at the last frame.
         """
-        direction = np.array([np.cos(foot.yaw), np.sin(foot.yaw)])
         p0 = foot.pitch
-        toe_xy = foot.xy + (toe * np.cos(p0) + leg.ankle_height * np.sin(p0)) * direction
+        direction_x, direction_y = np.cos(foot.yaw), np.sin(foot.yaw)
+        toe_xy = foot.xy + (toe * np.cos(p0) + leg.ankle_height * np.sin(p0)) * np.array(
+            [direction_x, direction_y])
         toe_z = foot.z + toe * np.sin(p0) - leg.ankle_height * np.cos(p0)
         over = joints[:, 3] > limit
-        pitch = np.full(joints.shape[0], p0)
-        shank = joints[over, 1] - joints[over, 2]
-        k = int(np.count_nonzero(over))
-        plane = np.full(k, foot.yaw)
-        for _ in range(5):
-            p = np.minimum(limit + shank, p0)
-            ankle = np.column_stack([
-                toe_xy - (toe * np.cos(p) + leg.ankle_height * np.sin(p))[:, None] * direction,
-                toe_z - (toe * np.sin(p) - leg.ankle_height * np.cos(p))])
-            solved, _, _ = leg_inverse_kinematics(leg, hip[over], ankle, plane,
-                                                  pelvis_yaw[over], p)
-            shank = solved[:, 1] - solved[:, 2]
-        joints = joints.copy()
-        joints[over] = solved
-        pitch[over] = p
+        joints, ankle, pitch = _rolled_stance(
+            hip, pelvis_yaw, joints, np.flatnonzero(over), float(limit), float(p0),
+            float(foot.yaw), float(direction_x), float(direction_y), float(toe_xy[0]),
+            float(toe_xy[1]), float(toe_z), float(toe), float(leg.ankle_height),
+            float(leg.thigh), float(leg.shank))
         if over[-1]:
-            end = FootPose(ankle[-1, :2].copy(), float(ankle[-1, 2]), foot.yaw, float(p[-1]),
-                           foot.sole)
+            end = FootPose(ankle[:2].copy(), float(ankle[2]), foot.yaw, float(pitch), foot.sole)
         else:
             end = foot
         return joints, end
