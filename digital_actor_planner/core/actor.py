@@ -223,6 +223,7 @@ class Actor:
         self._collision = body_collision or BodyCollision(skeleton, environment)
         self._leg_links = LEG_LINKS
         self._path_steps = np.arange(24.0)
+        self._root_columns = skeleton.branch('root')
         self._lower_body = np.concatenate([skeleton.branch(b) for b in
                                            ('root', 'left_leg', 'right_leg')])
         self._lower_velocity_limit = skeleton.velocity_limit[self._lower_body]
@@ -395,13 +396,15 @@ class Actor:
         frames = self._with_patterns(frames)
         if self._upper is None:
             return frames, True, ''
-        upper = self.skeleton.branch('waist').tolist() + self.skeleton.branch(
-            'left_arm').tolist() + self.skeleton.branch('right_arm').tolist()
-        full = np.vstack([self._configuration[None, :], frames])
-        full_times = np.concatenate([[0.0], times])
-        # Continuity: frame 0 is the previous step's planned upper body.
-        full[0, upper] = self._configuration[upper]
-        k = full.shape[0]
+        # Continuity: frame 0 is the previous step's configuration, its planned upper body
+        # included.
+        k = frames.shape[0] + 1
+        full = np.empty((k, frames.shape[1]))
+        full[0] = self._configuration
+        full[1:] = frames
+        full_times = np.empty(k)
+        full_times[0] = 0.0
+        full_times[1:] = times
         # Receding horizon: plan over this step plus a preview of the pelvis carrying on, so
         # the waist starts to bend before an obstacle is reached; commit only this step.
         preview = self._preview(full_times, full)
@@ -469,7 +472,7 @@ class Actor:
         if duration <= 0 or frames.shape[0] < 3:
             return None
         dt = 1.0 / self.config.frame_rate
-        root = self.skeleton.branch('root')
+        root = self._root_columns
         span = min(frames.shape[0] - 1, int(round(0.2 * self.config.frame_rate)))
         velocity = (frames[-1, root] - frames[-1 - span, root]) / (span * dt)
         velocity[2] = 0.0

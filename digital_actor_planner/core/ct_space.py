@@ -56,6 +56,8 @@ SAT_MARGIN = 1e-3
 TRIANGLE_CELL = 0.25
 #: Most cells of that grid; a larger scene gets larger cells.
 TRIANGLE_CELLS = 1 << 20
+_IDENTITY = np.eye(3)
+_IDENTITY.setflags(write=False)
 
 
 def _axis_code(axis: np.ndarray) -> Tuple[int, float]:
@@ -1009,7 +1011,7 @@ class BodyKinematics:
         if rotations is None:
             rotations = np.empty((k, self.link_count, 3, 3))
             positions = np.empty((k, self.link_count, 3))
-            rotations[:, 0] = np.eye(3)
+            rotations[:, 0] = _IDENTITY
             positions[:, 0] = 0.0
         steps = self.steps if steps is None else steps
         _link_poses(float_array(q), rotations, positions, *self._step_arrays(steps))
