@@ -1473,6 +1473,18 @@ def spin_until_shutdown(executor, ok=rclpy.ok) -> None:
                 raise
 
 
+def _close_partial(nodes, commands, planners) -> None:
+    """Shut down what :func:`main` built before it stopped starting."""
+    for node in nodes:
+        node.stop()
+        node.destroy_node()
+    if commands is not None:
+        commands.stop()
+    if planners is not None:
+        planners.close()
+    rclpy.try_shutdown()
+
+
 def main(args=None) -> int:
     """Run the node(s) until interrupted; exit status 2 on a bad configuration."""
     # The executor and planning threads hold the GIL at times; a short switch interval bounds
@@ -1496,15 +1508,13 @@ def main(args=None) -> int:
                                           **({'namespace': ns} if ns else {})))
     except ConfigurationError as error:
         logger.fatal(f'invalid configuration: {error}')
-        for node in nodes:
-            node.stop()
-            node.destroy_node()
-        if commands is not None:
-            commands.stop()
-        if planners is not None:
-            planners.close()
-        rclpy.try_shutdown()
+        _close_partial(nodes, commands, planners)
         return 2
+    except (KeyboardInterrupt, ExternalShutdownException):
+        # Stopped while starting (a fresh install's first start compiles the planner's
+        # kernels, tens of seconds): what was built is shut down as on a stop while running.
+        _close_partial(nodes, commands, planners)
+        return 0
     priority = nodes[0].config.stream_priority
     if priority > 2:
         real_time(priority - 1)  # the executor thread, as the planning threads
