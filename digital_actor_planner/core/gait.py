@@ -377,6 +377,9 @@ def _swing_plane(progress, plane_turn, pinned, pitch_release, pitch_take, swing_
         direction[i, 0] = math.cos(plane[i])
         direction[i, 1] = math.sin(plane[i])
     if turning:
+        # Turning the plane swings the sole about the ankle: that moves its ends less than
+        # carrying it sideways only where the foot is farther from the hip than they are from
+        # the ankle.
         worst = -np.inf
         for i in range(count):
             toward_x = wanted[i, 0] - swing_hip[i, 0]
@@ -392,6 +395,9 @@ def _swing_plane(progress, plane_turn, pinned, pitch_release, pitch_take, swing_
             direction[i, 0], direction[i, 1] = x / norm, y / norm
             plane[i] = math.atan2(direction[i, 1], direction[i, 0])
             worst = max(worst, inward * _wrapped(plane[i] - stance_yaw) - toe_in)
+        # Toes in, both thighs turn in, and as the swinging knee passes the stance knee with
+        # both hips flexed the two would meet: in the air the swinging foot points at most
+        # toe_in towards the stance foot (it turns further in as it lands).
         if worst > 0.0:
             for i in range(count):
                 excess = inward * _wrapped(plane[i] - stance_yaw) - toe_in
@@ -399,6 +405,11 @@ def _swing_plane(progress, plane_turn, pinned, pitch_release, pitch_take, swing_
                     1.0 - pinned[i])
                 direction[i, 0] = math.cos(plane[i])
                 direction[i, 1] = math.sin(plane[i])
+        # The foot turns on its own ramp and the pelvis on another: in a large turn the hip
+        # yaw between them overshoots the range in mid-swing though it starts and ends inside
+        # it (after a zigzag, 0.44 -> 0.74 -> 0.45 rad was seen). In the air the foot may lag:
+        # it points as far as the hip allows. Not near the ground (where the plane turns
+        # through the foot), so it still leaves and lands as planned.
         outside = False
         for i in range(count):
             hip_yaw = _wrapped(plane[i] - yaw[i])
