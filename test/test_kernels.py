@@ -81,7 +81,6 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    gait._pelvis_track, gait._yaw_and_slide, gait._swing_plane,
                    gait._wrapped, gait._swing_bounds, gait._swing_pass, gait._stance_leg,
                    gait._fade_ankle, path_module._arc_offsets, gait._rolled_stance,
-                   ct_space._triangle_grid, ct_space._cell_range, ct_space._grid_candidates,
                    upper_body._write_patterns, upper_body._clipped):
         assert kernel.py_func is not kernel
 
@@ -805,49 +804,3 @@ def test_the_heel_off_roll(skeleton):
             same((end.xy, end.z, end.pitch), (compiled[1][:2], compiled[1][2], compiled[2]))
         else:
             assert end is foot
-
-
-def test_triangles_near_through_the_grid():
-    """The environment's triangles near a box, found through the grid of their boxes, are the
-    ones a test of every triangle's box finds, in the same order: rough ground of many small
-    triangles, a floor of two large ones, boxes inside, across and wholly outside the grid,
-    a box of zero size; and the grid's kernels compiled and as Python alike (including a scene
-    made to need larger cells)."""
-    import trimesh
-    rng = np.random.default_rng(17)
-    ground = trimesh.creation.box(extents=(8.0, 5.0, 0.1))
-    rough = trimesh.Trimesh(*_rough_patch(rng))
-    index = ct_space.EnvironmentIndex([ground, rough])
-    every = np.arange(len(index.lower), dtype=np.int64)
-    for trial in range(300):
-        centre = rng.uniform(-6, 6, 3) * np.array([1.0, 1.0, 0.2])
-        half = rng.uniform(0.0, 2.0, 3) * (trial % 10 != 0)
-        lower, upper = centre - half, centre + half
-        expected = ct_space._candidates_meeting(lower, upper, index.lower, index.upper, every)
-        same(index.triangles_near(lower, upper), expected)
-    grid = ct_space._triangle_grid(index.lower, index.upper, 0.25, 1 << 20)
-    same(grid, ct_space._triangle_grid.py_func(index.lower, index.upper, 0.25, 1 << 20))
-    small = ct_space._triangle_grid(index.lower, index.upper, 0.25, 64)
-    assert small[3] * small[4] <= 64 and small[2] > 0.25
-    lower, upper = np.array([0.1, -0.2, -1.0]), np.array([0.6, 0.4, 1.0])
-    for layout in (grid, small):
-        found = ct_space._grid_candidates(lower, upper, *layout, len(index.lower))
-        same(found, ct_space._grid_candidates.py_func(lower, upper, *layout, len(index.lower)))
-        assert set(ct_space._candidates_meeting(lower, upper, index.lower, index.upper,
-                                                every).tolist()) <= set(found.tolist())
-    empty = ct_space.EnvironmentIndex([])
-    assert empty.triangles_near(lower, upper).size == 0
-
-
-def _rough_patch(rng, cells=40, size=2.0):
-    """(vertices, faces) of a bumpy 2 m square patch of 2 x cells^2 triangles near the origin."""
-    x, y = np.meshgrid(np.linspace(-size / 2, size / 2, cells + 1),
-                       np.linspace(-size / 2, size / 2, cells + 1))
-    z = 0.05 + 0.03 * rng.random(x.shape)
-    vertices = np.column_stack([x.ravel(), y.ravel(), z.ravel()])
-    faces = []
-    for i in range(cells):
-        for j in range(cells):
-            a = i * (cells + 1) + j
-            faces += [(a, a + 1, a + cells + 2), (a, a + cells + 2, a + cells + 1)]
-    return vertices, np.array(faces)
