@@ -61,7 +61,7 @@ def test_node_from_the_colcon_install_streams_the_22_joints(install, tmp_path):
     probe = Probe(DOMAIN_ID)
     try:
         # A fresh install's first start compiles the planner's kernels (numba caches them in
-        # the install): 25-55 s on this machine, depending on its load.
+        # the install): about 50 s on this machine.
         assert probe.wait_for_stream(process, 180.0), process.output()
         _, msg = probe.joint_states[-1]
         assert tuple(msg.name) == JOINT_NAMES
