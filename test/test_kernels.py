@@ -78,10 +78,10 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    convex._middle, ct_roadmap._travel,
                    ct_space._candidates_meeting, ct_space._turn_entry,
                    ct_space._pose_shapes_into, ct_space._write_columns, gait._sagittal_joints,
-                   gait._pelvis_track, gait._yaw_and_slide, gait._swing_plane,
+                   gait._pelvis_track, gait._swing_plane, gait._ankle_correction,
                    gait._wrapped, gait._swing_bounds, gait._swing_pass, gait._stance_leg,
                    gait._fade_ankle, path_module._arc_offsets, gait._rolled_stance,
-                   upper_body._write_patterns, upper_body._clipped):
+                   upper_body._write_patterns):
         assert kernel.py_func is not kernel
 
 

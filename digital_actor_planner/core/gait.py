@@ -298,33 +298,24 @@ def _sagittal_leg(leg: LegGeometry, forward: np.ndarray, down: np.ndarray,
                             float(leg.thigh), float(leg.shank), joints)
 
 
-@kernel('UniTuple(f8[::1], 2)(readonly(f8[::1]), readonly(f8[::1]), f8, f8, f8, f8)')
-def _yaw_and_slide(turn, progress, yaw0, yaw1, lam0, lam1):
-    """The pelvis yaw (k,) turning from ``yaw0`` to ``yaw1`` as ``turn`` and the stance
-    hip's place (k,) along its foot's line from ``lam0`` to ``lam1`` as ``progress``, m."""
-    count = turn.shape[0]
-    yaw, lam = np.empty(count), np.empty(count)
-    for i in range(count):
-        yaw[i] = yaw0 + (yaw1 - yaw0) * turn[i]
-        lam[i] = lam0 + (lam1 - lam0) * progress[i]
-    return yaw, lam
-
-
 @kernel('Tuple((f8[::1], f8[::1], f8[:, ::1], f8[:, ::1], f8[:, ::1]))(readonly(f8[::1]), '
         'readonly(f8[::1]), f8, f8, f8, f8, f8, f8, f8, f8, f8, f8)')
 def _pelvis_track(turn, progress, yaw0, yaw1, lam0, lam1, foot_x, foot_y, along_x, along_y,
                   stance_offset, swing_offset):
-    """:meth:`WalkGenerator.step`'s pelvis over a step: the yaw (k,) and the stance hip's
-    place (k,) along its foot's line (:func:`_yaw_and_slide`), then the stance hip (k, 2)
+    """:meth:`WalkGenerator.step`'s pelvis over a step: the yaw (k,) turning from ``yaw0`` to
+    ``yaw1`` as ``turn`` and the stance hip's place (k,) along its foot's line from ``lam0``
+    to ``lam1`` as ``progress``, m, then the stance hip (k, 2)
     on that line (from the foot at (``foot_x``, ``foot_y``) along (``along_x``,
     ``along_y``)), the pelvis (k, 2) ``stance_offset`` m to its right of the heading and the
     swing hip (k, 2) ``swing_offset`` m to the pelvis' left (what _lateral gives, from one
     sine and cosine of the yaw)."""
-    yaw, lam = _yaw_and_slide(turn, progress, yaw0, yaw1, lam0, lam1)
-    count = yaw.shape[0]
+    count = turn.shape[0]
+    yaw, lam = np.empty(count), np.empty(count)
     stance_hip, pelvis, swing_hip = np.empty((count, 2)), np.empty((count, 2)), np.empty(
         (count, 2))
     for i in range(count):
+        yaw[i] = yaw0 + (yaw1 - yaw0) * turn[i]
+        lam[i] = lam0 + (lam1 - lam0) * progress[i]
         stance_hip[i, 0] = foot_x + lam[i] * along_x
         stance_hip[i, 1] = foot_y + lam[i] * along_y
         sin_yaw, cos_yaw = math.sin(yaw[i]), math.cos(yaw[i])
@@ -634,13 +625,19 @@ def _stance_leg(stance_hip, yaw, z, foot_x, foot_y, foot_yaw, foot_z, foot_pitch
     return joints, reach, lateral, over
 
 
+@kernel('f8(f8, f8, f8, f8)')
+def _ankle_correction(ankle, low, high, fade):
+    """What brings a swinging foot's ``ankle`` (rad) into [``low``, ``high``], by the share
+    ``fade`` (none at touchdown)."""
+    return (min(max(ankle, low), high) - ankle) * fade
+
+
 @kernel('void(f8[:, :], f8, f8, readonly(f8[::1]))')
 def _fade_ankle(joints, low, high, fade):
-    """A swinging foot's ankle (column 3 of ``joints``) brought into [``low``, ``high``] by
-    the share ``fade`` of each frame (none at touchdown), in place."""
+    """:func:`_ankle_correction` of a swinging foot's ankle (column 3 of ``joints``) at each
+    frame, applied in place."""
     for i in range(joints.shape[0]):
-        ankle = joints[i, 3]
-        joints[i, 3] = ankle + (min(max(ankle, low), high) - ankle) * fade[i]
+        joints[i, 3] = joints[i, 3] + _ankle_correction(joints[i, 3], low, high, fade[i])
 
 
 @kernel('Tuple((b1, f8[::1], f8[::1], f8[::1], f8[::1], f8[::1], f8[::1], f8))(f8[::1], '
@@ -718,8 +715,7 @@ def _swing_pass(swing_z, z_bound, swing_reach, hip_over_ankle, hump, stance_boun
     converged = True
     next_pitch = np.empty(count)
     for i in range(count):
-        ankle = joints[i, 3]
-        correction = (min(max(ankle, ankle_low), ankle_high) - ankle) * fade[i]
+        correction = _ankle_correction(joints[i, 3], ankle_low, ankle_high, fade[i])
         converged = converged and abs(correction) < 0.005
         next_pitch[i] = swing_pitch[i] + correction
     return z, joints, reach, converged, next_pitch

@@ -95,13 +95,6 @@ def _pattern_layout(skeleton: Skeleton) -> tuple:
     return layout
 
 
-@kernel('f8(f8, f8, f8)')
-def _clipped(value, low, high):
-    """np.minimum(np.maximum(value, low), high) of one finite number."""
-    value = value if value >= low else low
-    return value if value <= high else high
-
-
 @kernel('void(f8[:, ::1], f8[::1], i8[::1], i8[::1], f8[::1], f8[::1])')
 def _write_patterns(out, swing, waist, arms, lower, upper):
     """:func:`motion_patterns`' columns of ``out`` (k, 22): the ``waist`` columns erect; each
@@ -111,14 +104,14 @@ def _write_patterns(out, swing, waist, arms, lower, upper):
     [``lower``, ``upper``] as np.minimum(np.maximum(value, lower), upper) would."""
     for f in range(out.shape[0]):
         for j in waist:
-            out[f, j] = _clipped(0.0, lower[j], upper[j])
+            out[f, j] = min(max(0.0, lower[j]), upper[j])
         for side in range(2):
             pitch = (1.0 if side == 0 else -1.0) * swing[f]
             first = 4 * side
             values = (pitch, ARM_CLEARANCE_ROLL, 0.0, RELAXED_ELBOW + ELBOW_SWING_GAIN * pitch)
             for i in range(4):
                 j = arms[first + i]
-                out[f, j] = _clipped(values[i], lower[j], upper[j])
+                out[f, j] = min(max(values[i], lower[j]), upper[j])
 
 
 # -- prioritized planning (§5) ------------------------------------------------------------
