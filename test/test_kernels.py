@@ -710,7 +710,7 @@ def test_the_stance_leg_and_the_ankle_fade(skeleton):
 
 def test_points_beside_the_path():
     """Points beside a predicted path, compiled and as Python to the last bit, and against the
-    NumPy code they replace (PredictedPath._points and the offset along the normal; see near):
+    NumPy code they replace (the centre line and the offset along the normal; see near):
     straight and curved paths, arc lengths past both ends, one offset for all points, one per
     point, and one per track."""
     rng = np.random.default_rng(15)
@@ -718,7 +718,15 @@ def test_points_beside_the_path():
         path = path_module.PredictedPath(rng.uniform(-3, 3), rng.uniform(-3, 3),
                                          rng.uniform(-np.pi, np.pi), curvature, 2.0)
         s = rng.uniform(-0.5, 2.5, 40)
-        x, y, heading, sin, cos = path._points(s)
+        # The NumPy code the kernel replaced: the centre line, then the offset along the normal.
+        heading = path.heading + path.curvature * s
+        sin, cos = np.sin(heading), np.cos(heading)
+        if abs(path.curvature) < 1e-9:
+            x = path.x + s * np.cos(path.heading)
+            y = path.y + s * np.sin(path.heading)
+        else:
+            x = path.x + (sin - np.sin(path.heading)) / path.curvature
+            y = path.y - (cos - np.cos(path.heading)) / path.curvature
         for lateral in (np.float64(0.0), np.float64(0.09), rng.uniform(-0.1, 0.1, 40)):
             expected = np.stack([x - lateral * sin, y + lateral * cos, heading], axis=1)
             near(path.offset_poses(s, lateral), expected)
@@ -732,8 +740,13 @@ def test_points_beside_the_path():
         args = (s, tracks.ravel().copy(), False, path.x, path.y, path.heading, path.curvature)
         same(path_module._arc_offsets(*args), path_module._arc_offsets.py_func(*args))
         near(path_module._arc_offsets(*args)[:, :, :2], expected)
-        # Other shapes still broadcast as before (the NumPy code).
-        same(path.offset_points(s, 0.05), np.stack([x - 0.05 * sin, y + 0.05 * cos], axis=-1))
+        # Other shapes broadcast as NumPy would.
+        near(path.offset_points(s, 0.05), np.stack([x - 0.05 * sin, y + 0.05 * cos], axis=-1))
+        grid = path.offset_poses(s[:4, None] * np.ones((4, 3)), np.array([0.0, 0.1, -0.1]))
+        assert grid.shape == (4, 3, 3)
+        near(grid[:, 1], path.offset_poses(s[:4], 0.1))
+        assert path.offset_points(s, np.array([[0.05]])).shape == (1, 40, 2)
+        assert path.offset_poses(s[:0], 0.1).shape == (0, 3)
 
 
 def _heel_off_in_numpy(leg, hip, foot, pelvis_yaw, joints, limit, toe):

@@ -70,17 +70,12 @@ class PredictedPath:
         s = np.asarray(s, dtype=float)
         lateral = np.asarray(lateral, dtype=float)
         if s.ndim == 1 and lateral.ndim == 2 and lateral.shape[1] == 1:
-            # T tracks of N points, the way the ground profile asks: one compiled pass.
+            # T tracks of N points, the way the ground profile asks: the path evaluated once
+            # per arc length.
             tracks = _arc_offsets(np.ascontiguousarray(s), lateral.ravel().copy(), False,
                                   self.x, self.y, self.heading, self.curvature)
             return tracks[:, :, :2].copy()
-        x, y, _, sin, cos = self._points(s)
-        # The track's normal (left of the heading) is (-sin, cos).
-        track_x = x - lateral * sin
-        out = np.empty(track_x.shape + (2,))
-        out[..., 0] = track_x
-        out[..., 1] = y + lateral * cos
-        return out
+        return self.offset_poses(s, lateral)[..., :2].copy()
 
     def offset_poses(self, s: np.ndarray, lateral) -> np.ndarray:
         """Points on parallel tracks with the path's heading there: :meth:`offset_points` and
@@ -89,40 +84,23 @@ class PredictedPath:
         Parameters
         ----------
         s
-            (N,) arc lengths, m.
+            (N,) arc lengths, m (any shape that broadcasts with ``lateral``).
         lateral
-            Scalar or (N,) offsets to the left of the path, m.
+            Scalar or (N,) offsets to the left of the path, m (or a shape that broadcasts).
 
         Returns
         -------
         numpy.ndarray
-            (N, 3) x (m), y (m), heading (rad).
+            (N, 3) x (m), y (m), heading (rad): the broadcast shape, then those three.
 
         """
         s = np.asarray(s, dtype=float)
-        offsets = np.asarray(lateral, dtype=float)
-        if s.ndim == 1 and (offsets.ndim == 0 or offsets.shape == s.shape):
-            # The usual call: one compiled pass, the same arithmetic as below.
-            return _arc_offsets(np.ascontiguousarray(s), offsets.reshape(-1).copy(), True,
-                                self.x, self.y, self.heading, self.curvature)[0]
-        x, y, heading, sin, cos = self._points(s)
-        out = np.empty(s.shape + (3,))
-        out[..., 0] = x - lateral * sin
-        out[..., 1] = y + lateral * cos
-        out[..., 2] = heading
-        return out
-
-    def _points(self, s: np.ndarray):
-        """Centre-line x, y (m), heading (rad) and its sine and cosine at arc lengths ``s``."""
-        heading = self.heading + self.curvature * s
-        sin, cos = np.sin(heading), np.cos(heading)
-        if abs(self.curvature) < 1e-9:
-            x = self.x + s * math.cos(self.heading)
-            y = self.y + s * math.sin(self.heading)
-        else:
-            x = self.x + (sin - math.sin(self.heading)) / self.curvature
-            y = self.y - (cos - math.cos(self.heading)) / self.curvature
-        return x, y, heading, sin, cos
+        lateral = np.asarray(lateral, dtype=float)
+        if lateral.ndim and lateral.shape != s.shape:
+            s, lateral = np.broadcast_arrays(s, lateral)
+        out = _arc_offsets(np.ascontiguousarray(s.ravel()), lateral.ravel().copy(), True,
+                           self.x, self.y, self.heading, self.curvature)[0]
+        return out.reshape(s.shape + (3,))
 
     def project(self, xy: np.ndarray) -> float:
         """Arc length of the path point closest to ``xy`` ((2,) m), near the start."""
@@ -142,9 +120,9 @@ class PredictedPath:
 
 @kernel('f8[:, :, ::1](f8[::1], f8[::1], b1, f8, f8, f8, f8)')
 def _arc_offsets(s, lateral, paired, x0, y0, heading0, curvature):
-    """Points beside a path (:meth:`PredictedPath._points`, then the offset along the
-    normal, as :meth:`PredictedPath.offset_poses` computes them): x, y (m) and the path's
-    heading (rad) at arc lengths ``s`` (N,), ``lateral`` m to the left of the path. With
+    """Points beside a path: x, y (m) and the path's heading (rad) at arc lengths ``s``
+    (N,), ``lateral`` m to the left of the path (along the normal, (-sin, cos) of the
+    heading); the arc's centre line in closed form, a straight line below 1e-9 /m. With
     ``paired`` one row (1, N, 3) with ``lateral`` (N,) per point, or (1,) for all; else a
     row per track, (T, N, 3) for ``lateral`` (T,)."""
     rows = 1 if paired else lateral.shape[0]
