@@ -127,6 +127,57 @@ def test_table_beside_the_path_makes_that_arm_flex(skeleton):
     assert plan.per_branch['waist']['deviation'] == 0.0
 
 
+@pytest.mark.parametrize('seeded', [False, True])
+def test_branches_off_their_pattern_go_straight_back_as_their_searches_would(
+        skeleton, seeded):
+    """After an obstacle a branch starts off its motion pattern, too far to join it at once;
+    its search first tries going straight back. The plan tries that for every such branch
+    in one batch with the whole body first: wherever it takes it, the plan is the one the
+    searches make (the same frames), and where the way back is not legal, or the search
+    would go another way first, the searches plan as before."""
+    obstacles = {'beam': [box([0.6, -1.0, 1.60], [0.8, 1.0, 1.80])],
+                 'table': [box([0.3, 0.21, 0.0], [1.1, 1.0, 0.78])],
+                 'pillars': [box([0.6, 0.235, 0.0], [0.75, 0.6, 2.2]),
+                             box([0.6, -0.6, 0.0], [0.75, -0.235, 2.2])]}
+    times, frames = walk(skeleton, 320)
+    taken = attempted = 0
+    for name, meshes in obstacles.items():
+        reference = planner_for(skeleton, *meshes, seed=0)[0].plan(times, frames)
+        assert reference.ok, reference.reason
+        config = UpperBodyConfig()
+        planners = [planner_for(skeleton, *meshes, config=config)[0] for _ in range(2)]
+        planners[1]._plan_returning = lambda *args: None  # the searches only
+        checks = planners[0].pattern_checks
+        calls = []
+        planners[0].pattern_checks = lambda *args: calls.append(1) or checks(*args)
+        for begin in range(0, 260, 10):
+            window = slice(begin, begin + 61)
+            step = frames[window].copy()
+            step[0] = reference.frames[begin]
+            seeds = {}
+            if seeded:
+                # The reference plan from here on, for the branches it moves off the pattern.
+                rest = reference.frames[window] - frames[window]
+                seeds = {branch: rest[:, skeleton.branch(branch)]
+                         for branch in ('waist', 'left_arm', 'right_arm')
+                         if rest[:, skeleton.branch(branch)].any()}
+            plans = [planner.plan(times[window], step, seeds=seeds) for planner in planners]
+            assert plans[0].ok == plans[1].ok and plans[0].reason == plans[1].reason
+            assert np.array_equal(plans[0].frames, plans[1].frames), (name, begin)
+            returned = [b for b, r in plans[0].per_branch.items() if r.get('returned')]
+            taken += bool(returned)
+            for branch in returned:
+                # Straight back to the pattern, then on it to the end.
+                columns = skeleton.branch(branch)
+                off = np.abs(plans[0].frames[1:, columns] - step[1:, columns]).max(axis=1)
+                back = np.flatnonzero(off == 0.0)[0]
+                assert back > 0 and off[back:].max() == 0.0
+                assert np.all(np.diff(off[:back]) < 0)
+                assert plans[1].per_branch[branch]['nodes'] == 0
+        attempted += len(calls)
+    assert taken >= 5 and attempted > taken, (taken, attempted)
+
+
 def test_beam_at_waist_height_is_reported_blocked(skeleton):
     beam = box([0.3, -1.0, 1.05], [0.5, 1.0, 1.30])
     planner, _ = planner_for(skeleton, beam)

@@ -177,6 +177,57 @@ def _travel(change, rate, step):
     return out
 
 
+def objective_grid(last: int, spacing: int) -> np.ndarray:
+    """Frames 0, ``spacing``, 2 ``spacing``, ... and ``last``: where a search first checks the
+    objective (:meth:`CTRoadmap._objective_free`); made once per (last, spacing) and shared,
+    never changed by a caller."""
+    grid = _GRIDS.get((last, spacing))
+    if grid is None:
+        grid = _GRIDS[last, spacing] = np.unique(np.append(np.arange(0, last + 1, spacing),
+                                                           last))
+    return grid
+
+
+def direct_return(objective: np.ndarray, times: np.ndarray, start: np.ndarray,
+                  rate: np.ndarray) -> Optional[Tuple[int, np.ndarray]]:
+    """The motion a search from a start off the objective tries first: straight back to it at
+    joint speeds ``rate`` (d,), then along it (:meth:`CTRoadmap._return_directly`).
+
+    Parameters
+    ----------
+    objective
+        (k, d) the branch's objective, rad.
+    times
+        (k,) frame times, s.
+    start
+        (d,) the branch at frame 0, rad.
+    rate
+        (d,) joint speeds of the way back, rad/s (the search's: a fraction of the limits).
+
+    Returns
+    -------
+    tuple or None
+        (arrival frame, (k, d) motion: the deviation shrinking linearly in time from the
+        start's to zero at the arrival, then the objective; not clipped to the joint limits),
+        the numbers the search's path would hold; None where the search does not return
+        directly (a start on the objective, or a way back that takes to the final frame).
+
+    """
+    deviation = start - objective[0]
+    if not deviation.any():
+        return None
+    last = len(times) - 1
+    step = (times[-1] - times[0]) / max(last, 1)
+    arrival = int(_travel(deviation[None], rate, float(step))[0])
+    if arrival >= last:
+        return None
+    zero = np.zeros_like(deviation)
+    unbounded = np.full(len(zero), np.inf)
+    path = _stack_path(objective, times, np.array([deviation, zero, zero]),
+                       np.array([0, arrival, last], dtype=np.int64), -unbounded, unbounded)
+    return arrival, path
+
+
 class _Horizon:
     """Per search: where the objective is legal, and how far a posture is held from a frame.
 
@@ -525,14 +576,8 @@ class CTRoadmap:
 
     @staticmethod
     def _objective_grid(space: CTSpace, spacing: int) -> np.ndarray:
-        """Frames :meth:`_objective_free` checks: every ``spacing``-th and the last (made once
-        per frame count and spacing and shared: never changed by a caller)."""
-        last = space.frame_count - 1
-        grid = _GRIDS.get((last, spacing))
-        if grid is None:
-            grid = _GRIDS[last, spacing] = np.unique(np.append(np.arange(0, last + 1, spacing),
-                                                               last))
-        return grid
+        """Frames :meth:`_objective_free` checks (:func:`objective_grid`)."""
+        return objective_grid(space.frame_count - 1, spacing)
 
     @staticmethod
     def _free_frames(grid: np.ndarray, legal: np.ndarray, last: int) -> np.ndarray:

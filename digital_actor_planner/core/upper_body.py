@@ -15,9 +15,10 @@ from typing import Dict, Optional, Tuple
 
 import numpy as np
 
-from .ct_roadmap import CTRoadmap
+from .ct_roadmap import CTRoadmap, direct_return, objective_grid
 from .ct_space import (
-    BodyKinematics, BodyShapes, branch_layout, CTSpace, EnvironmentIndex, TimedBody)
+    BodyKinematics, BodyShapes, branch_layout, branch_model, CTSpace, EnvironmentIndex,
+    TimedBody)
 from .jit import kernel
 from .skeleton import Skeleton
 
@@ -247,7 +248,9 @@ class UpperBodyPlan:
         Wall time of the plan, s.
     per_branch
         Branch name -> dict(time s, ok, fast bool, nodes, backtracks, grown, deviation rad;
-        a branch that searched also: checks, preview_backtracks, seeded frame).
+        a branch that searched also: checks, preview_backtracks, seeded frame; ``returned``
+        True where it went straight back to its pattern, checked in one batch with the others
+        instead of searching: see :meth:`UpperBodyPlanner.plan`).
     blocked_frame
         When not ok, the index of the frame the blocked branch could not get past (0 when its
         start is in collision); -1 when ok.
@@ -348,6 +351,10 @@ class UpperBodyPlanner:
         # groups of one check over the whole upper body (pattern_checks).
         layouts = [branch_layout(self.kinematics, self.shapes, name, self._checked[name],
                                  self._obstacles[name]) for name in BRANCH_ORDER]
+        self._layouts = dict(zip(BRANCH_ORDER, layouts))
+        self._models = {name: branch_model(self.kinematics, self.shapes, name,
+                                           self._checked[name], self._obstacles[name])
+                        for name in BRANCH_ORDER}
         self._pattern_checked = np.concatenate([layout[1] for layout in layouts])
         self._pattern_pairs = np.vstack([layout[3] for layout in layouts])
         self._pattern_group = np.full(len(self.shapes.kind), -1, dtype=int)
@@ -411,6 +418,14 @@ class UpperBodyPlanner:
         UpperBodyPlan
             Frames whose upper-body columns follow the objective wherever it is legal.
 
+        Notes
+        -----
+        The whole input motion is checked first, in one batch; it stands where it is legal.
+        Where it is not only because branches start too far off their patterns to join them
+        at once, their searches' first tries (straight back to the pattern) are checked
+        together in a second batch (:meth:`_plan_returning`). Otherwise the branches are
+        planned one by one.
+
         """
         began = time.perf_counter()
         times = np.asarray(times, dtype=float)
@@ -434,7 +449,8 @@ class UpperBodyPlanner:
         body = TimedBody(self.kinematics, self.shapes, self.environment, frames)
         out = frames.copy()
         per_branch: Dict[str, dict] = {}
-        legality = self.pattern_checks(times, body)
+        contacts = self._pattern_contacts(times, body)
+        legality = self._legality(*contacts)
         if all(start and motion for start, motion in legality.values()):
             for name in BRANCH_ORDER:
                 per_branch[name] = dict(ok=True, fast=True, nodes=0, backtracks=0, grown=0,
@@ -442,19 +458,17 @@ class UpperBodyPlanner:
             return UpperBodyPlan(frames=out, ok=True, reason='', deviation=0.0,
                                  planning_time=time.perf_counter() - began,
                                  per_branch=per_branch)
+        plan = self._plan_returning(times, frames, contacts, seeds, began)
+        if plan is not None:
+            return plan
         ok, reason, blocked_frame = True, '', -1
-        last = len(times) - 1
         moved = False  # whether a branch planned so far left the motion the body held
         for name in BRANCH_ORDER:
             tic = time.perf_counter()
             indices = self.indices[name]
             columns = self._columns[name]
             start = frames[0, columns].copy()
-            objective = frames[:, columns].copy()
-            # Frame 0 holds the start, not the pattern: continue the pattern back one frame.
-            objective[0] = np.minimum(np.maximum(
-                2 * objective[1] - objective[2] if last >= 2 else objective[1],
-                self.skeleton.lower[columns]), self.skeleton.upper[columns])
+            objective = self._objective(frames, columns)
             record = dict(ok=True, fast=False, nodes=0, backtracks=0, grown=0)
             path = None
             checks = 0
@@ -513,6 +527,110 @@ class UpperBodyPlanner:
                              planning_time=time.perf_counter() - began, per_branch=per_branch,
                              blocked_frame=blocked_frame)
 
+    def _objective(self, frames: np.ndarray, columns) -> np.ndarray:
+        """A branch's objective over the step, (k, d) rad: its columns of ``frames``, where
+        frame 0 holds the start, not the pattern: there the pattern continued back one frame."""
+        objective = frames[:, columns].copy()
+        objective[0] = np.minimum(np.maximum(
+            2 * objective[1] - objective[2] if len(frames) > 2 else objective[1],
+            self.skeleton.lower[columns]), self.skeleton.upper[columns])
+        return objective
+
+    def _plan_returning(self, times: np.ndarray, frames: np.ndarray, contacts: tuple,
+                        seeds: dict, began: float) -> Optional[UpperBodyPlan]:
+        """The plan of a step whose branches, each, keep their motion pattern or go straight
+        back to it, when all of that is legal; None otherwise.
+
+        A branch that starts too far off its pattern to join it at once (the joined motion
+        breaks a speed limit) must search, and its search first tries to go straight back to
+        the pattern and along it (:func:`direct_return`), which succeeds when that motion is
+        legal and the pattern itself is legal at the search's grid frames before it is back
+        (``CTRoadmap.solve``: where the pattern is blocked, the search first goes another
+        way). Here those motions are written into a body of their own, the grid frames'
+        patterns appended as extra rows, and everything checked in one batch
+        (:meth:`pattern_checks`): the same plan as the searches one by one would make, without
+        a CT-space per branch (the step after an obstacle, when the obstacle is behind).
+
+        ``seeds``: as :meth:`plan` takes them. ``contacts``: :meth:`_pattern_contacts` of the
+        input motion; the way back is tried only where they leave it a chance: every start
+        legal, every other branch keeping its pattern, and no branch's pattern (joined at
+        once) meeting anything after it would be back on it. Where the batch finds something
+        illegal, the branches are planned one by one as before (the batch's cost is lost:
+        about that of the pattern check).
+        """
+        start_inside, within, first = contacts
+        if not start_inside.all() or within.all() or 0 in first:
+            return None
+        k = len(times)
+        config = self.config
+        grid = objective_grid(k - 1, config.hold_frames)
+        out = frames.copy()
+        extra = []
+        returning = {}
+        for name, legal, bad in zip(BRANCH_ORDER, within.tolist(), first):
+            if legal:
+                if bad >= 0:
+                    return None  # it must search anyway
+                continue
+            model = self._models[name]
+            columns = self._columns[name]
+            objective = self._objective(frames, columns)
+            route = direct_return(objective, times, frames[0, columns],
+                                  config.speed_fraction * model.speed_limit)
+            if route is None:
+                return None
+            arrival, path = route
+            if bad >= arrival:
+                return None  # its pattern meets something when it would be back on it
+            # The search's check of the way back takes it within the limits (tolerances
+            # included), and its path is clipped to them.
+            if not np.all((path[1:] >= model.lower_tolerant)
+                          & (path[1:] <= model.upper_tolerant)):
+                return None
+            path = np.minimum(np.maximum(path, model.lower), model.upper)
+            path[0] = frames[0, columns]
+            out[:, columns] = path
+            # The pattern where the search checks it before the arrival (the earlier branches
+            # where they are now planned): at the grid frame just before it, whose block would
+            # reach past it, or, where a seed would be followed into a blocked stretch, at
+            # every grid frame before it.
+            before = grid[grid < arrival]
+            if name not in seeds and len(before):
+                before = before[-1:] if grid[len(before)] > arrival else before[:0]
+            rows = out[before]
+            rows[:, columns] = objective[before]
+            extra.append(rows)
+            returning[name] = len(before)
+        if not returning:
+            return None
+        body = TimedBody(self.kinematics, self.shapes, self.environment,
+                         np.concatenate([out] + extra))
+        legality = self.pattern_checks(times, body)
+        if not all(start and motion for start, motion in legality.values()):
+            return None
+        row = k
+        for name, count in returning.items():
+            layout = self._layouts[name]
+            if count and body.first_collision(layout[1], layout[3],
+                                              np.arange(row, row + count)) >= 0:
+                return None
+            row += count
+        per_branch: Dict[str, dict] = {}
+        for name in BRANCH_ORDER:
+            if name in returning:
+                columns = self._columns[name]
+                per_branch[name] = dict(
+                    ok=True, fast=False, returned=True, nodes=0, backtracks=0, grown=0,
+                    preview_backtracks=0, seeded=0,
+                    deviation=float(np.abs(out[1:, columns] - frames[1:, columns]).max()),
+                    checks=k - 1 + returning[name], time=0.0)
+            else:
+                per_branch[name] = dict(ok=True, fast=True, nodes=0, backtracks=0, grown=0,
+                                        deviation=0.0, checks=0, time=0.0)
+        return UpperBodyPlan(frames=out, ok=True, reason='',
+                             deviation=max(r['deviation'] for r in per_branch.values()),
+                             planning_time=time.perf_counter() - began, per_branch=per_branch)
+
     def start_and_objective(self, times: np.ndarray, body: TimedBody,
                             name: str) -> Tuple[bool, bool]:
         """Whether a branch's start is legal, and whether its motion in ``body`` is.
@@ -570,14 +688,29 @@ class UpperBodyPlanner:
             Branch name -> (start legal at frame 0, the whole motion legal: start included).
 
         """
-        start_inside, within = _within_limits(body.frames[:, self._upper_columns], times,
+        return self._legality(*self._pattern_contacts(times, body))
+
+    def _pattern_contacts(self, times: np.ndarray, body: TimedBody) -> tuple:
+        """:meth:`pattern_checks`' checks: per branch whether its start is within the joint
+        limits, whether its whole motion is (speeds included), as (B,) bool arrays, and the
+        first frame at which it touches something (-1: none), as a list; the frames from
+        ``len(times)`` on, if ``body`` has any, are not part of the motion."""
+        k = len(times)
+        start_inside, within = _within_limits(body.frames[:k, self._upper_columns], times,
                                               self._pattern_limits)
         first = body.first_collisions(self._pattern_checked, self._pattern_pairs,
-                                      self._pattern_group, len(BRANCH_ORDER))
-        out = {}
+                                      self._pattern_group, len(BRANCH_ORDER),
+                                      None if len(body.frames) == k else np.arange(k))
         for name, bad in zip(BRANCH_ORDER, first):
             # Every frame was checked up to the first contact (the CT-spaces skip them).
             body.set_clear(name, bad)
+        return start_inside, within, first
+
+    @staticmethod
+    def _legality(start_inside: np.ndarray, within: np.ndarray,
+                  first: list) -> Dict[str, Tuple[bool, bool]]:
+        """:meth:`pattern_checks`' answers from :meth:`_pattern_contacts`."""
+        out = {}
         for name, bad, start, legal in zip(BRANCH_ORDER, first, start_inside.tolist(),
                                            within.tolist()):
             if not legal:
