@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from digital_actor_planner.core.ct_roadmap import _Horizon, _State, CTRoadmap
+from digital_actor_planner.core.ct_roadmap import _Horizon, _State, CTRoadmap, direct_return
 from digital_actor_planner.core.ct_space import CTSpace
 from digital_actor_planner.core.environment import Environment
 from scene_helpers import box, timed_body, walk
@@ -328,6 +328,27 @@ def test_a_start_off_the_objective_goes_back_to_it_in_one_check_where_it_is_free
     arrival = int(np.ceil(0.5 / (0.8 * space.speed_limit[1]) / step - 1e-9))
     off = np.flatnonzero(np.abs(direct.path - space.objective).max(axis=1) > 1e-9)
     assert off[-1] == arrival - 1
+
+
+def test_the_way_straight_back_is_the_searchs_path_from_a_start_off_the_objective(skeleton):
+    # direct_return gives the path the search takes when going back directly is legal (the
+    # upper-body planner checks it for all branches in one batch before any search).
+    space = waist_space(skeleton, None, frame_count=100)
+    rate = 0.8 * space.speed_limit
+    for change in ([0.0, 0.5], [0.3, -0.2], [1e-3, 0.0]):
+        start = space.objective[0] + np.array(change)
+        arrival, path = direct_return(space.objective, space.times, start, rate)
+        result = roadmap().solve(space, start)
+        assert result.ok and result.nodes == 0
+        assert np.array_equal(path, result.path), 'the same numbers'
+        step = space.times[1] - space.times[0]
+        assert arrival == max(1, int(np.ceil(np.max(np.abs(change) / rate) / step - 1e-9)))
+        off = np.abs(path - space.objective).max(axis=1)
+        assert np.all(np.diff(off[:arrival + 1]) < 0) and off[arrival:].max() == 0.0
+    # On the objective, or back only at the final frame: the search does something else.
+    assert direct_return(space.objective, space.times, space.objective[0], rate) is None
+    far = space.objective[0] + np.array([0.0, 50.0])
+    assert direct_return(space.objective, space.times, far, rate) is None
 
 
 def test_a_start_off_the_objective_is_searched_from_as_before_where_the_objective_is_blocked(
