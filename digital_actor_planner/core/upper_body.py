@@ -455,7 +455,7 @@ class UpperBodyPlanner:
         body = TimedBody(self.kinematics, self.shapes, self.environment, frames)
         out = frames.copy()
         per_branch: Dict[str, dict] = {}
-        legality = self._legality(*self._pattern_contacts(times, body, (start_inside, within)))
+        legality = self.pattern_checks(times, body, (start_inside, within))
         if all(start and motion for start, motion in legality.values()):
             for name in BRANCH_ORDER:
                 per_branch[name] = dict(ok=True, fast=True, nodes=0, backtracks=0, grown=0,
@@ -602,8 +602,6 @@ class UpperBodyPlanner:
             rows[:, columns] = objective[before]
             extra.append(rows)
             returning[name] = len(before)
-        if not returning:
-            return None
         body = TimedBody(self.kinematics, self.shapes, self.environment,
                          np.concatenate([out] + extra))
         legality = self.pattern_checks(times, body)
@@ -672,7 +670,8 @@ class UpperBodyPlanner:
         body.set_clear(name, bad)
         return bad != 0, bad < 0
 
-    def pattern_checks(self, times: np.ndarray, body: TimedBody) -> Dict[str, Tuple[bool, bool]]:
+    def pattern_checks(self, times: np.ndarray, body: TimedBody,
+                       limits: Optional[tuple] = None) -> Dict[str, Tuple[bool, bool]]:
         """:meth:`start_and_objective` of every branch, in one batch over the upper body.
 
         The input upper-body motion is the start at frame 0, then the objective: the motion
@@ -681,7 +680,9 @@ class UpperBodyPlanner:
         (the poses and boxes of every shape at every frame are already in ``body``), each
         branch's shapes left out once they have collided. The
         answers hold for a branch as long as the branches before it keep the motion ``body``
-        holds.
+        holds. Rows of ``body`` from ``len(times)`` on, if any, are not part of the motion.
+        ``limits``: per branch whether the motion's start and whole motion keep to the joint
+        limits ((B,) bool each, speeds included), when already known.
 
         Returns
         -------
@@ -689,31 +690,16 @@ class UpperBodyPlanner:
             Branch name -> (start legal at frame 0, the whole motion legal: start included).
 
         """
-        return self._legality(*self._pattern_contacts(times, body))
-
-    def _pattern_contacts(self, times: np.ndarray, body: TimedBody,
-                          limits: Optional[tuple] = None) -> tuple:
-        """:meth:`pattern_checks`' checks: per branch whether its start is within the joint
-        limits, whether its whole motion is (speeds included), as (B,) bool arrays, and the
-        first frame at which it touches something (-1: none), as a list; the frames from
-        ``len(times)`` on, if ``body`` has any, are not part of the motion. ``limits``: the
-        first two when already known."""
         k = len(times)
         start_inside, within = limits or _within_limits(body.frames[:k, self._upper_columns],
                                                         times, self._pattern_limits)
         first = body.first_collisions(self._pattern_checked, self._pattern_pairs,
                                       self._pattern_group, len(BRANCH_ORDER),
                                       None if len(body.frames) == k else np.arange(k))
+        out = {}
         for name, bad in zip(BRANCH_ORDER, first):
             # Every frame was checked up to the first contact (the CT-spaces skip them).
             body.set_clear(name, bad)
-        return start_inside, within, first
-
-    @staticmethod
-    def _legality(start_inside: np.ndarray, within: np.ndarray,
-                  first: list) -> Dict[str, Tuple[bool, bool]]:
-        """:meth:`pattern_checks`' answers from :meth:`_pattern_contacts`."""
-        out = {}
         for name, bad, start, legal in zip(BRANCH_ORDER, first, start_inside.tolist(),
                                            within.tolist()):
             if not legal:
