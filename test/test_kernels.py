@@ -4,6 +4,7 @@ An installation without numba runs that source: it then plans the same frames, o
 Each kernel is run compiled and as plain Python on the inputs the planners give it, including
 the awkward ones (off the map, NaN, holes, a table over the floor).
 """
+import math
 import os
 import subprocess
 import sys
@@ -76,7 +77,7 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    upper_body._within_limits_kernel, ct_space._box_within,
                    upper_body._input_sound, ct_space._column_dots, ct_space._triangle_apart_along,
                    convex._middle, ct_roadmap._travel,
-                   ct_space._candidates_meeting, ct_space._turn_entry,
+                   ct_space._candidates_meeting,
                    ct_space._pose_shapes_into, ct_space._write_columns, gait._sagittal_joints,
                    gait._pelvis_track, gait._swing_plane, gait._ankle_correction,
                    gait._wrapped, gait._swing_bounds, gait._swing_pass, gait._stance_leg,
@@ -165,6 +166,36 @@ def test_the_broad_phase_of_the_3d_check(skeleton, world):
     same(collision._half_extents(body._kind_codes[index], body._halves[index], rotations),
          collision._half_extents.py_func(body._kind_codes[index], body._halves[index],
                                          rotations))
+
+
+def test_a_turn_about_a_coordinate_axis_gives_the_written_out_products_numbers():
+    """_link_poses turns a link about a coordinate axis by mixing two columns; the numbers
+    must be those of the product with the rotation matrix written out (three terms per entry,
+    in order, two of them products with 0 or 1), which the kernel computed before."""
+    rng = np.random.default_rng(12)
+    frames = 200
+    for axis in range(3):
+        for sign in (1.0, -1.0):
+            q = rng.uniform(-3.2, 3.2, (frames, 1))
+            rotations = np.zeros((frames, 2, 3, 3))
+            positions = np.zeros((frames, 2, 3))
+            rotations[:, 0] = [np.linalg.qr(rng.normal(size=(3, 3)))[0] for _ in range(frames)]
+            # One revolute step from link 0 to link 1 about the axis, no origin offset.
+            table = (np.array([0]), np.array([1]), np.eye(3)[None].copy(), np.array([False]),
+                     np.zeros((1, 3)), np.array([-1]), np.zeros(1), np.array([False]),
+                     np.array([0]), np.array([1]), np.array([axis]), np.array([sign]),
+                     np.eye(3)[axis][None].copy())
+            ct_space._link_poses(q, rotations, positions, *table)
+            for f in range(frames):
+                angle = q[f, 0] * sign
+                turn = np.eye(3)
+                b, e = (axis + 1) % 3, (axis + 2) % 3
+                turn[b, b] = turn[e, e] = math.cos(angle)
+                turn[e, b], turn[b, e] = math.sin(angle), -math.sin(angle)
+                base = rotations[f, 0]
+                written_out = [[base[r, 0] * turn[0, c] + base[r, 1] * turn[1, c]
+                                + base[r, 2] * turn[2, c] for c in range(3)] for r in range(3)]
+                assert np.array_equal(rotations[f, 1], written_out), (axis, sign, f)
 
 
 def test_the_upper_body_kinematics_and_boxes(skeleton):

@@ -63,18 +63,6 @@ def _axis_code(axis: np.ndarray) -> Tuple[int, float]:
     return -1, 0.0
 
 
-@kernel('f8(i8, i8, i8, f8, f8)')
-def _turn_entry(coordinate, row, col, cos, sin):
-    """Entry (row, col) of the rotation by an angle (its ``cos``, ``sin``) about coordinate
-    axis ``coordinate``: 1 on the axis, 0 off it in its row and column, cos on the diagonal,
-    sin at (a + 1, a) and -sin at (a, a + 1) of the other two axes a, a + 1 (mod 3)."""
-    if row == coordinate or col == coordinate:
-        return 1.0 if row == col else 0.0
-    if row == col:
-        return cos
-    return sin if row == (coordinate + 2) % 3 else -sin
-
-
 @kernel('void(f8[:, :], f8[:, :, :, :], f8[:, :, :], i8[::1], i8[::1], f8[:, :, ::1], '
         'b1[::1], f8[:, ::1], i8[::1], f8[::1], b1[::1], i8[::1], i8[::1], i8[::1], f8[::1], '
         'f8[:, ::1])')
@@ -128,18 +116,19 @@ def _link_poses(q, rotations, positions, parent, child, origin_rotation, turned,
                                      + base[r, 2] * axis[i, 2])
                         positions[f, c, r] += along * value
                 continue
-            coordinate = axis_coordinate[i]
-            if coordinate >= 0:
-                # A revolute joint about a coordinate axis: the product with its rotation
-                # matrix, entry by entry (the same sums as with the matrix written out).
+            a = axis_coordinate[i]
+            if a >= 0:
+                # A revolute joint about coordinate axis a: the product with its rotation
+                # matrix keeps column a and mixes the other two, b = a + 1 and e = a + 2
+                # (mod 3): b' = cos b + sin e, e' = cos e - sin b. The written-out product's
+                # third terms are products with 0: the same numbers (a zero's sign aside).
                 angle = q[f, joint[i]] * axis_sign[i]
                 cos, sin = math.cos(angle), math.sin(angle)
+                b, e = (a + 1) % 3, (a + 2) % 3
                 for r in range(3):
-                    for col in range(3):
-                        rotations[f, c, r, col] = (
-                            base[r, 0] * _turn_entry(coordinate, 0, col, cos, sin)
-                            + base[r, 1] * _turn_entry(coordinate, 1, col, cos, sin)
-                            + base[r, 2] * _turn_entry(coordinate, 2, col, cos, sin))
+                    rotations[f, c, r, a] = base[r, a]
+                    rotations[f, c, r, b] = base[r, b] * cos + base[r, e] * sin
+                    rotations[f, c, r, e] = base[r, e] * cos + base[r, b] * -sin
                 continue
             x, y, z = axis[i, 0], axis[i, 1], axis[i, 2]
             cos, sin = math.cos(q[f, joint[i]]), math.sin(q[f, joint[i]])
