@@ -177,6 +177,16 @@ def _travel(change, rate, step):
     return out
 
 
+def _travel_over(times: np.ndarray, change: np.ndarray, rate: np.ndarray):
+    """Frames of ``times`` (k,) needed to change by ``change`` (..., d) at joint speeds
+    ``rate`` (d,) rad/s, the frames taken as evenly spaced: an int (an int array for a batch
+    of changes), at least 1."""
+    step = (times[-1] - times[0]) / max(len(times) - 1, 1)
+    change = np.asarray(change, dtype=np.float64)
+    frames = _travel(change.reshape(-1, change.shape[-1]), rate, float(step))
+    return int(frames[0]) if change.ndim == 1 else frames.reshape(change.shape[:-1])
+
+
 def objective_grid(last: int, spacing: int) -> np.ndarray:
     """Frames 0, ``spacing``, 2 ``spacing``, ... and ``last``: where a search first checks the
     objective (:meth:`CTRoadmap._objective_free`); made once per (last, spacing) and shared,
@@ -217,8 +227,7 @@ def direct_return(objective: np.ndarray, times: np.ndarray, start: np.ndarray,
     if not deviation.any():
         return None
     last = len(times) - 1
-    step = (times[-1] - times[0]) / max(last, 1)
-    arrival = int(_travel(deviation[None], rate, float(step))[0])
+    arrival = _travel_over(times, deviation, rate)
     if arrival >= last:
         return None
     zero = np.zeros_like(deviation)
@@ -331,11 +340,7 @@ class CTRoadmap:
 
         Returns an int (or an int array for a batch of changes), at least 1.
         """
-        step = (space.times[-1] - space.times[0]) / max(space.frame_count - 1, 1)
-        change = np.asarray(change, dtype=np.float64)
-        frames = _travel(change.reshape(-1, change.shape[-1]),
-                         speed_fraction * space.speed_limit, float(step))
-        return int(frames[0]) if change.ndim == 1 else frames.reshape(change.shape[:-1])
+        return _travel_over(space.times, change, speed_fraction * space.speed_limit)
 
     # -- search --------------------------------------------------------------------------
     def solve(self, space: CTSpace, start: np.ndarray, hold_frames: int = 5,

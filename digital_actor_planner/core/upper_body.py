@@ -654,8 +654,7 @@ class UpperBodyPlanner:
             (start legal at frame 0, the whole motion legal: start included).
 
         """
-        layout = branch_layout(self.kinematics, self.shapes, name, self._checked[name],
-                               self._obstacles[name])
+        layout = self._layouts[name]
         checked, pairs = layout[1], layout[3]
         start_inside, within = _within_limits(
             body.frames[:, self._columns[name]], times, self._branch_limits[name])
