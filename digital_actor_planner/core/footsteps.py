@@ -558,6 +558,21 @@ class FootstepPlanner:
         if not all(any(row) for row in memo.ok):
             return None
 
+        ok_rows = memo.ok
+
+        def lands(config: Tuple[int, ...]) -> bool:
+            """Whether every footstep has a foothold where it lands (the table alone; False
+            means infeasible, recorded as :func:`evaluate` would). Most configurations the
+            breadth-first search visits on stairs land on a riser: this answers them without
+            resuming the effort's evaluation."""
+            cumulative = 0
+            for row, j in zip(ok_rows, config):
+                cumulative += j
+                if not row[cumulative]:
+                    feasible[config] = None
+                    return False
+            return True
+
         def nearest_free(seed: Tuple[int, ...]) -> Optional[Tuple[int, ...]]:
             """Breadth-first search from ``seed`` to the nearest collision-free configuration.
 
@@ -568,14 +583,27 @@ class FootstepPlanner:
             """
             if evaluate(seed) is not None:
                 return seed
-            queue, seen = deque([seed]), {seed}
+            # Configurations are numbered in base m + 1 (footstep 0 the most significant
+            # digit): a neighbour's number is one stride away, and only the ones not seen yet
+            # are built as tuples. The same neighbours in the same order as
+            # _neighbours(..., paired=False), so the same search.
+            strides = [(m + 1) ** (n - 1 - i) for i in range(n)]
+            number = sum(j * stride for j, stride in zip(seed, strides))
+            seen = {number}
+            queue = deque([(number, seed)])
             while queue:
-                for neighbour in self._neighbours(queue.popleft(), m, paired=False):
-                    if neighbour not in seen:
-                        if evaluate(neighbour) is not None:
+                number, config = queue.popleft()
+                for i, stride in enumerate(strides):
+                    j = config[i]
+                    for delta in (-1, 1):
+                        other = number + delta * stride
+                        if not 0 <= j + delta <= m or other in seen:
+                            continue
+                        neighbour = config[:i] + (j + delta,) + config[i + 1:]
+                        if lands(neighbour) and evaluate(neighbour) is not None:
                             return neighbour
-                        seen.add(neighbour)
-                        queue.append(neighbour)
+                        seen.add(other)
+                        queue.append((other, neighbour))
             return None
 
         def climb(current: Tuple[int, ...]) -> Tuple[Tuple[int, ...], float]:
