@@ -56,12 +56,24 @@ class ComparingPlanner(FootstepPlanner):
                               banned_first=banned_first, max_length=max_length)
         t1 = time.process_time()
         if not banned_first:
-            best = self.plan_exhaustive(profile, stance_side, stance_s, stance_height, swing_s,
-                                        swing_height, s_init, previous_length)
-            t2 = time.process_time()
+            arguments = (profile, stance_side, stance_s, stance_height, swing_s, swing_height,
+                         s_init, previous_length)
+            exhaustive = []
+            for _ in range(2):
+                t2 = time.process_time()
+                best = self.plan_exhaustive(*arguments)
+                exhaustive.append(time.process_time() - t2)
+            # Warm: the window planned again twice (its tables too), the best of the three.
+            ours = t1 - t0
+            for _ in range(2):
+                self._last_tables = None
+                t2 = time.process_time()
+                super().plan(*arguments, start=start, max_length=max_length)
+                ours = min(ours, time.process_time() - t2)
             if window is not None and best is not None:
                 self.records.append(((window.effort + 1e-3) / (best.effort + 1e-3),
-                                     (t1 - t0) / max(t2 - t1, 1e-9)))
+                                     (t1 - t0) / max(exhaustive[0], 1e-9),
+                                     ours / max(min(exhaustive), 1e-9)))
         return window
 
 
@@ -168,7 +180,8 @@ def main(argv=None):
         return
     upper = args.whole_body
     wall_all, cpu_all = [], []
-    ratios, speed = {False: [], True: []}, {False: [], True: []}
+    ratios, speed, warm = ({False: [], True: []}, {False: [], True: []},
+                           {False: [], True: []})
     print(f'load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores')
     print('| course | steps | wall p50 ms | wall p99 ms | CPU p50 ms | CPU p99 ms | x real time |')
     print('|---|---:|---:|---:|---:|---:|---:|')
@@ -201,6 +214,7 @@ def main(argv=None):
                          [c.angular_z for c in commands])
             ratios[greedy] += [r[0] for r in comparing.records]
             speed[greedy] += [r[1] for r in comparing.records]
+            warm[greedy] += [r[2] for r in comparing.records]
     print(f'| all | {len(wall_all)} | {1e3 * np.percentile(wall_all, 50):.2f} | '
           f'{1e3 * np.percentile(wall_all, 99):.2f} | {1e3 * np.percentile(cpu_all, 50):.2f} | '
           f'{1e3 * np.percentile(cpu_all, 99):.2f} | |')
@@ -209,15 +223,18 @@ def main(argv=None):
     print()
     print('footstep windows compared with the exhaustive optimum '
           '(each course walked again with each search):')
+    print('time ratio in the walk: the first call of each search, ours between walking steps '
+          '(cold caches), then the exhaustive one; warm: each search run again, the best of 3 '
+          '(ours) and of 2 (exhaustive)')
     print('| search | windows | effort ratio mean | median | p95 | max '
-          '| time ratio median | p95 |')
-    print('|---|---:|---:|---:|---:|---:|---:|---:|')
+          '| time ratio in the walk median | p95 | warm median | p95 |')
+    print('|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|')
     for greedy, label in ((False, 'paper: BFS + hill-climbing'),
                           (True, '+ climb from a greedy start (default)')):
-        r, t = ratios[greedy], speed[greedy]
+        r, t, w = ratios[greedy], speed[greedy], warm[greedy]
         print(f'| {label} | {len(r)} | {np.mean(r):.3f} | {np.median(r):.3f} | '
               f'{np.percentile(r, 95):.3f} | {np.max(r):.3f} | {np.median(t):.4f} | '
-              f'{np.percentile(t, 95):.4f} |')
+              f'{np.percentile(t, 95):.4f} | {np.median(w):.4f} | {np.percentile(w, 95):.4f} |')
 
 
 if __name__ == '__main__':
