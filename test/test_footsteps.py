@@ -382,3 +382,84 @@ def test_another_attempt_at_a_step_plans_as_a_fresh_planner_would(leg):
     assert retry is not None and retry.indices != first.indices
     assert retry.indices == fresh.indices and retry.effort == fresh.effort
     np.testing.assert_array_equal(retry.heights, fresh.heights)
+
+
+def _paper_search(planner, profile, start, s_init, previous_length):
+    """§4.2 written out plainly: breadth-first search from ``start`` over one-footstep moves
+    to the first collision-free configuration (by levels, each level's configurations in the
+    order they were reached), then hill-climbing to the best neighbour (one footstep, or one
+    longer and the next shorter) while it lowers the effort; every configuration judged by
+    the plain effort. Returns (configuration, effort, configurations judged)."""
+    n, m = planner.config.window_steps, planner.config.step_intervals
+    sides, side_list = planner._sides[RIGHT]  # the feet's order when the right one stands
+    tables = planner._search_tables(profile, sides, 0.0)
+    lengths = planner.config.lengths().tolist()
+    judged = {}
+
+    def effort(config):
+        if config not in judged:
+            judged[config] = planner._effort(profile, config, lengths, side_list, 0.0, 0.0,
+                                             0.0, 0.0, s_init, previous_length, tables, set())
+        return judged[config]
+
+    def moves(config, paired):
+        for i in range(n):
+            for delta in (-1, 1):
+                if 0 <= config[i] + delta <= m:
+                    yield config[:i] + (config[i] + delta,) + config[i + 1:]
+                    if paired and i + 1 < n and 0 <= config[i + 1] - delta <= m:
+                        yield (config[:i] + (config[i] + delta, config[i + 1] - delta)
+                               + config[i + 2:])
+
+    found = start if effort(start) is not None else None
+    level, seen = [start], {start}
+    while found is None and level:
+        following = []
+        for config in level:
+            for neighbour in moves(config, paired=False):
+                if neighbour in seen:
+                    continue
+                seen.add(neighbour)
+                if effort(neighbour) is not None:
+                    found = neighbour
+                    break
+                following.append(neighbour)
+            if found is not None:
+                break
+        level = following
+    if found is None:
+        return None, None, judged
+    current, value = found, effort(found)
+    while True:
+        better = [(effort(c), k, c) for k, c in enumerate(moves(current, paired=True))
+                  if effort(c) is not None and effort(c) < value - 1e-12]
+        if not better:
+            return current, value, judged
+        value, _, current = min(better)
+
+
+def test_the_search_is_the_papers_breadth_first_search_and_hill_climbing(leg):
+    """The planner's search (greedy restart off) finds the configuration the plain §4.2
+    search finds, with the same effort, having judged the same configurations, from starts
+    far from any free one on stairs, holes and bumps."""
+    rng = np.random.default_rng(11)
+    planner = FootstepPlanner(FootstepConfig(greedy_restart=False), leg)
+    terrain = {'stairs': lambda s: 0.12 * (np.floor((s - 0.4) / 0.3) + 1) if s > 0.4 else 0.0,
+               'holes': lambda s: np.nan if 0.5 < s < 0.85 or 1.5 < s < 1.8 else 0.0,
+               'bumps': lambda s: 0.25 if 0.9 < s < 0.96 else 0.03 * np.sin(9 * s)}
+    searched = 0
+    for name, height_of in terrain.items():
+        profile = profile_from(height_of)
+        for _ in range(12):
+            start = tuple(int(j) for j in rng.integers(0, 14, 3))
+            s_init = float(rng.uniform(0.3, 0.7))
+            expected, effort, judged = _paper_search(planner, profile, start, s_init, 0.5)
+            window = plan(planner, profile, s_init=s_init, start=start)
+            if expected is None:
+                assert window is None, (name, start)
+                continue
+            assert window.indices == expected, (name, start)
+            assert window.effort == effort
+            assert window.evaluated == len(judged), (name, start)
+            searched += len(judged) > 14
+    assert searched >= 10, 'too few searches that had to go far for the test to mean much'
