@@ -24,6 +24,7 @@ import importlib.util
 import os
 import re
 import sys
+import tempfile
 import time
 
 import numpy as np
@@ -95,6 +96,24 @@ def _load_other(root):
         module = importlib.util.module_from_spec(spec)
         sys.modules[name] = module
         spec.loader.exec_module(module)
+    # Its kernels, compiled under the name other_dap, are cached away from its own tree: in
+    # its __pycache__ they would be read back by its own imports and fail there (the pickled
+    # kernels refer to other_dap). Every core module is imported here, while that holds (the
+    # actor imports some only when they are needed).
+    try:
+        import numba
+    except ImportError:
+        numba = None
+    if numba is not None:
+        cache_dir = numba.config.CACHE_DIR
+        numba.config.CACHE_DIR = os.path.join(tempfile.gettempdir(), 'dap_against_numba_cache')
+    try:
+        for name in sorted(os.listdir(os.path.join(package, 'core'))):
+            if name.endswith('.py') and name != '__init__.py':
+                importlib.import_module('other_dap.core.' + name[:-3])
+    finally:
+        if numba is not None:
+            numba.config.CACHE_DIR = cache_dir
     return importlib.import_module('other_dap.core.actor')
 
 
