@@ -198,7 +198,7 @@ def main(argv=None):
         compare(courses, args.against, args.rounds, args.whole_body)
         return
     upper = args.whole_body
-    wall_all, cpu_all = [], []
+    wall_all, cpu_all, slowest = [], [], []
     ratios, speed, warm = ({False: [], True: []}, {False: [], True: []},
                            {False: [], True: []})
     print(f'load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores')
@@ -217,6 +217,7 @@ def main(argv=None):
         wall = [b.planning_time for b in blocks if b.status == 'walking']
         wall_all += wall
         cpu_all += cpu
+        slowest += [(seconds, name, step) for step, seconds in enumerate(cpu)]
         print(f'| {name} | {len(wall)} | {1e3 * np.percentile(wall, 50):.2f} | '
               f'{1e3 * np.percentile(wall, 99):.2f} | {1e3 * np.percentile(cpu, 50):.2f} | '
               f'{1e3 * np.percentile(cpu, 99):.2f} | {blocks[-1].times[-1] / elapsed:.0f} |')
@@ -237,6 +238,10 @@ def main(argv=None):
     print(f'| all | {len(wall_all)} | {1e3 * np.percentile(wall_all, 50):.2f} | '
           f'{1e3 * np.percentile(wall_all, 99):.2f} | {1e3 * np.percentile(cpu_all, 50):.2f} | '
           f'{1e3 * np.percentile(cpu_all, 99):.2f} | |')
+    # With n steps, p99 lies between the two slowest (n <= 100) or near them.
+    print('slowest steps (CPU ms, course and walking step from 0): ' + ', '.join(
+        f'{1e3 * seconds:.1f} {name} {step}'
+        for seconds, name, step in sorted(slowest)[-5:][::-1]))
     if upper:
         return
     print()
