@@ -583,10 +583,10 @@ class FootstepPlanner:
             """
             if evaluate(seed) is not None:
                 return seed
+            # The paper's single-footstep moves, footstep by footstep, shorter before longer.
             # Configurations are numbered in base m + 1 (footstep 0 the most significant
             # digit): a neighbour's number is one stride away, and only the ones not seen yet
-            # are built as tuples. The same neighbours in the same order as
-            # _neighbours(..., paired=False), so the same search.
+            # are built as tuples.
             strides = [(m + 1) ** (n - 1 - i) for i in range(n)]
             number = sum(j * stride for j, stride in zip(seed, strides))
             seen = {number}
@@ -766,22 +766,23 @@ class FootstepPlanner:
         return tuple(seed)
 
     @staticmethod
-    def _neighbours(config: Tuple[int, ...], m: int, paired: bool = True):
-        """Configurations one interval away: one footstep longer or shorter, or (``paired``)
+    def _neighbours(config: Tuple[int, ...], m: int):
+        """Hill-climbing's neighbours, one interval away: one footstep longer or shorter, or
         one footstep longer and the next shorter by the same amount (so the footholds after
         them stay).
 
         Because each foothold lies at the sum of the lengths before it, lengthening one footstep
         alone moves every later foothold; the paired move reaches the neighbour that moves a
         single foothold, without which hill-climbing stalls on ridges of the effort. The
-        breadth-first search keeps the paper's single-footstep moves.
+        breadth-first search keeps the paper's single-footstep moves (``nearest_free`` in
+        :meth:`plan`, in the same order as here).
         """
         for i in range(len(config)):
             for delta in (-1, 1):
                 j = config[i] + delta
                 if 0 <= j <= m:
                     yield config[:i] + (j,) + config[i + 1:]
-                    if paired and i + 1 < len(config) and 0 <= config[i + 1] - delta <= m:
+                    if i + 1 < len(config) and 0 <= config[i + 1] - delta <= m:
                         yield config[:i] + (j, config[i + 1] - delta) + config[i + 2:]
 
     def _effort(self, profile, config, lengths, sides, stance_s, stance_height, swing_s,
