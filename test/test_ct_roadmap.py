@@ -2,7 +2,8 @@
 import numpy as np
 import pytest
 
-from digital_actor_planner.core.ct_roadmap import _Horizon, _State, CTRoadmap, direct_return
+from digital_actor_planner.core.ct_roadmap import _Horizon, _neighbour_table, _State, CTRoadmap, \
+    direct_return
 from digital_actor_planner.core.ct_space import CTSpace
 from digital_actor_planner.core.environment import Environment
 from scene_helpers import box, timed_body, walk
@@ -452,3 +453,87 @@ def test_travel_frames_follow_the_slowest_joint(beam_space):
         assert [CTRoadmap._travel_frames(space, 0, c, fraction) for c in changes[:20]] == (
             expected[:20].tolist())
     assert set(expected.tolist()) > {1}  # some changes take one frame, others several
+
+
+def _neighbours_written_out(road, space, state, horizon, fraction, sub_goal):
+    """The neighbours _candidates ranks, in plain NumPy: (targets, frames, closeness,
+    index of the hold up to the next blocked stretch or None)."""
+    last, here, hold_frames = space.frame_count - 1, state.frame, horizon.hold_frames
+    on_objective = not np.any(state.deviation)
+    targets, frames = [], []
+    if on_objective and not sub_goal:
+        targets.append(np.zeros_like(state.deviation))
+        frames.append(last)
+    nodes = state.allowed if sub_goal else road.nodes
+    change = nodes - state.deviation
+    travels = np.atleast_1d(road._travel_frames(space, here, change, fraction))
+    travels[~np.any(change, axis=1)] = hold_frames
+    arrivals = here + travels
+    steer = np.flatnonzero(arrivals > last)
+    nodes = nodes.copy()
+    share = (last - here) / travels[steer]
+    nodes[steer] = state.deviation + share[:, None] * change[steer]
+    arrivals[steer] = last
+    targets.extend(nodes)
+    frames.extend(arrivals.tolist())
+    hold_end, approach = horizon.hold_end(here), None
+    if hold_end > min(here + hold_frames, last) and not on_objective:
+        back = road._travel_frames(space, here, state.deviation, fraction)
+        hold_end = hold_end - back if hold_end < last else hold_end
+        if hold_end > here + hold_frames:
+            targets.append(state.deviation.copy())
+            frames.append(hold_end)
+    elif road.prefer_lasting and not state.relaxed and not on_objective:
+        ahead = np.flatnonzero(~horizon.free[here:])
+        if len(ahead) and ahead[0] - 1 > hold_frames:
+            approach = len(targets)
+            targets.append(state.deviation.copy())
+            frames.append(here + int(ahead[0]) - 1)
+    targets.append(state.deviation.copy())
+    frames.append(min(here + hold_frames, last))
+    targets = np.array(targets)
+    return targets, np.array(frames), road.closeness(targets), approach
+
+
+@pytest.mark.parametrize('table', [_neighbour_table, _neighbour_table.py_func])
+def test_the_neighbour_table_is_the_neighbours_written_out(beam_space, table):
+    # The kernel _candidates ranks from (compiled, and as plain Python without numba), bit for
+    # bit against NumPy: on and off the objective, nodes the remaining time cannot reach
+    # (steered), sub-goals, holds past a blocked stretch and up to one, with and without the
+    # lasting preference.
+    space = beam_space
+    rng = np.random.default_rng(11)
+    last = space.frame_count - 1
+    seen = set()
+    for trial in range(300):
+        road = CTRoadmap(PATTERNS, np.array([1.0, 0.5]), radius=0.3, max_nodes=32,
+                         rng=np.random.default_rng(trial), prefer_lasting=trial % 2 == 0)
+        for _ in range(trial % 4):
+            road._add(rng.normal(0.0, 0.5, 2))
+        free = rng.random(last + 1) >= (0.0, 0.2, 0.6)[trial % 3]
+        free[rng.integers(0, last + 1, 3)] = False
+        horizon = _Horizon(free, 5)
+        here = int(rng.choice([0, rng.integers(0, last + 1), last - rng.integers(1, 8)]))
+        deviation = (np.zeros(2) if trial % 5 == 0 else
+                     PATTERNS[trial % len(PATTERNS)].copy() if trial % 5 == 1 else
+                     rng.normal(0.0, 0.4, 2))
+        state = _State(deviation, here, relaxed=trial % 7 == 0)
+        sub_goal = trial % 6 == 0
+        if sub_goal:
+            state.allowed, state.until = road.nodes[rng.random(len(road.nodes)) < 0.5], last
+        fraction = (0.8, 1.0)[trial % 2]
+        expected = _neighbours_written_out(road, space, state, horizon, fraction, sub_goal)
+        targets, frames, closeness, approach = table(
+            state.allowed if sub_goal else road.nodes, state.deviation, here, last,
+            horizon.hold_frames, not np.any(deviation) and not sub_goal,
+            not np.any(deviation), road.prefer_lasting and not state.relaxed, space.times,
+            fraction * space.speed_limit, horizon.hold_end(here), horizon.free, road.weights)
+        assert targets.tobytes() == expected[0].tobytes(), trial
+        assert frames.tolist() == expected[1].tolist(), trial
+        assert closeness.tobytes() == expected[2].tobytes(), trial
+        assert (None if approach < 0 else approach) == expected[3], trial
+        seen.add((len(frames) > len(road.nodes) + 1, expected[3] is not None,
+                  bool((frames == last).any())))
+    # Long holds, approach holds and steered nodes all occurred.
+    assert {flags[0] for flags in seen} == {True, False}
+    assert True in {flags[1] for flags in seen} and True in {flags[2] for flags in seen}

@@ -74,6 +74,7 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    ct_space._first_contacts, ct_space._touches_triangle, ct_space._touches_shape,
                    ct_space._reachable_pairs, ct_space._motion_paths,
                    ct_roadmap._stack_path, ct_roadmap._horizon_tables, ct_space._within,
+                   ct_roadmap._neighbour_table,
                    upper_body._within_limits_kernel, ct_space._box_within,
                    upper_body._input_sound, ct_space._column_dots, ct_space._triangle_apart_along,
                    convex._middle, ct_roadmap._travel,

@@ -187,6 +187,91 @@ def _travel_over(times: np.ndarray, change: np.ndarray, rate: np.ndarray):
     return int(frames[0]) if change.ndim == 1 else frames.reshape(change.shape[:-1])
 
 
+@kernel('Tuple((f8[:, ::1], i8[::1], f8[::1], i8))(readonly(f8[:, :]), f8[::1], i8, i8, i8, '
+        'b1, b1, b1, f8[:], f8[:], i8, b1[::1], f8[:])')
+def _neighbour_table(nodes, deviation, here, last, hold_frames, with_objective, on_objective,
+                     approach_first, times, rate, hold_end, free, weights):
+    """:meth:`CTRoadmap._candidates`' neighbours of a state, in one pass: (targets (m, d) as
+    deviations, arrival frames (m,), closeness (m,), index of the approach hold or -1).
+
+    In order: the objective followed to the final frame (``with_objective``); each of
+    ``nodes`` at its arrival at joint speeds ``rate`` (a node the remaining time does not
+    reach steered as far towards it as it allows; the current posture held ``hold_frames``);
+    the current posture held to ``hold_end`` less the way back to the objective, or, with
+    ``approach_first``, up to the frame before the objective is next blocked (``free``); and
+    the current posture held ``hold_frames``. The same arithmetic as the NumPy it replaces
+    (:func:`_travel`'s timing, the steering share, the weighted norm summed joint by joint).
+    """
+    n, d = nodes.shape
+    step = (times[times.shape[0] - 1] - times[0]) / max(times.shape[0] - 1, 1)
+    size = n + 3
+    targets = np.empty((size, d))
+    frames = np.empty(size, dtype=np.int64)
+    row = 0
+    if with_objective:
+        for j in range(d):
+            targets[0, j] = 0.0
+        frames[0] = last
+        row = 1
+    change = np.empty(d)
+    for i in range(n):
+        seconds = 0.0
+        moved = False
+        for j in range(d):
+            change[j] = nodes[i, j] - deviation[j]
+            if change[j] != 0.0:
+                moved = True
+            seconds = max(seconds, abs(change[j]) / rate[j])
+        travel = hold_frames
+        if moved:
+            travel = max(1, int(math.ceil(seconds / step - 1e-9)))
+        arrival = here + travel
+        if arrival > last:
+            share = (last - here) / travel
+            for j in range(d):
+                targets[row, j] = deviation[j] + share * change[j]
+            arrival = last
+        else:
+            for j in range(d):
+                targets[row, j] = nodes[i, j]
+        frames[row] = arrival
+        row += 1
+    approach = -1
+    held = min(here + hold_frames, last)
+    if hold_end > held and not on_objective:
+        seconds = 0.0
+        for j in range(d):
+            seconds = max(seconds, abs(deviation[j]) / rate[j])
+        back = max(1, int(math.ceil(seconds / step - 1e-9)))
+        end = hold_end - back if hold_end < last else hold_end
+        if end > here + hold_frames:
+            for j in range(d):
+                targets[row, j] = deviation[j]
+            frames[row] = end
+            row += 1
+    elif approach_first and not on_objective:
+        for f in range(here, free.shape[0]):
+            if not free[f]:
+                if f - here - 1 > hold_frames:
+                    approach = row
+                    for j in range(d):
+                        targets[row, j] = deviation[j]
+                    frames[row] = f - 1
+                    row += 1
+                break
+    for j in range(d):
+        targets[row, j] = deviation[j]
+    frames[row] = held
+    row += 1
+    closeness = np.empty(row)
+    for i in range(row):
+        total = 0.0
+        for j in range(d):
+            total += weights[j] * (targets[i, j] * targets[i, j])
+        closeness[i] = math.sqrt(total)
+    return targets[:row].copy(), frames[:row].copy(), closeness, approach
+
+
 def objective_grid(last: int, spacing: int) -> np.ndarray:
     """Frames 0, ``spacing``, 2 ``spacing``, ... and ``last``: where a search first checks the
     objective (:meth:`CTRoadmap._objective_free`); made once per (last, spacing) and shared,
@@ -315,18 +400,24 @@ class CTRoadmap:
         self.max_candidates = int(max_candidates)
         self.rng = rng
         self.grown_nodes = np.zeros((0, patterns.shape[1]))
+        self._nodes = None
         self.prefer_lasting = bool(prefer_lasting)
 
     @property
     def nodes(self) -> np.ndarray:
-        """All roadmap nodes as deviations from the objective: (n, d), rad."""
-        return np.vstack([self.patterns, self.grown_nodes])
+        """All roadmap nodes as deviations from the objective: (n, d), rad (read-only; made
+        again only when a node is grown)."""
+        if self._nodes is None:
+            self._nodes = np.vstack([self.patterns, self.grown_nodes])
+            self._nodes.flags.writeable = False
+        return self._nodes
 
     def closeness(self, deviation: np.ndarray) -> np.ndarray:
         """Weighted distance of deviation(s) (..., d) from the objective, rad."""
         return np.sqrt(np.sum(self.weights * np.square(deviation), axis=-1))
 
     def _add(self, deviation: np.ndarray) -> None:
+        self._nodes = None
         self.grown_nodes = np.vstack([self.grown_nodes, deviation[None]])
         spare = self.max_nodes - len(self.patterns)
         if len(self.grown_nodes) > max(spare, 0):
@@ -603,58 +694,29 @@ class CTRoadmap:
         """
         last = space.frame_count - 1
         here = state.frame
-        hold_frames = horizon.hold_frames
         on_objective = not np.any(state.deviation)
-        targets, frames = [], []
-        if on_objective:
-            # Following the objective to the goal is the best advance there is.
-            targets.append(np.zeros_like(state.deviation))
-            frames.append(last)
         nodes = self.nodes
-        if state.allowed is not None and here < state.until:
-            # Backtracking set a sub-goal: stay among the nodes legal at the blocking frame.
+        # Backtracking set a sub-goal: stay among the nodes legal at the blocking frame.
+        sub_goal = state.allowed is not None and here < state.until
+        if sub_goal:
             nodes = state.allowed
-            targets, frames = [], []
-        change = nodes - state.deviation
-        travels = np.atleast_1d(self._travel_frames(space, here, change, speed_fraction))
-        travels[~np.any(change, axis=1)] = hold_frames
-        arrivals = here + travels
-        # Steer: go as far towards a node as the remaining time allows.
-        steer = np.flatnonzero(arrivals > last)
-        if len(steer):
-            nodes = nodes.copy()
-            share = (last - here) / travels[steer]
-            nodes[steer] = state.deviation + share[:, None] * change[steer]
-            arrivals[steer] = last
-        targets.extend(nodes)
-        frames.extend(arrivals.tolist())
-        # Holding the posture: first past the stretch where the objective is blocked (one long
-        # advance), else for hold_frames.
-        hold_end = horizon.hold_end(here)
-        approach = None
-        if hold_end > min(here + hold_frames, last) and not on_objective:
-            # End the hold where a return to the objective would arrive as it becomes legal.
-            back = self._travel_frames(space, here, state.deviation, speed_fraction)
-            hold_end = hold_end - back if hold_end < last else hold_end
-            if hold_end > here + hold_frames:
-                targets.append(state.deviation.copy())
-                frames.append(hold_end)
-        elif self.prefer_lasting and not state.relaxed and not on_objective:
-            # Before a blocked stretch, a search that prefers lasting postures holds a lasting
-            # one up to it in one advance, not hold_frames at a time (re-ranking the same
-            # neighbours at every hold, the table's arm took 7 of them to get there); from
-            # the stretch on, as before (held into it in one advance, the arm that met the
-            # second pillar swung back 1.0 rad instead of 0.35).
-            ahead = np.flatnonzero(~horizon.free[here:])
-            if len(ahead) and ahead[0] - 1 > hold_frames:
-                approach = len(targets)
-                targets.append(state.deviation.copy())
-                frames.append(here + int(ahead[0]) - 1)
-        targets.append(state.deviation.copy())
-        frames.append(min(here + hold_frames, last))
-        targets = np.array(targets)
-        frames = np.array(frames)
-        closeness = self.closeness(targets)
+        # Following the objective to the goal is the best advance there is. Steer towards the
+        # nodes as far as the remaining time allows. Holding the posture: first past the
+        # stretch where the objective is blocked (one long advance, ending where a return to
+        # the objective would arrive as it becomes legal), else for hold_frames. Before a
+        # blocked stretch, a search that prefers lasting postures holds a lasting one up to it
+        # in one advance, not hold_frames at a time (re-ranking the same neighbours at every
+        # hold, the table's arm took 7 of them to get there); from the stretch on, as before
+        # (held into it in one advance, the arm that met the second pillar swung back 1.0 rad
+        # instead of 0.35).
+        targets, frames, closeness, approach = _neighbour_table(
+            nodes, state.deviation, here, last, horizon.hold_frames,
+            on_objective and not sub_goal, on_objective,
+            self.prefer_lasting and not state.relaxed, space.times,
+            speed_fraction * space.speed_limit, horizon.hold_end(here), horizon.free,
+            self.weights)
+        if approach < 0:
+            approach = None
         # Equally close: sooner arrival first, except holds and the objective, longest first.
         holds = ~np.any(targets != state.deviation, axis=1)
         lasting = (self._lasting(space, horizon, here, targets, frames)
