@@ -125,6 +125,52 @@ def test_validity_agrees_with_body_collision(skeleton, beam_world):
     assert space.is_valid(np.array([0.0, 0.9]), 160)
 
 
+@pytest.mark.parametrize('kernel', [ct_space._illegal_rows, ct_space._illegal_rows.py_func])
+def test_a_batch_is_illegal_where_its_pieces_say_so(skeleton, beam_world, kernel):
+    # The one-kernel check of a batch against the kernels it stands for, called one by one:
+    # the branch's boxes, the contacts (rows where the body holds the branch, before
+    # clear_until, skipped), then the joint limits. Under the beam and beside it, upright and
+    # bent, inside and outside the limits, rows where the body holds the waist.
+    space, _, frames = beam_world
+    rng = np.random.default_rng(12)
+    rows = np.sort(rng.integers(0, space.frame_count, 120))
+    q = space.objective[rows] + rng.normal(0.0, 0.5, (120, 2)) * (np.arange(120) % 4 > 0)[:, None]
+    rotation, centre, low, high, held = space._shape_boxes(q, rows)
+    answers = {}
+    for clear_until in (0, space.frame_count):
+        for swept in (True, False):
+            known = held & (rows < clear_until)
+            contact = ct_space._row_collisions(
+                low, high, space._triangle_lower, space._triangle_upper, swept, rows,
+                space._pair_column, space.body.shape_lower, space.body.shape_upper, rotation,
+                centre, space._checked_box_half, space._triangle_corners,
+                space.body.shape_rotation, space.body.shape_centre, space._pair_box_half,
+                ct_space.SAT_MARGIN, space._checked_kinds, space._checked_half,
+                space._pair_kinds, space._pair_half, space._pair_other, known)
+            expected = contact | ~space.within_bounds(q)
+            tables = list(space._illegal_tables)
+            tables[2] = clear_until
+            found = kernel(q, rows, swept, *tables)
+            assert found.tolist() == expected.tolist(), (clear_until, swept)
+            answers[clear_until] = expected
+    # Every kind of row occurred: legal, touching, outside the limits; and upright under the
+    # beam, where the body holds the waist, a row that clear_until lets pass untested.
+    expected = answers[0]
+    assert expected.any() and not expected.all() and (~space.within_bounds(q)).any()
+    assert (expected & space.within_bounds(q)).any()
+    assert (held & expected & ~answers[space.frame_count]).any()
+    # What the space reports, with its own clear_until.
+    known = held & (rows < space._clear_until)
+    contact = ct_space._row_collisions(
+        low, high, space._triangle_lower, space._triangle_upper, True, rows,
+        space._pair_column, space.body.shape_lower, space.body.shape_upper, rotation, centre,
+        space._checked_box_half, space._triangle_corners, space.body.shape_rotation,
+        space.body.shape_centre, space._pair_box_half, ct_space.SAT_MARGIN,
+        space._checked_kinds, space._checked_half, space._pair_kinds, space._pair_half,
+        space._pair_other, known)
+    assert space.valid_rows(q, rows).tolist() == (~contact & space.within_bounds(q)).tolist()
+
+
 def test_out_of_limits_is_invalid(beam_world):
     space, _, _ = beam_world
     assert not space.is_valid(np.array([0.0, 1.3]), 10)
@@ -349,6 +395,71 @@ def test_first_legal_motion_agrees_with_goals_checked_one_by_one(beam_world):
             spent = space.checks - before
     assert min(one_by_one) < 0 < max(one_by_one), 'both legal and illegal goals are tried'
     assert spent < sum(rows), 'motions blocked early are not boxed to their ends'
+
+
+def _failures_written_out(space, motions, stop_at_legal, first):
+    """Each motion's first illegal frame (-1: legal), its rows checked one by one, and the rows
+    checked in waves of ``first`` rows of every open motion, then twice as many each wave
+    (all rows in one wave when first <= 0), up to the wave that answers the first legal one
+    with ``stop_at_legal``."""
+    paths = [space._motion_rows(qa, ia, qb, ib) if ib > ia else (np.zeros((0, 2)), ia)
+             for (qa, ia), (qb, ib) in motions]
+    answers, bad_rows = [], []
+    for ((_, ia), _), (rows, late) in zip(motions, paths):
+        bad = [r for r, q in enumerate(rows) if not space.is_valid(q, ia + 1 + r)]
+        bad_rows.append(bad[0] if bad else None)
+        answers.append(ia + 1 + bad[0] if bad else late if late >= 0 else -1)
+
+    def waves(count, bad, last_wave=np.inf):
+        # (rows read, the wave that answers the motion or last_wave)
+        read, size, wave = 0, (first if first > 0 else max(count, 1)), 0
+        while True:
+            read = min(read + size, count)
+            if (bad is not None and bad < read) or read == count or wave >= last_wave:
+                return read, wave
+            size, wave = 2 * size, wave + 1
+
+    answered = [waves(len(rows), bad)[1] for (rows, _), bad in zip(paths, bad_rows)]
+    stop = np.inf
+    if stop_at_legal and -1 in answers:
+        legal = answers.index(-1)
+        answers = answers[:legal + 1]
+        stop = max(answered[:legal + 1])
+    counted = sum(waves(len(rows), bad, stop)[0] for (rows, _), bad in zip(paths, bad_rows))
+    return answers, counted
+
+
+@pytest.mark.parametrize('kernel', [ct_space._motion_failures, ct_space._motion_failures.py_func])
+def test_motions_fail_where_their_rows_checked_one_by_one_do(beam_world, kernel):
+    # The kernel that checks motions for first_legal_motion and first_invalid_path, at once
+    # and in waves, against each row checked alone: the same answers, and in waves the rows
+    # read up to each motion's answer (or the first legal one's). Motions under the beam and
+    # beside it, too fast ones, ones backwards in time.
+    space, _, _ = beam_world
+    rng = np.random.default_rng(13)
+    seen = set()
+    for trial in range(40):
+        motions = []
+        for _ in range(rng.integers(1, 6)):
+            ia = int(rng.integers(0, space.frame_count - 2))
+            ib = int(rng.integers(ia + 1, min(ia + 60, space.frame_count)))
+            if rng.random() < 0.1:
+                ia, ib = ib, ia
+            scale = 0.2 if rng.random() < 0.8 else 1.5
+            motions.append(((space.objective[ia] + rng.normal(0.0, scale, 2), ia),
+                            (space.objective[ib] + rng.normal(0.0, scale, 2), ib)))
+        qa, qb = (np.array([m[end][0] for m in motions]) for end in (0, 1))
+        ia, ib = (np.array([m[end][1] for m in motions], dtype=np.int64) for end in (0, 1))
+        for stop_at_legal in (True, False):
+            for first in (0, 1, 8):
+                answers, checks = kernel(space.objective, space.times, space._frame_step,
+                                         space._speed_cap, qa, ia, qb, ib, stop_at_legal,
+                                         first, *space._illegal_tables)
+                expected = _failures_written_out(space, motions, stop_at_legal, first)
+                assert (answers.tolist(), checks) == expected, (trial, stop_at_legal, first)
+                seen.update(('legal' if a < 0 else 'illegal', first > 0 and len(answers) > 1)
+                            for a in answers)
+    assert seen >= {('legal', True), ('illegal', True), ('legal', False), ('illegal', False)}
 
 
 def test_rows_and_path_in_one_batch_agree_with_each_checked_alone(beam_world):

@@ -21,7 +21,6 @@ leaves (:func:`.convex.touching`, GJK), using the shapes and environment meshes 
 """
 from __future__ import annotations
 
-import bisect
 from dataclasses import dataclass
 import math
 from typing import Dict, List, Optional, Sequence, Tuple
@@ -539,6 +538,64 @@ def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pa
     return hit
 
 
+# numba types of CTSpace._illegal_tables, as _illegal_rows takes them: the joint limits,
+# clear_until, _branch_boxes' tables, the step table, _row_collisions' tables.
+_ILLEGAL_TABLE_TYPES = (
+    'f8[::1], f8[::1], i8, '
+    'f8[:, ::1], i8[::1], f8[:, :, :, ::1], f8[:, :, ::1], i8[::1], f8[:, :, :, ::1], '
+    'f8[:, :, ::1], f8[:, :, ::1], f8[:, :, ::1], i8[::1], i8[::1], f8[:, ::1], '
+    'f8[:, :, ::1], b1[::1], i8[::1], f8[:, ::1], ' + _STEP_TABLE_TYPES + ', '
+    'f8[:, ::1], f8[:, ::1], i8[::1], f8[:, ::1], f8[:, :, :], f8[:, :], f8, i8[::1], '
+    'f8[:, :], i8[::1], f8[:, :], i8[::1]')
+
+
+@kernel('b1[::1](f8[:, :], i8[::1], b1, ' + _ILLEGAL_TABLE_TYPES + ')')
+def _illegal_rows(q, frames, swept, lower, upper, clear_until,
+                  body_frames, indices, body_rotations, body_positions, links, shape_rotation,
+                  shape_centre, shape_lower, shape_upper, checked, shape_links, offsets, turns,
+                  turned, kinds, halves,
+                  parent, child, origin_rotation, step_turned, origin_translation, offset_axis,
+                  offset_length, has_offset, joint, kind, axis_coordinate, axis_sign, axis,
+                  triangle_lower, triangle_upper, pair_column, half, corners, pair_box_half,
+                  margin, checked_kinds, checked_half, pair_kinds, pair_half, pair_other):
+    """:meth:`CTSpace._illegal`: whether each row of a batch (``q`` (m, d) at ``frames``) is
+    illegal, outside [``lower``, ``upper``] or touching the environment or the body: (m,)
+    bool.
+
+    :func:`_branch_boxes` poses the branch's shapes, :func:`_row_collisions` tests them (rows
+    where the body holds the branch at frames before ``clear_until`` skipped: the body's own
+    check found them clear), then the limits as :func:`_within` tests them: the answers of
+    those kernels called one by one, from one call.
+    """
+    m, n = q.shape[0], checked.shape[0]
+    rotation = np.empty((m, n, 3, 3))
+    centre = np.empty((m, n, 3))
+    low = np.empty((m, n, 3))
+    high = np.empty((m, n, 3))
+    held = np.empty(m, dtype=np.bool_)
+    _branch_boxes(q, frames, body_frames, indices, body_rotations, body_positions, links,
+                  shape_rotation, shape_centre, shape_lower, shape_upper, checked, shape_links,
+                  offsets, turns, turned, kinds, halves, rotation, centre, low, high, held,
+                  parent, child, origin_rotation, step_turned, origin_translation, offset_axis,
+                  offset_length, has_offset, joint, kind, axis_coordinate, axis_sign, axis)
+    known = np.empty(m, dtype=np.bool_)
+    for r in range(m):
+        known[r] = held[r] and frames[r] < clear_until
+    illegal = _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames,
+                              pair_column, shape_lower, shape_upper, rotation, centre, half,
+                              corners, shape_rotation, shape_centre, pair_box_half, margin,
+                              checked_kinds, checked_half, pair_kinds, pair_half, pair_other,
+                              known)
+    for r in range(m):
+        if illegal[r]:
+            continue
+        for j in range(q.shape[1]):
+            if not (q[r, j] >= lower[j] and q[r, j] <= upper[j]):
+                illegal[r] = True
+                break
+    return illegal
+
+
 @kernel('i8[::1](i8[::1], i8[::1], i8[::1], i8, f8[:, :, ::1], f8[:, :, ::1], '
         'f8[:, :, :, ::1], f8[:, :, ::1], f8[:, ::1], i8[::1], f8[:, ::1], f8[:, ::1], '
         'f8[:, ::1], f8[:, :, :], i8[::1], i8[:, :], f8[:, ::1], f8[:, ::1], f8)')
@@ -720,6 +777,101 @@ def _motion_paths(objective, times, frame_step, speed_cap, qa, ia, qb, ib):
                 n += 1
         ends[i] = n
     return rows[:n].copy(), frames[:n].copy(), ends, late
+
+
+@kernel('Tuple((i8[::1], i8))(f8[:, :], f8[:], f8[:, :], f8[:], f8[:, ::1], i8[::1], '
+        'f8[:, ::1], i8[::1], b1, i8, ' + _ILLEGAL_TABLE_TYPES + ')')
+def _motion_failures(objective, times, frame_step, speed_cap, qa, ia, qb, ib, stop_at_legal,
+                     first, lower, upper, clear_until,
+                     body_frames, indices, body_rotations, body_positions, links,
+                     shape_rotation, shape_centre, shape_lower, shape_upper, checked,
+                     shape_links, offsets, turns, turned, kinds, halves,
+                     parent, child, origin_rotation, step_turned, origin_translation,
+                     offset_axis, offset_length, has_offset, joint, kind, axis_coordinate,
+                     axis_sign, axis,
+                     triangle_lower, triangle_upper, pair_column, half, corners, pair_box_half,
+                     margin, checked_kinds, checked_half, pair_kinds, pair_half, pair_other):
+    """:meth:`CTSpace._failures`: the first illegal frame of each motion (qa[i], ia[i]) ->
+    (qb[i], ib[i]) in order, -1 for a legal one, and the configurations checked.
+
+    The motions' rows are :func:`_motion_paths`'; they are judged by :func:`_illegal_rows`,
+    with ``first`` <= 0 all in one batch, else in waves along the motions (``first`` rows of
+    every motion still open, then twice as many each wave), so that rows after a motion's
+    first illegal one are seldom checked. A motion whose rows are all legal fails at its speed
+    violation, if any. With ``stop_at_legal`` the answers end at the first legal motion.
+    Returns (answers (n,), configurations checked).
+    """
+    rows, frames, ends, late = _motion_paths(objective, times, frame_step, speed_cap, qa, ia,
+                                             qb, ib)
+    count = ia.shape[0]
+    answers = np.empty(count, dtype=np.int64)
+    answered = 0
+    checks = 0
+    open_ = -3  # no answer yet
+    results = np.full(count, open_, dtype=np.int64)
+    position = np.empty(count, dtype=np.int64)
+    for i in range(count):
+        position[i] = 0 if i == 0 else ends[i - 1]
+    size = rows.shape[0] if first <= 0 else first
+    done = 0
+    while done < count:
+        # The next rows of every motion still open (all of them at once when first <= 0).
+        total = 0
+        for i in range(done, count):
+            if results[i] == open_:
+                total += min(position[i] + size, ends[i]) - position[i]
+        picked = np.empty(total, dtype=np.int64)
+        n = 0
+        for i in range(done, count):
+            if results[i] == open_:
+                for r in range(position[i], min(position[i] + size, ends[i])):
+                    picked[n] = r
+                    n += 1
+        checks += total
+        illegal = np.zeros(0, dtype=np.bool_)
+        if total:
+            batch = np.empty((total, rows.shape[1]))
+            batch_frames = np.empty(total, dtype=np.int64)
+            for r in range(total):
+                batch[r] = rows[picked[r]]
+                batch_frames[r] = frames[picked[r]]
+            swept = total > 1 and (
+                triangle_lower.shape[0] > FEW_TRIANGLES
+                or total * checked.shape[0] * triangle_lower.shape[0] > SWEPT_CONTACTS)
+            illegal = _illegal_rows(
+                batch, batch_frames, swept, lower, upper, clear_until,
+                body_frames, indices, body_rotations, body_positions, links, shape_rotation,
+                shape_centre, shape_lower, shape_upper, checked, shape_links, offsets, turns,
+                turned, kinds, halves,
+                parent, child, origin_rotation, step_turned, origin_translation, offset_axis,
+                offset_length, has_offset, joint, kind, axis_coordinate, axis_sign, axis,
+                triangle_lower, triangle_upper, pair_column, half, corners, pair_box_half,
+                margin, checked_kinds, checked_half, pair_kinds, pair_half, pair_other)
+        local = 0
+        for i in range(done, count):
+            if results[i] != open_:
+                continue
+            end = min(position[i] + size, ends[i])
+            for r in range(local, local + end - position[i]):
+                if illegal[r]:
+                    results[i] = frames[picked[r]]
+                    break
+            if results[i] == open_:
+                if end == ends[i]:
+                    results[i] = late[i] if late[i] >= 0 else -1
+                position_end = end
+            else:
+                position_end = position[i]
+            local += end - position[i]
+            position[i] = position_end
+        while done < count and results[done] != open_:
+            answers[answered] = results[done]
+            answered += 1
+            if stop_at_legal and results[done] < 0:
+                return answers[:answered].copy(), checks
+            done += 1
+        size *= 2
+    return answers[:answered].copy(), checks
 
 
 @kernel('b1[::1](f8[:, :], f8[::1], f8[::1])')
@@ -1056,7 +1208,7 @@ class BodyShapes:
         """Narrow phase: does shape ``shape`` posed at (rotation, centre) touch ``other``?"""
         obj = self.objects[shape]
         obj.setTransform(fcl.Transform(rotation, centre))
-        # The contact count says it (see CTSpace._in_contact); one result serves every call.
+        # The contact count says it; one result serves every call.
         if fcl.collide(obj, other, self._request, self._result):
             del self._result.contacts[:]
             return True
@@ -1326,14 +1478,6 @@ def _same_motion(a: tuple, b: tuple) -> bool:
     return all(ia == ib and np.array_equal(qa, qb) for (qa, ia), (qb, ib) in zip(a, b))
 
 
-def _watched_rows(inside: np.ndarray, broad: tuple) -> List[int]:
-    """Rows of a checked batch that are illegal: outside the limits or in contact."""
-    outside = np.flatnonzero(~inside).tolist()
-    if not outside:
-        return sorted(broad[0])
-    return sorted(set(outside).union(broad[0]))
-
-
 def branch_layout(kinematics: BodyKinematics, shapes: BodyShapes, branch: str,
                   checked_links: Sequence[str], obstacle_links: Sequence[str]) -> tuple:
     """The model-only data of a branch, built once and kept in ``shapes.branch_layouts``.
@@ -1531,6 +1675,13 @@ class CTSpace:
         self._prepare_environment()
         # Frames [0, clear_until) where the branch, where the body holds it, touches nothing.
         self._clear_until = body.clear_until.get(branch, 0)
+        # _illegal_rows' arguments after the batch's own (the same while the branch is planned).
+        self._illegal_tables = (
+            self._lower_tolerant, self._upper_tolerant, int(self._clear_until),
+            *self._box_tables, *self._chain.step_table, self._triangle_lower,
+            self._triangle_upper, self._pair_column, self._checked_box_half,
+            self._triangle_corners, self._pair_box_half, SAT_MARGIN, self._checked_kinds,
+            self._checked_half, self._pair_kinds, self._pair_half, self._pair_other)
         self.checks = 0
         # A motion whose check ran ahead (see best_valid_rows), or None.
         self._prefetched: Optional[tuple] = None
@@ -1640,12 +1791,9 @@ class CTSpace:
         prefetched, self._prefetched = self._prefetched, None
         if goals and prefetched is not None and _same_motion(prefetched[0], (a, goals[0])):
             # The first goal was checked with the neighbours (best_valid_rows).
-            _, _, late, frames, inside, broad = prefetched
-            bad = -1
-            for row in _watched_rows(inside, broad):
-                if not inside[row] or self._in_contact(row, frames[row], broad):
-                    bad = int(frames[row])
-                    break
+            _, _, late, frames, illegal = prefetched
+            hit = np.flatnonzero(illegal)
+            bad = int(frames[hit[0]]) if len(hit) else -1
             if bad < 0 and late >= 0:
                 bad = int(late)
             failures.append(bad)
@@ -1658,11 +1806,9 @@ class CTSpace:
             chosen = goals[:1] if first else goals[1:]
             if not chosen:
                 continue
-            q, frame_index, segments, early = self._motion_batch([(a, b) for b in chosen])
             # The other goals usually fail within a few frames of the start: their broad
             # phase runs a few frames of each at a time rather than over whole motions.
-            check = self._check_segments if first else self._check_progressively
-            for bad in check(q, frame_index, segments, early, stop_at_legal=True):
+            for bad in self._failures([(a, b) for b in chosen], True, 0 if first else 8):
                 failures.append(bad)
                 if bad < 0:
                     return len(failures) - 1, failures
@@ -1684,9 +1830,7 @@ class CTSpace:
         """
         if len(waypoints) < 2:
             return -1
-        q, frames, segments, early = self._motion_batch(list(zip(waypoints[:-1],
-                                                                 waypoints[1:])))
-        for bad in self._check_segments(q, frames, segments, early, stop_at_legal=False):
+        for bad in self._failures(list(zip(waypoints[:-1], waypoints[1:])), False, 0):
             if bad >= 0:
                 return bad
         return -1
@@ -1708,12 +1852,10 @@ class CTSpace:
             return self.valid_rows(q, frames), -1
         path, path_frames, segments, early = self._motion_batch(
             list(zip(waypoints[:-1], waypoints[1:])))
-        # The rows, then the motions, in one batch (the counts of _check_segments).
+        # The rows, then the motions, in one batch (counted as _failures counts them).
         rows = np.concatenate([q, path])
         self.checks += len(rows)
-        illegal = ~self.within_bounds(rows)
-        if len(rows):
-            illegal |= self._batch_contacts(rows, np.concatenate([frames, path_frames]))[2]
+        illegal = self._illegal(rows, np.concatenate([frames, path_frames]))
         legal = ~illegal[:m]
         for (begin, end), late in zip(segments, early):
             along = np.flatnonzero(illegal[m + begin:m + end])
@@ -1722,6 +1864,28 @@ class CTSpace:
             if late >= 0:
                 return legal, int(late)
         return legal, -1
+
+    def _failures(self, motions: Sequence[tuple], stop_at_legal: bool, first: int) -> List[int]:
+        """The first illegal frame of each motion ((qa, ia), (qb, ib)) in order, -1 for a legal
+        one (the rows are counted in ``checks``).
+
+        With ``first`` <= 0 every row is checked in one batch; else in waves along the
+        motions, ``first`` rows of each motion still open, then twice as many each wave (so
+        rows after a motion's first illegal one are seldom checked; the answers are the same).
+        With ``stop_at_legal`` the answers end at the first legal motion. A motion whose rows
+        are all legal is illegal at its speed violation, one that does not go forward in time
+        at its start frame (:func:`_motion_failures`).
+        """
+        count = len(motions)
+        qa, qb = np.empty((count, self.dimension)), np.empty((count, self.dimension))
+        ia, ib = np.empty(count, dtype=np.int64), np.empty(count, dtype=np.int64)
+        for i, ((a, frame_a), (b, frame_b)) in enumerate(motions):
+            qa[i], ia[i], qb[i], ib[i] = a, frame_a, b, frame_b
+        answers, checks = _motion_failures(self.objective, self.times, self._frame_step,
+                                           self._speed_cap, qa, ia, qb, ib, stop_at_legal,
+                                           first, *self._illegal_tables)
+        self.checks += checks
+        return answers.tolist()
 
     def _motion_batch(self, motions: Sequence[tuple]) -> tuple:
         """The rows of motions ((qa, ia), (qb, ib)) for one check: (q (m, d) rad, frames (m,),
@@ -1766,9 +1930,11 @@ class CTSpace:
 
         """
         frames = np.asarray(frames)
-        bad = next(self._check_segments(np.asarray(q, dtype=float), frames,
-                                        [(0, len(frames))], [-1], False))
-        return -1 if bad < 0 else int(np.searchsorted(frames, bad))
+        self.checks += len(frames)
+        if not len(frames):
+            return -1
+        bad = np.flatnonzero(self._illegal(np.asarray(q, dtype=float), frames))
+        return -1 if not len(bad) else int(np.searchsorted(frames, frames[bad[0]]))
 
     def valid_rows(self, q: np.ndarray, frames: np.ndarray) -> np.ndarray:
         """Legality of each configuration of a batch: (m,) bool.
@@ -1787,13 +1953,7 @@ class CTSpace:
         self.checks += m
         if not m:
             return np.zeros(0, dtype=bool)
-        legal = self.within_bounds(q)
-        broad = self._batch_contacts(q, frames)
-        # Only rows in contact are illegal within the limits.
-        for row in broad[0]:
-            if legal[row] and self._in_contact(row, frames[row], broad):
-                legal[row] = False
-        return legal
+        return ~self._illegal(q, frames)
 
     def best_valid_rows(self, q: np.ndarray, frames: np.ndarray, order: np.ndarray,
                         count: int, also: Sequence[int] = (),
@@ -1830,7 +1990,6 @@ class CTSpace:
         self._prefetched = None
         if not m:
             return legal
-        inside = self.within_bounds(q)
         extra = None
         if motion is not None:
             (qa, ia), (qb, ib) = motion
@@ -1840,99 +1999,20 @@ class CTSpace:
                 q = np.concatenate([q, rows])
                 frames = np.concatenate([frames, extra[3]])
         self.checks += len(frames)
-        answers = self._batch_contacts(q, frames)
+        illegal = self._illegal(q, frames)
         if extra is not None:
-            # The motion's rows as a batch of their own (rows numbered from 0).
-            own = ([row - m for row in answers[0] if row >= m], answers[1][m:],
-                   answers[2][m:])
-            self._prefetched = extra + (self.within_bounds(extra[1]), own)
-        checked = set()
-        found = 0
-        for row in list(order):
-            if found >= count:
-                break
-            checked.add(row)
-            legal[row] = inside[row] and not self._in_contact(row, frames[row], answers)
-            found += int(legal[row])
-        for row in also:
-            if row not in checked:
-                legal[row] = inside[row] and not self._in_contact(row, frames[row], answers)
+            # The motion's rows' answers, read by first_legal_motion.
+            self._prefetched = extra + (illegal[m:],)
+        usable = ~illegal[:m]
+        # Read in order up to the count-th legal row; the rows in ``also`` whatever their rank.
+        order = np.asarray(order, dtype=np.int64)
+        found = np.flatnonzero(usable[order])
+        read = order[:found[count - 1] + 1] if 0 < count <= len(found) else (
+            order if count > 0 else order[:0])
+        legal[read] = usable[read]
+        also = np.asarray(also, dtype=np.int64)
+        legal[also] = usable[also]
         return legal
-
-    def _check_segments(self, q: np.ndarray, frames: np.ndarray,
-                        segments: Sequence[Tuple[int, int]], early: Sequence[int],
-                        stop_at_legal: bool):
-        """Yield, per segment of rows, the frame of its first illegal row or -1.
-
-        All rows are checked in one batch (limits, collisions), its answers read segment by
-        segment, in row order, up to a segment's first illegal row. A segment with
-        ``early[i] >= 0`` is illegal at that frame if its rows are all legal. With
-        ``stop_at_legal`` nothing after the first legal segment is read.
-        """
-        m = len(frames)
-        self.checks += m
-        watch: List[int] = []
-        if m:
-            inside = self.within_bounds(q)
-            answers = self._batch_contacts(q, frames)
-            watch = _watched_rows(inside, answers)
-        for (begin, end), late in zip(segments, early):
-            bad = -1
-            for row in watch[bisect.bisect_left(watch, begin):]:
-                if row >= end:
-                    break
-                if not inside[row] or self._in_contact(row, frames[row], answers):
-                    bad = int(frames[row])
-                    break
-            if bad < 0 and late >= 0:
-                bad = int(late)
-            yield bad
-            if stop_at_legal and bad < 0:
-                return
-
-    def _check_progressively(self, q: np.ndarray, frames: np.ndarray,
-                             segments: Sequence[Tuple[int, int]], early: Sequence[int],
-                             stop_at_legal: bool, first: int = 8):
-        """Like :meth:`_check_segments`, with the checks in waves along the segments.
-
-        Each wave takes the next rows of every segment still open (``first`` rows, then twice
-        as many each wave), so rows after a segment's first illegal one are seldom boxed. The
-        frames yielded are the same; only the rows counted in ``checks`` are fewer.
-        """
-        count = len(segments)
-        results: List[Optional[int]] = [None] * count
-        position = [begin for begin, _ in segments]
-        inside = self.within_bounds(q) if len(frames) else None
-        size, done = int(first), 0
-        while done < count:
-            wave = []
-            for i in range(done, count):
-                if results[i] is None:
-                    wave.append((i, position[i], min(position[i] + size, segments[i][1])))
-            rows = np.concatenate([np.arange(begin, end) for _, begin, end in wave])
-            self.checks += len(rows)
-            answers = self._batch_contacts(q[rows], frames[rows]) if len(rows) else None
-            watch = _watched_rows(inside[rows], answers) if len(rows) else []
-            local = 0
-            for i, begin, end in wave:
-                for row in watch[bisect.bisect_left(watch, local):]:
-                    if row >= local + end - begin:
-                        break
-                    if not inside[begin + row - local] or self._in_contact(
-                            row, frames[begin + row - local], answers):
-                        results[i] = int(frames[begin + row - local])
-                        break
-                if results[i] is None:
-                    if end == segments[i][1]:
-                        results[i] = int(early[i]) if early[i] >= 0 else -1
-                    position[i] = end
-                local += end - begin
-            while done < count and results[done] is not None:
-                yield results[done]
-                if stop_at_legal and results[done] < 0:
-                    return
-                done += 1
-            size *= 2
 
     def _shape_boxes(self, q: np.ndarray, frames: np.ndarray) -> tuple:
         """Poses and boxes of the branch's checked shapes for a batch of rows.
@@ -1956,38 +2036,22 @@ class CTSpace:
                       centre, low, high, held, *self._chain.step_table)
         return rotation, centre, low, high, held
 
-    def _batch_contacts(self, q: np.ndarray, frames: np.ndarray) -> tuple:
-        """Which rows of a batch touch the environment or the body, all rows at once.
+    def _illegal(self, q: np.ndarray, frames: np.ndarray) -> np.ndarray:
+        """Which rows of a batch are illegal, all rows at once: (m,) bool.
 
-        The broad phase (boxes, the separating axis test) and the exact test of the shapes it
-        leaves, in one kernel (:func:`_row_collisions`). Returns (the rows in contact, in
-        increasing order; per row whether it is in contact, as a list, what
-        :meth:`_in_contact` reads, and as an (m,) bool array).
-
-        Rows where the body holds the branch, at frames where the check of the body's own
-        motion found that the branch touches nothing (``TimedBody.clear_until``), are not
-        tested again: the same tests gave that answer (the same poses; the pairs and triangles
-        here are among those checked there).
+        A row is illegal outside the joint limits (with :meth:`within_bounds`' tolerance) or
+        where the branch touches the environment or the body: the broad phase (boxes, the
+        separating axis test) and the exact test of the shapes it leaves, in one kernel
+        (:func:`_illegal_rows`). Rows where the body holds the branch, at frames where the
+        check of the body's own motion found that the branch touches nothing
+        (``TimedBody.clear_until``), are not tested again: the same tests gave that answer
+        (the same poses; the pairs and triangles here are among those checked there).
         """
-        frames = frames.astype(np.int64, copy=False)  # the kernels' index type, once
-        rotation, centre, low, high, held = self._shape_boxes(q, frames)
-        known = held & (frames < self._clear_until)
+        frames = np.ascontiguousarray(frames, dtype=np.int64)  # the kernels' index type
         m = len(frames)
         triangles = len(self._triangle_lower)
         # Many triangles: the pairs (shape, triangle) are first cut by each shape's box swept
         # over the rows, which also drops the triangles far from every box.
         swept = m > 1 and (triangles > FEW_TRIANGLES
                            or m * len(self.checked) * triangles > SWEPT_CONTACTS)
-        body = self.body
-        colliding = _row_collisions(
-            low, high, self._triangle_lower, self._triangle_upper, swept, frames,
-            self._pair_column, body.shape_lower, body.shape_upper, rotation, centre,
-            self._checked_box_half, self._triangle_corners, body.shape_rotation,
-            body.shape_centre, self._pair_box_half, SAT_MARGIN, self._checked_kinds,
-            self._checked_half, self._pair_kinds, self._pair_half, self._pair_other, known)
-        return np.flatnonzero(colliding).tolist(), colliding.tolist(), colliding
-
-    @staticmethod
-    def _in_contact(row: int, frame: int, broad: tuple) -> bool:
-        """Whether a row of a batch touches anything (its answer from :meth:`_batch_contacts`)."""
-        return broad[1][row]
+        return _illegal_rows(q, frames, swept, *self._illegal_tables)
