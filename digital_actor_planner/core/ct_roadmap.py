@@ -86,7 +86,8 @@ class SearchResult:
 class _State:
     deviation: np.ndarray
     frame: int
-    candidates: Optional[List[Tuple[float, int, np.ndarray]]] = None
+    # Ranked neighbours left to try: (closeness, arrival, deviation, its key in ``visited``).
+    candidates: Optional[List[Tuple[float, int, np.ndarray, tuple]]] = None
     grew: bool = False
     # Only lasting neighbours were offered from here; ``relaxed``: the others are offered too.
     lasting_only: bool = False
@@ -730,10 +731,10 @@ class CTRoadmap:
         # Endpoints in collision cannot start a legal motion: filter them, best first, until
         # enough are legal (holding the current posture is kept whatever its rank).
         motion = None
+        # The keys _advance marks tried neighbours with (rounded once for all rows: the same
+        # numbers, as Python floats, which hash and compare as NumPy's do).
+        rounded = np.round(targets, 3).tolist()
         if visited is not None and not on_objective and not state.followed:
-            # The keys _advance marks tried neighbours with (rounded once for all rows: the
-            # same numbers, as Python floats, which hash and compare as NumPy's do).
-            rounded = np.round(targets, 3).tolist()
             for i in order.tolist():
                 if (int(frames[i]), tuple(rounded[i])) not in visited:
                     motion = ((space.objective[here] + state.deviation, here),
@@ -749,7 +750,8 @@ class CTRoadmap:
             # first (filtering there too made the arms backtrack ten times between the pillars).
             legal &= lasting
             state.lasting_only = True
-        ranked = [(float(closeness[i]), int(frames[i]), targets[i]) for i in order if legal[i]]
+        ranked = [(float(closeness[i]), int(frames[i]), targets[i], tuple(rounded[i]))
+                  for i in order if legal[i]]
         # The neighbours closest to the objective, plus holding the current posture.
         hold = [c for c in ranked[self.max_candidates:]
                 if np.array_equal(c[2], state.deviation)]
@@ -787,10 +789,10 @@ class CTRoadmap:
             (m,) bool; all True when the objective is legal from ``here`` to the last frame.
 
         """
-        lasting = np.ones(len(targets), dtype=bool)
         blocked = np.flatnonzero(~horizon.free[here:])
         if not len(blocked):
-            return lasting
+            return np.ones(len(targets), dtype=bool)
+        lasting = [True] * len(targets)  # a list while it is written element by element
         begin = here + int(blocked[0])
         end = int(horizon.next_free[begin])
         spacing = horizon.hold_frames
@@ -829,8 +831,8 @@ class CTRoadmap:
                 legal = space.valid_rows(space.objective[frames] + targets[rows], frames)
                 for key, is_legal, row in zip(keys, legal.tolist(), rows.tolist()):
                     horizon.held[key] = is_legal
-                    lasting[row] &= is_legal
-        return lasting
+                    lasting[row] = lasting[row] and is_legal
+        return np.array(lasting, dtype=bool)
 
     def _advance(self, space: CTSpace, state: _State, visited: set, horizon: _Horizon,
                  speed_fraction: float) -> Optional[_State]:
@@ -859,33 +861,35 @@ class CTRoadmap:
                                     if np.any(c[2]) or c[1] > state.frame + horizon.hold_frames]
             elif state.candidates and on_objective:
                 # On the objective: follow it as far as it is legal (one motion check).
-                _, arrival, target = state.candidates.pop(0)
+                _, arrival, target, _ = state.candidates.pop(0)
                 if not state.tried_objective:
                     child = self._try(space, state, target, arrival)
                     if child is not None:
                         return child
         fresh = []
         while state.candidates:
-            _, arrival, target = state.candidates.pop(0)
-            key = (arrival, tuple(np.round(target, 3)))
+            _, arrival, target, rounded = state.candidates.pop(0)
+            key = (arrival, rounded)
             if key not in visited:
                 visited.add(key)
-                fresh.append((target, arrival))
+                fresh.append((target, arrival, rounded))
         if not fresh:
             return None
         here = state.frame
         start = (space.objective[here] + state.deviation, here)
-        goals = [(space.objective[arrival] + target, arrival) for target, arrival in fresh]
+        goals = [(space.objective[arrival] + target, arrival) for target, arrival, _ in fresh]
         chosen, failures = space.first_legal_motion(start, goals)
         state.failures.extend(f for f in failures if f >= 0)
         # Keep the untried neighbours for when the search comes back here.
-        state.candidates = [(0.0, arrival, target) for target, arrival in fresh[chosen + 1:]
+        state.candidates = [(0.0, arrival, target, rounded)
+                            for target, arrival, rounded in fresh[chosen + 1:]
                             ] if chosen >= 0 else []
         if chosen < 0:
             return None
-        target, arrival = fresh[chosen]
+        target, arrival, _ = fresh[chosen]
         if np.array_equal(target, state.deviation):
-            arrival = self._longest_hold(target, arrival, fresh[:chosen], failures)
+            arrival = self._longest_hold(target, arrival,
+                                         [(t, a) for t, a, _ in fresh[:chosen]], failures)
         child = _State(np.array(target), arrival)
         if arrival < state.until:
             child.until, child.allowed = state.until, state.allowed
