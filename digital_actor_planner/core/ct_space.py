@@ -2015,7 +2015,8 @@ class CTSpace:
         return legal
 
     def _shape_boxes(self, q: np.ndarray, frames: np.ndarray) -> tuple:
-        """Poses and boxes of the branch's checked shapes for a batch of rows.
+        """Poses and boxes of the branch's checked shapes for a batch of rows (what
+        :func:`_illegal_rows` works out first, as the checks see it; the tests read it here).
 
         Rows where the branch is where the body already holds it (the objective, or the start
         at frame 0, before the branch is fixed) take the body's poses; only the others need
