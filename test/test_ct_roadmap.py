@@ -2,6 +2,7 @@
 import numpy as np
 import pytest
 
+from digital_actor_planner.core import ct_roadmap
 from digital_actor_planner.core.ct_roadmap import _Horizon, _neighbour_table, _State, CTRoadmap, \
     direct_return
 from digital_actor_planner.core.ct_space import CTSpace
@@ -537,3 +538,79 @@ def test_the_neighbour_table_is_the_neighbours_written_out(beam_space, table):
     # Long holds, approach holds and steered nodes all occurred.
     assert {flags[0] for flags in seen} == {True, False}
     assert True in {flags[1] for flags in seen} and True in {flags[2] for flags in seen}
+
+
+def _lasting_written_out(space, horizon, held, here, targets, arrivals):
+    """Whether each target, held from its arrival, lasts through the blocked stretch ahead,
+    in plain Python with a dict cache ``held`` of (frame, rounded posture) -> legal: (lasting,
+    configurations checked)."""
+    lasting = np.ones(len(targets), dtype=bool)
+    blocked = np.flatnonzero(~horizon.free[here:])
+    if not len(blocked):
+        return lasting, 0
+    begin = here + int(blocked[0])
+    end = int(horizon.next_free[begin])
+    spacing, grids, checks = horizon.hold_frames, {}, 0
+    for i, arrival in enumerate(arrivals.tolist()):
+        if arrival > end:
+            continue
+        if not targets[i].any():
+            lasting[i] = bool(horizon.free[arrival:end + 1].all())
+            continue
+        grid = [begin] if arrival < begin else []
+        grid += list(range(max(arrival, begin) // spacing * spacing + spacing, end, spacing))
+        grids[i] = (tuple(np.round(targets[i], 4).tolist()), grid + [end])
+    for coarse in (True, False):
+        rows, frames, keys = [], [], []
+        for i, (posture, grid) in grids.items():
+            if not lasting[i]:
+                continue
+            for frame in (grid[::-1][::ct_roadmap.COARSE_STRIDE] if coarse else grid):
+                known = held.get((frame, posture))
+                if known is None:
+                    rows.append(i)
+                    frames.append(frame)
+                    keys.append((frame, posture))
+                elif not known:
+                    lasting[i] = False
+        if rows:
+            legal = space.valid_rows(space.objective[frames] + targets[rows], np.array(frames))
+            checks += len(rows)
+            for key, is_legal, row in zip(keys, legal.tolist(), rows):
+                held[key] = is_legal
+                lasting[row] &= is_legal
+    return lasting, checks
+
+
+@pytest.mark.parametrize('table', [ct_roadmap._lasting_table, ct_roadmap._lasting_table.py_func])
+def test_the_lasting_check_is_written_out_with_its_cache(beam_space, table, monkeypatch):
+    # Successive states of a search share what is known of a posture at a frame: the kernel
+    # and its cache (a table of postures by frame) against plain Python with a dict, over a
+    # sequence of calls on one horizon: the same answers, the same configurations checked.
+    # Targets repeat (also within a call, equal to 1e-4 rad), arrive before, inside and after
+    # the blocked stretch, or do not move.
+    monkeypatch.setattr(ct_roadmap, '_lasting_table', table)
+    space = beam_space
+    rng = np.random.default_rng(21)
+    horizon = _Horizon(CTRoadmap._objective_free(space, 5), 5)
+    blocked = np.flatnonzero(~horizon.free)
+    held = {}
+    pool = np.vstack([PATTERNS, rng.normal(0.0, 0.4, (6, 2)), np.zeros((1, 2))])
+    outcomes = set()
+    for call in range(60):
+        here = int(rng.integers(0, blocked[-1] + 1))
+        targets = pool[rng.integers(0, len(pool), rng.integers(1, 9))]
+        if call % 3 == 0:
+            targets = np.vstack([targets, targets[:1] + 2e-5])  # the same rounded posture
+        arrivals = here + rng.integers(1, 60, len(targets))
+        before = space.checks
+        found = CTRoadmap._lasting(space, horizon, here, np.ascontiguousarray(targets),
+                                   arrivals.astype(np.int64))
+        checked = space.checks - before
+        expected, expected_checks = _lasting_written_out(space, horizon, held, here, targets,
+                                                         arrivals)
+        assert found.tolist() == expected.tolist(), call
+        assert checked == expected_checks, call
+        outcomes.update(found.tolist())
+        outcomes.add(('checked', checked > 0))
+    assert outcomes == {True, False, ('checked', True), ('checked', False)}

@@ -38,7 +38,7 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .ct_space import CTSpace
+from .ct_space import _ILLEGAL_TABLE_TYPES, _illegal_rows, _sweeps, CTSpace
 from .jit import kernel
 
 
@@ -273,6 +273,116 @@ def _neighbour_table(nodes, deviation, here, last, hold_frames, with_objective, 
     return targets[:row].copy(), frames[:row].copy(), closeness, approach
 
 
+@kernel('Tuple((b1[::1], i8))(f8[:, ::1], i8[::1], i8[::1], i8, i8, i8, i8, b1[::1], '
+        'i1[:, ::1], f8[:, :], ' + _ILLEGAL_TABLE_TYPES + ')')
+def _lasting_table(targets, ids, arrivals, begin, end, spacing, stride, free, held, objective,
+                   lower, upper, clear_until,
+                   body_frames, indices, body_rotations, body_positions, links, shape_rotation,
+                   shape_centre, shape_lower, shape_upper, checked, shape_links, offsets, turns,
+                   turned, kinds, halves,
+                   parent, child, origin_rotation, step_turned, origin_translation, offset_axis,
+                   offset_length, has_offset, joint, kind, axis_coordinate, axis_sign, axis,
+                   triangle_lower, triangle_upper, pair_column, half, corners, pair_box_half,
+                   margin, checked_kinds, checked_half, pair_kinds, pair_half, pair_other):
+    """:meth:`CTRoadmap._lasting` for the blocked stretch [``begin``, ``end``]: whether each
+    of ``targets`` (m, d), held from its ``arrivals`` (m,), lasts through it, and the
+    configurations checked.
+
+    ``held`` (postures, frames) caches what is known of a posture (``ids`` (m,): each
+    target's row, one per posture rounded to 1e-4 rad) at a frame: -1 unknown, 0 illegal, 1
+    legal; it is read and written here. A moved target is checked on its grid (the stretch's
+    start if it arrives before it, every ``spacing``-th frame after its arrival, the end),
+    first every ``stride``-th grid frame from the end (a coarse pass), then the rest; a
+    target that does not move lasts where ``free`` (the objective legal) holds to the end.
+    The checks are :func:`_illegal_rows`' over the rows not known yet, in the order of the
+    targets and their grids, a later answer for the same posture and frame written over an
+    earlier one.
+    """
+    m, d = targets.shape
+    lasting = np.ones(m, dtype=np.bool_)
+    # Each moved target's grid, one after the other.
+    starts = np.full(m + 1, 0, dtype=np.int64)
+    has_grid = np.zeros(m, dtype=np.bool_)
+    total = 0
+    for i in range(m):
+        starts[i] = total
+        arrival = arrivals[i]
+        if arrival > end:
+            continue
+        moved = False
+        for j in range(d):
+            if targets[i, j] != 0.0:
+                moved = True
+        if not moved:
+            for f in range(arrival, end + 1):
+                if not free[f]:
+                    lasting[i] = False
+                    break
+            continue
+        has_grid[i] = True
+        first = max(arrival, begin)
+        total += (1 if arrival < begin else 0) + len(range(first // spacing * spacing + spacing,
+                                                           end, spacing)) + 1
+    starts[m] = total
+    grid = np.empty(total, dtype=np.int64)
+    for i in range(m):
+        if not has_grid[i]:
+            continue
+        n = starts[i]
+        arrival = arrivals[i]
+        if arrival < begin:
+            grid[n] = begin
+            n += 1
+        first = max(arrival, begin)
+        for f in range(first // spacing * spacing + spacing, end, spacing):
+            grid[n] = f
+            n += 1
+        grid[n] = end
+    checks = 0
+    rows = np.empty(total, dtype=np.int64)
+    frames = np.empty(total, dtype=np.int64)
+    for coarse in (True, False):
+        count = 0
+        for i in range(m):
+            if not has_grid[i] or not lasting[i]:
+                continue
+            length = starts[i + 1] - starts[i]
+            # The grid from its end every stride-th frame (coarse), or all of it.
+            picks = (length + stride - 1) // stride if coarse else length
+            for p in range(picks):
+                frame = grid[starts[i] + length - 1 - p * stride] if coarse else grid[
+                    starts[i] + p]
+                known = held[ids[i], frame]
+                if known < 0:
+                    rows[count] = i
+                    frames[count] = frame
+                    count += 1
+                elif known == 0:
+                    lasting[i] = False
+        if count:
+            q = np.empty((count, d))
+            batch_frames = frames[:count].copy()
+            for r in range(count):
+                for j in range(d):
+                    q[r, j] = objective[batch_frames[r], j] + targets[rows[r], j]
+            illegal = _illegal_rows(
+                q, batch_frames, _sweeps(count, checked.shape[0], triangle_lower.shape[0]),
+                lower, upper, clear_until,
+                body_frames, indices, body_rotations, body_positions, links, shape_rotation,
+                shape_centre, shape_lower, shape_upper, checked, shape_links, offsets, turns,
+                turned, kinds, halves,
+                parent, child, origin_rotation, step_turned, origin_translation, offset_axis,
+                offset_length, has_offset, joint, kind, axis_coordinate, axis_sign, axis,
+                triangle_lower, triangle_upper, pair_column, half, corners, pair_box_half,
+                margin, checked_kinds, checked_half, pair_kinds, pair_half, pair_other)
+            checks += count
+            for r in range(count):
+                legal = not illegal[r]
+                held[ids[rows[r]], batch_frames[r]] = 1 if legal else 0
+                lasting[rows[r]] = lasting[rows[r]] and legal
+    return lasting, checks
+
+
 def objective_grid(last: int, spacing: int) -> np.ndarray:
     """Frames 0, ``spacing``, 2 ``spacing``, ... and ``last``: where a search first checks the
     objective (:meth:`CTRoadmap._objective_free`); made once per (last, spacing) and shared,
@@ -337,14 +447,28 @@ class _Horizon:
 
     def __init__(self, free: np.ndarray, hold_frames: int):
         self.hold_frames = int(hold_frames)
-        # (frame, rounded deviation) -> whether that posture is legal there (see _lasting).
-        self.held: dict = {}
         last = len(free) - 1
+        # What is known of a posture (a deviation rounded to 1e-4 rad, numbered in
+        # ``postures``) at each frame: -1 unknown, 0 illegal, 1 legal (see _lasting).
+        self.postures: Dict[tuple, int] = {}
+        self.held = np.full((16, last + 1), -1, dtype=np.int8)
         self.last = last
         self.free = free
         # next_free[i]: the first frame >= i where the objective is legal (last if none);
         # run_start[i]: the first frame of the blocked stretch holding i (i itself if free).
         self.next_free, self.run_start = _horizon_tables(np.asarray(free, dtype=np.bool_))
+
+    def posture_ids(self, rounded: list) -> np.ndarray:
+        """The rows of ``held`` for postures (each a list of rounded deviations), added as
+        they first appear: (m,) int."""
+        postures = self.postures
+        ids = np.array([postures.setdefault(tuple(r), len(postures)) for r in rounded],
+                       dtype=np.int64)
+        if len(postures) > len(self.held):
+            grown = np.full((2 * len(postures), self.held.shape[1]), -1, dtype=np.int8)
+            grown[:len(self.held)] = self.held
+            self.held = grown
+        return ids
 
     def hold_end(self, here: int) -> int:
         """Frame a posture held from ``here`` is held to: ``hold_frames`` on, then on to where
@@ -792,47 +916,15 @@ class CTRoadmap:
         blocked = np.flatnonzero(~horizon.free[here:])
         if not len(blocked):
             return np.ones(len(targets), dtype=bool)
-        lasting = [True] * len(targets)  # a list while it is written element by element
         begin = here + int(blocked[0])
-        end = int(horizon.next_free[begin])
-        spacing = horizon.hold_frames
-        grids = {}
-        rounded = np.round(targets, 4).tolist()
-        moved = targets.any(axis=1).tolist()
-        for i, arrival in enumerate(arrivals.tolist()):
-            if arrival > end:
-                continue
-            if not moved[i]:
-                lasting[i] = bool(horizon.free[arrival:end + 1].all())
-                continue
-            # The arrival frame itself is checked with the neighbour's endpoint.
-            first = max(arrival, begin)
-            grid = [begin] if arrival < begin else []
-            grid += list(range(first // spacing * spacing + spacing, end, spacing)) + [end]
-            grids[i] = (tuple(rounded[i]), grid)
         # A coarse pass first (most postures that do not last fail it), then the rest of the
-        # grid for the postures left.
-        for coarse in (True, False):
-            rows, frames, keys = [], [], []
-            for i, (deviation, grid) in grids.items():
-                if not lasting[i]:
-                    continue
-                chosen = grid[-1::-COARSE_STRIDE] if coarse else grid
-                for frame in chosen:
-                    known = horizon.held.get((frame, deviation))
-                    if known is None:
-                        rows.append(i)
-                        frames.append(frame)
-                        keys.append((frame, deviation))
-                    elif not known:
-                        lasting[i] = False
-            if rows:
-                rows, frames = np.array(rows), np.array(frames)
-                legal = space.valid_rows(space.objective[frames] + targets[rows], frames)
-                for key, is_legal, row in zip(keys, legal.tolist(), rows.tolist()):
-                    horizon.held[key] = is_legal
-                    lasting[row] = lasting[row] and is_legal
-        return np.array(lasting, dtype=bool)
+        # grid for the postures left; one kernel (_lasting_table).
+        lasting, checks = _lasting_table(
+            targets, horizon.posture_ids(np.round(targets, 4).tolist()), arrivals, begin,
+            int(horizon.next_free[begin]), horizon.hold_frames, COARSE_STRIDE, horizon.free,
+            horizon.held, space.objective, *space._illegal_tables)
+        space.checks += checks
+        return lasting
 
     def _advance(self, space: CTSpace, state: _State, visited: set, horizon: _Horizon,
                  speed_fraction: float) -> Optional[_State]:

@@ -538,6 +538,14 @@ def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pa
     return hit
 
 
+@kernel('b1(i8, i8, i8)')
+def _sweeps(rows, shapes, triangles):
+    """Whether a batch of ``rows`` of a branch's ``shapes`` against ``triangles`` kept
+    triangles first cuts the (shape, triangle) pairs by each shape's box swept over the rows
+    (which also drops the triangles far from every box): many triangles, or many tests."""
+    return rows > 1 and (triangles > FEW_TRIANGLES or rows * shapes * triangles > SWEPT_CONTACTS)
+
+
 # numba types of CTSpace._illegal_tables, as _illegal_rows takes them: the joint limits,
 # clear_until, _branch_boxes' tables, the step table, _row_collisions' tables.
 _ILLEGAL_TABLE_TYPES = (
@@ -835,9 +843,7 @@ def _motion_failures(objective, times, frame_step, speed_cap, qa, ia, qb, ib, st
             for r in range(total):
                 batch[r] = rows[picked[r]]
                 batch_frames[r] = frames[picked[r]]
-            swept = total > 1 and (
-                triangle_lower.shape[0] > FEW_TRIANGLES
-                or total * checked.shape[0] * triangle_lower.shape[0] > SWEPT_CONTACTS)
+            swept = _sweeps(total, checked.shape[0], triangle_lower.shape[0])
             illegal = _illegal_rows(
                 batch, batch_frames, swept, lower, upper, clear_until,
                 body_frames, indices, body_rotations, body_positions, links, shape_rotation,
@@ -2049,10 +2055,5 @@ class CTSpace:
         (the same poses; the pairs and triangles here are among those checked there).
         """
         frames = np.ascontiguousarray(frames, dtype=np.int64)  # the kernels' index type
-        m = len(frames)
-        triangles = len(self._triangle_lower)
-        # Many triangles: the pairs (shape, triangle) are first cut by each shape's box swept
-        # over the rows, which also drops the triangles far from every box.
-        swept = m > 1 and (triangles > FEW_TRIANGLES
-                           or m * len(self.checked) * triangles > SWEPT_CONTACTS)
+        swept = _sweeps(len(frames), len(self.checked), len(self._triangle_lower))
         return _illegal_rows(q, frames, swept, *self._illegal_tables)
