@@ -524,18 +524,31 @@ def test_the_neighbour_table_is_the_neighbours_written_out(beam_space, table):
             state.allowed, state.until = road.nodes[rng.random(len(road.nodes)) < 0.5], last
         fraction = (0.8, 1.0)[trial % 2]
         expected = _neighbours_written_out(road, space, state, horizon, fraction, sub_goal)
-        targets, frames, closeness, approach = table(
+        (targets, frames, closeness, approach, holds, ranked_frames, ranked_closeness,
+         rounded, q) = table(
             state.allowed if sub_goal else road.nodes, state.deviation, here, last,
             horizon.hold_frames, not np.any(deviation) and not sub_goal,
             not np.any(deviation), road.prefer_lasting and not state.relaxed, space.times,
-            fraction * space.speed_limit, horizon.hold_end(here), horizon.free, road.weights)
+            fraction * space.speed_limit, horizon.hold_end(here), horizon.free, road.weights,
+            space.objective)
         assert targets.tobytes() == expected[0].tobytes(), trial
         assert frames.tolist() == expected[1].tolist(), trial
         assert closeness.tobytes() == expected[2].tobytes(), trial
         assert (None if approach < 0 else approach) == expected[3], trial
+        # What _candidates ranks them by, and checks.
+        expected_holds = ~np.any(expected[0] != state.deviation, axis=1)
+        assert holds.tolist() == expected_holds.tolist(), trial
+        assert ranked_frames.tolist() == np.where(expected_holds | (not np.any(deviation)),
+                                                  -expected[1], expected[1]).tolist(), trial
+        assert ranked_closeness.tobytes() == np.round(expected[2], 6).tobytes(), trial
+        assert rounded.tobytes() == np.round(expected[0], 3).tobytes(), trial
+        assert q.tobytes() == (space.objective[expected[1]] + expected[0]).tobytes(), trial
+        seen.add(('hold', bool(holds.any()), bool((~holds).any())))
         seen.add((len(frames) > len(road.nodes) + 1, expected[3] is not None,
                   bool((frames == last).any())))
     # Long holds, approach holds and steered nodes all occurred.
+    assert ('hold', True, True) in seen
+    seen = {flags for flags in seen if flags[0] != 'hold'}
     assert {flags[0] for flags in seen} == {True, False}
     assert True in {flags[1] for flags in seen} and True in {flags[2] for flags in seen}
 

@@ -188,12 +188,17 @@ def _travel_over(times: np.ndarray, change: np.ndarray, rate: np.ndarray):
     return int(frames[0]) if change.ndim == 1 else frames.reshape(change.shape[:-1])
 
 
-@kernel('Tuple((f8[:, ::1], i8[::1], f8[::1], i8))(readonly(f8[:, :]), f8[::1], i8, i8, i8, '
-        'b1, b1, b1, f8[:], f8[:], i8, b1[::1], f8[:])')
+@kernel('Tuple((f8[:, ::1], i8[::1], f8[::1], i8, b1[::1], i8[::1], f8[::1], f8[:, ::1], '
+        'f8[:, ::1]))(readonly(f8[:, :]), f8[::1], i8, i8, i8, b1, b1, b1, f8[:], f8[:], i8, '
+        'b1[::1], f8[:], f8[:, :])')
 def _neighbour_table(nodes, deviation, here, last, hold_frames, with_objective, on_objective,
-                     approach_first, times, rate, hold_end, free, weights):
-    """:meth:`CTRoadmap._candidates`' neighbours of a state, in one pass: (targets (m, d) as
-    deviations, arrival frames (m,), closeness (m,), index of the approach hold or -1).
+                     approach_first, times, rate, hold_end, free, weights, objective):
+    """:meth:`CTRoadmap._candidates`' neighbours of a state, in one pass: targets (m, d) as
+    deviations, arrival frames (m,), closeness (m,), the index of the approach hold or -1,
+    and for the ranking: whether each is the current posture held (m,), its arrival as
+    ranked (later first for holds and, on the objective, for all: negated), closeness
+    rounded to 1e-6 and targets to 1e-3 (NumPy's rounding), and the configurations
+    (``objective`` at the arrivals plus the targets).
 
     In order: the objective followed to the final frame (``with_objective``); each of
     ``nodes`` at its arrival at joint speeds ``rate`` (a node the remaining time does not
@@ -264,13 +269,24 @@ def _neighbour_table(nodes, deviation, here, last, hold_frames, with_objective, 
         targets[row, j] = deviation[j]
     frames[row] = held
     row += 1
+    targets = targets[:row].copy()
+    frames = frames[:row].copy()
     closeness = np.empty(row)
+    holds = np.empty(row, dtype=np.bool_)
+    ranked_frames = np.empty(row, dtype=np.int64)
+    q = np.empty((row, d))
     for i in range(row):
         total = 0.0
+        holds[i] = True
         for j in range(d):
             total += weights[j] * (targets[i, j] * targets[i, j])
+            if targets[i, j] != deviation[j]:
+                holds[i] = False
+            q[i, j] = objective[frames[i], j] + targets[i, j]
         closeness[i] = math.sqrt(total)
-    return targets[:row].copy(), frames[:row].copy(), closeness, approach
+        ranked_frames[i] = -frames[i] if holds[i] or on_objective else frames[i]
+    return (targets, frames, closeness, approach, holds, ranked_frames, np.round(closeness, 6),
+            np.round(targets, 3), q)
 
 
 @kernel('Tuple((b1[::1], i8))(f8[:, ::1], i8[::1], i8[::1], i8, i8, i8, i8, b1[::1], '
@@ -834,19 +850,19 @@ class CTRoadmap:
         # hold, the table's arm took 7 of them to get there); from the stretch on, as before
         # (held into it in one advance, the arm that met the second pillar swung back 1.0 rad
         # instead of 0.35).
-        targets, frames, closeness, approach = _neighbour_table(
+        # Equally close: sooner arrival first, except holds and the objective, longest first.
+        (targets, frames, closeness, approach, holds, ranked_frames, ranked_closeness,
+         rounded, q) = _neighbour_table(
             nodes, state.deviation, here, last, horizon.hold_frames,
             on_objective and not sub_goal, on_objective,
             self.prefer_lasting and not state.relaxed, space.times,
             speed_fraction * space.speed_limit, horizon.hold_end(here), horizon.free,
-            self.weights)
+            self.weights, space.objective)
         if approach < 0:
             approach = None
-        # Equally close: sooner arrival first, except holds and the objective, longest first.
-        holds = ~np.any(targets != state.deviation, axis=1)
         lasting = (self._lasting(space, horizon, here, targets, frames)
                    if self.prefer_lasting and not state.relaxed else None)
-        keys = (np.where(holds | on_objective, -frames, frames), np.round(closeness, 6))
+        keys = (ranked_frames, ranked_closeness)
         order = np.lexsort(keys if lasting is None else keys + (~lasting,))
         if approach is not None and not lasting[-1]:
             # The posture does not last through the stretch (held from hold_frames on, checked
@@ -857,14 +873,14 @@ class CTRoadmap:
         motion = None
         # The keys _advance marks tried neighbours with (rounded once for all rows: the same
         # numbers, as Python floats, which hash and compare as NumPy's do).
-        rounded = np.round(targets, 3).tolist()
+        rounded = rounded.tolist()
         if visited is not None and not on_objective and not state.followed:
             for i in order.tolist():
                 if (int(frames[i]), tuple(rounded[i])) not in visited:
                     motion = ((space.objective[here] + state.deviation, here),
                               (space.objective[frames[i]] + targets[i], int(frames[i])))
                     break
-        legal = space.best_valid_rows(space.objective[frames] + targets, frames, order,
+        legal = space.best_valid_rows(q, frames, order,
                                       self.max_candidates,
                                       also=np.flatnonzero(holds).tolist(), motion=motion)
         if (lasting is not None and horizon.free[here] and (legal & lasting).any()
