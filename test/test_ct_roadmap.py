@@ -627,3 +627,34 @@ def test_the_lasting_check_is_written_out_with_its_cache(beam_space, table, monk
         outcomes.update(found.tolist())
         outcomes.add(('checked', checked > 0))
     assert outcomes == {True, False, ('checked', True), ('checked', False)}
+
+
+@pytest.mark.parametrize('grown', [ct_roadmap._grown_node, ct_roadmap._grown_node.py_func])
+def test_a_grown_node_is_the_numpy_written_out(beam_space, grown):
+    # _grow's node (the state moved r along a random direction of unit weighted norm, timed at
+    # a fraction of the speed limits, kept within the limits), bit for bit against NumPy;
+    # nodes clipped at the limits and nodes arriving at the final frame both occur.
+    space = beam_space
+    rng = np.random.default_rng(31)
+    weights = np.array([1.0, 0.5])
+    last = space.frame_count - 1
+    clipped = capped = False
+    for trial in range(300):
+        direction = rng.normal(size=2)
+        deviation = rng.normal(0.0, 0.6, 2)
+        frame = int(rng.integers(0, last + 1))
+        radius = float(rng.choice([0.3, 1.5]))
+        rate = (0.8, 1.0)[trial % 2] * space.speed_limit
+        unit = direction / np.sqrt(np.sum(weights * direction * direction))
+        moved = deviation + radius * unit
+        travel = max(1, int(np.ceil(np.max(np.abs(moved - deviation) / rate)
+                                    / ((space.times[-1] - space.times[0]) / last) - 1e-9)))
+        arrival = min(frame + travel, last)
+        q = np.clip(space.objective[arrival] + moved, space.lower, space.upper)
+        found, found_arrival = grown(direction, deviation, frame, radius, weights, space.times,
+                                     rate, space.objective, space.lower, space.upper)
+        assert found_arrival == arrival, trial
+        assert found.tobytes() == (q - space.objective[arrival]).tobytes(), trial
+        clipped |= bool(np.any(q != space.objective[arrival] + moved))
+        capped |= frame + travel > last
+    assert clipped and capped

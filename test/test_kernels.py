@@ -76,6 +76,7 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    ct_roadmap._stack_path, ct_roadmap._horizon_tables, ct_space._within,
                    ct_roadmap._neighbour_table, ct_space._illegal_rows,
                    ct_space._motion_failures, ct_space._sweeps, ct_roadmap._lasting_table,
+                   ct_roadmap._grown_node,
                    upper_body._within_limits_kernel, ct_space._box_within,
                    upper_body._input_sound, ct_space._column_dots, ct_space._triangle_apart_along,
                    convex._middle, ct_roadmap._travel,

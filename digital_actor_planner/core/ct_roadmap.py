@@ -399,6 +399,34 @@ def _lasting_table(targets, ids, arrivals, begin, end, spacing, stride, free, he
     return lasting, checks
 
 
+@kernel('Tuple((f8[::1], i8))(f8[::1], f8[::1], i8, f8, f8[:], f8[:], f8[:], f8[:, :], '
+        'f8[:], f8[:])')
+def _grown_node(direction, deviation, frame, radius, weights, times, rate, objective, lower,
+                upper):
+    """:meth:`CTRoadmap._grow`'s node in a random ``direction`` (d,): the state's
+    ``deviation`` moved ``radius`` along it (scaled to unit weighted norm), arriving at joint
+    speeds ``rate`` no later than the final frame, kept within [``lower``, ``upper``]; as
+    (deviation, arrival frame), with the NumPy arithmetic it replaces."""
+    d = deviation.shape[0]
+    last = times.shape[0] - 1
+    total = 0.0
+    for j in range(d):
+        total += weights[j] * direction[j] * direction[j]
+    norm = math.sqrt(total)
+    moved = np.empty(d)
+    seconds = 0.0
+    for j in range(d):
+        moved[j] = deviation[j] + radius * (direction[j] / norm)
+        seconds = max(seconds, abs(moved[j] - deviation[j]) / rate[j])
+    step = (times[last] - times[0]) / max(last, 1)
+    arrival = min(frame + max(1, int(math.ceil(seconds / step - 1e-9))), last)
+    out = np.empty(d)
+    for j in range(d):
+        q = min(max(objective[arrival, j] + moved[j], lower[j]), upper[j])
+        out[j] = q - objective[arrival, j]
+    return out, arrival
+
+
 def objective_grid(last: int, spacing: int) -> np.ndarray:
     """Frames 0, ``spacing``, 2 ``spacing``, ... and ``last``: where a search first checks the
     objective (:meth:`CTRoadmap._objective_free`); made once per (last, spacing) and shared,
@@ -1069,17 +1097,12 @@ class CTRoadmap:
     def _grow(self, space: CTSpace, state: _State, speed_fraction: float,
               attempts: int) -> Optional[_State]:
         """Grow a roadmap node at distance r from the current state (§5.2)."""
-        last = space.frame_count - 1
+        rate = speed_fraction * space.speed_limit
         for _ in range(attempts):
-            direction = self.rng.normal(size=state.deviation.shape)
-            direction /= np.sqrt(np.sum(self.weights * direction * direction))
-            deviation = state.deviation + self.radius * direction
-            arrival = state.frame + self._travel_frames(space, state.frame,
-                                                        deviation - state.deviation,
-                                                        speed_fraction)
-            arrival = min(arrival, last)
-            q = np.clip(space.objective[arrival] + deviation, space.lower, space.upper)
-            deviation = q - space.objective[arrival]
+            deviation, arrival = _grown_node(
+                self.rng.normal(size=state.deviation.shape), state.deviation, state.frame,
+                self.radius, self.weights, space.times, rate, space.objective, space.lower,
+                space.upper)
             child = self._try(space, state, deviation, arrival)
             if child is not None:
                 self._add(deviation)
@@ -1128,8 +1151,9 @@ class CTRoadmap:
         nodes = nodes[legal]
         ranks = np.lexsort((self.closeness(nodes), ~through))
         nodes = nodes[ranks]
-        # A sub-goal already tried for this blocking frame led to a dead end: skip it.
-        fresh = [(blocked, tuple(np.round(node, 3))) not in jumps for node in nodes]
+        # A sub-goal already tried for this blocking frame led to a dead end: skip it (the
+        # nodes rounded in one call: the same numbers, as Python floats).
+        fresh = [(blocked, tuple(node)) not in jumps for node in np.round(nodes, 3).tolist()]
         nodes = nodes[np.array(fresh, dtype=bool)]
         earlier = [depth for depth in range(len(stack) - 1) if stack[depth].frame < blocked]
         for node in nodes[:targets]:
