@@ -966,7 +966,7 @@ class CTRoadmap:
         lasting, checks = _lasting_table(
             targets, horizon.posture_ids(np.round(targets, 4).tolist()), arrivals, begin,
             int(horizon.next_free[begin]), horizon.hold_frames, COARSE_STRIDE, horizon.free,
-            horizon.held, space.objective, *space._illegal_tables)
+            horizon.held, space.objective, *space.check_tables)
         space.checks += checks
         return lasting
 

@@ -546,7 +546,7 @@ def _sweeps(rows, shapes, triangles):
     return rows > 1 and (triangles > FEW_TRIANGLES or rows * shapes * triangles > SWEPT_CONTACTS)
 
 
-# numba types of CTSpace._illegal_tables, as _illegal_rows takes them: the joint limits,
+# numba types of CTSpace.check_tables, as _illegal_rows takes them: the joint limits,
 # clear_until, _branch_boxes' tables, the step table, _row_collisions' tables.
 _ILLEGAL_TABLE_TYPES = (
     'f8[::1], f8[::1], i8, '
@@ -1681,8 +1681,9 @@ class CTSpace:
         self._prepare_environment()
         # Frames [0, clear_until) where the branch, where the body holds it, touches nothing.
         self._clear_until = body.clear_until.get(branch, 0)
-        # _illegal_rows' arguments after the batch's own (the same while the branch is planned).
-        self._illegal_tables = (
+        #: _illegal_rows' arguments after the batch's own, the same while the branch is planned
+        #: (the roadmap's kernels that check rows take them too, _ILLEGAL_TABLE_TYPES).
+        self.check_tables = (
             self._lower_tolerant, self._upper_tolerant, int(self._clear_until),
             *self._box_tables, *self._chain.step_table, self._triangle_lower,
             self._triangle_upper, self._pair_column, self._checked_box_half,
@@ -1889,7 +1890,7 @@ class CTSpace:
             qa[i], ia[i], qb[i], ib[i] = a, frame_a, b, frame_b
         answers, checks = _motion_failures(self.objective, self.times, self._frame_step,
                                            self._speed_cap, qa, ia, qb, ib, stop_at_legal,
-                                           first, *self._illegal_tables)
+                                           first, *self.check_tables)
         self.checks += checks
         return answers.tolist()
 
@@ -2056,4 +2057,4 @@ class CTSpace:
         """
         frames = np.ascontiguousarray(frames, dtype=np.int64)  # the kernels' index type
         swept = _sweeps(len(frames), len(self.checked), len(self._triangle_lower))
-        return _illegal_rows(q, frames, swept, *self._illegal_tables)
+        return _illegal_rows(q, frames, swept, *self.check_tables)
