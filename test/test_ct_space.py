@@ -148,11 +148,17 @@ def test_a_batch_is_illegal_where_its_pieces_say_so(skeleton, beam_world, kernel
                 ct_space.SAT_MARGIN, space._checked_kinds, space._checked_half,
                 space._pair_kinds, space._pair_half, space._pair_other, known)
             expected = contact | ~space.within_bounds(q)
-            tables = list(space.check_tables)
-            tables[2] = clear_until
-            found = kernel(q, rows, swept, *tables)
-            assert found.tolist() == expected.tolist(), (clear_until, swept)
-            answers[clear_until] = expected
+            answers.setdefault(clear_until, expected)
+            assert expected.tolist() == answers[clear_until].tolist()  # the cut changes nothing
+        tables = list(space.check_tables)
+        tables[2] = clear_until
+        tables = tuple(tables)
+        # The whole batch (its pairs cut by the swept boxes: many rows) and each row alone.
+        assert ct_space._sweeps(len(rows), len(space.checked), len(space._triangle_lower))
+        found = kernel(q, rows, tables)
+        assert found.tolist() == answers[clear_until].tolist(), clear_until
+        alone = [kernel(q[i:i + 1], rows[i:i + 1], tables)[0] for i in range(len(rows))]
+        assert alone == answers[clear_until].tolist(), clear_until
     # Every kind of row occurred: legal, touching, outside the limits; and upright under the
     # beam, where the body holds the waist, a row that clear_until lets pass untested.
     expected = answers[0]
@@ -454,7 +460,7 @@ def test_motions_fail_where_their_rows_checked_one_by_one_do(beam_world, kernel)
             for first in (0, 1, 8):
                 answers, checks = kernel(space.objective, space.times, space._frame_step,
                                          space._speed_cap, qa, ia, qb, ib, stop_at_legal,
-                                         first, *space.check_tables)
+                                         first, space.check_tables)
                 expected = _failures_written_out(space, motions, stop_at_legal, first)
                 assert (answers.tolist(), checks) == expected, (trial, stop_at_legal, first)
                 seen.update(('legal' if a < 0 else 'illegal', first > 0 and len(answers) > 1)

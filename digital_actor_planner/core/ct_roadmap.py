@@ -38,7 +38,7 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .ct_space import _ILLEGAL_TABLE_TYPES, _illegal_rows, _sweeps, CTSpace
+from .ct_space import _illegal_rows, CHECK_TABLES_TYPE, CTSpace
 from .jit import kernel
 
 
@@ -290,16 +290,9 @@ def _neighbour_table(nodes, deviation, here, last, hold_frames, with_objective, 
 
 
 @kernel('Tuple((b1[::1], i8))(f8[:, ::1], i8[::1], i8[::1], i8, i8, i8, i8, b1[::1], '
-        'i1[:, ::1], f8[:, :], ' + _ILLEGAL_TABLE_TYPES + ')')
+        'i1[:, ::1], f8[:, :], ' + CHECK_TABLES_TYPE + ')')
 def _lasting_table(targets, ids, arrivals, begin, end, spacing, stride, free, held, objective,
-                   lower, upper, clear_until,
-                   body_frames, indices, body_rotations, body_positions, links, shape_rotation,
-                   shape_centre, shape_lower, shape_upper, checked, shape_links, offsets, turns,
-                   turned, kinds, halves,
-                   parent, child, origin_rotation, step_turned, origin_translation, offset_axis,
-                   offset_length, has_offset, joint, kind, axis_coordinate, axis_sign, axis,
-                   triangle_lower, triangle_upper, pair_column, half, corners, pair_box_half,
-                   margin, checked_kinds, checked_half, pair_kinds, pair_half, pair_other):
+                   tables):
     """:meth:`CTRoadmap._lasting` for the blocked stretch [``begin``, ``end``]: whether each
     of ``targets`` (m, d), held from its ``arrivals`` (m,), lasts through it, and the
     configurations checked.
@@ -381,16 +374,7 @@ def _lasting_table(targets, ids, arrivals, begin, end, spacing, stride, free, he
             for r in range(count):
                 for j in range(d):
                     q[r, j] = objective[batch_frames[r], j] + targets[rows[r], j]
-            illegal = _illegal_rows(
-                q, batch_frames, _sweeps(count, checked.shape[0], triangle_lower.shape[0]),
-                lower, upper, clear_until,
-                body_frames, indices, body_rotations, body_positions, links, shape_rotation,
-                shape_centre, shape_lower, shape_upper, checked, shape_links, offsets, turns,
-                turned, kinds, halves,
-                parent, child, origin_rotation, step_turned, origin_translation, offset_axis,
-                offset_length, has_offset, joint, kind, axis_coordinate, axis_sign, axis,
-                triangle_lower, triangle_upper, pair_column, half, corners, pair_box_half,
-                margin, checked_kinds, checked_half, pair_kinds, pair_half, pair_other)
+            illegal = _illegal_rows(q, batch_frames, tables)
             checks += count
             for r in range(count):
                 legal = not illegal[r]
@@ -966,7 +950,7 @@ class CTRoadmap:
         lasting, checks = _lasting_table(
             targets, horizon.posture_ids(np.round(targets, 4).tolist()), arrivals, begin,
             int(horizon.next_free[begin]), horizon.hold_frames, COARSE_STRIDE, horizon.free,
-            horizon.held, space.objective, *space.check_tables)
+            horizon.held, space.objective, space.check_tables)
         space.checks += checks
         return lasting
 

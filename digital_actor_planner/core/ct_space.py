@@ -546,36 +546,39 @@ def _sweeps(rows, shapes, triangles):
     return rows > 1 and (triangles > FEW_TRIANGLES or rows * shapes * triangles > SWEPT_CONTACTS)
 
 
-# numba types of CTSpace.check_tables, as _illegal_rows takes them: the joint limits,
+# numba type of CTSpace.check_tables, the tuple _illegal_rows takes: the joint limits,
 # clear_until, _branch_boxes' tables, the step table, _row_collisions' tables.
-_ILLEGAL_TABLE_TYPES = (
-    'f8[::1], f8[::1], i8, '
+CHECK_TABLES_TYPE = (
+    'Tuple((f8[::1], f8[::1], i8, '
     'f8[:, ::1], i8[::1], f8[:, :, :, ::1], f8[:, :, ::1], i8[::1], f8[:, :, :, ::1], '
     'f8[:, :, ::1], f8[:, :, ::1], f8[:, :, ::1], i8[::1], i8[::1], f8[:, ::1], '
     'f8[:, :, ::1], b1[::1], i8[::1], f8[:, ::1], ' + _STEP_TABLE_TYPES + ', '
     'f8[:, ::1], f8[:, ::1], i8[::1], f8[:, ::1], f8[:, :, :], f8[:, :], f8, i8[::1], '
-    'f8[:, :], i8[::1], f8[:, :], i8[::1]')
+    'f8[:, :], i8[::1], f8[:, :], i8[::1]))')
 
 
-@kernel('b1[::1](f8[:, :], i8[::1], b1, ' + _ILLEGAL_TABLE_TYPES + ')')
-def _illegal_rows(q, frames, swept, lower, upper, clear_until,
-                  body_frames, indices, body_rotations, body_positions, links, shape_rotation,
-                  shape_centre, shape_lower, shape_upper, checked, shape_links, offsets, turns,
-                  turned, kinds, halves,
-                  parent, child, origin_rotation, step_turned, origin_translation, offset_axis,
-                  offset_length, has_offset, joint, kind, axis_coordinate, axis_sign, axis,
-                  triangle_lower, triangle_upper, pair_column, half, corners, pair_box_half,
-                  margin, checked_kinds, checked_half, pair_kinds, pair_half, pair_other):
+@kernel('b1[::1](f8[:, :], i8[::1], ' + CHECK_TABLES_TYPE + ')')
+def _illegal_rows(q, frames, tables):
     """:meth:`CTSpace._illegal`: whether each row of a batch (``q`` (m, d) at ``frames``) is
-    illegal, outside [``lower``, ``upper``] or touching the environment or the body: (m,)
-    bool.
+    illegal, outside the joint limits or touching the environment or the body: (m,) bool.
+    ``tables``: :attr:`CTSpace.check_tables`.
 
     :func:`_branch_boxes` poses the branch's shapes, :func:`_row_collisions` tests them (rows
     where the body holds the branch at frames before ``clear_until`` skipped: the body's own
     check found them clear), then the limits as :func:`_within` tests them: the answers of
-    those kernels called one by one, from one call.
+    those kernels called one by one, from one call (the pairs cut by swept boxes where
+    :func:`_sweeps` says so).
     """
+    (lower, upper, clear_until,
+     body_frames, indices, body_rotations, body_positions, links, shape_rotation,
+     shape_centre, shape_lower, shape_upper, checked, shape_links, offsets, turns,
+     turned, kinds, halves,
+     parent, child, origin_rotation, step_turned, origin_translation, offset_axis,
+     offset_length, has_offset, joint, kind, axis_coordinate, axis_sign, axis,
+     triangle_lower, triangle_upper, pair_column, half, corners, pair_box_half,
+     margin, checked_kinds, checked_half, pair_kinds, pair_half, pair_other) = tables
     m, n = q.shape[0], checked.shape[0]
+    swept = _sweeps(m, n, triangle_lower.shape[0])
     rotation = np.empty((m, n, 3, 3))
     centre = np.empty((m, n, 3))
     low = np.empty((m, n, 3))
@@ -788,17 +791,9 @@ def _motion_paths(objective, times, frame_step, speed_cap, qa, ia, qb, ib):
 
 
 @kernel('Tuple((i8[::1], i8))(f8[:, :], f8[:], f8[:, :], f8[:], f8[:, ::1], i8[::1], '
-        'f8[:, ::1], i8[::1], b1, i8, ' + _ILLEGAL_TABLE_TYPES + ')')
+        'f8[:, ::1], i8[::1], b1, i8, ' + CHECK_TABLES_TYPE + ')')
 def _motion_failures(objective, times, frame_step, speed_cap, qa, ia, qb, ib, stop_at_legal,
-                     first, lower, upper, clear_until,
-                     body_frames, indices, body_rotations, body_positions, links,
-                     shape_rotation, shape_centre, shape_lower, shape_upper, checked,
-                     shape_links, offsets, turns, turned, kinds, halves,
-                     parent, child, origin_rotation, step_turned, origin_translation,
-                     offset_axis, offset_length, has_offset, joint, kind, axis_coordinate,
-                     axis_sign, axis,
-                     triangle_lower, triangle_upper, pair_column, half, corners, pair_box_half,
-                     margin, checked_kinds, checked_half, pair_kinds, pair_half, pair_other):
+                     first, tables):
     """:meth:`CTSpace._failures`: the first illegal frame of each motion (qa[i], ia[i]) ->
     (qb[i], ib[i]) in order, -1 for a legal one, and the configurations checked.
 
@@ -843,16 +838,7 @@ def _motion_failures(objective, times, frame_step, speed_cap, qa, ia, qb, ib, st
             for r in range(total):
                 batch[r] = rows[picked[r]]
                 batch_frames[r] = frames[picked[r]]
-            swept = _sweeps(total, checked.shape[0], triangle_lower.shape[0])
-            illegal = _illegal_rows(
-                batch, batch_frames, swept, lower, upper, clear_until,
-                body_frames, indices, body_rotations, body_positions, links, shape_rotation,
-                shape_centre, shape_lower, shape_upper, checked, shape_links, offsets, turns,
-                turned, kinds, halves,
-                parent, child, origin_rotation, step_turned, origin_translation, offset_axis,
-                offset_length, has_offset, joint, kind, axis_coordinate, axis_sign, axis,
-                triangle_lower, triangle_upper, pair_column, half, corners, pair_box_half,
-                margin, checked_kinds, checked_half, pair_kinds, pair_half, pair_other)
+            illegal = _illegal_rows(batch, batch_frames, tables)
         local = 0
         for i in range(done, count):
             if results[i] != open_:
@@ -1682,7 +1668,7 @@ class CTSpace:
         # Frames [0, clear_until) where the branch, where the body holds it, touches nothing.
         self._clear_until = body.clear_until.get(branch, 0)
         #: _illegal_rows' arguments after the batch's own, the same while the branch is planned
-        #: (the roadmap's kernels that check rows take them too, _ILLEGAL_TABLE_TYPES).
+        #: (the roadmap's kernels that check rows take them too; CHECK_TABLES_TYPE).
         self.check_tables = (
             self._lower_tolerant, self._upper_tolerant, int(self._clear_until),
             *self._box_tables, *self._chain.step_table, self._triangle_lower,
@@ -1890,7 +1876,7 @@ class CTSpace:
             qa[i], ia[i], qb[i], ib[i] = a, frame_a, b, frame_b
         answers, checks = _motion_failures(self.objective, self.times, self._frame_step,
                                            self._speed_cap, qa, ia, qb, ib, stop_at_legal,
-                                           first, *self.check_tables)
+                                           first, self.check_tables)
         self.checks += checks
         return answers.tolist()
 
@@ -2056,5 +2042,4 @@ class CTSpace:
         (the same poses; the pairs and triangles here are among those checked there).
         """
         frames = np.ascontiguousarray(frames, dtype=np.int64)  # the kernels' index type
-        swept = _sweeps(len(frames), len(self.checked), len(self._triangle_lower))
-        return _illegal_rows(q, frames, swept, *self.check_tables)
+        return _illegal_rows(q, frames, self.check_tables)
