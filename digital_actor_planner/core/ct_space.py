@@ -848,14 +848,10 @@ def _motion_failures(objective, times, frame_step, speed_cap, qa, ia, qb, ib, st
                 if illegal[r]:
                     results[i] = frames[picked[r]]
                     break
-            if results[i] == open_:
-                if end == ends[i]:
-                    results[i] = late[i] if late[i] >= 0 else -1
-                position_end = end
-            else:
-                position_end = position[i]
+            if results[i] == open_ and end == ends[i]:
+                results[i] = late[i] if late[i] >= 0 else -1
             local += end - position[i]
-            position[i] = position_end
+            position[i] = end
         while done < count and results[done] != open_:
             answers[answered] = results[done]
             answered += 1
