@@ -309,8 +309,10 @@ def _lasting_table(targets, ids, arrivals, begin, end, spacing, stride, free, he
     """
     m, d = targets.shape
     lasting = np.ones(m, dtype=np.bool_)
-    # Each moved target's grid, one after the other.
-    starts = np.full(m + 1, 0, dtype=np.int64)
+    # Each moved target's grid, one after the other (at most ``room`` frames each).
+    room = (end - begin) // spacing + 3
+    grid = np.empty(m * room, dtype=np.int64)
+    starts = np.zeros(m + 1, dtype=np.int64)
     has_grid = np.zeros(m, dtype=np.bool_)
     total = 0
     for i in range(m):
@@ -329,24 +331,15 @@ def _lasting_table(targets, ids, arrivals, begin, end, spacing, stride, free, he
                     break
             continue
         has_grid[i] = True
-        first = max(arrival, begin)
-        total += (1 if arrival < begin else 0) + len(range(first // spacing * spacing + spacing,
-                                                           end, spacing)) + 1
-    starts[m] = total
-    grid = np.empty(total, dtype=np.int64)
-    for i in range(m):
-        if not has_grid[i]:
-            continue
-        n = starts[i]
-        arrival = arrivals[i]
         if arrival < begin:
-            grid[n] = begin
-            n += 1
-        first = max(arrival, begin)
-        for f in range(first // spacing * spacing + spacing, end, spacing):
-            grid[n] = f
-            n += 1
-        grid[n] = end
+            grid[total] = begin
+            total += 1
+        for f in range(max(arrival, begin) // spacing * spacing + spacing, end, spacing):
+            grid[total] = f
+            total += 1
+        grid[total] = end
+        total += 1
+    starts[m] = total
     checks = 0
     rows = np.empty(total, dtype=np.int64)
     frames = np.empty(total, dtype=np.int64)

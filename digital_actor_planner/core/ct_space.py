@@ -538,6 +538,20 @@ def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pa
     return hit
 
 
+@kernel('b1[::1](f8[:, :], f8[::1], f8[::1])')
+def _within(q, lower, upper):
+    """Whether each row of ``q`` (m, d) lies in [lower, upper] (d,): (m,) bool."""
+    out = np.empty(q.shape[0], dtype=np.bool_)
+    for r in range(q.shape[0]):
+        inside = True
+        for j in range(q.shape[1]):
+            if not (q[r, j] >= lower[j] and q[r, j] <= upper[j]):
+                inside = False
+                break
+        out[r] = inside
+    return out
+
+
 @kernel('b1(i8, i8, i8)')
 def _sweeps(rows, shapes, triangles):
     """Whether a batch of ``rows`` of a branch's ``shapes`` against ``triangles`` kept
@@ -597,13 +611,9 @@ def _illegal_rows(q, frames, tables):
                               corners, shape_rotation, shape_centre, pair_box_half, margin,
                               checked_kinds, checked_half, pair_kinds, pair_half, pair_other,
                               known)
+    inside = _within(q, lower, upper)
     for r in range(m):
-        if illegal[r]:
-            continue
-        for j in range(q.shape[1]):
-            if not (q[r, j] >= lower[j] and q[r, j] <= upper[j]):
-                illegal[r] = True
-                break
+        illegal[r] = illegal[r] or not inside[r]
     return illegal
 
 
@@ -860,20 +870,6 @@ def _motion_failures(objective, times, frame_step, speed_cap, qa, ia, qb, ib, st
             done += 1
         size *= 2
     return answers[:answered].copy(), checks
-
-
-@kernel('b1[::1](f8[:, :], f8[::1], f8[::1])')
-def _within(q, lower, upper):
-    """Whether each row of ``q`` (m, d) lies in [lower, upper] (d,): (m,) bool."""
-    out = np.empty(q.shape[0], dtype=np.bool_)
-    for r in range(q.shape[0]):
-        inside = True
-        for j in range(q.shape[1]):
-            if not (q[r, j] >= lower[j] and q[r, j] <= upper[j]):
-                inside = False
-                break
-        out[r] = inside
-    return out
 
 
 @kernel('b1(f8[::1], f8[::1], f8[::1], f8[::1])')
@@ -1865,28 +1861,28 @@ class CTSpace:
         are all legal is illegal at its speed violation, one that does not go forward in time
         at its start frame (:func:`_motion_failures`).
         """
+        answers, checks = _motion_failures(self.objective, self.times, self._frame_step,
+                                           self._speed_cap, *self._motion_ends(motions),
+                                           stop_at_legal, first, self.check_tables)
+        self.checks += checks
+        return answers.tolist()
+
+    def _motion_ends(self, motions: Sequence[tuple]) -> tuple:
+        """The end points of motions ((qa, ia), (qb, ib)) as the motion kernels take them:
+        (qa (n, d), ia (n,), qb (n, d), ib (n,))."""
         count = len(motions)
         qa, qb = np.empty((count, self.dimension)), np.empty((count, self.dimension))
         ia, ib = np.empty(count, dtype=np.int64), np.empty(count, dtype=np.int64)
         for i, ((a, frame_a), (b, frame_b)) in enumerate(motions):
             qa[i], ia[i], qb[i], ib[i] = a, frame_a, b, frame_b
-        answers, checks = _motion_failures(self.objective, self.times, self._frame_step,
-                                           self._speed_cap, qa, ia, qb, ib, stop_at_legal,
-                                           first, self.check_tables)
-        self.checks += checks
-        return answers.tolist()
+        return qa, ia, qb, ib
 
     def _motion_batch(self, motions: Sequence[tuple]) -> tuple:
         """The rows of motions ((qa, ia), (qb, ib)) for one check: (q (m, d) rad, frames (m,),
         segments [(begin, end)] per motion, early: each motion's speed violation frame or -1,
         its start frame for one that does not go forward in time)."""
-        count = len(motions)
-        qa, qb = np.empty((count, self.dimension)), np.empty((count, self.dimension))
-        ia, ib = np.empty(count, dtype=np.int64), np.empty(count, dtype=np.int64)
-        for i, ((a, frame_a), (b, frame_b)) in enumerate(motions):
-            qa[i], ia[i], qb[i], ib[i] = a, frame_a, b, frame_b
         q, frames, ends, late = _motion_paths(self.objective, self.times, self._frame_step,
-                                              self._speed_cap, qa, ia, qb, ib)
+                                              self._speed_cap, *self._motion_ends(motions))
         ends = ends.tolist()
         return q, frames, list(zip([0] + ends[:-1], ends)), late.tolist()
 
