@@ -8,13 +8,17 @@ neighbour until every neighbour is worse. Only s_1 is executed; the next call st
 """
 from __future__ import annotations
 
-from collections import deque
 from dataclasses import dataclass, field
 import math
 from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
+from .footstep_search import (DOWN, DS, HEEL, LIFT_RISE, LIFT_ROOM, LIFT_STEP_UP, MAX_SWING,
+                              NUMBER_COUNT, PITCH_RANGE, PREVIOUS_LENGTH, S0, S_INIT, SPAN,
+                              STANCE_HEIGHT, STANCE_S, SWING_HEIGHT, SWING_S, TOE, TWO, UP,
+                              UP_RANGE, W_HEIGHT, W_LENGTH, W_PITCH, W_SMOOTH,
+                              exhaustive_search, window_search)
 from .jit import float_array, kernel
 from .skeleton import LegGeometry
 
@@ -292,14 +296,14 @@ class FootstepWindow:
 
 @dataclass
 class _Search:
-    """Per-call tables of the window's footholds and memo of swing tests (one per plan).
+    """The window's footholds and a memo of swing tests as Python lists, for the plain effort
+    (:meth:`FootstepPlanner._effort`: the exhaustive search, and the reference the compiled
+    search, :mod:`footstep_search`, is tested against).
 
     ``ok[i][c]``, ``height[i][c]``, ``pitch[i][c]``: the foothold of footstep i when the
     interval indices of footsteps 1..i+1 sum to c (its arc length depends only on that sum).
     ``obstacle[side]``: the profile's swing obstacle heights as a list, -inf over empty space
     (so a range maximum over a slice is the swing test's).
-    ``prefixes``: state after the first footsteps of a configuration (see
-    :meth:`FootstepPlanner._search_effort`), None where they are already infeasible.
     ``reach``: the swing test's numbers as plain floats (sole toe and heel, the profile's first
     arc length, spacing and last sample index, the swing height limit), read once per plan.
     ``rise_ahead[(i, c)]``: how far the ground within ``lift_room`` ahead of that foothold's
@@ -317,8 +321,6 @@ class _Search:
     sides: tuple = ()
     rise_ahead: Dict[Tuple[int, int], float] = field(default_factory=dict)
     swings: Dict[tuple, bool] = field(default_factory=dict)
-    feasible: Dict[Tuple[int, ...], Optional[float]] = field(default_factory=dict)
-    prefixes: Dict[Tuple[int, ...], Optional[tuple]] = field(default_factory=dict)
 
 
 class FootstepPlanner:
@@ -349,6 +351,11 @@ class FootstepPlanner:
         self._lengths = config.lengths()
         self._length_list = self._lengths.tolist()
         self._offset_list = self._table_layout[1].tolist()
+        # The same layout for the compiled search: table rows' first entries, read-only (every
+        # window shares them).
+        self._bounds = np.array(self._table_layout[2], dtype=np.int64)
+        for table in (self._bounds, self._table_layout[1], self._lengths):
+            table.setflags(write=False)
         # The side of each footstep of a window, by the side of the stance foot: the other
         # foot steps first. As an array (read-only: windows get copies) and as a list.
         self._sides = {}
@@ -357,8 +364,8 @@ class FootstepPlanner:
                               for i in range(n)])
             sides.setflags(write=False)
             self._sides[stance_side] = (sides, sides.tolist())
-        # (profile, stance and swing feet, _Search) of the last plan: its foothold tables and
-        # swing tests, reused by another attempt at the same step (see plan).
+        # (profile, stance and swing feet, (ok, height, pitch, obstacle)) of the last plan:
+        # its foothold table, reused by another attempt at the same step (see search_tables).
         self._last_tables = None
         self._rise_limits = (float(config.max_step_up), float(config.max_step_down))
         # Weights and ranges of the effort terms (see _step_effort), as plain floats.
@@ -367,6 +374,16 @@ class FootstepPlanner:
             float(config.weight_pitch), float(config.weight_smooth),
             float(config.step_length_max - config.step_length_min),
             float(max(config.max_step_up, 1e-6)), float(max(config.max_foot_pitch, 1e-6)))
+        # The numbers the compiled search reads (footstep_search.NUMBER_COUNT); plan fills in
+        # the window's own (the feet, the speed, the profile's sampling).
+        numbers = np.zeros(NUMBER_COUNT)
+        numbers[[UP, DOWN]] = self._rise_limits
+        numbers[[W_LENGTH, W_HEIGHT, W_PITCH, W_SMOOTH, SPAN, UP_RANGE, PITCH_RANGE]] = \
+            self._effort_terms
+        numbers[[TOE, HEEL, MAX_SWING, LIFT_ROOM, LIFT_RISE, LIFT_STEP_UP, TWO]] = (
+            leg.toe, leg.heel, config.max_swing_height, config.lift_room, config.lift_rise,
+            config.lift_step_up, 2.0)
+        self._search_numbers = numbers
 
     # -- the ground under a sole -----------------------------------------------------------
     def foothold(self, profile: GroundProfile, side: int, s: float) -> Foothold:
@@ -500,10 +517,12 @@ class FootstepPlanner:
         FootstepWindow or None
             None when no collision-free configuration exists in the window.
 
+        The search itself is compiled (:func:`footstep_search.window_search`): about 20 us
+        against the 300 us of the same search in Python (the same configurations judged, the
+        same efforts to the last bit).
         """
         cfg = self.config
         n, m = cfg.window_steps, cfg.step_intervals
-        lengths = self._lengths
         init_index = int(min(max(round((s_init - cfg.step_length_min) / cfg.step_increment), 0),
                              m))
         q = tuple(start) if start is not None else (init_index,) * n
@@ -511,152 +530,63 @@ class FootstepPlanner:
             raise ValueError(f'start configuration {q} is not {n} indices in [0, {m}]')
         if stance_side not in (0, 1):
             raise ValueError(f'stance side {stance_side!r} is not 0 (left) or 1 (right)')
-        sides, side_list = self._sides[stance_side]
-        # Another attempt at the same step (the walk generator could not realise the last
-        # s_1) reads the same footholds and swings: its tables are reused, the search is not.
+        tables = self.search_tables(profile, stance_side, stance_s, stance_height, swing_s,
+                                    swing_height, s_init, previous_length)
+        banned = np.zeros(m + 1, dtype=bool)
+        for b in banned_first:
+            if 0 <= int(b) <= m:
+                banned[int(b)] = True
+        config, effort, evaluated = window_search(
+            np.array(q, dtype=np.int64), banned, self._lengths > max_length + 1e-9,
+            bool(cfg.greedy_restart), tables)
+        if not config.size:
+            return None
+        return self._window(config.tolist(), tables[6], stance_s, effort, evaluated,
+                            tables[1], tables[2])
+
+    def search_tables(self, profile: GroundProfile, stance_side: int, stance_s: float,
+                      stance_height: float, swing_s: float, swing_height: float,
+                      s_init: float, previous_length: float) -> tuple:
+        """What the compiled search of a window reads (:data:`footstep_search.TABLES_TYPE`):
+        every foothold the window can reach, evaluated in one batch, and the window's numbers
+        (the arguments are :meth:`plan`'s).
+
+        Another attempt at the same step (the walk generator could not realise the last s_1)
+        reads the same footholds: the table of the last call is reused then.
+        """
+        sides = self._sides[stance_side][0]
         key = (stance_side, stance_s, stance_height, swing_s, swing_height)
         if self._last_tables is not None and self._last_tables[0] is profile \
                 and self._last_tables[1] == key:
-            last = self._last_tables[2]
-            memo = _Search(ok=last.ok, height=last.height, pitch=last.pitch,
-                           obstacle=last.obstacle, reach=last.reach,
-                           stance_s=last.stance_s, sides=last.sides,
-                           rise_ahead=last.rise_ahead, swings=last.swings)
+            ok, height, pitch, obstacle = self._last_tables[2]
         else:
-            memo = self._search_tables(profile, sides, stance_s)
-            self._last_tables = (profile, key, memo)
-        length_list = self._length_list
-        banned = set(int(b) for b in banned_first)
-        banned_lengths = (set((lengths > max_length + 1e-9).nonzero()[0].tolist())
-                          if max_length + 1e-9 < length_list[-1] else set())
-
-        feasible, prefixes = memo.feasible, memo.prefixes
-        search_effort = self._search_effort
-        unseen = object()
-
-        def evaluate(config: Tuple[int, ...]) -> Optional[float]:
-            """Effort of a configuration, or None if it is not collision-free."""
-            # One dictionary lookup (hill-climbing asks mostly for configurations it has seen).
-            result = feasible.get(config, unseen)
-            if result is not unseen:
-                return result
-            if banned_lengths and banned_lengths.intersection(config):
-                feasible[config] = None
-                return None
-            # All but the last footstep already found infeasible (the breadth-first search
-            # walks through many of these): the answer without resuming the search.
-            if prefixes.get(config[:-1], unseen) is None:
-                feasible[config] = None
-                return None
-            result = search_effort(profile, config, length_list, side_list, stance_s,
-                                   stance_height, swing_s, swing_height, s_init,
-                                   previous_length, memo, banned)
-            feasible[config] = result
-            return result
-
-        # No configuration can be collision-free if some footstep has no foothold in reach.
-        if not all(any(row) for row in memo.ok):
-            return None
-
-        ok_rows = memo.ok
-
-        def lands(config: Tuple[int, ...]) -> bool:
-            """Whether every footstep has a foothold where it lands (the table alone; False
-            means infeasible, recorded as :func:`evaluate` would). Most configurations the
-            breadth-first search visits on stairs land on a riser: this answers them without
-            resuming the effort's evaluation."""
-            cumulative = 0
-            for row, j in zip(ok_rows, config):
-                cumulative += j
-                if not row[cumulative]:
-                    feasible[config] = None
-                    return False
-            return True
-
-        def nearest_free(seed: Tuple[int, ...]) -> Optional[Tuple[int, ...]]:
-            """Breadth-first search from ``seed`` to the nearest collision-free configuration.
-
-            Each configuration is tested when it is queued: the first one found free is the
-            first the queue would hand out (it is first in, first out), so the result and the
-            configurations tested are those of testing on the way out, without expanding the
-            rest of the last level.
-            """
-            if evaluate(seed) is not None:
-                return seed
-            # The paper's single-footstep moves, footstep by footstep, shorter before longer.
-            # Configurations are numbered in base m + 1 (footstep 0 the most significant
-            # digit): a neighbour's number is one stride away, and only the ones not seen yet
-            # are built as tuples.
-            strides = [(m + 1) ** (n - 1 - i) for i in range(n)]
-            number = sum(j * stride for j, stride in zip(seed, strides))
-            seen = {number}
-            queue = deque([(number, seed)])
-            while queue:
-                number, config = queue.popleft()
-                for i, stride in enumerate(strides):
-                    j = config[i]
-                    for delta in (-1, 1):
-                        other = number + delta * stride
-                        if not 0 <= j + delta <= m or other in seen:
-                            continue
-                        neighbour = config[:i] + (j + delta,) + config[i + 1:]
-                        if lands(neighbour) and evaluate(neighbour) is not None:
-                            return neighbour
-                        seen.add(other)
-                        queue.append((other, neighbour))
-            return None
-
-        def climb(current: Tuple[int, ...]) -> Tuple[Tuple[int, ...], float]:
-            """Hill-climbing: move to the best neighbour while it improves the effort."""
-            effort = evaluate(current)
-            while True:
-                best, best_effort = None, effort
-                for neighbour in self._neighbours(current, m):
-                    value = evaluate(neighbour)
-                    if value is not None and value < best_effort - 1e-12:
-                        best, best_effort = neighbour, value
-                if best is None:
-                    return current, effort
-                current, effort = best, best_effort
-
-        found = nearest_free(q)
-        if found is None:
-            return None
-        current, effort = climb(found)
-        if cfg.greedy_restart:
-            # A second hill-climb from a configuration built footstep by footstep: on stairs and
-            # blocks the feasible configurations fall apart into basins (a foothold on every
-            # tread or on every other one) and the first climb cannot leave its basin.
-            seed = self._greedy_seed(memo, length_list, stance_height, s_init, previous_length,
-                                     banned, banned_lengths)
-            if seed is not None and seed != current and evaluate(seed) is not None:
-                other, other_effort = climb(seed)
-                if other_effort < effort - 1e-12:
-                    current, effort = other, other_effort
-        return self._window(profile, current, lengths, sides, stance_s, effort,
-                            len(memo.feasible), memo)
+            step, offsets, _ = self._table_layout
+            ok, height, pitch = self.footholds(profile, sides[step], stance_s + offsets)
+            obstacle = np.where(np.isnan(profile.obstacle), -np.inf, profile.obstacle)
+            self._last_tables = (profile, key, (ok, height, pitch, obstacle))
+        numbers = self._search_numbers.copy()
+        numbers[[STANCE_S, STANCE_HEIGHT, SWING_S, SWING_HEIGHT, S_INIT, PREVIOUS_LENGTH, S0,
+                 DS]] = (stance_s, stance_height, swing_s, swing_height, s_init,
+                         previous_length, profile.s0, profile.ds)
+        return (ok, height, pitch, self._bounds, self._table_layout[1], obstacle, sides,
+                self._lengths, profile.samples - 1, numbers)
 
     def plan_exhaustive(self, profile: GroundProfile, stance_side: int, stance_s: float,
                         stance_height: float, swing_s: float, swing_height: float,
                         s_init: float, previous_length: float) -> Optional[FootstepWindow]:
-        """The optimum over every configuration of the window (for benchmarks only)."""
+        """The optimum over every configuration of the window (for benchmarks only): each
+        judged by the same compiled effort as :meth:`plan`'s search
+        (:func:`footstep_search.exhaustive_search`)."""
         cfg = self.config
-        n, m = cfg.window_steps, cfg.step_intervals
-        lengths = self._lengths
-        sides, side_list = self._sides[stance_side]
-        memo = self._search_tables(profile, sides, stance_s)
-        length_list = self._length_list
-        best, best_effort = None, np.inf
-        for config in np.ndindex(*([m + 1] * n)):
-            value = self._effort(profile, tuple(config), length_list, side_list, stance_s,
-                                 stance_height, swing_s, swing_height, s_init, previous_length,
-                                 memo, set())
-            if value is not None and value < best_effort:
-                best, best_effort = tuple(config), value
-        if best is None:
+        self._last_tables = None
+        tables = self.search_tables(profile, stance_side, stance_s, stance_height, swing_s,
+                                    swing_height, s_init, previous_length)
+        best, effort, evaluated = exhaustive_search(cfg.window_steps, cfg.step_intervals,
+                                                    tables)
+        if not best.size:
             return None
-        return self._window(profile, best, lengths, sides, stance_s, best_effort,
-                            (m + 1) ** n, memo)
+        return self._window(best.tolist(), tables[6], stance_s, effort, evaluated,
+                            tables[1], tables[2])
 
     def _search_tables(self, profile, sides, stance_s) -> _Search:
         """Every foothold the window can reach, evaluated in one batch."""
@@ -727,64 +657,6 @@ class FootstepPlanner:
         memo.rise_ahead[key] = value
         return value
 
-    def _greedy_seed(self, memo, lengths, stance_height, s_init, previous_length, banned_first,
-                     banned_lengths) -> Optional[Tuple[int, ...]]:
-        """A configuration built footstep by footstep, each the cheapest given the ones before.
-
-        Uses the same effort terms as :meth:`_effort` but not the swing test (the caller
-        evaluates the whole configuration); None when some footstep has no usable foothold.
-        """
-        cfg = self.config
-        choices = [j for j in range(cfg.step_intervals + 1) if j not in banned_lengths]
-        first_choices = [j for j in choices if j not in banned_first]
-        up, down = self._rise_limits
-        w_length, w_height, w_pitch, w_smooth, span, up_range, pitch_range = self._effort_terms
-        seed, cumulative, height_before, length_before = [], 0, stance_height, previous_length
-        for i in range(cfg.window_steps):
-            ok, height, pitch = memo.ok[i], memo.height[i], memo.pitch[i]
-            best, best_cost = None, math.inf
-            for j in (choices if i else first_choices):
-                c = cumulative + j
-                if not ok[c]:
-                    continue
-                rise = height[c] - height_before
-                if rise > up or -rise > down:
-                    continue
-                length = lengths[j]
-                # _step_effort written out (the same terms in the same order).
-                cost = (w_length * ((length - s_init) / span) ** 2
-                        + w_height * (rise / up_range) ** 2
-                        + w_pitch * (pitch[c] / pitch_range) ** 2
-                        + w_smooth * ((length - length_before) / span) ** 2)
-                if cost < best_cost:
-                    best, best_cost = j, cost
-            if best is None:
-                return None
-            seed.append(best)
-            cumulative += best
-            height_before, length_before = height[cumulative], lengths[best]
-        return tuple(seed)
-
-    @staticmethod
-    def _neighbours(config: Tuple[int, ...], m: int):
-        """Hill-climbing's neighbours, one interval away: one footstep longer or shorter, or
-        one footstep longer and the next shorter by the same amount (so the footholds after
-        them stay).
-
-        Because each foothold lies at the sum of the lengths before it, lengthening one footstep
-        alone moves every later foothold; the paired move reaches the neighbour that moves a
-        single foothold, without which hill-climbing stalls on ridges of the effort. The
-        breadth-first search keeps the paper's single-footstep moves (``nearest_free`` in
-        :meth:`plan`, in the same order as here).
-        """
-        for i in range(len(config)):
-            for delta in (-1, 1):
-                j = config[i] + delta
-                if 0 <= j <= m:
-                    yield config[:i] + (j,) + config[i + 1:]
-                    if i + 1 < len(config) and 0 <= config[i + 1] - delta <= m:
-                        yield config[:i] + (j, config[i + 1] - delta) + config[i + 2:]
-
     def _effort(self, profile, config, lengths, sides, stance_s, stance_height, swing_s,
                 swing_height, s_init, previous_length, memo, banned) -> Optional[float]:
         """Effort of a footstep configuration, or None if it is not collision-free."""
@@ -826,75 +698,6 @@ class FootstepPlanner:
             height_before, length_before = hold_height, length
         return effort
 
-    def _search_effort(self, profile, config, lengths, sides, stance_s, stance_height, swing_s,
-                       swing_height, s_init, previous_length, memo,
-                       banned) -> Optional[float]:
-        """:meth:`_effort` for the search: it resumes from the longest prefix of ``config``
-        already evaluated in this search (``memo.prefixes``).
-
-        Neighbouring configurations share their first footsteps (hill-climbing changes one or
-        two lengths), and the footsteps before a change are evaluated as they were: the same
-        sums in the same order, so the same effort to the last bit.
-        """
-        if config[0] in banned:
-            return None
-        up, down = self._rise_limits
-        prefixes = memo.prefixes
-        start = len(config) - 1
-        while start > 0 and config[:start] not in prefixes:
-            start -= 1
-        # State after footsteps 0..i-1: (effort, arc length, sole height, length, cumulative
-        # interval index); the empty prefix is the stance foot.
-        if start:
-            state = prefixes[config[:start]]
-        else:
-            state = (0.0, stance_s, stance_height, previous_length, 0)
-        if state is None:
-            return None
-        effort, s, height_before, length_before, cumulative = state
-        w_length, w_height, w_pitch, w_smooth, span, up_range, pitch_range = self._effort_terms
-        ok, heights, pitches, swings = memo.ok, memo.height, memo.pitch, memo.swings
-        for i in range(start, len(config)):
-            j = config[i]
-            length = lengths[j]
-            s += length
-            cumulative += j
-            if not ok[i][cumulative]:
-                prefixes[config[:i + 1]] = None
-                return None
-            hold_height = heights[i][cumulative]
-            rise = hold_height - height_before
-            if rise > up or -rise > down:
-                prefixes[config[:i + 1]] = None
-                return None
-            # The foot swings from where it was two footsteps before (the same side): the
-            # swing foot's or the stance foot's place (-1), or footstep i - 2's foothold.
-            if i >= 2:
-                before = prefixes[config[:i - 1]]
-                origin, s_from, h_from = before[4], before[1], before[2]
-            elif i == 1:
-                origin, s_from, h_from = -1, stance_s, stance_height
-            else:
-                origin, s_from, h_from = -1, swing_s, swing_height
-            swing_key = (i, origin, cumulative)
-            clear = swings.get(swing_key)
-            if clear is None:
-                clear = self._swing_clear_in(memo, sides[i], s_from, h_from, s, hold_height,
-                                             (i - 2, origin) if i >= 2 else None)
-                swings[swing_key] = clear
-            if not clear:
-                prefixes[config[:i + 1]] = None
-                return None
-            # _step_effort written out (the same terms in the same order): it runs for every
-            # footstep the search visits.
-            effort += (w_length * ((length - s_init) / span) ** 2
-                       + w_height * (rise / up_range) ** 2
-                       + w_pitch * (pitches[i][cumulative] / pitch_range) ** 2
-                       + w_smooth * ((length - length_before) / span) ** 2)
-            prefixes[config[:i + 1]] = (effort, s, hold_height, length, cumulative)
-            height_before, length_before = hold_height, length
-        return effort
-
     def _step_effort(self, length, rise, pitch, length_before, s_init) -> float:
         """One footstep's share of the effort: length off the neutral one, height change, sole
         pitch and change of length, each normalised by its range."""
@@ -904,16 +707,18 @@ class FootstepPlanner:
                 + w_pitch * (pitch / pitch_range) ** 2
                 + w_smooth * ((length - length_before) / span) ** 2)
 
-    def _window(self, profile, config, lengths, sides, stance_s, effort, evaluated, memo):
+    def _window(self, config, sides, stance_s, effort, evaluated, height, pitch):
+        """The window of ``config`` (interval indices) on the foothold table (``height``,
+        ``pitch``: entry ``bounds[i] + c`` for footstep i at cumulative index c)."""
         # Running sums in plain Python (np.cumsum adds in the same order): a few values.
-        chosen = [float(lengths[j]) for j in config]
+        chosen = [self._length_list[j] for j in config]
         arcs, heights, pitches, total, cumulative = [], [], [], 0.0, 0
         for i, (j, length) in enumerate(zip(config, chosen)):
             total += length
             cumulative += j
             arcs.append(stance_s + total)
-            heights.append(memo.height[i][cumulative])
-            pitches.append(memo.pitch[i][cumulative])
+            heights.append(height[self._bounds[i] + cumulative])
+            pitches.append(pitch[self._bounds[i] + cumulative])
         return FootstepWindow(lengths=np.array(chosen), indices=tuple(int(j) for j in config),
                               arc_lengths=np.array(arcs), heights=np.array(heights),
                               pitches=np.array(pitches), sides=sides.copy(),

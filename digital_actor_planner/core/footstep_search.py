@@ -1,0 +1,461 @@
+"""The footstep window's search (§4.2) as compiled kernels.
+
+:meth:`footsteps.FootstepPlanner.plan` builds the window's foothold table and hands it here:
+a breadth-first search from the start configuration to the nearest collision-free one, then
+hill-climbing on the effort while a neighbour improves it, then (``greedy_restart``) a second
+climb from a configuration built footstep by footstep. One call, no Python between the
+configurations it judges.
+
+A configuration (j_0, ..., j_{n-1}) of interval indices is numbered in base m + 1, footstep 0
+the most significant digit; its first L footsteps (a prefix) are numbered the same way and
+keyed ``number * (n + 1) + L``. Three memos live for one search:
+
+- ``feasible[number]``: the effort of a configuration judged, NaN where it is not
+  collision-free (their count is the window's ``evaluated``);
+- ``prefixes[key]``: the state after a prefix, (effort, arc length, sole height, length,
+  cumulative interval index), or :data:`_INFEASIBLE` where the prefix already fails; a
+  configuration is judged from the longest prefix known, so neighbours that share their first
+  footsteps (hill-climbing changes one or two) reuse them, with the same sums in the same
+  order;
+- ``swings[key]``: whether a foot can swing from one foothold to the next, 1 or 0 (the key
+  numbers the footstep, the foothold it leaves (-1: where the foot stands now) and where it
+  lands).
+
+``feasible`` and ``swings`` are read with one lookup each (``get`` with a default that no
+entry holds; numba types its answer as optional, which a tuple cannot be indexed as, so
+``prefixes`` is asked whether it holds a key first).
+
+The arithmetic is the plain effort's (:meth:`footsteps.FootstepPlanner._effort`) term by term:
+the squares are ``x ** two`` with ``two`` = 2.0 read from ``numbers``, because numba turns a
+constant square into ``x * x``, which differs from the C library's ``pow`` (what Python's
+``**`` calls) in the last bit for about one value in 1,200. Without numba the same functions run
+as Python.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .jit import kernel
+
+#: Indices into the ``numbers`` array of :func:`window_search` (see
+#: ``FootstepPlanner._search_numbers``).
+(STANCE_S, STANCE_HEIGHT, SWING_S, SWING_HEIGHT, S_INIT, PREVIOUS_LENGTH, UP, DOWN,
+ W_LENGTH, W_HEIGHT, W_PITCH, W_SMOOTH, SPAN, UP_RANGE, PITCH_RANGE, TOE, HEEL, S0, DS,
+ MAX_SWING, LIFT_ROOM, LIFT_RISE, LIFT_STEP_UP, TWO) = range(24)
+NUMBER_COUNT = 24
+
+#: A prefix that already fails (its cumulative interval index is -1).
+_INFEASIBLE = (math.nan, math.nan, math.nan, math.nan, -1.0)
+#: The answer of ``feasible`` for a configuration not judged yet (an effort is >= 0).
+_UNJUDGED = -1.0
+
+#: The foothold table and the numbers every kernel below reads: (ok (T,) bool, height (T,) m,
+#: pitch (T,) rad: footstep i's foothold when the indices of footsteps 0..i sum to c is entry
+#: bounds[i] + c; bounds (n + 1,); offsets (T,) m beyond the stance foot; obstacle (2, K) m,
+#: the profile's swing obstacle with -inf over empty space; sides (n,); lengths (m + 1,) m;
+#: last sample index of the profile; numbers (NUMBER_COUNT,)).
+TABLES_TYPE = ('Tuple((b1[::1], f8[::1], f8[::1], readonly(i8[::1]), readonly(f8[::1]), '
+               'f8[:, ::1], readonly(i8[::1]), readonly(f8[::1]), i8, f8[::1]))')
+_FEASIBLE_TYPE = 'DictType(i8, f8)'
+_PREFIXES_TYPE = 'DictType(i8, UniTuple(f8, 5))'
+_SWINGS_TYPE = 'DictType(i8, i8)'
+
+
+@kernel('f8(i8, i8, ' + TABLES_TYPE + ')')
+def _rise_ahead(row, cumulative, tables):
+    """How far the ground within ``lift_room`` ahead of a foothold's toe rises above its sole's
+    plane carried on, m: -inf where nothing does (or no room is asked for), NaN where the
+    foothold has no height. :meth:`footsteps.FootstepPlanner.rise_ahead` of one foothold of
+    the table (row ``row``, cumulative interval index ``cumulative``)."""
+    ok, height, pitch, bounds, offsets, obstacle, sides, lengths, last, numbers = tables
+    entry = bounds[row] + cumulative
+    sole = height[entry]
+    if sole != sole:  # NaN: no foothold there
+        return math.nan
+    lift_room = numbers[LIFT_ROOM]
+    if lift_room <= 0:
+        return -math.inf
+    toe, s0, ds = numbers[TOE], numbers[S0], numbers[DS]
+    s = numbers[STANCE_S] + offsets[entry]
+    first = int(math.floor((s + toe - s0) / ds + 1e-9))
+    end = int(math.floor((s + (toe + lift_room) - s0) / ds + 1e-9))
+    slope = math.tan(pitch[entry])
+    side = sides[row]
+    value = -math.inf
+    for j in range(first + 1, end + 1):
+        j = min(max(j, 0), last)
+        past = obstacle[side, j]
+        if past != -math.inf:
+            rise = past - slope * (s0 + ds * j - s) - sole
+            if rise > value:
+                value = rise
+    return value
+
+
+@kernel('b1(i8, f8, f8, f8, f8, i8, i8, ' + TABLES_TYPE + ')')
+def _swing_clear(side, s_from, h_from, s_to, h_to, from_row, from_cumulative, tables):
+    """Whether a foot can swing from one foothold (arc length, sole height) to the next over
+    the profile's obstacles, at most ``max_swing_height`` above the higher of the two; where it
+    leaves a foothold the window placed (``from_row`` >= 0, with its cumulative index), that
+    foothold must also let it lift off (``FootstepConfig.lift_room``)."""
+    ok, height, pitch, bounds, offsets, obstacle, sides, lengths, last, numbers = tables
+    toe, heel, s0, ds = numbers[TOE], numbers[HEEL], numbers[S0], numbers[DS]
+    i0 = max(int(math.floor((s_from + toe - s0) / ds)), 0)
+    i1 = min(int(math.ceil((s_to - heel - s0) / ds)), last)
+    if i1 >= i0:
+        # -inf (empty space) passes: there is nothing to hit.
+        top = obstacle[side, i0]
+        for i in range(i0 + 1, i1 + 1):
+            if obstacle[side, i] > top:
+                top = obstacle[side, i]
+        higher = h_to if h_to > h_from else h_from
+        if top > higher + numbers[MAX_SWING]:
+            return False
+    if from_row < 0:
+        return True
+    climb = h_to - h_from
+    allowed = numbers[LIFT_RISE] + (0.0 if 0.0 > climb else climb)
+    if numbers[LIFT_STEP_UP] < allowed:
+        allowed = numbers[LIFT_STEP_UP]
+    return _rise_ahead(from_row, from_cumulative, tables) <= allowed
+
+
+@kernel('f8(i8[::1], b1[::1], ' + TABLES_TYPE + ', ' + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE
+        + ')')
+def _effort(config, banned_first, tables, prefixes, swings):
+    """Effort of a configuration, NaN if it is not collision-free, resumed from the longest
+    prefix of it already in ``prefixes`` (and adding its own)."""
+    ok, height, pitch, bounds, offsets, obstacle, sides, lengths, last, numbers = tables
+    if banned_first[config[0]]:
+        return math.nan
+    n = config.shape[0]
+    base = lengths.shape[0]
+    # Prefix keys: number * (n + 1) + length.
+    keys = np.empty(n + 1, dtype=np.int64)
+    number = 0
+    keys[0] = 0
+    for i in range(n):
+        number = number * base + config[i]
+        keys[i + 1] = number * (n + 1) + i + 1
+    start = n - 1
+    while start > 0 and keys[start] not in prefixes:
+        start -= 1
+    if start:
+        state = prefixes[keys[start]]
+        if state[4] < 0:
+            return math.nan
+        effort, s, height_before, length_before = state[0], state[1], state[2], state[3]
+        cumulative = int(state[4])
+    else:
+        effort, s, height_before = 0.0, numbers[STANCE_S], numbers[STANCE_HEIGHT]
+        length_before, cumulative = numbers[PREVIOUS_LENGTH], 0
+    up, down, two = numbers[UP], numbers[DOWN], numbers[TWO]
+    s_init, span = numbers[S_INIT], numbers[SPAN]
+    spots = (bounds[-1] - bounds[-2]) + 1  # cumulative indices 0..n m, and -1
+    for i in range(start, n):
+        j = config[i]
+        length = lengths[j]
+        s += length
+        cumulative += j
+        entry = bounds[i] + cumulative
+        if not ok[entry]:
+            prefixes[keys[i + 1]] = _INFEASIBLE
+            return math.nan
+        hold_height = height[entry]
+        rise = hold_height - height_before
+        if rise > up or -rise > down:
+            prefixes[keys[i + 1]] = _INFEASIBLE
+            return math.nan
+        # The foot swings from where it was two footsteps before (the same side): the swing
+        # foot's or the stance foot's place (-1), or footstep i - 2's foothold.
+        if i >= 2:
+            before = prefixes[keys[i - 1]]
+            origin, s_from, h_from = int(before[4]), before[1], before[2]
+        elif i == 1:
+            origin, s_from, h_from = -1, numbers[STANCE_S], numbers[STANCE_HEIGHT]
+        else:
+            origin, s_from, h_from = -1, numbers[SWING_S], numbers[SWING_HEIGHT]
+        swing_key = (i * spots + origin + 1) * spots + cumulative
+        clear = swings.get(swing_key, np.int64(-1))
+        if clear < 0:
+            clear = 1 if _swing_clear(sides[i], s_from, h_from, s, hold_height,
+                                      i - 2 if i >= 2 else -1, origin, tables) else 0
+            swings[swing_key] = clear
+        if clear == 0:
+            prefixes[keys[i + 1]] = _INFEASIBLE
+            return math.nan
+        # The plain effort's terms in its order.
+        effort += (numbers[W_LENGTH] * ((length - s_init) / span) ** two
+                   + numbers[W_HEIGHT] * (rise / numbers[UP_RANGE]) ** two
+                   + numbers[W_PITCH] * (pitch[entry] / numbers[PITCH_RANGE]) ** two
+                   + numbers[W_SMOOTH] * ((length - length_before) / span) ** two)
+        if i + 1 < n:  # a whole configuration's state is never resumed from
+            prefixes[keys[i + 1]] = (effort, s, hold_height, length, float(cumulative))
+        height_before, length_before = hold_height, length
+    return effort
+
+
+@kernel('f8(i8[::1], i8, b1[::1], b1[::1], ' + TABLES_TYPE + ', ' + _FEASIBLE_TYPE + ', '
+        + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE + ')')
+def _evaluate(config, number, banned_first, banned_lengths, tables, feasible, prefixes,
+              swings):
+    """Effort of configuration ``config`` (numbered ``number``), NaN if it is not
+    collision-free; remembered in ``feasible``."""
+    known = feasible.get(number, _UNJUDGED)
+    if known != _UNJUDGED:  # True for NaN
+        return known
+    n = config.shape[0]
+    for i in range(n):
+        if banned_lengths[config[i]]:
+            feasible[number] = math.nan
+            return math.nan
+    if n > 1:
+        # All but the last footstep already found infeasible (the breadth-first search walks
+        # through many of these): the answer without resuming the effort.
+        key = (number // banned_lengths.shape[0]) * (n + 1) + n - 1
+        if key in prefixes and prefixes[key][4] < 0:
+            feasible[number] = math.nan
+            return math.nan
+    result = _effort(config, banned_first, tables, prefixes, swings)
+    feasible[number] = result
+    return result
+
+
+@kernel('b1(i8[::1], i8, ' + TABLES_TYPE + ', ' + _FEASIBLE_TYPE + ')')
+def _lands(config, number, tables, feasible):
+    """Whether every footstep of ``config`` has a foothold where it lands (the table alone;
+    False is recorded as infeasible, as :func:`_evaluate` would). Most configurations the
+    breadth-first search visits on stairs land on a riser."""
+    ok, bounds = tables[0], tables[3]
+    cumulative = 0
+    for i in range(config.shape[0]):
+        cumulative += config[i]
+        if not ok[bounds[i] + cumulative]:
+            feasible[number] = math.nan
+            return False
+    return True
+
+
+@kernel('i8(i8[::1], i8)')
+def _number(config, base):
+    """A configuration's number, base ``base``, footstep 0 the most significant digit."""
+    number = 0
+    for i in range(config.shape[0]):
+        number = number * base + config[i]
+    return number
+
+
+@kernel('f8(i8[::1], b1[::1], b1[::1], ' + TABLES_TYPE + ', ' + _FEASIBLE_TYPE + ', '
+        + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE + ')')
+def _climb(current, banned_first, banned_lengths, tables, feasible, prefixes, swings):
+    """Hill-climbing from ``current`` (changed in place): to the best neighbour while it
+    lowers the effort by more than 1e-12; returns the effort. The neighbours, in order: each
+    footstep one interval shorter, then longer, each followed by that change with the next
+    footstep changed the opposite way (so the footholds after them stay; without it
+    hill-climbing stalls on ridges of the effort)."""
+    n = current.shape[0]
+    base = banned_lengths.shape[0]
+    m = base - 1
+    effort = _evaluate(current, _number(current, base), banned_first, banned_lengths, tables,
+                       feasible, prefixes, swings)
+    neighbour = current.copy()
+    best = current.copy()
+    while True:
+        best_effort = effort
+        moved = False
+        for i in range(n):
+            for delta in (-1, 1):
+                j = current[i] + delta
+                if not 0 <= j <= m:
+                    continue
+                for paired in range(2):
+                    neighbour[:] = current
+                    neighbour[i] = j
+                    if paired:
+                        if i + 1 >= n or not 0 <= current[i + 1] - delta <= m:
+                            continue
+                        neighbour[i + 1] = current[i + 1] - delta
+                    value = _evaluate(neighbour, _number(neighbour, base), banned_first,
+                                      banned_lengths, tables, feasible, prefixes, swings)
+                    if value < best_effort - 1e-12:  # False for NaN
+                        best[:] = neighbour
+                        best_effort = value
+                        moved = True
+        if not moved:
+            return effort
+        current[:] = best
+        effort = best_effort
+
+
+@kernel('i8[::1](i8[::1], b1[::1], b1[::1], ' + TABLES_TYPE + ', ' + _FEASIBLE_TYPE + ', '
+        + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE + ')')
+def _nearest_free(start, banned_first, banned_lengths, tables, feasible, prefixes, swings):
+    """Breadth-first search from ``start`` to the nearest collision-free configuration (empty
+    when there is none).
+
+    The paper's single-footstep moves, footstep by footstep, shorter before longer. Each
+    configuration is tested when it is queued: the first one found free is the first the queue
+    would hand out (first in, first out), so the result and the configurations tested are those
+    of testing on the way out, without expanding the rest of the last level.
+    """
+    n = start.shape[0]
+    base = banned_lengths.shape[0]
+    m = base - 1
+    number = _number(start, base)
+    value = _evaluate(start, number, banned_first, banned_lengths, tables, feasible, prefixes,
+                      swings)
+    if value == value:  # not NaN
+        return start.copy()
+    strides = np.empty(n, dtype=np.int64)
+    stride = 1
+    for i in range(n - 1, -1, -1):
+        strides[i] = stride
+        stride *= base
+    seen = {number: True}
+    queue = [number]
+    head = 0
+    config = np.empty(n, dtype=np.int64)
+    neighbour = np.empty(n, dtype=np.int64)
+    while head < len(queue):
+        number = queue[head]
+        head += 1
+        rest = number
+        for i in range(n - 1, -1, -1):
+            config[i] = rest % base
+            rest //= base
+        for i in range(n):
+            j = config[i]
+            for delta in (-1, 1):
+                other = number + delta * strides[i]
+                if not 0 <= j + delta <= m or other in seen:
+                    continue
+                neighbour[:] = config
+                neighbour[i] = j + delta
+                if _lands(neighbour, other, tables, feasible):
+                    value = _evaluate(neighbour, other, banned_first, banned_lengths, tables,
+                                      feasible, prefixes, swings)
+                    if value == value:
+                        return neighbour
+                seen[other] = True
+                queue.append(other)
+    return np.empty(0, dtype=np.int64)
+
+
+@kernel('i8[::1](i8, b1[::1], b1[::1], ' + TABLES_TYPE + ')')
+def _greedy_seed(n, banned_first, banned_lengths, tables):
+    """A configuration built footstep by footstep, each the cheapest given the ones before by
+    the effort's terms (not the swing test: the caller judges the whole configuration); empty
+    when some footstep has no usable foothold."""
+    ok, height, pitch, bounds, offsets, obstacle, sides, lengths, last, numbers = tables
+    up, down, two = numbers[UP], numbers[DOWN], numbers[TWO]
+    s_init, span = numbers[S_INIT], numbers[SPAN]
+    seed = np.empty(n, dtype=np.int64)
+    cumulative, height_before = 0, numbers[STANCE_HEIGHT]
+    length_before = numbers[PREVIOUS_LENGTH]
+    for i in range(n):
+        best, best_cost = -1, math.inf
+        for j in range(lengths.shape[0]):
+            if banned_lengths[j] or (i == 0 and banned_first[j]):
+                continue
+            entry = bounds[i] + cumulative + j
+            if not ok[entry]:
+                continue
+            rise = height[entry] - height_before
+            if rise > up or -rise > down:
+                continue
+            length = lengths[j]
+            cost = (numbers[W_LENGTH] * ((length - s_init) / span) ** two
+                    + numbers[W_HEIGHT] * (rise / numbers[UP_RANGE]) ** two
+                    + numbers[W_PITCH] * (pitch[entry] / numbers[PITCH_RANGE]) ** two
+                    + numbers[W_SMOOTH] * ((length - length_before) / span) ** two)
+            if cost < best_cost:
+                best, best_cost = j, cost
+        if best < 0:
+            return np.empty(0, dtype=np.int64)
+        seed[i] = best
+        cumulative += best
+        height_before, length_before = height[bounds[i] + cumulative], lengths[best]
+    return seed
+
+
+@kernel('Tuple((i8[::1], f8, i8))(i8[::1], b1[::1], b1[::1], b1, ' + TABLES_TYPE + ')')
+def window_search(start, banned_first, banned_lengths, greedy_restart, tables):
+    """§4.2's search of one window: (configuration (n,) interval indices, empty when no
+    configuration is collision-free; its effort; configurations judged).
+
+    ``start`` (n,): the configuration the breadth-first search starts from; ``banned_first``
+    (m + 1,): the interval indices the first footstep must not take; ``banned_lengths``
+    (m + 1,): those no footstep may take; ``greedy_restart``: climb a second time from
+    :func:`_greedy_seed` and keep the better; ``tables``: :data:`TABLES_TYPE`.
+    """
+    ok, bounds = tables[0], tables[3]
+    n = start.shape[0]
+    none = np.empty(0, dtype=np.int64)
+    # No configuration can be collision-free if some footstep has no foothold in reach.
+    for i in range(n):
+        usable = False
+        for entry in range(bounds[i], bounds[i + 1]):
+            if ok[entry]:
+                usable = True
+                break
+        if not usable:
+            return none, math.nan, 0
+    # Typed by their first entries (computed, not literal values: a literal one would be part
+    # of the dictionary's type), removed at once.
+    feasible = {-1: math.nan}
+    del feasible[-1]
+    prefixes = {-1: _INFEASIBLE}
+    del prefixes[-1]
+    swings = {-1: n}
+    del swings[-1]
+    current = _nearest_free(start, banned_first, banned_lengths, tables, feasible, prefixes,
+                            swings)
+    if current.shape[0] == 0:
+        return none, math.nan, len(feasible)
+    effort = _climb(current, banned_first, banned_lengths, tables, feasible, prefixes, swings)
+    if greedy_restart:
+        # A second hill-climb from a configuration built footstep by footstep: on stairs and
+        # blocks the feasible configurations fall apart into basins (a foothold on every
+        # tread or on every other one) and the first climb cannot leave its basin.
+        seed = _greedy_seed(n, banned_first, banned_lengths, tables)
+        base = banned_lengths.shape[0]
+        if seed.shape[0] and not (seed == current).all():
+            value = _evaluate(seed, _number(seed, base), banned_first, banned_lengths, tables,
+                              feasible, prefixes, swings)
+            if value == value:
+                other = _climb(seed, banned_first, banned_lengths, tables, feasible, prefixes,
+                               swings)
+                if other < effort - 1e-12:
+                    current, effort = seed, other
+    return current, effort, len(feasible)
+
+
+@kernel('Tuple((i8[::1], f8, i8))(i8, i8, ' + TABLES_TYPE + ')')
+def exhaustive_search(n, m, tables):
+    """The optimum over every configuration of the window, the first of equals: (configuration
+    (n,), empty when none is collision-free; its effort; configurations judged,
+    (m + 1) ** n). For benchmarks, what :func:`window_search` is measured against: each
+    configuration judged whole by :func:`_effort` (no prefix of another resumed), the swing
+    tests remembered, as the plain effort judges them."""
+    prefixes = {-1: _INFEASIBLE}
+    del prefixes[-1]
+    swings = {-1: n}
+    del swings[-1]
+    base = m + 1
+    total = base ** n
+    banned = np.zeros(base, dtype=np.bool_)
+    config = np.zeros(n, dtype=np.int64)
+    best = np.empty(0, dtype=np.int64)
+    best_effort = math.inf
+    for number in range(total):
+        rest = number
+        for i in range(n - 1, -1, -1):
+            config[i] = rest % base
+            rest //= base
+        prefixes.clear()
+        value = _effort(config, banned, tables, prefixes, swings)
+        if value < best_effort:  # False for NaN
+            best, best_effort = config.copy(), value
+    return best, best_effort, total
