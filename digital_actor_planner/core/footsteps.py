@@ -14,12 +14,13 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .footstep_search import (DOWN, DS, HEEL, LIFT_RISE, LIFT_ROOM, LIFT_STEP_UP, MAX_SWING,
-                              NUMBER_COUNT, PITCH_RANGE, PREVIOUS_LENGTH, S0, S_INIT, SPAN,
-                              STANCE_HEIGHT, STANCE_S, SWING_HEIGHT, SWING_S, TOE, TWO, UP,
-                              UP_RANGE, W_HEIGHT, W_LENGTH, W_PITCH, W_SMOOTH,
-                              exhaustive_search, window_search)
-from .jit import float_array, kernel
+from .footstep_search import (DOWN, DS, HEEL, LIFT_RISE, LIFT_ROOM, LIFT_STEP_UP, MAX_PITCH,
+                              MAX_SWING, MIN_FRACTION, MIN_HEADROOM, NUMBER_COUNT, PITCH_RANGE,
+                              PREVIOUS_LENGTH, S0, S_INIT, SPAN, STANCE_HEIGHT, STANCE_S,
+                              SWING_HEIGHT, SWING_S, TOE, TOLERANCE, TWO, UP, UP_RANGE,
+                              W_HEIGHT, W_LENGTH, W_PITCH, W_SMOOTH, exhaustive_search,
+                              foothold_tables, judge_footholds, window_search)
+from .jit import float_array
 from .skeleton import LegGeometry
 
 LEFT, RIGHT = 0, 1
@@ -30,84 +31,6 @@ LEFT, RIGHT = 0, 1
 #: The map answers for a point's whole grid cell, so an obstacle up to a cell outside a line
 #: may show; the 3D check of every step (collision.BodyCollision) is exact.
 SOLE_LINES = (-0.4, 0.0, 0.4)
-
-
-@kernel('Tuple((b1[::1], f8[::1], f8[::1]))(f8[:, :], f8[:, :], f8[:, :], f8, f8, i8[::1], '
-        'f8[::1], f8, f8, f8, f8, f8, f8)')
-def _footholds(high, low, headroom, s0, ds, side, s, heel, toe, min_headroom, max_pitch,
-               tolerance, min_fraction):
-    """:meth:`FootstepPlanner.footholds` for every sole in one pass (see there for the rules).
-
-    Returns (ok, sole height under the ankle (NaN where not ok), slope of the sole's plane:
-    0 on an edge and where the sole is not usable). A maximum or minimum over a NaN sample is
-    NaN, as NumPy's: a missing sample makes the sole neither flat nor supported at an edge.
-    """
-    count = s.shape[0]
-    samples = high.shape[1]
-    ok = np.zeros(count, dtype=np.bool_)
-    height = np.full(count, np.nan)
-    slope_out = np.zeros(count)
-    for n in range(count):
-        sn = s[n]
-        row = side[n]
-        # The samples from the heel to the toe, none beyond them.
-        i0 = int(math.ceil((sn - heel - s0) / ds - 1e-9))
-        i1 = int(math.floor((sn + toe - s0) / ds + 1e-9))
-        if i0 < 0 or i1 >= samples or i1 < i0:
-            continue
-        usable = True
-        for i in range(i0, i1 + 1):
-            if not headroom[row, i] >= min_headroom:  # NaN has no headroom either
-                usable = False
-                break
-        if not usable:
-            continue
-        width = i1 - i0 + 1
-        # The least-squares slope through evenly spaced samples: their mean is the middle of
-        # the first and the last, and the squares of their distances from it sum to
-        # ds^2 W (W^2 - 1) / 12. Two samples or fewer fit no slope.
-        slope = 0.0
-        if width > 2:
-            middle = s0 + (0.5 * ds) * (i0 + i1) - sn
-            total = 0.0
-            for i in range(i0, i1 + 1):
-                total += ((s0 + ds * i - sn) - middle) * high[row, i]
-            slope = total / max((ds * ds / 12.0) * width * (width * width - 1), 1e-30)
-        # The sole rests on the highest point above the fitted plane and must not bridge a dip
-        # below it deeper than the tolerance.
-        lift, dip, top = -np.inf, np.inf, -np.inf
-        for i in range(i0, i1 + 1):
-            plane = slope * (s0 + ds * i - sn)
-            above, below, h = high[row, i] - plane, low[row, i] - plane, high[row, i]
-            if lift == lift and (above != above or above > lift):
-                lift = above
-            if dip == dip and (below != below or below < dip):
-                dip = below
-            if top == top and (h != h or h > top):
-                top = h
-        if abs(np.arctan(slope)) <= max_pitch and lift - dip <= tolerance:
-            ok[n] = True
-            height[n] = lift
-            slope_out[n] = slope
-            continue
-        # At an edge a flat sole may overhang lower ground: the ankle's sample (the lower of
-        # two as near) and its neighbours on the sole must be supported, and most of the sole.
-        # Not the pitch limit: the plane through the overhung ground tilts too (a heel over a
-        # stair's nosing, 0.2 m lower, tilted it past the limit).
-        level = top - tolerance
-        ankle = int(min(max(math.ceil((sn - s0) / ds - 0.5), i0), i1))
-        supported, around = 0, True
-        for i in range(i0, i1 + 1):
-            if high[row, i] >= level and low[row, i] >= level:
-                supported += 1
-            elif ankle - 1 <= i <= ankle + 1:
-                around = False
-        if around and supported / width >= min_fraction:
-            ok[n] = True
-            height[n] = top
-        else:
-            slope_out[n] = slope
-    return ok, height, slope_out
 
 
 @dataclass(frozen=True)
@@ -364,9 +287,12 @@ class FootstepPlanner:
                               for i in range(n)])
             sides.setflags(write=False)
             self._sides[stance_side] = (sides, sides.tolist())
-        # (profile, stance and swing feet, (ok, height, pitch, obstacle)) of the last plan:
-        # its foothold table, reused by another attempt at the same step (see search_tables).
-        self._last_tables = None
+        # The side of each entry of the foothold table, by the side of the stance foot.
+        self._entry_sides = {}
+        for stance_side in (0, 1):
+            entry_sides = self._sides[stance_side][0][self._table_layout[0]]
+            entry_sides.setflags(write=False)
+            self._entry_sides[stance_side] = entry_sides
         self._rise_limits = (float(config.max_step_up), float(config.max_step_down))
         # Weights and ranges of the effort terms (see _step_effort), as plain floats.
         self._effort_terms = (
@@ -380,9 +306,11 @@ class FootstepPlanner:
         numbers[[UP, DOWN]] = self._rise_limits
         numbers[[W_LENGTH, W_HEIGHT, W_PITCH, W_SMOOTH, SPAN, UP_RANGE, PITCH_RANGE]] = \
             self._effort_terms
-        numbers[[TOE, HEEL, MAX_SWING, LIFT_ROOM, LIFT_RISE, LIFT_STEP_UP, TWO]] = (
+        numbers[[TOE, HEEL, MAX_SWING, LIFT_ROOM, LIFT_RISE, LIFT_STEP_UP, TWO, MIN_HEADROOM,
+                 MAX_PITCH, TOLERANCE, MIN_FRACTION]] = (
             leg.toe, leg.heel, config.max_swing_height, config.lift_room, config.lift_rise,
-            config.lift_step_up, 2.0)
+            config.lift_step_up, 2.0, config.min_headroom, config.max_foot_pitch,
+            config.flatness_tolerance, config.min_support_fraction)
         self._search_numbers = numbers
 
     # -- the ground under a sole -----------------------------------------------------------
@@ -431,13 +359,13 @@ class FootstepPlanner:
         sides = np.empty(s.shape, dtype=np.int64)
         sides[...] = np.asarray(side, dtype=np.int64)
         side = sides
-        ok, height, slope = _footholds(float_array(profile.height), float_array(profile.low),
-                                       float_array(profile.headroom),
-                                       float(profile.s0), float(profile.ds), side, s,
-                                       float(leg.heel), float(leg.toe), float(cfg.min_headroom),
-                                       float(cfg.max_foot_pitch), float(cfg.flatness_tolerance),
-                                       float(cfg.min_support_fraction))
-        # NumPy's arctan, not the kernel's: the two may differ in the last bit.
+        ok, height, slope = judge_footholds(
+            float_array(profile.height), float_array(profile.low), float_array(profile.headroom),
+            float(profile.s0), float(profile.ds), side, s, float(leg.heel), float(leg.toe),
+            float(cfg.min_headroom), float(cfg.max_foot_pitch), float(cfg.flatness_tolerance),
+            float(cfg.min_support_fraction))
+        # NumPy's arctan; the window's search takes the C library's (footstep_search.
+        # foothold_tables), which gives the same bits on this machine.
         return ok, height, np.arctan(slope)
 
     def rise_ahead(self, profile: GroundProfile, side, s: np.ndarray, height: np.ndarray,
@@ -530,46 +458,40 @@ class FootstepPlanner:
             raise ValueError(f'start configuration {q} is not {n} indices in [0, {m}]')
         if stance_side not in (0, 1):
             raise ValueError(f'stance side {stance_side!r} is not 0 (left) or 1 (right)')
-        tables = self.search_tables(profile, stance_side, stance_s, stance_height, swing_s,
-                                    swing_height, s_init, previous_length)
         banned = np.zeros(m + 1, dtype=bool)
         for b in banned_first:
             if 0 <= int(b) <= m:
                 banned[int(b)] = True
-        config, effort, evaluated = window_search(
+        config, effort, evaluated, heights, pitches = window_search(
             np.array(q, dtype=np.int64), banned, self._lengths > max_length + 1e-9,
-            bool(cfg.greedy_restart), tables)
+            bool(cfg.greedy_restart),
+            self.search_profile(profile, stance_side, stance_s, stance_height, swing_s,
+                                swing_height, s_init, previous_length))
         if not config.size:
             return None
-        return self._window(config.tolist(), tables[6], stance_s, effort, evaluated,
-                            tables[1], tables[2])
+        return self._window(config.tolist(), stance_side, stance_s, effort, evaluated,
+                            heights, pitches)
 
-    def search_tables(self, profile: GroundProfile, stance_side: int, stance_s: float,
-                      stance_height: float, swing_s: float, swing_height: float,
-                      s_init: float, previous_length: float) -> tuple:
-        """What the compiled search of a window reads (:data:`footstep_search.TABLES_TYPE`):
-        every foothold the window can reach, evaluated in one batch, and the window's numbers
-        (the arguments are :meth:`plan`'s).
-
-        Another attempt at the same step (the walk generator could not realise the last s_1)
-        reads the same footholds: the table of the last call is reused then.
-        """
-        sides = self._sides[stance_side][0]
-        key = (stance_side, stance_s, stance_height, swing_s, swing_height)
-        if self._last_tables is not None and self._last_tables[0] is profile \
-                and self._last_tables[1] == key:
-            ok, height, pitch, obstacle = self._last_tables[2]
-        else:
-            step, offsets, _ = self._table_layout
-            ok, height, pitch = self.footholds(profile, sides[step], stance_s + offsets)
-            obstacle = np.where(np.isnan(profile.obstacle), -np.inf, profile.obstacle)
-            self._last_tables = (profile, key, (ok, height, pitch, obstacle))
+    def search_profile(self, profile: GroundProfile, stance_side: int, stance_s: float,
+                       stance_height: float, swing_s: float, swing_height: float,
+                       s_init: float, previous_length: float) -> tuple:
+        """What the compiled search of a window is given
+        (:data:`footstep_search.PROFILE_TYPE`): the profile's samples, the layout of the
+        window's foothold table and the window's numbers (the arguments are :meth:`plan`'s).
+        The search builds the table itself (:func:`footstep_search.foothold_tables`)."""
         numbers = self._search_numbers.copy()
         numbers[[STANCE_S, STANCE_HEIGHT, SWING_S, SWING_HEIGHT, S_INIT, PREVIOUS_LENGTH, S0,
                  DS]] = (stance_s, stance_height, swing_s, swing_height, s_init,
                          previous_length, profile.s0, profile.ds)
-        return (ok, height, pitch, self._bounds, self._table_layout[1], obstacle, sides,
-                self._lengths, profile.samples - 1, numbers)
+        return (float_array(profile.height), float_array(profile.low),
+                float_array(profile.headroom), float_array(profile.obstacle),
+                self._entry_sides[stance_side], self._table_layout[1], self._bounds,
+                self._sides[stance_side][0], self._lengths, numbers)
+
+    def search_tables(self, *arguments) -> tuple:
+        """The foothold table and numbers the search reads
+        (:data:`footstep_search.TABLES_TYPE`), for :meth:`search_profile`'s arguments."""
+        return foothold_tables(self.search_profile(*arguments))
 
     def plan_exhaustive(self, profile: GroundProfile, stance_side: int, stance_s: float,
                         stance_height: float, swing_s: float, swing_height: float,
@@ -578,15 +500,14 @@ class FootstepPlanner:
         judged by the same compiled effort as :meth:`plan`'s search
         (:func:`footstep_search.exhaustive_search`)."""
         cfg = self.config
-        self._last_tables = None
-        tables = self.search_tables(profile, stance_side, stance_s, stance_height, swing_s,
-                                    swing_height, s_init, previous_length)
-        best, effort, evaluated = exhaustive_search(cfg.window_steps, cfg.step_intervals,
-                                                    tables)
+        best, effort, evaluated, heights, pitches = exhaustive_search(
+            cfg.window_steps, cfg.step_intervals,
+            self.search_profile(profile, stance_side, stance_s, stance_height, swing_s,
+                                swing_height, s_init, previous_length))
         if not best.size:
             return None
-        return self._window(best.tolist(), tables[6], stance_s, effort, evaluated,
-                            tables[1], tables[2])
+        return self._window(best.tolist(), stance_side, stance_s, effort, evaluated, heights,
+                            pitches)
 
     def _search_tables(self, profile, sides, stance_s) -> _Search:
         """Every foothold the window can reach, evaluated in one batch."""
@@ -707,22 +628,19 @@ class FootstepPlanner:
                 + w_pitch * (pitch / pitch_range) ** 2
                 + w_smooth * ((length - length_before) / span) ** 2)
 
-    def _window(self, config, sides, stance_s, effort, evaluated, height, pitch):
-        """The window of ``config`` (interval indices) on the foothold table (``height``,
-        ``pitch``: entry ``bounds[i] + c`` for footstep i at cumulative index c)."""
+    def _window(self, config, stance_side, stance_s, effort, evaluated, heights, pitches):
+        """The window of ``config`` (interval indices) with its footholds' ``heights`` and
+        ``pitches``."""
         # Running sums in plain Python (np.cumsum adds in the same order): a few values.
         chosen = [self._length_list[j] for j in config]
-        arcs, heights, pitches, total, cumulative = [], [], [], 0.0, 0
-        for i, (j, length) in enumerate(zip(config, chosen)):
+        arcs, total = [], 0.0
+        for length in chosen:
             total += length
-            cumulative += j
             arcs.append(stance_s + total)
-            heights.append(height[self._bounds[i] + cumulative])
-            pitches.append(pitch[self._bounds[i] + cumulative])
         return FootstepWindow(lengths=np.array(chosen), indices=tuple(int(j) for j in config),
-                              arc_lengths=np.array(arcs), heights=np.array(heights),
-                              pitches=np.array(pitches), sides=sides.copy(),
-                              effort=float(effort), evaluated=int(evaluated))
+                              arc_lengths=np.array(arcs), heights=heights, pitches=pitches,
+                              sides=self._sides[stance_side][0].copy(), effort=float(effort),
+                              evaluated=int(evaluated))
 
 
 def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: float,
