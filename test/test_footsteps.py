@@ -2,6 +2,8 @@
 import numpy as np
 import pytest
 
+import footstep_reference as reference
+
 from digital_actor_planner.core import footstep_search, footsteps
 from digital_actor_planner.core.footsteps import (
     FootstepConfig, FootstepPlanner, GroundProfile, LEFT, RIGHT, validate_footstep_config)
@@ -87,9 +89,9 @@ def test_a_foot_placed_before_a_face_keeps_room_to_lift_off(leg):
     planner = FootstepPlanner(FootstepConfig(), leg)
     room = planner.config.lift_room
     sides = np.array([LEFT, RIGHT, LEFT])
-    memo = planner._search_tables(profile, sides, 0.0)
+    memo = reference.search_tables(planner, profile, sides, 0.0)
     s = 0.0 + planner._table_layout[1][:14]
-    rise = np.array([planner._rise_ahead_at(memo, 0, c) for c in range(14)])
+    rise = np.array([reference.rise_ahead_at(planner, memo, 0, c) for c in range(14)])
     toe_gap = face - (s + leg.toe)
     near = (toe_gap >= 0) & (toe_gap <= room - 0.01 + 1e-9)
     far = toe_gap > room + DS
@@ -101,25 +103,26 @@ def test_a_foot_placed_before_a_face_keeps_room_to_lift_off(leg):
     for j1 in range(14):
         for j2 in range(14):
             config = (j0, j1, j2)
-            effort = planner._effort(profile, config, lengths, sides.tolist(), *arguments,
-                                     memo, set())
+            effort = reference.plain_effort(planner, profile, config, lengths, sides.tolist(),
+                                            *arguments, memo, set())
             # Footstep 2 swings from footstep 0's foothold: only onto the block.
             if effort is not None:
                 assert memo.height[2][j0 + j1 + j2] > top - 0.02, config
     # Without the room (lift_room 0) the same footstep 0 has windows that stride on.
     loose = FootstepPlanner(FootstepConfig(lift_room=0.0), leg)
-    plain = loose._search_tables(profile, sides, 0.0)
-    assert any(loose._effort(profile, (j0, j1, j2), lengths, sides.tolist(), *arguments,
-                             plain, set()) is not None and plain.height[2][j0 + j1 + j2] < 0.01
+    plain = reference.search_tables(loose, profile, sides, 0.0)
+    assert any(reference.plain_effort(loose, profile, (j0, j1, j2), lengths, sides.tolist(),
+                                      *arguments, plain, set()) is not None
+               and plain.height[2][j0 + j1 + j2] < 0.01
                for j1 in range(14) for j2 in range(14))
     # Before a 0.28 m face the foot may not even step up onto it (lift_step_up 0.25: the knee
     # of a foot that close could not fold that far), before a 0.2 m riser it may.
     for height, steps_up in ((0.28, False), (0.2, True)):
         block = profile_from(lambda s: height if face <= s < face + 0.6 else 0.0)
-        tables = planner._search_tables(block, sides, 0.0)
+        tables = reference.search_tables(planner, block, sides, 0.0)
         assert steps_up == any(
-            planner._effort(block, (j0, j1, j2), lengths, sides.tolist(), *arguments,
-                            tables, set()) is not None
+            reference.plain_effort(planner, block, (j0, j1, j2), lengths, sides.tolist(),
+                                   *arguments, tables, set()) is not None
             for j1 in range(14) for j2 in range(14)), height
     # A ramp ahead of the toe is the sole's plane carried on, and a low bump is within
     # lift_rise: neither is a face.
@@ -313,7 +316,7 @@ def test_search_swing_test_agrees_with_the_plain_one(leg):
     obstacle[1, 40:90] = np.nan
     profile = GroundProfile(s0=s0, ds=DS, height=obstacle.copy(), low=obstacle.copy(),
                             headroom=np.full_like(obstacle, np.inf), obstacle=obstacle)
-    memo = planner._search_tables(profile, np.array([LEFT, RIGHT, LEFT]), 0.0)
+    memo = reference.search_tables(planner, profile, np.array([LEFT, RIGHT, LEFT]), 0.0)
     answers = set()
     for _ in range(2000):
         side = int(rng.integers(2))
@@ -321,8 +324,8 @@ def test_search_swing_test_agrees_with_the_plain_one(leg):
         s_to = s_from + rng.uniform(-0.2, 1.6)
         h_from, h_to = rng.uniform(-0.2, 0.4, 2)
         expected = _swing_clear_reference(planner, profile, side, s_from, h_from, s_to, h_to)
-        assert planner._swing_clear_in(memo, side, s_from, h_from, s_to,
-                                       h_to) == expected
+        assert reference.swing_clear_in(planner, memo, side, s_from, h_from, s_to,
+                                        h_to) == expected
         answers.add(expected)
     assert answers == {True, False}
 
@@ -344,14 +347,14 @@ def test_search_rise_ahead_agrees_with_the_batched_one(leg):
                                 headroom=np.full_like(both, np.inf), obstacle=both.copy())
         sides = np.array([LEFT, RIGHT, LEFT]) if trial % 2 else np.array([RIGHT, LEFT, RIGHT])
         stance_s = float(rng.uniform(0.0, 0.3))
-        memo = planner._search_tables(profile, sides, stance_s)
+        memo = reference.search_tables(planner, profile, sides, stance_s)
         s = stance_s + offsets
         ok, height, pitch = planner.footholds(profile, sides[step], s)
         batched = planner.rise_ahead(profile, sides[step], s, height, pitch)
         for row in range(3):
             for c in range(bounds[row + 1] - bounds[row]):
                 k = bounds[row] + c
-                got = planner._rise_ahead_at(memo, row, c)
+                got = reference.rise_ahead_at(planner, memo, row, c)
                 if np.isnan(batched[k]):
                     assert np.isnan(got)
                 else:
@@ -385,7 +388,7 @@ def test_the_compiled_effort_from_prefixes_is_the_plain_effort(leg, search_kind)
     for name, height_of in terrain.items():
         profile = profile_from(height_of)
         sides = np.array([LEFT, RIGHT, LEFT])
-        plain = planner._search_tables(profile, sides, 0.0)
+        plain = reference.search_tables(planner, profile, sides, 0.0)
         tables = planner.search_tables(profile, RIGHT, *arguments)
         configs = [tuple(int(j) for j in c) for c in rng.integers(0, 14, (600, 3))]
         configs += [c[:2] + (int(j),) for c in configs[:200] for j in rng.integers(0, 14, 2)]
@@ -393,8 +396,8 @@ def test_the_compiled_effort_from_prefixes_is_the_plain_effort(leg, search_kind)
             banned_first = np.isin(np.arange(14), list(banned))
             prefixes, swings = _memos(search_kind)
             for config in configs:
-                expected = planner._effort(profile, config, lengths, sides.tolist(),
-                                           *arguments, plain, banned)
+                expected = reference.plain_effort(planner, profile, config, lengths,
+                                                  sides.tolist(), *arguments, plain, banned)
                 got = footstep_search._effort(np.array(config), banned_first, tables,
                                               prefixes, swings)
                 if expected is None:
@@ -423,7 +426,7 @@ def test_the_compiled_effort_is_the_plain_effort_on_random_tables(leg, search_ki
                      float(rng.uniform(-0.05, 0.05)), float(rng.uniform(0.2, 0.8)),
                      float(rng.uniform(0.2, 0.8)))
         tables = list(planner.search_tables(profile, RIGHT, *arguments))
-        plain = planner._search_tables(profile, sides, 0.0)
+        plain = reference.search_tables(planner, profile, sides, 0.0)
         count = tables[0].size
         ok = rng.random(count) < 0.85
         height = np.where(ok, rng.uniform(-0.15, 0.15, count), np.nan)
@@ -441,8 +444,8 @@ def test_the_compiled_effort_is_the_plain_effort_on_random_tables(leg, search_ki
         prefixes, swings = _memos(search_kind)
         for config in rng.integers(0, 14, (150, 3)):
             config = tuple(int(j) for j in config)
-            expected = planner._effort(profile, config, lengths, sides.tolist(), *arguments,
-                                       plain, set())
+            expected = reference.plain_effort(planner, profile, config, lengths,
+                                              sides.tolist(), *arguments, plain, set())
             got = footstep_search._effort(np.array(config), np.zeros(14, dtype=bool),
                                           tuple(tables), prefixes, swings)
             if expected is None:
@@ -462,11 +465,11 @@ def test_the_exhaustive_search_is_the_least_plain_effort(leg, search_kind):
     for height_of in (lambda s: 0.15 * np.floor(max(s - 0.5, 0.0) / 0.35),
                       lambda s: np.nan if 0.7 < s < 1.1 else 0.02 * np.sin(7 * s)):
         profile = profile_from(height_of)
-        plain = planner._search_tables(profile, sides, 0.0)
+        plain = reference.search_tables(planner, profile, sides, 0.0)
         efforts = {}
         for config in np.ndindex(14, 14, 14):
-            effort = planner._effort(profile, config, lengths, sides.tolist(), 0.0, 0.0,
-                                     -0.05, 0.0, 0.5, 0.45, plain, set())
+            effort = reference.plain_effort(planner, profile, config, lengths, sides.tolist(),
+                                            0.0, 0.0, -0.05, 0.0, 0.5, 0.45, plain, set())
             if effort is not None:
                 efforts[config] = effort
         best = min(efforts, key=efforts.get)
@@ -499,14 +502,15 @@ def _paper_search(planner, profile, start, s_init, previous_length):
     the better of the two. Returns (configuration, effort, configurations judged)."""
     n, m = planner.config.window_steps, planner.config.step_intervals
     sides, side_list = planner._sides[RIGHT]  # the feet's order when the right one stands
-    tables = planner._search_tables(profile, sides, 0.0)
+    tables = reference.search_tables(planner, profile, sides, 0.0)
     lengths = planner.config.lengths().tolist()
     judged = {}
 
     def effort(config):
         if config not in judged:
-            judged[config] = planner._effort(profile, config, lengths, side_list, 0.0, 0.0,
-                                             0.0, 0.0, s_init, previous_length, tables, set())
+            judged[config] = reference.plain_effort(planner, profile, config, lengths,
+                                                    side_list, 0.0, 0.0, 0.0, 0.0, s_init,
+                                                    previous_length, tables, set())
         return judged[config]
 
     def moves(config, paired):
@@ -527,8 +531,9 @@ def _paper_search(planner, profile, start, s_init, previous_length):
                 rise = tables.height[i][c] - height_before
                 if tables.ok[i][c] and -planner.config.max_step_down <= rise \
                         <= planner.config.max_step_up:
-                    costs.append((planner._step_effort(lengths[j], rise, tables.pitch[i][c],
-                                                       length_before, s_init), j))
+                    costs.append((reference.step_effort(planner, lengths[j], rise,
+                                                        tables.pitch[i][c], length_before,
+                                                        s_init), j))
             if not costs:
                 return None
             j = min(costs)[1]

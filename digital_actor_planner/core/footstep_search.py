@@ -25,7 +25,8 @@ keyed ``number * (n + 1) + L``. Three memos live for one search:
 entry holds; numba types its answer as optional, which a tuple cannot be indexed as, so
 ``prefixes`` is asked whether it holds a key first).
 
-The arithmetic is the plain effort's (:meth:`footsteps.FootstepPlanner._effort`) term by term:
+The arithmetic is the plain effort's term by term (the Python search's until session 29, kept
+as the tests' reference, ``test/footstep_reference.py``):
 the squares are ``x ** two`` with ``two`` = 2.0 read from ``numbers``, because numba turns a
 constant square into ``x * x``, which differs from the C library's ``pow`` (what Python's
 ``**`` calls) in the last bit for about one value in 1,200. Without numba the same functions run

@@ -8,9 +8,9 @@ neighbour until every neighbour is worse. Only s_1 is executed; the next call st
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 import math
-from typing import Dict, List, Optional, Tuple
+from typing import Optional, Tuple
 
 import numpy as np
 
@@ -217,35 +217,6 @@ class FootstepWindow:
     evaluated: int
 
 
-@dataclass
-class _Search:
-    """The window's footholds and a memo of swing tests as Python lists, for the plain effort
-    (:meth:`FootstepPlanner._effort`: the exhaustive search, and the reference the compiled
-    search, :mod:`footstep_search`, is tested against).
-
-    ``ok[i][c]``, ``height[i][c]``, ``pitch[i][c]``: the foothold of footstep i when the
-    interval indices of footsteps 1..i+1 sum to c (its arc length depends only on that sum).
-    ``obstacle[side]``: the profile's swing obstacle heights as a list, -inf over empty space
-    (so a range maximum over a slice is the swing test's).
-    ``reach``: the swing test's numbers as plain floats (sole toe and heel, the profile's first
-    arc length, spacing and last sample index, the swing height limit), read once per plan.
-    ``rise_ahead[(i, c)]``: how far the ground within ``lift_room`` ahead of that foothold's
-    toe rises above its sole's plane, m (-inf where it does not; see ``FootstepConfig``),
-    filled in by :meth:`FootstepPlanner._rise_ahead_at` for the footholds a swing leaves from.
-    ``stance_s``, ``sides``: the window's stance arc length (m) and footstep sides.
-    """
-
-    ok: List[list]
-    height: List[list]
-    pitch: List[list]
-    obstacle: Tuple[list, list] = ((), ())
-    reach: tuple = ()
-    stance_s: float = 0.0
-    sides: tuple = ()
-    rise_ahead: Dict[Tuple[int, int], float] = field(default_factory=dict)
-    swings: Dict[tuple, bool] = field(default_factory=dict)
-
-
 class FootstepPlanner:
     """Sliding-window footstep planner (§4.2) over a ground profile.
 
@@ -273,7 +244,6 @@ class FootstepPlanner:
             [int(b) for b in np.cumsum([0] + counts)])
         self._lengths = config.lengths()
         self._length_list = self._lengths.tolist()
-        self._offset_list = self._table_layout[1].tolist()
         # The same layout for the compiled search: table rows' first entries, read-only (every
         # window shares them).
         self._bounds = np.array(self._table_layout[2], dtype=np.int64)
@@ -294,7 +264,7 @@ class FootstepPlanner:
             entry_sides.setflags(write=False)
             self._entry_sides[stance_side] = entry_sides
         self._rise_limits = (float(config.max_step_up), float(config.max_step_down))
-        # Weights and ranges of the effort terms (see _step_effort), as plain floats.
+        # Weights and ranges of the effort terms (footstep_search._effort), as plain floats.
         self._effort_terms = (
             float(config.weight_length), float(config.weight_height),
             float(config.weight_pitch), float(config.weight_smooth),
@@ -508,125 +478,6 @@ class FootstepPlanner:
             return None
         return self._window(best.tolist(), stance_side, stance_s, effort, evaluated, heights,
                             pitches)
-
-    def _search_tables(self, profile, sides, stance_s) -> _Search:
-        """Every foothold the window can reach, evaluated in one batch."""
-        step, offsets, bounds = self._table_layout
-        ok, height, pitch = self.footholds(profile, sides[step], stance_s + offsets)
-        ok, height, pitch = ok.tolist(), height.tolist(), pitch.tolist()
-        rows = list(zip(bounds[:-1], bounds[1:]))
-        obstacle = np.where(np.isnan(profile.obstacle), -np.inf, profile.obstacle).tolist()
-        return _Search(ok=[ok[a:b] for a, b in rows], height=[height[a:b] for a, b in rows],
-                       pitch=[pitch[a:b] for a, b in rows],
-                       stance_s=stance_s, sides=tuple(int(side) for side in sides),
-                       obstacle=(obstacle[0], obstacle[1]),
-                       reach=(float(self.leg.toe), float(self.leg.heel), float(profile.s0),
-                              float(profile.ds), profile.samples - 1,
-                              float(self.config.max_swing_height)))
-
-    def _swing_clear_in(self, memo: _Search, side: int, s_from: float, h_from: float,
-                        s_to: float, h_to: float, lifts_from: Optional[Tuple[int, int]] = None
-                        ) -> bool:
-        """Whether a foot can swing from one foothold to the next over the ground profile.
-
-        ``lifts_from``: (row, cumulative index) of the foothold it leaves when the window placed
-        it there; that foothold must also let it lift off (see ``FootstepConfig.lift_room``).
-        Reads the search's per-side obstacle lists (``memo``), not NumPy arrays: it runs for
-        every new swing the search visits.
-        """
-        toe, heel, s0, ds, last, max_swing = memo.reach
-        i0 = max(math.floor((s_from + toe - s0) / ds), 0)
-        i1 = min(math.ceil((s_to - heel - s0) / ds), last)
-        # -inf (empty space) passes: there is nothing to hit.
-        if i1 >= i0 and max(memo.obstacle[side][i0:i1 + 1]) > max(h_from, h_to) + max_swing:
-            return False
-        if lifts_from is None:
-            return True
-        cfg = self.config
-        return (self._rise_ahead_at(memo, *lifts_from)
-                <= min(cfg.lift_rise + max(h_to - h_from, 0.0), cfg.lift_step_up))
-
-    def _rise_ahead_at(self, memo: _Search, row: int, cumulative: int) -> float:
-        """:meth:`rise_ahead` of one foothold of the search's table (row ``row``, cumulative
-        interval index ``cumulative``), in plain Python on the search's lists and remembered:
-        only the footholds a swing of the window leaves from are asked for, a few per plan.
-        The same arithmetic as :meth:`rise_ahead`, so the same value.
-        """
-        key = (row, cumulative)
-        value = memo.rise_ahead.get(key)
-        if value is not None:
-            return value
-        height = memo.height[row][cumulative]
-        if height != height:  # NaN: no foothold there
-            memo.rise_ahead[key] = math.nan
-            return math.nan
-        if self.config.lift_room <= 0:
-            memo.rise_ahead[key] = -math.inf
-            return -math.inf
-        toe, _, s0, ds, last, _ = memo.reach
-        s = memo.stance_s + self._offset_list[self._table_layout[2][row] + cumulative]
-        first = math.floor((s + toe - s0) / ds + 1e-9)
-        end = math.floor((s + (toe + self.config.lift_room) - s0) / ds + 1e-9)
-        slope = math.tan(memo.pitch[row][cumulative])
-        obstacle = memo.obstacle[memo.sides[row]]
-        value = -math.inf
-        for j in range(first + 1, end + 1):
-            j = min(max(j, 0), last)
-            past = obstacle[j]
-            if past != -math.inf:
-                value = max(value, past - slope * (s0 + ds * j - s) - height)
-        memo.rise_ahead[key] = value
-        return value
-
-    def _effort(self, profile, config, lengths, sides, stance_s, stance_height, swing_s,
-                swing_height, s_init, previous_length, memo, banned) -> Optional[float]:
-        """Effort of a footstep configuration, or None if it is not collision-free."""
-        cfg = self.config
-        if config[0] in banned:
-            return None
-        up, down = cfg.max_step_up, cfg.max_step_down
-        # Where each foot was before its step: an index into ``placed`` (-2 swing, -1 stance).
-        placed = {-2: (swing_s, swing_height), -1: (stance_s, stance_height)}
-        s, height_before, effort, length_before = stance_s, stance_height, 0.0, previous_length
-        cumulative = 0
-        previous_key = {sides[0]: -2, 1 - sides[0]: -1}
-        for i, j in enumerate(config):
-            length = lengths[j]
-            s += length
-            cumulative += j
-            side = sides[i]
-            key = (i, cumulative)
-            if not memo.ok[i][cumulative]:
-                return None
-            hold_height = memo.height[i][cumulative]
-            rise = hold_height - height_before
-            if rise > up or -rise > down:
-                return None
-            origin = previous_key[side]
-            swing_key = (origin, key)
-            clear = memo.swings.get(swing_key)
-            if clear is None:
-                s_from, h_from = placed[origin]
-                clear = self._swing_clear_in(memo, side, s_from, h_from, s, hold_height,
-                                             None if origin in (-2, -1) else origin)
-                memo.swings[swing_key] = clear
-            if not clear:
-                return None
-            effort += self._step_effort(length, rise, memo.pitch[i][cumulative], length_before,
-                                        s_init)
-            placed[key] = (s, hold_height)
-            previous_key[side] = key
-            height_before, length_before = hold_height, length
-        return effort
-
-    def _step_effort(self, length, rise, pitch, length_before, s_init) -> float:
-        """One footstep's share of the effort: length off the neutral one, height change, sole
-        pitch and change of length, each normalised by its range."""
-        w_length, w_height, w_pitch, w_smooth, span, up, pitch_range = self._effort_terms
-        return (w_length * ((length - s_init) / span) ** 2
-                + w_height * (rise / up) ** 2
-                + w_pitch * (pitch / pitch_range) ** 2
-                + w_smooth * ((length - length_before) / span) ** 2)
 
     def _window(self, config, stance_side, stance_s, effort, evaluated, heights, pitches):
         """The window of ``config`` (interval indices) with its footholds' ``heights`` and
