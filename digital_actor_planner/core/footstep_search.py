@@ -1,10 +1,11 @@
 """The footstep window's search (§4.2) as compiled kernels.
 
-:meth:`footsteps.FootstepPlanner.plan` builds the window's foothold table and hands it here:
-a breadth-first search from the start configuration to the nearest collision-free one, then
-hill-climbing on the effort while a neighbour improves it, then (``greedy_restart``) a second
-climb from a configuration built footstep by footstep. One call, no Python between the
-configurations it judges.
+:meth:`footsteps.FootstepPlanner.plan` hands the profile's samples and the layout of the
+window's foothold table here. One call builds the table (every foothold the window can reach,
+:func:`judge_footholds`) and searches: a breadth-first search from the start configuration to
+the nearest collision-free one, then hill-climbing on the effort while a neighbour improves it,
+then (``greedy_restart``) a second climb from a configuration built footstep by footstep. No
+Python runs between the configurations it judges.
 
 A configuration (j_0, ..., j_{n-1}) of interval indices is numbered in base m + 1, footstep 0
 the most significant digit; its first L footsteps (a prefix) are numbered the same way and
@@ -155,7 +156,7 @@ _SWINGS_TYPE = 'DictType(i8, i8)'
 
 @kernel(TABLES_TYPE + '(' + PROFILE_TYPE + ')')
 def foothold_tables(profile):
-    """The window's foothold table (:func:`footholds` of every entry, the pitch as the
+    """The window's foothold table (:func:`judge_footholds` of every entry, the pitch as the
     arctangent of its slope) and the profile's obstacle with -inf over empty space: the
     :data:`TABLES_TYPE` the search reads, from the :data:`PROFILE_TYPE` it is given."""
     (high, low, headroom, obstacle, entry_sides, offsets, bounds, sides, lengths,
