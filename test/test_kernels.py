@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from digital_actor_planner.core import (collision, convex, ct_roadmap, ct_space, environment,
-                                        footsteps, gait, path as path_module)
+                                        footstep_search, gait, path as path_module)
 from digital_actor_planner.core import skeleton as skeleton_module, upper_body
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment, start_configuration
@@ -63,8 +63,9 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
     """requirements.txt pins numba: without it every kernel runs as Python, many times
     slower, and the planning-time numbers in the README would not hold."""
     assert COMPILED
-    for kernel in (footsteps._footholds, environment._ground_heights, environment._tops_near,
-                   collision._suspects, collision._half_extents, skeleton_module._shape_transforms,
+    for kernel in (footstep_search.judge_footholds, environment._ground_heights,
+                   environment._tops_near, collision._suspects, collision._half_extents,
+                   skeleton_module._shape_transforms,
                    gait._raise_swing, gait._swing_need, gait._leg_triangle, gait._feet_meet,
                    gait._leg_violation, gait._sole_points, gait._across_sole,
                    collision._quaternions,
@@ -85,7 +86,13 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    gait._pelvis_track, gait._swing_plane, gait._ankle_correction,
                    gait._wrapped, gait._swing_bounds, gait._swing_pass, gait._stance_leg,
                    gait._fade_ankle, path_module._arc_offsets, gait._rolled_stance,
-                   upper_body._write_patterns):
+                   upper_body._write_patterns, footstep_search.foothold_tables,
+                   footstep_search._rise_ahead, footstep_search._swing_clear,
+                   footstep_search._effort, footstep_search._evaluate, footstep_search._lands,
+                   footstep_search._number, footstep_search._climb,
+                   footstep_search._nearest_free, footstep_search._greedy_seed,
+                   footstep_search._footholds_of, footstep_search.window_search,
+                   footstep_search.exhaustive_search):
         assert kernel.py_func is not kernel
 
 
@@ -106,8 +113,8 @@ def test_footholds(skeleton):
     arguments = (high, low, headroom, -0.3, 0.02, side, s, float(leg.heel), float(leg.toe),
                  config.min_headroom, config.max_foot_pitch, config.flatness_tolerance,
                  config.min_support_fraction)
-    compiled = footsteps._footholds(*arguments)
-    same(compiled, footsteps._footholds.py_func(*arguments))
+    compiled = footstep_search.judge_footholds(*arguments)
+    same(compiled, footstep_search.judge_footholds.py_func(*arguments))
     assert 0 < compiled[0].sum() < s.size
 
 
