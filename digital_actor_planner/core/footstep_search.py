@@ -178,6 +178,48 @@ def foothold_tables(profile):
             high.shape[1] - 1, numbers)
 
 
+@kernel('Tuple((' + _FEASIBLE_TYPE + ', ' + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE + '))(i8)')
+def _empty_memos(n):
+    """Empty ``feasible``, ``prefixes`` and ``swings`` memos for one search. Typed by their
+    first entries (computed, not literal values: a literal one would be part of the
+    dictionary's type), removed at once."""
+    feasible = {-1: math.nan}
+    del feasible[-1]
+    prefixes = {-1: _INFEASIBLE}
+    del prefixes[-1]
+    swings = {-1: n}
+    del swings[-1]
+    return feasible, prefixes, swings
+
+
+@kernel('i8(i8, i8, i8)')
+def _prefix_key(prefix_number, length, n):
+    """The ``prefixes`` key of a configuration's first ``length`` footsteps, numbered
+    ``prefix_number``, in a window of ``n``."""
+    return prefix_number * (n + 1) + length
+
+
+@kernel('void(i8, i8, i8[::1])')
+def _digits(number, base, config):
+    """Write configuration ``number``'s interval indices into ``config`` (:func:`_number`
+    undone)."""
+    for i in range(config.shape[0] - 1, -1, -1):
+        config[i] = number % base
+        number //= base
+
+
+@kernel('f8(f8, f8, f8, f8, f8[::1])')
+def _step_cost(length, rise, pitch, length_before, numbers):
+    """One footstep's share of the effort: length off the neutral one, height change, sole
+    pitch and change of length, each normalised by its range, in the plain effort's order
+    (the squares as ``** two``, see the module's docstring)."""
+    two, span = numbers[TWO], numbers[SPAN]
+    return (numbers[W_LENGTH] * ((length - numbers[S_INIT]) / span) ** two
+            + numbers[W_HEIGHT] * (rise / numbers[UP_RANGE]) ** two
+            + numbers[W_PITCH] * (pitch / numbers[PITCH_RANGE]) ** two
+            + numbers[W_SMOOTH] * ((length - length_before) / span) ** two)
+
+
 @kernel('f8(i8, i8, ' + TABLES_TYPE + ')')
 def _rise_ahead(row, cumulative, tables):
     """How far the ground within ``lift_room`` ahead of a foothold's toe rises above its sole's
@@ -253,7 +295,7 @@ def _effort(config, banned_first, tables, prefixes, swings):
     keys[0] = 0
     for i in range(n):
         number = number * base + config[i]
-        keys[i + 1] = number * (n + 1) + i + 1
+        keys[i + 1] = _prefix_key(number, i + 1, n)
     start = n - 1
     while start > 0 and keys[start] not in prefixes:
         start -= 1
@@ -266,8 +308,7 @@ def _effort(config, banned_first, tables, prefixes, swings):
     else:
         effort, s, height_before = 0.0, numbers[STANCE_S], numbers[STANCE_HEIGHT]
         length_before, cumulative = numbers[PREVIOUS_LENGTH], 0
-    up, down, two = numbers[UP], numbers[DOWN], numbers[TWO]
-    s_init, span = numbers[S_INIT], numbers[SPAN]
+    up, down = numbers[UP], numbers[DOWN]
     spots = (bounds[-1] - bounds[-2]) + 1  # cumulative indices 0..n m, and -1
     for i in range(start, n):
         j = config[i]
@@ -301,11 +342,7 @@ def _effort(config, banned_first, tables, prefixes, swings):
         if clear == 0:
             prefixes[keys[i + 1]] = _INFEASIBLE
             return math.nan
-        # The plain effort's terms in its order.
-        effort += (numbers[W_LENGTH] * ((length - s_init) / span) ** two
-                   + numbers[W_HEIGHT] * (rise / numbers[UP_RANGE]) ** two
-                   + numbers[W_PITCH] * (pitch[entry] / numbers[PITCH_RANGE]) ** two
-                   + numbers[W_SMOOTH] * ((length - length_before) / span) ** two)
+        effort += _step_cost(length, rise, pitch[entry], length_before, numbers)
         if i + 1 < n:  # a whole configuration's state is never resumed from
             prefixes[keys[i + 1]] = (effort, s, hold_height, length, float(cumulative))
         height_before, length_before = hold_height, length
@@ -329,7 +366,7 @@ def _evaluate(config, number, banned_first, banned_lengths, tables, feasible, pr
     if n > 1:
         # All but the last footstep already found infeasible (the breadth-first search walks
         # through many of these): the answer without resuming the effort.
-        key = (number // banned_lengths.shape[0]) * (n + 1) + n - 1
+        key = _prefix_key(number // banned_lengths.shape[0], n - 1, n)
         if key in prefixes and prefixes[key][4] < 0:
             feasible[number] = math.nan
             return math.nan
@@ -436,10 +473,7 @@ def _nearest_free(start, banned_first, banned_lengths, tables, feasible, prefixe
     while head < len(queue):
         number = queue[head]
         head += 1
-        rest = number
-        for i in range(n - 1, -1, -1):
-            config[i] = rest % base
-            rest //= base
+        _digits(number, base, config)
         for i in range(n):
             j = config[i]
             for delta in (-1, 1):
@@ -464,8 +498,7 @@ def _greedy_seed(n, banned_first, banned_lengths, tables):
     the effort's terms (not the swing test: the caller judges the whole configuration); empty
     when some footstep has no usable foothold."""
     ok, height, pitch, bounds, offsets, obstacle, sides, lengths, last, numbers = tables
-    up, down, two = numbers[UP], numbers[DOWN], numbers[TWO]
-    s_init, span = numbers[S_INIT], numbers[SPAN]
+    up, down = numbers[UP], numbers[DOWN]
     seed = np.empty(n, dtype=np.int64)
     cumulative, height_before = 0, numbers[STANCE_HEIGHT]
     length_before = numbers[PREVIOUS_LENGTH]
@@ -480,11 +513,7 @@ def _greedy_seed(n, banned_first, banned_lengths, tables):
             rise = height[entry] - height_before
             if rise > up or -rise > down:
                 continue
-            length = lengths[j]
-            cost = (numbers[W_LENGTH] * ((length - s_init) / span) ** two
-                    + numbers[W_HEIGHT] * (rise / numbers[UP_RANGE]) ** two
-                    + numbers[W_PITCH] * (pitch[entry] / numbers[PITCH_RANGE]) ** two
-                    + numbers[W_SMOOTH] * ((length - length_before) / span) ** two)
+            cost = _step_cost(lengths[j], rise, pitch[entry], length_before, numbers)
             if cost < best_cost:
                 best, best_cost = j, cost
         if best < 0:
@@ -534,14 +563,7 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
                 break
         if not usable:
             return none, math.nan, 0, nothing, nothing
-    # Typed by their first entries (computed, not literal values: a literal one would be part
-    # of the dictionary's type), removed at once.
-    feasible = {-1: math.nan}
-    del feasible[-1]
-    prefixes = {-1: _INFEASIBLE}
-    del prefixes[-1]
-    swings = {-1: n}
-    del swings[-1]
+    feasible, prefixes, swings = _empty_memos(n)
     current = _nearest_free(start, banned_first, banned_lengths, tables, feasible, prefixes,
                             swings)
     if current.shape[0] == 0:
@@ -574,10 +596,7 @@ def exhaustive_search(n, m, profile):
     :func:`_effort` (no prefix of another resumed), the swing tests remembered, as the plain
     effort judges them."""
     tables = foothold_tables(profile)
-    prefixes = {-1: _INFEASIBLE}
-    del prefixes[-1]
-    swings = {-1: n}
-    del swings[-1]
+    _, prefixes, swings = _empty_memos(n)
     base = m + 1
     total = base ** n
     banned = np.zeros(base, dtype=np.bool_)
@@ -585,10 +604,7 @@ def exhaustive_search(n, m, profile):
     best = np.empty(0, dtype=np.int64)
     best_effort = math.inf
     for number in range(total):
-        rest = number
-        for i in range(n - 1, -1, -1):
-            config[i] = rest % base
-            rest //= base
+        _digits(number, base, config)
         prefixes.clear()
         value = _effort(config, banned, tables, prefixes, swings)
         if value < best_effort:  # False for NaN
