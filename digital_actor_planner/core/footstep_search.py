@@ -152,6 +152,8 @@ PROFILE_TYPE = ('Tuple((f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], readonly
 _FEASIBLE_TYPE = 'DictType(i8, f8)'
 _PREFIXES_TYPE = 'DictType(i8, UniTuple(f8, 5))'
 _SWINGS_TYPE = 'DictType(i8, i8)'
+#: The banned interval indices (m + 1,) bool, read-only (the planner's shared none-banned).
+_BANNED = 'readonly(b1[::1])'
 
 
 @kernel(TABLES_TYPE + '(' + PROFILE_TYPE + ')')
@@ -279,8 +281,8 @@ def _swing_clear(side, s_from, h_from, s_to, h_to, from_row, from_cumulative, ta
     return _rise_ahead(from_row, from_cumulative, tables) <= allowed
 
 
-@kernel('f8(i8[::1], b1[::1], ' + TABLES_TYPE + ', ' + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE
-        + ')')
+@kernel('f8(i8[::1], ' + _BANNED + ', ' + TABLES_TYPE + ', ' + _PREFIXES_TYPE + ', '
+        + _SWINGS_TYPE + ')')
 def _effort(config, banned_first, tables, prefixes, swings):
     """Effort of a configuration, NaN if it is not collision-free, resumed from the longest
     prefix of it already in ``prefixes`` (and adding its own)."""
@@ -349,8 +351,8 @@ def _effort(config, banned_first, tables, prefixes, swings):
     return effort
 
 
-@kernel('f8(i8[::1], i8, b1[::1], b1[::1], ' + TABLES_TYPE + ', ' + _FEASIBLE_TYPE + ', '
-        + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE + ')')
+@kernel('f8(i8[::1], i8, ' + _BANNED + ', ' + _BANNED + ', ' + TABLES_TYPE + ', '
+        + _FEASIBLE_TYPE + ', ' + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE + ')')
 def _evaluate(config, number, banned_first, banned_lengths, tables, feasible, prefixes,
               swings):
     """Effort of configuration ``config`` (numbered ``number``), NaN if it is not
@@ -399,8 +401,8 @@ def _number(config, base):
     return number
 
 
-@kernel('f8(i8[::1], b1[::1], b1[::1], ' + TABLES_TYPE + ', ' + _FEASIBLE_TYPE + ', '
-        + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE + ')')
+@kernel('f8(i8[::1], ' + _BANNED + ', ' + _BANNED + ', ' + TABLES_TYPE + ', '
+        + _FEASIBLE_TYPE + ', ' + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE + ')')
 def _climb(current, banned_first, banned_lengths, tables, feasible, prefixes, swings):
     """Hill-climbing from ``current`` (changed in place): to the best neighbour while it
     lowers the effort by more than 1e-12; returns the effort. The neighbours, in order: each
@@ -441,8 +443,8 @@ def _climb(current, banned_first, banned_lengths, tables, feasible, prefixes, sw
         effort = best_effort
 
 
-@kernel('i8[::1](i8[::1], b1[::1], b1[::1], ' + TABLES_TYPE + ', ' + _FEASIBLE_TYPE + ', '
-        + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE + ')')
+@kernel('i8[::1](i8[::1], ' + _BANNED + ', ' + _BANNED + ', ' + TABLES_TYPE + ', '
+        + _FEASIBLE_TYPE + ', ' + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE + ')')
 def _nearest_free(start, banned_first, banned_lengths, tables, feasible, prefixes, swings):
     """Breadth-first search from ``start`` to the nearest collision-free configuration (empty
     when there is none).
@@ -492,7 +494,7 @@ def _nearest_free(start, banned_first, banned_lengths, tables, feasible, prefixe
     return np.empty(0, dtype=np.int64)
 
 
-@kernel('i8[::1](i8, b1[::1], b1[::1], ' + TABLES_TYPE + ')')
+@kernel('i8[::1](i8, ' + _BANNED + ', ' + _BANNED + ', ' + TABLES_TYPE + ')')
 def _greedy_seed(n, banned_first, banned_lengths, tables):
     """A configuration built footstep by footstep, each the cheapest given the ones before by
     the effort's terms (not the swing test: the caller judges the whole configuration); empty
@@ -524,25 +526,37 @@ def _greedy_seed(n, banned_first, banned_lengths, tables):
     return seed
 
 
-@kernel('Tuple((f8[::1], f8[::1]))(i8[::1], f8[::1], f8[::1], readonly(i8[::1]))')
-def _footholds_of(config, height, pitch, bounds):
-    """The sole heights and pitches of a configuration's footholds, (n,) each."""
+@kernel('UniTuple(f8[::1], 4)(i8[::1], ' + TABLES_TYPE + ')')
+def _footholds_of(config, tables):
+    """A configuration's footstep lengths (m), its footholds' arc lengths along the path (m,
+    the stance foot's plus the running sum of the lengths), sole heights (m) and pitches
+    (rad), (n,) each."""
+    ok, height, pitch, bounds, offsets, obstacle, sides, lengths, last, numbers = tables
     n = config.shape[0]
-    heights, pitches = np.empty(n), np.empty(n)
-    cumulative = 0
+    chosen, arcs, heights, pitches = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    cumulative, total = 0, 0.0
     for i in range(n):
         cumulative += config[i]
+        chosen[i] = lengths[config[i]]
+        total += chosen[i]
+        arcs[i] = numbers[STANCE_S] + total
         heights[i] = height[bounds[i] + cumulative]
         pitches[i] = pitch[bounds[i] + cumulative]
-    return heights, pitches
+    return chosen, arcs, heights, pitches
 
 
-@kernel('Tuple((i8[::1], f8, i8, f8[::1], f8[::1]))(i8[::1], b1[::1], b1[::1], b1, '
+#: What :func:`window_search` and :func:`exhaustive_search` return: the configuration (n,)
+#: interval indices, empty when none is collision-free; its effort; configurations judged; and
+#: :func:`_footholds_of` of it (empty arrays when there is none).
+_RESULT_TYPE = 'Tuple((i8[::1], f8, i8, f8[::1], f8[::1], f8[::1], f8[::1]))'
+
+
+@kernel(_RESULT_TYPE + '(i8[::1], ' + _BANNED + ', ' + _BANNED + ', b1, '
         + PROFILE_TYPE + ')')
 def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
     """§4.2's search of one window: (configuration (n,) interval indices, empty when no
-    configuration is collision-free; its effort; configurations judged; its footholds' sole
-    heights (n,) m and pitches (n,) rad).
+    configuration is collision-free; its effort; configurations judged; its lengths, arc
+    lengths, sole heights and pitches, :func:`_footholds_of`).
 
     ``start`` (n,): the configuration the breadth-first search starts from; ``banned_first``
     (m + 1,): the interval indices the first footstep must not take; ``banned_lengths``
@@ -550,7 +564,7 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
     :func:`_greedy_seed` and keep the better; ``profile``: :data:`PROFILE_TYPE`.
     """
     tables = foothold_tables(profile)
-    ok, height, pitch, bounds = tables[0], tables[1], tables[2], tables[3]
+    ok, bounds = tables[0], tables[3]
     n = start.shape[0]
     none = np.empty(0, dtype=np.int64)
     nothing = np.empty(0)
@@ -562,12 +576,12 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
                 usable = True
                 break
         if not usable:
-            return none, math.nan, 0, nothing, nothing
+            return none, math.nan, 0, nothing, nothing, nothing, nothing
     feasible, prefixes, swings = _empty_memos(n)
     current = _nearest_free(start, banned_first, banned_lengths, tables, feasible, prefixes,
                             swings)
     if current.shape[0] == 0:
-        return none, math.nan, len(feasible), nothing, nothing
+        return none, math.nan, len(feasible), nothing, nothing, nothing, nothing
     effort = _climb(current, banned_first, banned_lengths, tables, feasible, prefixes, swings)
     if greedy_restart:
         # A second hill-climb from a configuration built footstep by footstep: on stairs and
@@ -583,15 +597,14 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
                                swings)
                 if other < effort - 1e-12:
                     current, effort = seed, other
-    heights, pitches = _footholds_of(current, height, pitch, bounds)
-    return current, effort, len(feasible), heights, pitches
+    chosen, arcs, heights, pitches = _footholds_of(current, tables)
+    return current, effort, len(feasible), chosen, arcs, heights, pitches
 
 
-@kernel('Tuple((i8[::1], f8, i8, f8[::1], f8[::1]))(i8, i8, ' + PROFILE_TYPE + ')')
+@kernel(_RESULT_TYPE + '(i8, i8, ' + PROFILE_TYPE + ')')
 def exhaustive_search(n, m, profile):
-    """The optimum over every configuration of the window, the first of equals: (configuration
-    (n,), empty when none is collision-free; its effort; configurations judged,
-    (m + 1) ** n; its footholds' heights and pitches). For benchmarks, what
+    """The optimum over every configuration of the window, the first of equals: as
+    :func:`window_search` returns it, the configurations judged (m + 1) ** n. For benchmarks, what
     :func:`window_search` is measured against: each configuration judged whole by
     :func:`_effort` (no prefix of another resumed), the swing tests remembered, as the plain
     effort judges them."""
@@ -610,6 +623,7 @@ def exhaustive_search(n, m, profile):
         if value < best_effort:  # False for NaN
             best, best_effort = config.copy(), value
     if not best.shape[0]:
-        return best, best_effort, total, np.empty(0), np.empty(0)
-    heights, pitches = _footholds_of(best, tables[1], tables[2], tables[3])
-    return best, best_effort, total, heights, pitches
+        nothing = np.empty(0)
+        return best, best_effort, total, nothing, nothing, nothing, nothing
+    chosen, arcs, heights, pitches = _footholds_of(best, tables)
+    return best, best_effort, total, chosen, arcs, heights, pitches

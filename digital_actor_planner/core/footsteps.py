@@ -243,7 +243,6 @@ class FootstepPlanner:
                             + config.step_increment * np.arange(counts[i]) for i in range(n)]),
             [int(b) for b in np.cumsum([0] + counts)])
         self._lengths = config.lengths()
-        self._length_list = self._lengths.tolist()
         # The same layout for the compiled search: table rows' first entries, read-only (every
         # window shares them).
         self._bounds = np.array(self._table_layout[2], dtype=np.int64)
@@ -282,6 +281,10 @@ class FootstepPlanner:
             config.lift_step_up, 2.0, config.min_headroom, config.max_foot_pitch,
             config.flatness_tolerance, config.min_support_fraction)
         self._search_numbers = numbers
+        # No interval index banned (read-only: every window shares it).
+        self._none_banned = np.zeros(m + 1, dtype=bool)
+        self._none_banned.setflags(write=False)
+        self._longest = float(self._lengths.max())
 
     # -- the ground under a sole -----------------------------------------------------------
     def foothold(self, profile: GroundProfile, side: int, s: float) -> Foothold:
@@ -425,23 +428,24 @@ class FootstepPlanner:
         init_index = int(min(max(round((s_init - cfg.step_length_min) / cfg.step_increment), 0),
                              m))
         q = tuple(start) if start is not None else (init_index,) * n
-        if len(q) != n or any(not 0 <= j <= m for j in q):
+        if len(q) != n or min(q) < 0 or max(q) > m:
             raise ValueError(f'start configuration {q} is not {n} indices in [0, {m}]')
         if stance_side not in (0, 1):
             raise ValueError(f'stance side {stance_side!r} is not 0 (left) or 1 (right)')
-        banned = np.zeros(m + 1, dtype=bool)
-        for b in banned_first:
-            if 0 <= int(b) <= m:
-                banned[int(b)] = True
-        config, effort, evaluated, heights, pitches = window_search(
-            np.array(q, dtype=np.int64), banned, self._lengths > max_length + 1e-9,
-            bool(cfg.greedy_restart),
+        banned = self._none_banned
+        if banned_first:
+            banned = np.zeros(m + 1, dtype=bool)
+            for b in banned_first:
+                if 0 <= int(b) <= m:
+                    banned[int(b)] = True
+        too_long = self._none_banned
+        if self._longest > max_length + 1e-9:
+            too_long = self._lengths > max_length + 1e-9
+        found = window_search(
+            np.array(q, dtype=np.int64), banned, too_long, bool(cfg.greedy_restart),
             self.search_profile(profile, stance_side, stance_s, stance_height, swing_s,
                                 swing_height, s_init, previous_length))
-        if not config.size:
-            return None
-        return self._window(config.tolist(), stance_side, stance_s, effort, evaluated,
-                            heights, pitches)
+        return self._window(found, stance_side)
 
     def search_profile(self, profile: GroundProfile, stance_side: int, stance_s: float,
                        stance_height: float, swing_s: float, swing_height: float,
@@ -451,9 +455,15 @@ class FootstepPlanner:
         window's foothold table and the window's numbers (the arguments are :meth:`plan`'s).
         The search builds the table itself (:func:`footstep_search.foothold_tables`)."""
         numbers = self._search_numbers.copy()
-        numbers[[STANCE_S, STANCE_HEIGHT, SWING_S, SWING_HEIGHT, S_INIT, PREVIOUS_LENGTH, S0,
-                 DS]] = (stance_s, stance_height, swing_s, swing_height, s_init,
-                         previous_length, profile.s0, profile.ds)
+        # One by one: an index list and a tuple take NumPy five times longer.
+        numbers[STANCE_S] = stance_s
+        numbers[STANCE_HEIGHT] = stance_height
+        numbers[SWING_S] = swing_s
+        numbers[SWING_HEIGHT] = swing_height
+        numbers[S_INIT] = s_init
+        numbers[PREVIOUS_LENGTH] = previous_length
+        numbers[S0] = profile.s0
+        numbers[DS] = profile.ds
         return (float_array(profile.height), float_array(profile.low),
                 float_array(profile.headroom), float_array(profile.obstacle),
                 self._entry_sides[stance_side], self._table_layout[1], self._bounds,
@@ -471,28 +481,21 @@ class FootstepPlanner:
         judged by the same compiled effort as :meth:`plan`'s search
         (:func:`footstep_search.exhaustive_search`)."""
         cfg = self.config
-        best, effort, evaluated, heights, pitches = exhaustive_search(
+        return self._window(exhaustive_search(
             cfg.window_steps, cfg.step_intervals,
             self.search_profile(profile, stance_side, stance_s, stance_height, swing_s,
-                                swing_height, s_init, previous_length))
-        if not best.size:
-            return None
-        return self._window(best.tolist(), stance_side, stance_s, effort, evaluated, heights,
-                            pitches)
+                                swing_height, s_init, previous_length)), stance_side)
 
-    def _window(self, config, stance_side, stance_s, effort, evaluated, heights, pitches):
-        """The window of ``config`` (interval indices) with its footholds' ``heights`` and
-        ``pitches``."""
-        # Running sums in plain Python (np.cumsum adds in the same order): a few values.
-        chosen = [self._length_list[j] for j in config]
-        arcs, total = [], 0.0
-        for length in chosen:
-            total += length
-            arcs.append(stance_s + total)
-        return FootstepWindow(lengths=np.array(chosen), indices=tuple(int(j) for j in config),
-                              arc_lengths=np.array(arcs), heights=heights, pitches=pitches,
-                              sides=self._sides[stance_side][0].copy(), effort=float(effort),
-                              evaluated=int(evaluated))
+    def _window(self, found: tuple, stance_side: int) -> Optional[FootstepWindow]:
+        """The window a search found (:func:`footstep_search.window_search`'s answer), None
+        when it found none."""
+        config, effort, evaluated, lengths, arcs, heights, pitches = found
+        if not config.size:
+            return None
+        return FootstepWindow(lengths=lengths, indices=tuple(config.tolist()), arc_lengths=arcs,
+                              heights=heights, pitches=pitches,
+                              sides=self._sides[stance_side][0].copy(), effort=effort,
+                              evaluated=evaluated)
 
 
 def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: float,
