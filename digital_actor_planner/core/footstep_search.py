@@ -50,7 +50,7 @@ from .jit import kernel
 NUMBER_COUNT = 28
 
 
-@kernel('Tuple((b1[::1], f8[::1], f8[::1]))(f8[:, :], f8[:, :], f8[:, :], f8, f8, '
+@kernel('Tuple((b1[::1], f8[::1], f8[::1]))(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8, f8, '
         'readonly(i8[::1]), '
         'f8[::1], f8, f8, f8, f8, f8, f8)')
 def judge_footholds(high, low, headroom, s0, ds, side, s, heel, toe, min_headroom, max_pitch,
@@ -58,15 +58,16 @@ def judge_footholds(high, low, headroom, s0, ds, side, s, heel, toe, min_headroo
     """:meth:`footsteps.FootstepPlanner.footholds` for every sole in one pass (see there for
     the rules).
 
-    Returns (ok, sole height under the ankle (NaN where not ok), slope of the sole's plane:
-    0 on an edge and where the sole is not usable). A maximum or minimum over a NaN sample is
-    NaN, as NumPy's: a missing sample makes the sole neither flat nor supported at an edge.
+    Returns (ok, sole height under the ankle (NaN where not ok), pitch of the sole's plane,
+    the C library's arctangent of its slope: 0 on an edge and where the sole is not usable).
+    A maximum or minimum over a NaN sample is NaN, as NumPy's: a missing sample makes the sole
+    neither flat nor supported at an edge.
     """
     count = s.shape[0]
     samples = high.shape[1]
     ok = np.zeros(count, dtype=np.bool_)
     height = np.full(count, np.nan)
-    slope_out = np.zeros(count)
+    pitch_out = np.zeros(count)
     for n in range(count):
         sn = s[n]
         row = side[n]
@@ -75,40 +76,57 @@ def judge_footholds(high, low, headroom, s0, ds, side, s, heel, toe, min_headroo
         i1 = int(math.floor((sn + toe - s0) / ds + 1e-9))
         if i0 < 0 or i1 >= samples or i1 < i0:
             continue
-        usable = True
+        # One pass: the headroom, the sum of the slope's fit and whether a sample is missing.
+        # The least-squares slope through evenly spaced samples: their mean is the middle of
+        # the first and the last, and the squares of their distances from it sum to
+        # ds^2 W (W^2 - 1) / 12. Two samples or fewer fit no slope.
+        width = i1 - i0 + 1
+        middle = s0 + (0.5 * ds) * (i0 + i1) - sn
+        total = 0.0
+        usable, clean = True, True
         for i in range(i0, i1 + 1):
             if not headroom[row, i] >= min_headroom:  # NaN has no headroom either
                 usable = False
                 break
+            h = high[row, i]
+            total += ((s0 + ds * i - sn) - middle) * h
+            if h != h or low[row, i] != low[row, i]:
+                clean = False
         if not usable:
             continue
-        width = i1 - i0 + 1
-        # The least-squares slope through evenly spaced samples: their mean is the middle of
-        # the first and the last, and the squares of their distances from it sum to
-        # ds^2 W (W^2 - 1) / 12. Two samples or fewer fit no slope.
         slope = 0.0
         if width > 2:
-            middle = s0 + (0.5 * ds) * (i0 + i1) - sn
-            total = 0.0
-            for i in range(i0, i1 + 1):
-                total += ((s0 + ds * i - sn) - middle) * high[row, i]
             slope = total / max((ds * ds / 12.0) * width * (width * width - 1), 1e-30)
+        pitch = math.atan(slope)
         # The sole rests on the highest point above the fitted plane and must not bridge a dip
-        # below it deeper than the tolerance.
+        # below it deeper than the tolerance. Without a NaN the plain comparisons give the
+        # NaN-propagating ones' answers, faster.
         lift, dip, top = -np.inf, np.inf, -np.inf
-        for i in range(i0, i1 + 1):
-            plane = slope * (s0 + ds * i - sn)
-            above, below, h = high[row, i] - plane, low[row, i] - plane, high[row, i]
-            if lift == lift and (above != above or above > lift):
-                lift = above
-            if dip == dip and (below != below or below < dip):
-                dip = below
-            if top == top and (h != h or h > top):
-                top = h
-        if abs(np.arctan(slope)) <= max_pitch and lift - dip <= tolerance:
+        if clean and slope == slope:
+            for i in range(i0, i1 + 1):
+                plane = slope * (s0 + ds * i - sn)
+                h = high[row, i]
+                above, below = h - plane, low[row, i] - plane
+                if above > lift:
+                    lift = above
+                if below < dip:
+                    dip = below
+                if h > top:
+                    top = h
+        else:
+            for i in range(i0, i1 + 1):
+                plane = slope * (s0 + ds * i - sn)
+                above, below, h = high[row, i] - plane, low[row, i] - plane, high[row, i]
+                if lift == lift and (above != above or above > lift):
+                    lift = above
+                if dip == dip and (below != below or below < dip):
+                    dip = below
+                if top == top and (h != h or h > top):
+                    top = h
+        if abs(pitch) <= max_pitch and lift - dip <= tolerance:
             ok[n] = True
             height[n] = lift
-            slope_out[n] = slope
+            pitch_out[n] = pitch
             continue
         # At an edge a flat sole may overhang lower ground: the ankle's sample (the lower of
         # two as near) and its neighbours on the sole must be supported, and most of the sole.
@@ -126,8 +144,8 @@ def judge_footholds(high, low, headroom, s0, ds, side, s, heel, toe, min_headroo
             ok[n] = True
             height[n] = top
         else:
-            slope_out[n] = slope
-    return ok, height, slope_out
+            pitch_out[n] = pitch
+    return ok, height, pitch_out
 
 
 #: A prefix that already fails (its cumulative interval index is -1).
@@ -164,13 +182,10 @@ def foothold_tables(profile):
     (high, low, headroom, obstacle, entry_sides, offsets, bounds, sides, lengths,
      numbers) = profile
     s = numbers[STANCE_S] + offsets
-    ok, height, slope = judge_footholds(high, low, headroom, numbers[S0], numbers[DS],
+    ok, height, pitch = judge_footholds(high, low, headroom, numbers[S0], numbers[DS],
                                         entry_sides, s, numbers[HEEL], numbers[TOE],
                                         numbers[MIN_HEADROOM], numbers[MAX_PITCH],
                                         numbers[TOLERANCE], numbers[MIN_FRACTION])
-    pitch = np.empty_like(slope)
-    for entry in range(slope.shape[0]):
-        pitch[entry] = math.atan(slope[entry])  # NumPy's arctan's bits on this machine
     swing_obstacle = np.empty_like(obstacle)
     for side in range(obstacle.shape[0]):
         for i in range(obstacle.shape[1]):

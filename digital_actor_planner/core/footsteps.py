@@ -332,14 +332,11 @@ class FootstepPlanner:
         sides = np.empty(s.shape, dtype=np.int64)
         sides[...] = np.asarray(side, dtype=np.int64)
         side = sides
-        ok, height, slope = judge_footholds(
-            float_array(profile.height), float_array(profile.low), float_array(profile.headroom),
+        return judge_footholds(
+            _samples(profile.height), _samples(profile.low), _samples(profile.headroom),
             float(profile.s0), float(profile.ds), side, s, float(leg.heel), float(leg.toe),
             float(cfg.min_headroom), float(cfg.max_foot_pitch), float(cfg.flatness_tolerance),
             float(cfg.min_support_fraction))
-        # NumPy's arctan; the window's search takes the C library's (footstep_search.
-        # foothold_tables), which gives the same bits on this machine.
-        return ok, height, np.arctan(slope)
 
     def rise_ahead(self, profile: GroundProfile, side, s: np.ndarray, height: np.ndarray,
                    pitch: np.ndarray) -> np.ndarray:
@@ -464,10 +461,10 @@ class FootstepPlanner:
         numbers[PREVIOUS_LENGTH] = previous_length
         numbers[S0] = profile.s0
         numbers[DS] = profile.ds
-        return (float_array(profile.height), float_array(profile.low),
-                float_array(profile.headroom), float_array(profile.obstacle),
-                self._entry_sides[stance_side], self._table_layout[1], self._bounds,
-                self._sides[stance_side][0], self._lengths, numbers)
+        return (_samples(profile.height), _samples(profile.low), _samples(profile.headroom),
+                _samples(profile.obstacle), self._entry_sides[stance_side],
+                self._table_layout[1], self._bounds, self._sides[stance_side][0], self._lengths,
+                numbers)
 
     def search_tables(self, *arguments) -> tuple:
         """The foothold table and numbers the search reads
@@ -496,6 +493,12 @@ class FootstepPlanner:
                               heights=heights, pitches=pitches,
                               sides=self._sides[stance_side][0].copy(), effort=effort,
                               evaluated=evaluated)
+
+
+def _samples(array) -> np.ndarray:
+    """A profile's (2, K) samples as the compiled kernels take them: float64, C-contiguous and
+    writable (copied only when they are not)."""
+    return np.ascontiguousarray(float_array(array))
 
 
 def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: float,
