@@ -111,6 +111,12 @@ def validate_footstep_config(config: FootstepConfig) -> None:
                          f'step_length_max={config.step_length_max}')
 
 
+def _samples(array) -> np.ndarray:
+    """A profile's (2, K) samples as the compiled kernels take them: float64, C-contiguous and
+    writable (copied only when they are not)."""
+    return np.ascontiguousarray(float_array(array))
+
+
 @dataclass(frozen=True)
 class GroundProfile:
     """The ground under each foot's track, sampled along the predicted path (§3.2).
@@ -138,6 +144,12 @@ class GroundProfile:
     low: np.ndarray
     headroom: np.ndarray
     obstacle: np.ndarray
+
+    def __post_init__(self):
+        # The compiled kernels take the samples as C-contiguous, writable float64: made so once
+        # here (copied only where they are not), not at every search of a window.
+        for name in ('height', 'low', 'headroom', 'obstacle'):
+            object.__setattr__(self, name, _samples(getattr(self, name)))
 
     @property
     def samples(self) -> int:
@@ -333,9 +345,9 @@ class FootstepPlanner:
         sides[...] = np.asarray(side, dtype=np.int64)
         side = sides
         return judge_footholds(
-            _samples(profile.height), _samples(profile.low), _samples(profile.headroom),
-            float(profile.s0), float(profile.ds), side, s, float(leg.heel), float(leg.toe),
-            float(cfg.min_headroom), float(cfg.max_foot_pitch), float(cfg.flatness_tolerance),
+            profile.height, profile.low, profile.headroom, float(profile.s0), float(profile.ds),
+            side, s, float(leg.heel), float(leg.toe), float(cfg.min_headroom),
+            float(cfg.max_foot_pitch), float(cfg.flatness_tolerance),
             float(cfg.min_support_fraction))
 
     def rise_ahead(self, profile: GroundProfile, side, s: np.ndarray, height: np.ndarray,
@@ -461,10 +473,9 @@ class FootstepPlanner:
         numbers[PREVIOUS_LENGTH] = previous_length
         numbers[S0] = profile.s0
         numbers[DS] = profile.ds
-        return (_samples(profile.height), _samples(profile.low), _samples(profile.headroom),
-                _samples(profile.obstacle), self._entry_sides[stance_side],
-                self._table_layout[1], self._bounds, self._sides[stance_side][0], self._lengths,
-                numbers)
+        return (profile.height, profile.low, profile.headroom, profile.obstacle,
+                self._entry_sides[stance_side], self._table_layout[1], self._bounds,
+                self._sides[stance_side][0], self._lengths, numbers)
 
     def search_tables(self, *arguments) -> tuple:
         """The foothold table and numbers the search reads
@@ -493,12 +504,6 @@ class FootstepPlanner:
                               heights=heights, pitches=pitches,
                               sides=self._sides[stance_side][0].copy(), effort=effort,
                               evaluated=evaluated)
-
-
-def _samples(array) -> np.ndarray:
-    """A profile's (2, K) samples as the compiled kernels take them: float64, C-contiguous and
-    writable (copied only when they are not)."""
-    return np.ascontiguousarray(float_array(array))
 
 
 def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: float,
