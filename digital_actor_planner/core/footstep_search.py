@@ -467,7 +467,9 @@ def _nearest_free(start, banned_first, banned_lengths, tables, feasible, prefixe
     The paper's single-footstep moves, footstep by footstep, shorter before longer. Each
     configuration is tested when it is queued: the first one found free is the first the queue
     would hand out (first in, first out), so the result and the configurations tested are those
-    of testing on the way out, without expanding the rest of the last level.
+    of testing on the way out, without expanding the rest of the last level. ``feasible`` must
+    start empty: then the configurations it holds are those the search has seen (each is
+    judged, by :func:`_lands` or :func:`_evaluate`, when it is queued).
     """
     n = start.shape[0]
     base = banned_lengths.shape[0]
@@ -482,7 +484,6 @@ def _nearest_free(start, banned_first, banned_lengths, tables, feasible, prefixe
     for i in range(n - 1, -1, -1):
         strides[i] = stride
         stride *= base
-    seen = {number: True}
     queue = [number]
     head = 0
     config = np.empty(n, dtype=np.int64)
@@ -495,7 +496,7 @@ def _nearest_free(start, banned_first, banned_lengths, tables, feasible, prefixe
             j = config[i]
             for delta in (-1, 1):
                 other = number + delta * strides[i]
-                if not 0 <= j + delta <= m or other in seen:
+                if not 0 <= j + delta <= m or other in feasible:
                     continue
                 neighbour[:] = config
                 neighbour[i] = j + delta
@@ -504,7 +505,6 @@ def _nearest_free(start, banned_first, banned_lengths, tables, feasible, prefixe
                                       feasible, prefixes, swings)
                     if value == value:
                         return neighbour
-                seen[other] = True
                 queue.append(other)
     return np.empty(0, dtype=np.int64)
 
