@@ -443,7 +443,7 @@ class FootstepPlanner:
         if stance_side not in (0, 1):
             raise ValueError(f'stance side {stance_side!r} is not 0 (left) or 1 (right)')
         banned = self._none_banned
-        if banned_first:
+        if len(banned_first):
             banned = np.zeros(m + 1, dtype=bool)
             for b in banned_first:
                 if 0 <= int(b) <= m:
