@@ -155,10 +155,21 @@ def test_a_batch_is_illegal_where_its_pieces_say_so(skeleton, beam_world, kernel
         tables = tuple(tables)
         # The whole batch (its pairs cut by the swept boxes: many rows) and each row alone.
         assert ct_space._sweeps(len(rows), len(space.checked), len(space._triangle_lower))
-        found = kernel(q, rows, tables)
+        found = kernel(q, rows, tables, ct_space._empty_row_memo())
         assert found.tolist() == answers[clear_until].tolist(), clear_until
-        alone = [kernel(q[i:i + 1], rows[i:i + 1], tables)[0] for i in range(len(rows))]
+        alone = [kernel(q[i:i + 1], rows[i:i + 1], tables, ct_space._empty_row_memo())[0]
+                 for i in range(len(rows))]
         assert alone == answers[clear_until].tolist(), clear_until
+        # One memo for a space's calls: a row checked once is answered from it after, alone or
+        # in a batch of remembered and new rows, the same as checked again.
+        memo = ct_space._empty_row_memo()
+        shared = [kernel(q[i:i + 1], rows[i:i + 1], tables, memo)[0] for i in range(len(rows))]
+        assert shared == answers[clear_until].tolist(), clear_until
+        assert len(memo) == len({(f, tuple(row)) for f, row in zip(rows.tolist(), q.tolist())})
+        assert kernel(q[::-1], rows[::-1].copy(), tables, memo)[::-1].tolist() == shared
+        mixed, mixed_rows = np.vstack([q[::3], q[::3] + 0.05]), np.concatenate([rows[::3]] * 2)
+        assert (kernel(mixed, mixed_rows, tables, memo).tolist()
+                == kernel(mixed, mixed_rows, tables, ct_space._empty_row_memo()).tolist())
     # Every kind of row occurred: legal, touching, outside the limits; and upright under the
     # beam, where the body holds the waist, a row that clear_until lets pass untested.
     expected = answers[0]
@@ -460,7 +471,8 @@ def test_motions_fail_where_their_rows_checked_one_by_one_do(beam_world, kernel)
             for first in (0, 1, 8):
                 answers, checks = kernel(space.objective, space.times, space._frame_step,
                                          space._speed_cap, qa, ia, qb, ib, stop_at_legal,
-                                         first, space.check_tables)
+                                         first, space.check_tables,
+                                         ct_space._empty_row_memo())
                 expected = _failures_written_out(space, motions, stop_at_legal, first)
                 assert (answers.tolist(), checks) == expected, (trial, stop_at_legal, first)
                 seen.update(('legal' if a < 0 else 'illegal', first > 0 and len(answers) > 1)

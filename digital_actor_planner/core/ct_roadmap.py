@@ -38,7 +38,7 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .ct_space import _illegal_rows, CHECK_TABLES_TYPE, CTSpace
+from .ct_space import _illegal_rows, CHECK_TABLES_TYPE, CTSpace, ROW_MEMO_TYPE
 from .jit import kernel
 
 
@@ -290,9 +290,9 @@ def _neighbour_table(nodes, deviation, here, last, hold_frames, with_objective, 
 
 
 @kernel('Tuple((b1[::1], i8))(f8[:, ::1], i8[::1], i8[::1], i8, i8, i8, i8, b1[::1], '
-        'i1[:, ::1], f8[:, :], ' + CHECK_TABLES_TYPE + ')')
+        'i1[:, ::1], f8[:, :], ' + CHECK_TABLES_TYPE + ', ' + ROW_MEMO_TYPE + ')')
 def _lasting_table(targets, ids, arrivals, begin, end, spacing, stride, free, held, objective,
-                   tables):
+                   tables, memo):
     """:meth:`CTRoadmap._lasting` for the blocked stretch [``begin``, ``end``]: whether each
     of ``targets`` (m, d), held from its ``arrivals`` (m,), lasts through it, and the
     configurations checked.
@@ -367,7 +367,7 @@ def _lasting_table(targets, ids, arrivals, begin, end, spacing, stride, free, he
             for r in range(count):
                 for j in range(d):
                     q[r, j] = objective[batch_frames[r], j] + targets[rows[r], j]
-            illegal = _illegal_rows(q, batch_frames, tables)
+            illegal = _illegal_rows(q, batch_frames, tables, memo)
             checks += count
             for r in range(count):
                 legal = not illegal[r]
@@ -943,7 +943,7 @@ class CTRoadmap:
         lasting, checks = _lasting_table(
             targets, horizon.posture_ids(np.round(targets, 4).tolist()), arrivals, begin,
             int(horizon.next_free[begin]), horizon.hold_frames, COARSE_STRIDE, horizon.free,
-            horizon.held, space.objective, space.check_tables)
+            horizon.held, space.objective, space.check_tables, space.row_memo)
         space.checks += checks
         return lasting
 
