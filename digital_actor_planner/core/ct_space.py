@@ -1733,7 +1733,8 @@ class CTSpace:
             self._triangle_upper, self._pair_column, self._checked_box_half,
             self._triangle_corners, self._pair_box_half, SAT_MARGIN, self._checked_kinds,
             self._checked_half, self._pair_kinds, self._pair_half, self._pair_other)
-        #: The answers of the rows checked so far (_illegal_rows), which hold as long.
+        #: The answers of the rows checked so far (_illegal_rows): valid as long as the tables,
+        #: while the body holds still.
         self.row_memo = _empty_row_memo()
         self.checks = 0
         # A motion whose check ran ahead (see best_valid_rows), or None.
