@@ -154,12 +154,12 @@ def test_banned_first_step_is_avoided(leg):
     first = plan(planner, profile)
     other = plan(planner, profile, banned=(first.indices[0],))
     assert other.indices[0] != first.indices[0]
-    # Any sequence of indices bans them, an array too (index 0 included: not read as False).
 
     def shortest(banned=()):  # the neutral and the previous length both the shortest
         return planner.plan(profile, RIGHT, 0.0, 0.0, 0.0, 0.0, 0.15, 0.15,
                             banned_first=banned).indices[0]
 
+    # Any sequence of indices bans them, an array too (index 0 included: not read as False).
     assert shortest() == 0
     for banned in (np.array([0]), [0], np.array([0, 1])):
         assert shortest(banned) not in banned
