@@ -481,7 +481,8 @@ def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pa
     ``pair_shape_half`` (P, 3)) at the row's frame. Pair p's branch shape is column
     ``pair_column[p]``, its other shape is body shape ``pair_other[p]`` of the body's
     (k, S, ...) boxes ``pair_lower``/``pair_upper`` and poses ``pair_rotation``/
-    ``pair_centre``, with box half extents ``pair_half[p]``. A row stops at its first contact.
+    ``pair_centre``, with box half extents ``pair_half[p]``. A row stops at its first contact;
+    the shape and triangle of the last contact found are tried first on the next row.
     Rows where ``skip`` are known to touch nothing: reported so without a test (nor a part in
     the swept boxes).
     """
@@ -489,23 +490,51 @@ def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pa
     pairs = pair_column.shape[0]
     hit = np.zeros(m, dtype=np.bool_)
     every = np.arange(count)
+    # Per shape, the triangles its boxes may meet: all of them, or those the shape's box swept
+    # over the rows meets.
+    starts = np.zeros(n + 1, dtype=np.int64)
+    candidates = every if not swept else np.empty(n * count, dtype=np.int64)
     lowest, highest = np.empty(3), np.empty(3)
     for c in range(n):
-        candidates = every
-        if swept:
-            for axis in range(3):
-                lowest[axis], highest[axis] = np.inf, -np.inf
-                for r in range(m):
-                    if not skip[r]:
-                        lowest[axis] = min(lowest[axis], low[r, c, axis])
-                        highest[axis] = max(highest[axis], high[r, c, axis])
-            candidates = _candidates_meeting(lowest, highest, triangle_lower, triangle_upper,
-                                             every)
-        for r in range(m):
-            if hit[r] or skip[r]:
+        if not swept:
+            starts[c + 1] = count
+            continue
+        for axis in range(3):
+            lowest[axis], highest[axis] = np.inf, -np.inf
+            for r in range(m):
+                if not skip[r]:
+                    lowest[axis] = min(lowest[axis], low[r, c, axis])
+                    highest[axis] = max(highest[axis], high[r, c, axis])
+        meeting = _candidates_meeting(lowest, highest, triangle_lower, triangle_upper, every)
+        starts[c + 1] = starts[c] + meeting.shape[0]
+        candidates[starts[c]:starts[c + 1]] = meeting
+    # Row by row; the shape and triangle that touched the row before are tried first (rows of
+    # a batch are mostly neighbouring frames of a motion, and a row that touches is decided by
+    # its first contact: the same answers, fewer exact tests).
+    witness_shape, witness_triangle = -1, -1
+    for r in range(m):
+        if skip[r]:
+            continue
+        if witness_shape >= 0:
+            c, t = witness_shape, witness_triangle
+            if (high[r, c, 0] >= triangle_lower[t, 0] and low[r, c, 0] <= triangle_upper[t, 0]
+                    and high[r, c, 1] >= triangle_lower[t, 1]
+                    and low[r, c, 1] <= triangle_upper[t, 1]
+                    and high[r, c, 2] >= triangle_lower[t, 2]
+                    and low[r, c, 2] <= triangle_upper[t, 2]
+                    and _touches_triangle(kinds[c], shape_half[c], half[c], rotation[r, c],
+                                          centre[r, c], corners[t], margin)):
+                hit[r] = True
                 continue
-            for k in range(candidates.shape[0]):
+        for c in range(n):
+            if not swept:
+                first, last = 0, count
+            else:
+                first, last = starts[c], starts[c + 1]
+            for k in range(first, last):
                 t = candidates[k]
+                if c == witness_shape and t == witness_triangle:
+                    continue
                 meets = True
                 for axis in range(3):
                     if not (high[r, c, axis] >= triangle_lower[t, axis]
@@ -516,7 +545,10 @@ def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pa
                                                rotation[r, c], centre[r, c], corners[t],
                                                margin):
                     hit[r] = True
+                    witness_shape, witness_triangle = c, t
                     break
+            if hit[r]:
+                break
     for r in range(m):
         if hit[r] or skip[r]:
             continue
