@@ -877,17 +877,21 @@ class CTRoadmap:
         # enough are legal (holding the current posture is kept whatever its rank).
         motion = None
         # The keys _advance marks tried neighbours with (rounded once for all rows: the same
-        # numbers, as Python floats, which hash and compare as NumPy's do).
+        # numbers, as Python floats, which hash and compare as NumPy's do), and the table's
+        # columns read row by row as Python numbers (the same values).
         rounded = rounded.tolist()
+        arrivals = frames.tolist()
+        ranking = order.tolist()
         if visited is not None and not on_objective and not state.followed:
-            for i in order.tolist():
-                if (int(frames[i]), tuple(rounded[i])) not in visited:
+            for i in ranking:
+                if (arrivals[i], tuple(rounded[i])) not in visited:
                     motion = ((space.objective[here] + state.deviation, here),
-                              (space.objective[frames[i]] + targets[i], int(frames[i])))
+                              (space.objective[arrivals[i]] + targets[i], arrivals[i]))
                     break
-        legal = space.best_valid_rows(q, frames, order,
-                                      self.max_candidates,
-                                      also=np.flatnonzero(holds).tolist(), motion=motion)
+        holds = holds.tolist()
+        legal = space.best_valid_rows(q, frames, order, self.max_candidates,
+                                      also=[i for i, hold in enumerate(holds) if hold],
+                                      motion=motion)
         if (lasting is not None and horizon.free[here] and (legal & lasting).any()
                 and (legal & ~lasting).any()):
             # Leaving the objective before a blocked stretch: lasting neighbours only, until
@@ -895,12 +899,13 @@ class CTRoadmap:
             # first (filtering there too made the arms backtrack ten times between the pillars).
             legal &= lasting
             state.lasting_only = True
-        ranked = [(float(closeness[i]), int(frames[i]), targets[i], tuple(rounded[i]))
-                  for i in order if legal[i]]
-        # The neighbours closest to the objective, plus holding the current posture.
-        hold = [c for c in ranked[self.max_candidates:]
-                if np.array_equal(c[2], state.deviation)]
-        return ranked[:self.max_candidates] + hold
+        legal = legal.tolist()
+        closeness = closeness.tolist()
+        kept = [i for i in ranking if legal[i]]
+        # The neighbours closest to the objective, plus holding the current posture (a row
+        # of the table that holds it: its target is the current deviation).
+        kept = kept[:self.max_candidates] + [i for i in kept[self.max_candidates:] if holds[i]]
+        return [(closeness[i], arrivals[i], targets[i], tuple(rounded[i])) for i in kept]
 
     @staticmethod
     def _lasting(space: CTSpace, horizon: _Horizon, here: int, targets: np.ndarray,
