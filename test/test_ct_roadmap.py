@@ -390,13 +390,67 @@ def test_a_lasting_posture_is_held_up_to_the_blocked_stretch_in_one_advance(beam
     assert space.first_invalid(result.path[1:], np.arange(1, space.frame_count)) == -1
 
 
-def test_a_held_posture_goes_on_to_where_a_longer_hold_of_it_failed():
+@pytest.mark.parametrize('longest', [ct_roadmap._longest_hold,
+                                     ct_roadmap._longest_hold.py_func])
+def test_a_held_posture_goes_on_to_where_a_longer_hold_of_it_failed(longest):
     bend, other = np.array([0.0, 0.6]), np.array([0.0, 0.3])
+
+    def hold(arrival, before, failures):
+        return longest(bend, arrival, np.array([t for t, _ in before]),
+                       np.array([a for _, a in before], dtype=np.int64),
+                       np.array(failures, dtype=np.int64))
+
     # The long hold to frame 80 failed at frame 52: the chosen short hold to 35 goes to 51.
-    assert CTRoadmap._longest_hold(bend, 35, [(other, 40), (bend, 80)], [38, 52]) == 51
+    assert hold(35, [(other, 40), (bend, 80)], [38, 52]) == 51
     # Not from a hold of another posture, nor from a failure sooner than the chosen arrival.
-    assert CTRoadmap._longest_hold(bend, 35, [(other, 80)], [52]) == 35
-    assert CTRoadmap._longest_hold(bend, 35, [(bend, 80)], [33]) == 35
+    assert hold(35, [(other, 80)], [52]) == 35
+    assert hold(35, [(bend, 80)], [33]) == 35
+    # Longer holds one after the other: each goes on from where the one before got it.
+    assert hold(35, [(bend, 50), (bend, 80)], [45, 60]) == 59
+
+
+@pytest.mark.parametrize('ranking', [ct_roadmap._ranking, ct_roadmap._ranking.py_func])
+def test_neighbours_rank_as_numpy_lexsort_ranks_them(ranking):
+    # The expansion kernel's order of the neighbours: lasting ones first (where the roadmap
+    # prefers them), then by rounded closeness, then by ranked arrival; ties in row order.
+    rng = np.random.default_rng(8)
+    for trial in range(300):
+        m = int(rng.integers(1, 30))
+        frames = rng.integers(-6, 6, m).astype(np.int64)
+        closeness = np.round(rng.choice([0.0, 0.25, 0.5, 1.0], m) + (trial % 2) * rng.random(m)
+                             * (rng.random(m) < 0.5), 6)
+        lasting = rng.random(m) < 0.5
+        assert ranking(frames, closeness, False, lasting).tolist() == np.lexsort(
+            (frames, closeness)).tolist()
+        assert ranking(frames, closeness, True, lasting).tolist() == np.lexsort(
+            (frames, closeness, ~lasting)).tolist()
+
+
+@pytest.mark.parametrize('prefer_lasting', [False, True])
+def test_a_search_plans_the_same_with_its_expansion_kernel_as_plain_python(
+        beam_space, prefer_lasting, monkeypatch):
+    # Without numba the expansion runs as Python (its tried neighbours and postures in plain
+    # dicts): the same search, node for node and check for check, from starts that bend,
+    # backtrack and grow.
+    def search(seed, start):
+        graph = CTRoadmap(PATTERNS, np.ones(2), radius=0.3, max_nodes=32,
+                          rng=np.random.default_rng(seed), prefer_lasting=prefer_lasting)
+        before = beam_space.checks
+        result = graph.solve(beam_space, beam_space.objective[0] + start)
+        return result, beam_space.checks - before
+
+    starts = [np.zeros(2), np.array([0.0, 0.9]), np.array([0.3, 0.2]), np.array([-0.4, 0.5])]
+    compiled = [search(seed, start) for seed, start in enumerate(starts)]
+    for name in ('_expand', '_lasting_from', '_empty_visited', '_empty_postures'):
+        monkeypatch.setattr(ct_roadmap, name, getattr(ct_roadmap, name).py_func)
+    plain = [search(seed, start) for seed, start in enumerate(starts)]
+    for (a, a_checks), (b, b_checks) in zip(compiled, plain):
+        assert (a.ok, a.nodes, a.backtracks, a.grown, a_checks) == (
+            b.ok, b.nodes, b.backtracks, b.grown, b_checks)
+        assert np.array_equal(a.path, b.path)
+    # The searches did more than follow the pattern: they ranked, backtracked, grew.
+    assert sum(result.nodes for result, _ in compiled) > 10
+    assert any(result.backtracks for result, _ in compiled)
 
 
 def test_horizon_tables_follow_their_definitions():

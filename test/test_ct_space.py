@@ -242,7 +242,7 @@ def test_motion_rows_are_the_interpolated_motion_up_to_its_first_speed_violation
         assert late == (end if len(fast) else -1), trial
         if trial % 20 == 0:  # the kernel's own Python source gives the same
             plain = ct_space._motion_path.py_func(space.objective, space.times,
-                                                  space._frame_step, space._speed_cap, qa,
+                                                  space.frame_step, space.speed_cap, qa,
                                                   ia, qb, ib)
             assert plain[0].tobytes() == rows.tobytes() and plain[1] == late
         late_seen.add(late < 0)
@@ -469,8 +469,8 @@ def test_motions_fail_where_their_rows_checked_one_by_one_do(beam_world, kernel)
         ia, ib = (np.array([m[end][1] for m in motions], dtype=np.int64) for end in (0, 1))
         for stop_at_legal in (True, False):
             for first in (0, 1, 8):
-                answers, checks = kernel(space.objective, space.times, space._frame_step,
-                                         space._speed_cap, qa, ia, qb, ib, stop_at_legal,
+                answers, checks = kernel(space.objective, space.times, space.frame_step,
+                                         space.speed_cap, qa, ia, qb, ib, stop_at_legal,
                                          first, space.check_tables,
                                          ct_space._empty_row_memo())
                 expected = _failures_written_out(space, motions, stop_at_legal, first)

@@ -38,7 +38,8 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .ct_space import _illegal_rows, CHECK_TABLES_TYPE, CTSpace, ROW_MEMO_TYPE
+from .ct_space import (_illegal_rows, _motion_failures, _motion_path, CHECK_TABLES_TYPE,
+                       CTSpace, ROW_MEMO_TYPE)
 from .jit import kernel
 
 
@@ -86,8 +87,9 @@ class SearchResult:
 class _State:
     deviation: np.ndarray
     frame: int
-    # Ranked neighbours left to try: (closeness, arrival, deviation, its key in ``visited``).
-    candidates: Optional[List[Tuple[float, int, np.ndarray, tuple]]] = None
+    # Ranked neighbours left to try, once ranked: (targets (c, d) as deviations, arrivals (c,),
+    # the targets rounded to 1e-3 rad (c, d): their keys in the search's tried ones).
+    candidates: Optional[Tuple[np.ndarray, np.ndarray, np.ndarray]] = None
     grew: bool = False
     # Only lasting neighbours were offered from here; ``relaxed``: the others are offered too.
     lasting_only: bool = False
@@ -193,7 +195,7 @@ def _travel_over(times: np.ndarray, change: np.ndarray, rate: np.ndarray):
         'b1[::1], f8[:], f8[:, :])')
 def _neighbour_table(nodes, deviation, here, last, hold_frames, with_objective, on_objective,
                      approach_first, times, rate, hold_end, free, weights, objective):
-    """:meth:`CTRoadmap._candidates`' neighbours of a state, in one pass: targets (m, d) as
+    """The neighbours :func:`_expand` ranks for a state, in one pass: targets (m, d) as
     deviations, arrival frames (m,), closeness (m,), the index of the approach hold or -1,
     and for the ranking: whether each is the current posture held (m,), its arrival as
     ranked (later first for holds and, on the objective, for all: negated), closeness
@@ -404,6 +406,464 @@ def _grown_node(direction, deviation, frame, radius, weights, times, rate, objec
     return out, arrival
 
 
+#: numba type of a search's tried neighbours (see _expand): (arrival frame, the target
+#: deviation rounded to 1e-3 rad, zero-padded to four joints) -> True.
+VISITED_TYPE = 'DictType(UniTuple(f8, 5), b1)'
+#: numba type of _Horizon.postures: a deviation rounded to 1e-4 rad (zero-padded to four
+#: joints) -> its row of _Horizon.held.
+POSTURES_TYPE = 'DictType(UniTuple(f8, 4), i8)'
+
+
+@kernel(VISITED_TYPE + '()')
+def _empty_visited():
+    """An empty set of tried neighbours (typed by a first entry, removed at once)."""
+    visited = {(-1.0, 0.0, 0.0, 0.0, 0.0): np.bool_(True)}
+    del visited[(-1.0, 0.0, 0.0, 0.0, 0.0)]
+    return visited
+
+
+@kernel(POSTURES_TYPE + '()')
+def _empty_postures():
+    """An empty numbering of postures (typed by a first entry, removed at once)."""
+    postures = {(0.0, 0.0, 0.0, 0.0): np.int64(0)}
+    del postures[(0.0, 0.0, 0.0, 0.0)]
+    return postures
+
+
+@kernel('UniTuple(f8, 4)(f8[:, ::1], i8)')
+def _padded(rows, i):
+    """Row ``i`` of ``rows`` (m, d), d <= 4, zero-padded to four values."""
+    d = rows.shape[1]
+    return (rows[i, 0], rows[i, 1] if d > 1 else 0.0, rows[i, 2] if d > 2 else 0.0,
+            rows[i, 3] if d > 3 else 0.0)
+
+
+@kernel('UniTuple(f8, 5)(i8, f8[:, ::1], i8)')
+def _visited_key(arrival, rounded, i):
+    """The key of the neighbour (arrival frame, row ``i`` of ``rounded``, its target rounded to
+    1e-3 rad) among a search's tried ones."""
+    padded = _padded(rounded, i)
+    return (float(arrival), padded[0], padded[1], padded[2], padded[3])
+
+
+@kernel('Tuple((b1[::1], i8, i1[:, ::1]))(f8[:, ::1], i8[::1], i8, i8, b1[::1], i8[::1], '
+        'i1[:, ::1], ' + POSTURES_TYPE + ', f8[:, :], ' + CHECK_TABLES_TYPE + ', '
+        + ROW_MEMO_TYPE + ')')
+def _lasting_from(targets, arrivals, here, hold_frames, free, next_free, held, postures,
+                  objective, tables, memo):
+    """:meth:`CTRoadmap._lasting`: whether each of ``targets`` (m, d), held from its
+    ``arrivals`` (m,), lasts through the first blocked stretch from ``here`` on (all True
+    where there is none), the configurations checked, and ``held`` (a larger copy where new
+    postures outgrew it).
+
+    Each posture (a target rounded to 1e-4 rad) is numbered in ``postures`` as it first
+    appears (its row of ``held``), then :func:`_lasting_table` answers.
+    """
+    m = targets.shape[0]
+    begin = -1
+    for f in range(here, free.shape[0]):
+        if not free[f]:
+            begin = f
+            break
+    if begin < 0:
+        return np.ones(m, dtype=np.bool_), 0, held
+    rounded = np.round(targets, 4)
+    ids = np.empty(m, dtype=np.int64)
+    for i in range(m):
+        key = _padded(rounded, i)
+        number = postures.get(key, -1)
+        if number < 0:
+            number = len(postures)
+            postures[key] = number
+        ids[i] = number
+    if len(postures) > held.shape[0]:
+        grown = np.full((2 * len(postures), held.shape[1]), -1, dtype=np.int8)
+        grown[:held.shape[0]] = held
+        held = grown
+    lasting, checks = _lasting_table(targets, ids, arrivals, begin, next_free[begin],
+                                     hold_frames, COARSE_STRIDE, free, held, objective,
+                                     tables, memo)
+    return lasting, checks, held
+
+
+@kernel('i8[::1](i8[::1], f8[::1], b1, b1[::1])')
+def _ranking(ranked_frames, ranked_closeness, with_lasting, lasting):
+    """The order :func:`numpy.lexsort` gives the keys (``ranked_frames``,
+    ``ranked_closeness``), with ``~lasting`` as the first key when ``with_lasting``: row
+    indices, ties in row order."""
+    m = ranked_frames.shape[0]
+    order = np.empty(m, dtype=np.int64)
+    for i in range(m):
+        # Insertion sort (stable): a few dozen rows at most.
+        j = i
+        while j > 0:
+            other = order[j - 1]
+            if with_lasting and lasting[other] != lasting[i]:
+                before = lasting[i]
+            elif ranked_closeness[i] != ranked_closeness[other]:
+                before = ranked_closeness[i] < ranked_closeness[other]
+            else:
+                before = ranked_frames[i] < ranked_frames[other]
+            if not before:
+                break
+            order[j] = other
+            j -= 1
+        order[j] = i
+    return order
+
+
+@kernel('Tuple((i8[::1], i8))(f8[:, :], f8[:], f8[:, :], f8[:], f8[::1], i8, f8[:, ::1], '
+        'i8[::1], b1, i8, ' + CHECK_TABLES_TYPE + ', ' + ROW_MEMO_TYPE + ')')
+def _motions_from(objective, times, frame_step, speed_cap, start, here, goals, arrivals,
+                  stop_at_legal, first, tables, memo):
+    """:meth:`CTSpace._failures` of the motions from (``start``, ``here``) to each of
+    ``goals`` (m, d) at ``arrivals`` (m,): (answers, configurations checked)."""
+    m, d = goals.shape
+    qa = np.empty((m, d))
+    ia = np.empty(m, dtype=np.int64)
+    for i in range(m):
+        for j in range(d):
+            qa[i, j] = start[j]
+        ia[i] = here
+    return _motion_failures(objective, times, frame_step, speed_cap, qa, ia, goals, arrivals,
+                            stop_at_legal, first, tables, memo)
+
+
+@kernel('i8(f8[::1], i8, f8[:, ::1], i8[::1], i8[::1])')
+def _longest_hold(deviation, arrival, before, before_arrivals, failures):
+    """Arrival frame of a hold of ``deviation`` (d,) chosen to ``arrival``, made as long as the
+    failed longer holds of it checked before show it is legal.
+
+    A longer hold that failed was legal up to the frame before it failed, and of two holds
+    the longer ranks first (see _neighbour_table): the hold goes on to there in this advance
+    rather than hold_frames at a time. ``before`` (c, d), ``before_arrivals`` (c,): the
+    motions checked before, in order, with their first illegal frames ``failures`` (c,).
+    """
+    for i in range(before.shape[0]):
+        same = True
+        for j in range(deviation.shape[0]):
+            if before[i, j] != deviation[j]:
+                same = False
+        if same and before_arrivals[i] > arrival and failures[i] - 1 > arrival:
+            arrival = failures[i] - 1
+    return arrival
+
+
+@kernel('Tuple((i8, f8[::1], i8, b1, f8[:, ::1], i8[::1], f8[:, ::1], i8[::1], b1, '
+        'i1[:, ::1], i8))(f8[::1], i8, b1, f8[:, ::1], i8[::1], f8[:, ::1], b1, b1, b1, i8, '
+        'readonly(f8[:, :]), b1, readonly(f8[:, :]), f8[:], i8, b1, i8, b1[::1], i8[::1], '
+        'i1[:, ::1], ' + POSTURES_TYPE + ', f8[:, :], f8[:], f8[:], f8[:, :], f8[:], '
+        + CHECK_TABLES_TYPE + ', ' + ROW_MEMO_TYPE + ', ' + VISITED_TYPE + ')')
+def _expand(deviation, here, has_candidates, candidate_targets, candidate_frames,
+            candidate_keys, followed, tried_objective, relaxed, until, allowed, sub_goal,
+            nodes, weights, max_candidates, prefer_lasting, hold_frames, free, next_free,
+            held, postures, objective, times, rate, frame_step, speed_cap, tables, memo,
+            visited):
+    """:meth:`CTRoadmap._advance` from a state at ``here`` with ``deviation`` (d,), past the
+    shortcuts it takes on the objective: rank the neighbours (once per state: ``has_candidates``
+    says whether ``candidate_targets``, ``candidate_frames`` and ``candidate_keys`` hold the
+    ones left from an earlier visit), then try the untried ones in order.
+
+    The state's other fields: ``followed``, ``tried_objective``, ``relaxed``, ``until``, and
+    ``allowed`` (the nodes of a sub-goal, used while ``sub_goal``); the roadmap's ``nodes``,
+    ``weights``, ``max_candidates`` and ``prefer_lasting``; the horizon's ``hold_frames``,
+    ``free``, ``next_free``, ``held`` and ``postures``; the space's ``objective``, ``times``,
+    ``frame_step``, ``speed_cap``, check ``tables`` and row ``memo``, the joint speeds ``rate``
+    of the search; ``visited``, the search's tried neighbours (added to here).
+
+    The ranking is :func:`_neighbour_table`'s, lasting postures first where the roadmap
+    prefers them (:func:`_lasting_from`), the neighbours' end points checked in one batch with
+    the motion to the best untried one (read up to ``max_candidates`` legal ones, holds
+    always); on the objective the best one (following it) is tried at once, and the motions
+    are tried in order, the first alone and the others in waves (as
+    :meth:`CTSpace.first_legal_motion` tries them), a hold chosen made as long as the failed
+    longer holds before it allow (:func:`_longest_hold`). One call instead of about five
+    kernels and their Python: on the pillars' slowest step 14.8 -> 11.3 ms.
+
+    Returns (1 and a child's deviation and arrival, whether it keeps the state's sub-goal, or
+    0), the neighbours left to try (targets, arrivals, keys), the failures to add to the
+    state's, whether the state now offers lasting neighbours only, ``held`` (a larger copy
+    where it grew), and the configurations checked.
+    """
+    d = deviation.shape[0]
+    last = objective.shape[0] - 1
+    on_objective = True
+    for j in range(d):
+        if deviation[j] != 0.0:
+            on_objective = False
+    checks = 0
+    lasting_only = False
+    start = np.empty(d)
+    for j in range(d):
+        start[j] = objective[here, j] + deviation[j]
+    targets, arrivals, keys = candidate_targets, candidate_frames, candidate_keys
+    count = arrivals.shape[0]
+    failures = np.empty(count + 2 + (0 if has_candidates else max(nodes.shape[0],
+                                                                  allowed.shape[0]) + 4),
+                        dtype=np.int64)
+    failed = 0
+    # The motion checked with the neighbours' end points: its goal, arrival, rows' answers.
+    motion_goal = np.empty(d)
+    motion_arrival = -1
+    motion_illegal = np.zeros(0, dtype=np.bool_)
+    motion_late = -1
+    if not has_candidates:
+        # Backtracking set a sub-goal: stay among the nodes legal at the blocking frame.
+        in_sub_goal = sub_goal and here < until
+        approach_first = prefer_lasting and not relaxed
+        # Following the objective to the goal is the best advance there is. Steer towards the
+        # nodes as far as the remaining time allows. Holding the posture: first past the
+        # stretch where the objective is blocked (one long advance, ending where a return to
+        # the objective would arrive as it becomes legal), else for hold_frames. Before a
+        # blocked stretch, a search that prefers lasting postures holds a lasting one up to it
+        # in one advance, not hold_frames at a time (re-ranking the same neighbours at every
+        # hold, the table's arm took 7 of them to get there); from the stretch on, as before
+        # (held into it in one advance, the arm that met the second pillar swung back 1.0 rad
+        # instead of 0.35). Equally close: sooner arrival first, except holds and the
+        # objective, longest first.
+        (table_targets, table_frames, closeness, approach, holds, ranked_frames,
+         ranked_closeness, rounded, q) = _neighbour_table(
+            allowed if in_sub_goal else nodes, deviation, here, last, hold_frames,
+            on_objective and not in_sub_goal, on_objective, approach_first, times, rate,
+            next_free[min(here + hold_frames, last)], free, weights, objective)
+        m = table_frames.shape[0]
+        lasting = np.ones(m, dtype=np.bool_)
+        if approach_first:
+            lasting, more, held = _lasting_from(table_targets, table_frames, here,
+                                                hold_frames, free, next_free, held, postures,
+                                                objective, tables, memo)
+            checks += more
+        order = _ranking(ranked_frames, ranked_closeness, approach_first, lasting)
+        if approach >= 0 and not lasting[m - 1]:
+            # The posture does not last through the stretch (held from hold_frames on, checked
+            # on _lasting_from's grid): ranked at every hold on the way.
+            kept = 0
+            for p in range(m):
+                if order[p] != approach:
+                    order[kept] = order[p]
+                    kept += 1
+            order = order[:kept].copy()
+        # The motion to the best untried neighbour, usually the next motion checked.
+        extra = np.zeros((0, d))
+        if not on_objective and not followed:
+            for p in range(order.shape[0]):
+                i = order[p]
+                if _visited_key(table_frames[i], rounded, i) not in visited:
+                    motion_arrival = table_frames[i]
+                    for j in range(d):
+                        motion_goal[j] = objective[motion_arrival, j] + table_targets[i, j]
+                    if motion_arrival > here:
+                        extra, motion_late = _motion_path(objective, times, frame_step,
+                                                          speed_cap, start, here, motion_goal,
+                                                          motion_arrival)
+                    break
+        total = m + extra.shape[0]
+        batch = np.empty((total, d))
+        batch_frames = np.empty(total, dtype=np.int64)
+        for r in range(m):
+            for j in range(d):
+                batch[r, j] = q[r, j]
+            batch_frames[r] = table_frames[r]
+        for r in range(extra.shape[0]):
+            for j in range(d):
+                batch[m + r, j] = extra[r, j]
+            batch_frames[m + r] = here + 1 + r
+        checks += total
+        illegal = _illegal_rows(batch, batch_frames, tables, memo)
+        if extra.shape[0] == 0:
+            motion_arrival = -1  # nothing checked ahead
+        else:
+            motion_illegal = illegal[m:].copy()
+        # End points in collision cannot start a legal motion: read in order up to the
+        # max_candidates-th legal one (holding the current posture kept whatever its rank).
+        legal = np.zeros(m, dtype=np.bool_)
+        found = 0
+        for p in range(order.shape[0]):
+            i = order[p]
+            legal[i] = not illegal[i]
+            if legal[i]:
+                found += 1
+                if found == max_candidates:
+                    break
+        for i in range(m):
+            if holds[i]:
+                legal[i] = not illegal[i]
+        if approach_first and free[here]:
+            some_lasting = False
+            some_other = False
+            for i in range(m):
+                if legal[i]:
+                    if lasting[i]:
+                        some_lasting = True
+                    else:
+                        some_other = True
+            if some_lasting and some_other:
+                # Leaving the objective before a blocked stretch: lasting neighbours only, until
+                # backtracking for them has failed (see CTRoadmap.solve). Inside the stretch
+                # they only rank first (filtering there too made the arms backtrack ten times
+                # between the pillars).
+                for i in range(m):
+                    legal[i] = legal[i] and lasting[i]
+                lasting_only = True
+        # The max_candidates closest legal neighbours, plus holding the current posture.
+        picked = np.empty(m, dtype=np.int64)
+        count = 0
+        ranked = 0
+        for p in range(order.shape[0]):
+            i = order[p]
+            if not legal[i]:
+                continue
+            ranked += 1
+            if ranked <= max_candidates or holds[i]:
+                picked[count] = i
+                count += 1
+        if followed:
+            # The search already went on from here along the objective.
+            kept = 0
+            for c in range(count):
+                i = picked[c]
+                moved = False
+                for j in range(d):
+                    if table_targets[i, j] != 0.0:
+                        moved = True
+                if moved or table_frames[i] > here + hold_frames:
+                    picked[kept] = i
+                    kept += 1
+            count = kept
+        targets = np.empty((count, d))
+        arrivals = np.empty(count, dtype=np.int64)
+        keys = np.empty((count, d))
+        for c in range(count):
+            i = picked[c]
+            for j in range(d):
+                targets[c, j] = table_targets[i, j]
+                keys[c, j] = rounded[i, j]
+            arrivals[c] = table_frames[i]
+        if count and on_objective and not followed:
+            # On the objective: follow it as far as it is legal (one motion check).
+            first_target = targets[0].copy()
+            first_arrival = arrivals[0]
+            targets, arrivals, keys = targets[1:].copy(), arrivals[1:].copy(), keys[1:].copy()
+            count -= 1
+            if not tried_objective:
+                goal = np.empty((1, d))
+                for j in range(d):
+                    goal[0, j] = objective[first_arrival, j] + first_target[j]
+                answers, more = _motions_from(objective, times, frame_step, speed_cap, start,
+                                              here, goal, np.array([first_arrival]), True, 0,
+                                              tables, memo)
+                checks += more
+                bad = answers[0]
+                if bad < 0:
+                    return (1, first_target, first_arrival, first_arrival < until, targets,
+                            arrivals, keys, failures[:failed].copy(), lasting_only, held,
+                            checks)
+                failures[failed] = bad
+                failed += 1
+                zero = True
+                for j in range(d):
+                    if first_target[j] != 0.0:
+                        zero = False
+                if zero and bad - 1 > here:
+                    # Following the objective is legal up to the frame before the obstacle.
+                    return (1, np.zeros(d), bad - 1, False, targets, arrivals, keys,
+                            failures[:failed].copy(), lasting_only, held, checks)
+    # The untried neighbours, in order; all of them are marked tried.
+    fresh = np.empty(count, dtype=np.int64)
+    fresh_count = 0
+    for c in range(count):
+        key = _visited_key(arrivals[c], keys, c)
+        if key not in visited:
+            visited[key] = True
+            fresh[fresh_count] = c
+            fresh_count += 1
+    nothing = np.zeros((0, d))
+    none = np.zeros(0, dtype=np.int64)
+    if fresh_count == 0:
+        return (0, deviation, -1, False, nothing, none, nothing, failures[:failed].copy(),
+                lasting_only, held, checks)
+    goals = np.empty((fresh_count, d))
+    goal_frames = np.empty(fresh_count, dtype=np.int64)
+    for f in range(fresh_count):
+        c = fresh[f]
+        for j in range(d):
+            goals[f, j] = objective[arrivals[c], j] + targets[c, j]
+        goal_frames[f] = arrivals[c]
+    # CTSpace.first_legal_motion: the first goal alone (its answer read from the batch above
+    # when that checked its motion), then the others in waves.
+    answers = np.full(fresh_count, -2, dtype=np.int64)
+    chosen = -1
+    answered = 0
+    if motion_arrival >= 0 and goal_frames[0] == motion_arrival:
+        same = True
+        for j in range(d):
+            if goals[0, j] != motion_goal[j]:
+                same = False
+        if same:
+            bad = -1
+            for r in range(motion_illegal.shape[0]):
+                if motion_illegal[r]:
+                    bad = here + 1 + r
+                    break
+            if bad < 0 and motion_late >= 0:
+                bad = motion_late
+            answers[0] = bad
+            answered = 1
+            if bad < 0:
+                chosen = 0
+    if answered == 0:
+        first, more = _motions_from(objective, times, frame_step, speed_cap, start, here,
+                                    goals[:1].copy(), goal_frames[:1].copy(), True, 0, tables,
+                                    memo)
+        checks += more
+        answers[0] = first[0]
+        answered = 1
+        if first[0] < 0:
+            chosen = 0
+    if chosen < 0 and fresh_count > 1:
+        others, more = _motions_from(objective, times, frame_step, speed_cap, start, here,
+                                     goals[1:].copy(), goal_frames[1:].copy(), True, 8,
+                                     tables, memo)
+        checks += more
+        for r in range(others.shape[0]):
+            answers[1 + r] = others[r]
+            answered += 1
+            if others[r] < 0:
+                chosen = 1 + r
+                break
+    for r in range(answered):
+        if answers[r] >= 0:
+            failures[failed] = answers[r]
+            failed += 1
+    if chosen < 0:
+        return (0, deviation, -1, False, nothing, none, nothing, failures[:failed].copy(),
+                lasting_only, held, checks)
+    # Keep the untried neighbours for when the search comes back here.
+    left = fresh_count - chosen - 1
+    left_targets = np.empty((left, d))
+    left_arrivals = np.empty(left, dtype=np.int64)
+    left_keys = np.empty((left, d))
+    for f in range(left):
+        c = fresh[chosen + 1 + f]
+        for j in range(d):
+            left_targets[f, j] = targets[c, j]
+            left_keys[f, j] = keys[c, j]
+        left_arrivals[f] = arrivals[c]
+    c = fresh[chosen]
+    target = targets[c].copy()
+    arrival = arrivals[c]
+    holding = True
+    for j in range(d):
+        if target[j] != deviation[j]:
+            holding = False
+    if holding:
+        before = fresh[:chosen]
+        arrival = _longest_hold(target, arrival, targets[before], arrivals[before],
+                                answers[:chosen].copy())
+    return (1, target, arrival, arrival < until, left_targets, left_arrivals, left_keys,
+            failures[:failed].copy(), lasting_only, held, checks)
+
+
 def objective_grid(last: int, spacing: int) -> np.ndarray:
     """Frames 0, ``spacing``, 2 ``spacing``, ... and ``last``: where a search first checks the
     objective (:meth:`CTRoadmap._objective_free`); made once per (last, spacing) and shared,
@@ -471,25 +931,13 @@ class _Horizon:
         last = len(free) - 1
         # What is known of a posture (a deviation rounded to 1e-4 rad, numbered in
         # ``postures``) at each frame: -1 unknown, 0 illegal, 1 legal (see _lasting).
-        self.postures: Dict[tuple, int] = {}
+        self.postures = _empty_postures()
         self.held = np.full((16, last + 1), -1, dtype=np.int8)
         self.last = last
-        self.free = free
+        self.free = np.ascontiguousarray(free, dtype=np.bool_)
         # next_free[i]: the first frame >= i where the objective is legal (last if none);
         # run_start[i]: the first frame of the blocked stretch holding i (i itself if free).
-        self.next_free, self.run_start = _horizon_tables(np.asarray(free, dtype=np.bool_))
-
-    def posture_ids(self, rounded: list) -> np.ndarray:
-        """The rows of ``held`` for postures (each a list of rounded deviations), added as
-        they first appear: (m,) int."""
-        postures = self.postures
-        ids = np.array([postures.setdefault(tuple(r), len(postures)) for r in rounded],
-                       dtype=np.int64)
-        if len(postures) > len(self.held):
-            grown = np.full((2 * len(postures), self.held.shape[1]), -1, dtype=np.int8)
-            grown[:len(self.held)] = self.held
-            self.held = grown
-        return ids
+        self.next_free, self.run_start = _horizon_tables(self.free)
 
     def hold_end(self, here: int) -> int:
         """Frame a posture held from ``here`` is held to: ``hold_frames`` on, then on to where
@@ -547,6 +995,11 @@ class CTRoadmap:
         self.rng = rng
         self.grown_nodes = np.zeros((0, patterns.shape[1]))
         self._nodes = None
+        # What _expand takes for a state not ranked yet, and for one without a sub-goal.
+        d = patterns.shape[1]
+        self._no_candidates = (np.zeros((0, d)), np.zeros(0, dtype=np.int64),
+                               np.zeros((0, d)))
+        self._no_nodes = np.zeros((0, d))
         self.prefer_lasting = bool(prefer_lasting)
 
     @property
@@ -662,7 +1115,7 @@ class CTRoadmap:
         unused = route is not None and not horizon.free[route[0]:].all()
         checks_limit = None if check_budget is None else (
             before + len(grid) + check_budget + (route_rows if unused else 0))
-        visited = set()
+        visited = _empty_visited()
         jumps = set()
         known = {}
         nodes = backtracks = grown = in_preview = 0
@@ -830,83 +1283,6 @@ class CTRoadmap:
             free[grid[i]] = False
         return free
 
-    def _candidates(self, space: CTSpace, state: _State, horizon: _Horizon,
-                    speed_fraction: float,
-                    visited: Optional[set] = None) -> List[Tuple[float, int, np.ndarray]]:
-        """Neighbouring states forward in time, ranked by closeness to the objective.
-
-        With ``visited`` (the search's tried neighbours), the motion to the best untried one,
-        usually the next motion checked, shares the broad phase of the neighbours' check.
-        """
-        last = space.frame_count - 1
-        here = state.frame
-        on_objective = not np.any(state.deviation)
-        nodes = self.nodes
-        # Backtracking set a sub-goal: stay among the nodes legal at the blocking frame.
-        sub_goal = state.allowed is not None and here < state.until
-        if sub_goal:
-            nodes = state.allowed
-        # Following the objective to the goal is the best advance there is. Steer towards the
-        # nodes as far as the remaining time allows. Holding the posture: first past the
-        # stretch where the objective is blocked (one long advance, ending where a return to
-        # the objective would arrive as it becomes legal), else for hold_frames. Before a
-        # blocked stretch, a search that prefers lasting postures holds a lasting one up to it
-        # in one advance, not hold_frames at a time (re-ranking the same neighbours at every
-        # hold, the table's arm took 7 of them to get there); from the stretch on, as before
-        # (held into it in one advance, the arm that met the second pillar swung back 1.0 rad
-        # instead of 0.35).
-        # Equally close: sooner arrival first, except holds and the objective, longest first.
-        (targets, frames, closeness, approach, holds, ranked_frames, ranked_closeness,
-         rounded, q) = _neighbour_table(
-            nodes, state.deviation, here, last, horizon.hold_frames,
-            on_objective and not sub_goal, on_objective,
-            self.prefer_lasting and not state.relaxed, space.times,
-            speed_fraction * space.speed_limit, horizon.hold_end(here), horizon.free,
-            self.weights, space.objective)
-        if approach < 0:
-            approach = None
-        lasting = (self._lasting(space, horizon, here, targets, frames)
-                   if self.prefer_lasting and not state.relaxed else None)
-        keys = (ranked_frames, ranked_closeness)
-        order = np.lexsort(keys if lasting is None else keys + (~lasting,))
-        if approach is not None and not lasting[-1]:
-            # The posture does not last through the stretch (held from hold_frames on, checked
-            # on _lasting's grid): ranked at every hold on the way.
-            order = order[order != approach]
-        # Endpoints in collision cannot start a legal motion: filter them, best first, until
-        # enough are legal (holding the current posture is kept whatever its rank).
-        motion = None
-        # The keys _advance marks tried neighbours with (rounded once for all rows: the same
-        # numbers, as Python floats, which hash and compare as NumPy's do), and the table's
-        # columns read row by row as Python numbers (the same values).
-        rounded = rounded.tolist()
-        arrivals = frames.tolist()
-        ranking = order.tolist()
-        if visited is not None and not on_objective and not state.followed:
-            for i in ranking:
-                if (arrivals[i], tuple(rounded[i])) not in visited:
-                    motion = ((space.objective[here] + state.deviation, here),
-                              (space.objective[arrivals[i]] + targets[i], arrivals[i]))
-                    break
-        holds = holds.tolist()
-        legal = space.best_valid_rows(q, frames, order, self.max_candidates,
-                                      also=[i for i, hold in enumerate(holds) if hold],
-                                      motion=motion)
-        if (lasting is not None and horizon.free[here] and (legal & lasting).any()
-                and (legal & ~lasting).any()):
-            # Leaving the objective before a blocked stretch: lasting neighbours only, until
-            # backtracking for them has failed (see solve). Inside the stretch they only rank
-            # first (filtering there too made the arms backtrack ten times between the pillars).
-            legal &= lasting
-            state.lasting_only = True
-        legal = legal.tolist()
-        closeness = closeness.tolist()
-        kept = [i for i in ranking if legal[i]]
-        # The neighbours closest to the objective, plus holding the current posture (a row
-        # of the table that holds it: its target is the current deviation).
-        kept = kept[:self.max_candidates] + [i for i in kept[self.max_candidates:] if holds[i]]
-        return [(closeness[i], arrivals[i], targets[i], tuple(rounded[i])) for i in kept]
-
     @staticmethod
     def _lasting(space: CTSpace, horizon: _Horizon, here: int, targets: np.ndarray,
                  arrivals: np.ndarray) -> np.ndarray:
@@ -939,16 +1315,12 @@ class CTRoadmap:
             (m,) bool; all True when the objective is legal from ``here`` to the last frame.
 
         """
-        blocked = np.flatnonzero(~horizon.free[here:])
-        if not len(blocked):
-            return np.ones(len(targets), dtype=bool)
-        begin = here + int(blocked[0])
         # A coarse pass first (most postures that do not last fail it), then the rest of the
-        # grid for the postures left; one kernel (_lasting_table).
-        lasting, checks = _lasting_table(
-            targets, horizon.posture_ids(np.round(targets, 4).tolist()), arrivals, begin,
-            int(horizon.next_free[begin]), horizon.hold_frames, COARSE_STRIDE, horizon.free,
-            horizon.held, space.objective, space.check_tables, space.row_memo)
+        # grid for the postures left; one kernel (_lasting_from).
+        lasting, checks, horizon.held = _lasting_from(
+            targets, arrivals, here, horizon.hold_frames, horizon.free, horizon.next_free,
+            horizon.held, horizon.postures, space.objective, space.check_tables,
+            space.row_memo)
         space.checks += checks
         return lasting
 
@@ -971,64 +1343,30 @@ class CTRoadmap:
                     child = self._try(space, state, np.zeros_like(state.deviation), last)
                     if child is not None:
                         return child
-        if state.candidates is None:
-            state.candidates = self._candidates(space, state, horizon, speed_fraction, visited)
-            if state.followed:
-                # The search already went on from here along the objective.
-                state.candidates = [c for c in state.candidates
-                                    if np.any(c[2]) or c[1] > state.frame + horizon.hold_frames]
-            elif state.candidates and on_objective:
-                # On the objective: follow it as far as it is legal (one motion check).
-                _, arrival, target, _ = state.candidates.pop(0)
-                if not state.tried_objective:
-                    child = self._try(space, state, target, arrival)
-                    if child is not None:
-                        return child
-        fresh = []
-        while state.candidates:
-            _, arrival, target, rounded = state.candidates.pop(0)
-            key = (arrival, rounded)
-            if key not in visited:
-                visited.add(key)
-                fresh.append((target, arrival, rounded))
-        if not fresh:
+        # The rest in one kernel: rank the neighbours (once per state), then try the untried
+        # ones in order.
+        ranked = state.candidates is not None
+        allowed = state.allowed
+        (outcome, deviation, arrival, inherit, targets, arrivals, keys, failures, lasting_only,
+         horizon.held, checks) = _expand(
+            state.deviation, state.frame, ranked,
+            *(state.candidates if ranked else self._no_candidates), state.followed,
+            state.tried_objective, state.relaxed, state.until,
+            self._no_nodes if allowed is None else allowed, allowed is not None, self.nodes,
+            self.weights, self.max_candidates, self.prefer_lasting, horizon.hold_frames,
+            horizon.free, horizon.next_free, horizon.held, horizon.postures, space.objective,
+            space.times, speed_fraction * space.speed_limit, space.frame_step, space.speed_cap,
+            space.check_tables, space.row_memo, visited)
+        state.candidates = (targets, arrivals, keys)
+        space.checks += checks
+        state.lasting_only |= lasting_only
+        state.failures.extend(failures.tolist())
+        if not outcome:
             return None
-        here = state.frame
-        start = (space.objective[here] + state.deviation, here)
-        goals = [(space.objective[arrival] + target, arrival) for target, arrival, _ in fresh]
-        chosen, failures = space.first_legal_motion(start, goals)
-        state.failures.extend(f for f in failures if f >= 0)
-        # Keep the untried neighbours for when the search comes back here.
-        state.candidates = [(0.0, arrival, target, rounded)
-                            for target, arrival, rounded in fresh[chosen + 1:]
-                            ] if chosen >= 0 else []
-        if chosen < 0:
-            return None
-        target, arrival, _ = fresh[chosen]
-        if np.array_equal(target, state.deviation):
-            arrival = self._longest_hold(target, arrival,
-                                         [(t, a) for t, a, _ in fresh[:chosen]], failures)
-        child = _State(np.array(target), arrival)
-        if arrival < state.until:
+        child = _State(deviation, int(arrival))
+        if inherit:
             child.until, child.allowed = state.until, state.allowed
         return child
-
-    @staticmethod
-    def _longest_hold(deviation: np.ndarray, arrival: int, before: list,
-                      failures: List[int]) -> int:
-        """Arrival frame of a hold of ``deviation`` chosen to ``arrival``, made as long as the
-        failed longer holds of it checked before show it is legal.
-
-        A longer hold that failed was legal up to the frame before it failed, and of two holds
-        the longer ranks first (see _candidates): the hold goes on to there in this advance
-        rather than hold_frames at a time. ``before``: the (target, arrival) motions checked
-        before, in order, with their first illegal frames ``failures``.
-        """
-        for (other, other_arrival), bad in zip(before, failures):
-            longer = other_arrival > arrival and np.array_equal(other, deviation)
-            if longer and bad - 1 > arrival:
-                arrival = bad - 1
-        return arrival
 
     def _follow(self, space: CTSpace, state: _State, horizon: _Horizon) -> Optional[_State]:
         """Follow the objective from a state on it, hold_frames at a time, in one motion check.

@@ -1555,11 +1555,6 @@ class TimedBody:
         self._pose_shapes(table)
 
 
-def _same_motion(a: tuple, b: tuple) -> bool:
-    """Whether two motions ((qa, ia), (qb, ib)) are the same."""
-    return all(ia == ib and np.array_equal(qa, qb) for (qa, ia), (qb, ib) in zip(a, b))
-
-
 def branch_layout(kinematics: BodyKinematics, shapes: BodyShapes, branch: str,
                   checked_links: Sequence[str], obstacle_links: Sequence[str]) -> tuple:
     """The model-only data of a branch, built once and kept in ``shapes.branch_layouts``.
@@ -1724,9 +1719,10 @@ class CTSpace:
         self.lower, self.upper, self.speed_limit = model.lower, model.upper, model.speed_limit
         # The joint limits with the tolerance of within_bounds, worked out once.
         self._lower_tolerant, self._upper_tolerant = model.lower_tolerant, model.upper_tolerant
-        self._speed_cap = model.speed_cap
+        #: (d,) joint speeds a motion may not exceed (the limits with their tolerance), rad/s.
+        self.speed_cap = model.speed_cap
         #: (k - 1, 1) time from each frame to the next, s.
-        self._frame_step = (self.times[1:] - self.times[:-1])[:, None]
+        self.frame_step = (self.times[1:] - self.times[:-1])[:, None]
         self.time_weight = float(time_weight)
         #: steps: the steps to re-evaluate when the branch moves (all links it carries).
         (self.steps, self.checked, self._check_steps, pairs, first, self._reach, obstacle,
@@ -1769,8 +1765,6 @@ class CTSpace:
         #: while the body holds still.
         self.row_memo = _empty_row_memo()
         self.checks = 0
-        # A motion whose check ran ahead (see best_valid_rows), or None.
-        self._prefetched: Optional[tuple] = None
 
     def _prepare_environment(self) -> None:
         """Keep only triangles the branch could reach during the step (§5: broad phase)."""
@@ -1872,22 +1866,8 @@ class CTSpace:
             -1 for the legal one).
 
         """
-        qa, ia = a
         failures: List[int] = []
-        prefetched, self._prefetched = self._prefetched, None
-        if goals and prefetched is not None and _same_motion(prefetched[0], (a, goals[0])):
-            # The first goal was checked with the neighbours (best_valid_rows).
-            _, _, late, frames, illegal = prefetched
-            hit = np.flatnonzero(illegal)
-            bad = int(frames[hit[0]]) if len(hit) else -1
-            if bad < 0 and late >= 0:
-                bad = int(late)
-            failures.append(bad)
-            if bad < 0:
-                return 0, failures
         for first in (True, False):
-            if first and failures:
-                continue
             # The others are interpolated only when the first goal fails.
             chosen = goals[:1] if first else goals[1:]
             if not chosen:
@@ -1962,8 +1942,8 @@ class CTSpace:
         are all legal is illegal at its speed violation, one that does not go forward in time
         at its start frame (:func:`_motion_failures`).
         """
-        answers, checks = _motion_failures(self.objective, self.times, self._frame_step,
-                                           self._speed_cap, *self._motion_ends(motions),
+        answers, checks = _motion_failures(self.objective, self.times, self.frame_step,
+                                           self.speed_cap, *self._motion_ends(motions),
                                            stop_at_legal, first, self.check_tables,
                                            self.row_memo)
         self.checks += checks
@@ -1983,8 +1963,8 @@ class CTSpace:
         """The rows of motions ((qa, ia), (qb, ib)) for one check: (q (m, d) rad, frames (m,),
         segments [(begin, end)] per motion, early: each motion's speed violation frame or -1,
         its start frame for one that does not go forward in time)."""
-        q, frames, ends, late = _motion_paths(self.objective, self.times, self._frame_step,
-                                              self._speed_cap, *self._motion_ends(motions))
+        q, frames, ends, late = _motion_paths(self.objective, self.times, self.frame_step,
+                                              self.speed_cap, *self._motion_ends(motions))
         ends = ends.tolist()
         return q, frames, list(zip([0] + ends[:-1], ends)), late.tolist()
 
@@ -1994,8 +1974,8 @@ class CTSpace:
         limits, and the frame of the first speed violation (-1 when none)."""
         if ib <= ia:
             return np.zeros((0, self.dimension)), ia
-        rows, late = _motion_path(self.objective, self.times, self._frame_step,
-                                  self._speed_cap, float_array(qa), int(ia), float_array(qb),
+        rows, late = _motion_path(self.objective, self.times, self.frame_step,
+                                  self.speed_cap, float_array(qa), int(ia), float_array(qb),
                                   int(ib))
         return rows, int(late)
 
@@ -2041,65 +2021,6 @@ class CTSpace:
         if not m:
             return np.zeros(0, dtype=bool)
         return ~self._illegal(q, frames)
-
-    def best_valid_rows(self, q: np.ndarray, frames: np.ndarray, order: np.ndarray,
-                        count: int, also: Sequence[int] = (),
-                        motion: Optional[Tuple[Tuple[np.ndarray, int],
-                                               Tuple[np.ndarray, int]]] = None) -> np.ndarray:
-        """Legality of the first ``count`` legal rows of a batch in a given order: (m,) bool.
-
-        All rows are checked in one batch, then read row by row in ``order`` until ``count``
-        rows are legal; the rows in ``also`` are always read. Rows left unread are reported
-        illegal: a search that keeps only its ``count`` best neighbours needs no more.
-
-        Parameters
-        ----------
-        q
-            (m, d) branch configurations, rad.
-        frames
-            (m,) frame index of each row, any order.
-        order
-            Row indices, best first.
-        count
-            Legal rows wanted.
-        also
-            Rows checked whatever their rank.
-        motion
-            A motion (a, b) likely to be checked next (by :meth:`first_legal_motion`, as its
-            first goal): its frames share this batch, and only reading its answers is left
-            for then.
-
-        """
-        frames = np.asarray(frames)
-        q = np.asarray(q, dtype=float)
-        m = len(frames)
-        legal = np.zeros(m, dtype=bool)
-        self._prefetched = None
-        if not m:
-            return legal
-        extra = None
-        if motion is not None:
-            (qa, ia), (qb, ib) = motion
-            rows, late = self._motion_rows(qa, ia, qb, ib)
-            if len(rows):
-                extra = (motion, rows, late, np.arange(ia + 1, ia + 1 + len(rows)))
-                q = np.concatenate([q, rows])
-                frames = np.concatenate([frames, extra[3]])
-        self.checks += len(frames)
-        illegal = self._illegal(q, frames)
-        if extra is not None:
-            # The motion's rows' answers, read by first_legal_motion.
-            self._prefetched = extra + (illegal[m:],)
-        usable = ~illegal[:m]
-        # Read in order up to the count-th legal row; the rows in ``also`` whatever their rank.
-        order = np.asarray(order, dtype=np.int64)
-        found = np.flatnonzero(usable[order])
-        read = order[:found[count - 1] + 1] if 0 < count <= len(found) else (
-            order if count > 0 else order[:0])
-        legal[read] = usable[read]
-        also = np.asarray(also, dtype=np.int64)
-        legal[also] = usable[also]
-        return legal
 
     def _shape_boxes(self, q: np.ndarray, frames: np.ndarray) -> tuple:
         """Poses and boxes of the branch's checked shapes for a batch of rows (what
