@@ -2,6 +2,7 @@
 import numpy as np
 import pytest
 
+from digital_actor_planner.core import ct_roadmap
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.upper_body import (
@@ -110,6 +111,30 @@ def test_low_beam_makes_the_waist_bend_and_the_pattern_returns_after_it(skeleton
     # Lower body and root are never changed.
     lower = np.setdiff1d(np.arange(22), upper)
     assert np.array_equal(plan.frames[:, lower], frames[:, lower])
+
+
+def test_warming_the_kernels_up_runs_once_and_changes_no_plan(skeleton, monkeypatch):
+    # The first planner of a process calls the search's kernels once on a throwaway space
+    # (numba's first look at their arguments, otherwise on the first step that searches);
+    # later planners do not, and a planner that warmed up plans exactly as one that did not.
+    from digital_actor_planner.core import upper_body
+    warmed = []
+    monkeypatch.setattr(upper_body, '_WARMED', False)
+    monkeypatch.setattr(upper_body, 'warm_up', lambda *args: warmed.append(args[0]) or
+                        ct_roadmap.warm_up(*args))
+    beam = box([0.3, -1.0, 1.60], [0.5, 1.0, 1.80])
+    first, _ = planner_for(skeleton, beam)
+    assert len(warmed) == 1 and upper_body._WARMED
+    later, _ = planner_for(skeleton, beam)
+    assert len(warmed) == 1
+    times, frames = walk(skeleton, 260)
+    one, other = first.plan(times, frames), later.plan(times, frames)
+    assert one.ok and other.ok
+    assert not all(record['fast'] for record in one.per_branch.values())  # it searched
+    assert np.array_equal(one.frames, other.frames)
+    assert ({name: len(r.grown_nodes) for name, r in first.roadmaps.items()}
+            == {name: len(r.grown_nodes) for name, r in later.roadmaps.items()})
+    assert first.rng.bit_generator.state == later.rng.bit_generator.state
 
 
 def test_table_beside_the_path_makes_that_arm_flex(skeleton):
