@@ -103,6 +103,10 @@ def test_roadmap_rejects_bad_parameters():
                   rng=np.random.default_rng())
     with pytest.raises(ValueError, match='joints'):
         CTRoadmap(PATTERNS, np.ones(3), radius=0.3, max_nodes=10, rng=np.random.default_rng())
+    # Tried neighbours are keyed by at most four joints.
+    with pytest.raises(ValueError, match='1 to 4 joints.*5 joints'):
+        CTRoadmap(np.zeros((2, 5)), np.ones(5), radius=0.3, max_nodes=10,
+                  rng=np.random.default_rng())
 
 
 def test_check_budget_stops_the_search_the_same_way_every_time(beam_space):

@@ -998,6 +998,11 @@ class CTRoadmap:
         if patterns.shape[1] != weights.shape[0]:
             raise ValueError(f'patterns have {patterns.shape[1]} joints, weights '
                              f'{weights.shape[0]}')
+        if not 1 <= patterns.shape[1] <= 4:
+            # The search keys a tried neighbour and a posture by their joints zero-padded to
+            # four (_visited_key, _padded): a wider branch would share keys.
+            raise ValueError(f'a branch of 1 to 4 joints is searched, patterns have '
+                             f'{patterns.shape[1]} joints')
         if not np.all(weights > 0):
             raise ValueError(f'weights must be > 0, got {weights}')
         if not radius > 0:
