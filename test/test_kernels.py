@@ -82,6 +82,7 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    ct_roadmap._ranking, ct_roadmap._motions_from, ct_roadmap._longest_hold,
                    ct_roadmap._empty_visited, ct_roadmap._empty_postures,
                    ct_roadmap._padded, ct_roadmap._visited_key,
+                   ct_roadmap._unsigned_zero,
                    upper_body._within_limits_kernel, ct_space._box_within,
                    upper_body._input_sound, ct_space._column_dots, ct_space._triangle_apart_along,
                    convex._middle, ct_roadmap._travel,

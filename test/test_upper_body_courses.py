@@ -168,6 +168,27 @@ def test_pillars_off_the_path_are_passed_or_met_in_front_never_between(tmp_path,
         f'stopped at x = {frames[-1, 0]:.2f} m: {blocks[-1].reason}')
 
 
+def test_the_moved_pillars_plan_the_same_with_the_expansion_compiled_as_in_python(
+        tmp_path, monkeypatch):
+    """The search's expansion (ct_roadmap._expand) as a kernel and as plain Python (its
+    tried neighbours in Python's dictionaries) plans this walk alike. Pillars 2 cm to the
+    left, 0.35 m either side: here a neighbour's rounded target was -0.0 where the one tried
+    was 0.0, which numba's dictionaries told apart (bit by bit) and Python's did not."""
+    from digital_actor_planner.core import ct_roadmap
+    sk = skeleton()
+    sc = pillars_moved_sideways(SCENES, tmp_path, 0.35, 0.02, sk)
+
+    def frames():
+        actor = Actor(sk, sc.environment, ActorConfig(), start=sc.start)
+        return np.vstack([b.frames for b in run_commands(actor, [0.0, 9.0], [0.8, 0.0],
+                                                         [0.0, 0.0])])
+
+    compiled = frames()
+    for name in ('_expand', '_lasting_from', '_empty_visited', '_empty_postures'):
+        monkeypatch.setattr(ct_roadmap, name, getattr(ct_roadmap, name).py_func)
+    assert np.array_equal(frames(), compiled)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize('margin, pause, outcome', [
     (0.1, 0.2, 'passed'), (0.1, 0.0, 'stopped in front'), (0.0, 0.0, 'held between')])

@@ -430,12 +430,22 @@ def _empty_postures():
     return postures
 
 
+@kernel('f8(f8)')
+def _unsigned_zero(value):
+    """``value`` with a zero of either sign as 0.0: numba's dictionaries compare float keys
+    bit by bit, where -0.0 (a deviation rounded from a tiny negative one) and 0.0 differ,
+    unlike Python's."""
+    return 0.0 if value == 0.0 else value
+
+
 @kernel('UniTuple(f8, 4)(f8[:, ::1], i8)')
 def _padded(rows, i):
-    """Row ``i`` of ``rows`` (m, d), d <= 4, zero-padded to four values."""
+    """Row ``i`` of ``rows`` (m, d), d <= 4, zero-padded to four values, as a dictionary key
+    (zeros unsigned, :func:`_unsigned_zero`)."""
     d = rows.shape[1]
-    return (rows[i, 0], rows[i, 1] if d > 1 else 0.0, rows[i, 2] if d > 2 else 0.0,
-            rows[i, 3] if d > 3 else 0.0)
+    return (_unsigned_zero(rows[i, 0]), _unsigned_zero(rows[i, 1]) if d > 1 else 0.0,
+            _unsigned_zero(rows[i, 2]) if d > 2 else 0.0,
+            _unsigned_zero(rows[i, 3]) if d > 3 else 0.0)
 
 
 @kernel('UniTuple(f8, 5)(i8, f8[:, ::1], i8)')
