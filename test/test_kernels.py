@@ -79,7 +79,7 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    ct_space._row_key, ct_space._empty_row_memo,
                    ct_space._motion_failures, ct_space._sweeps, ct_roadmap._lasting_table,
                    ct_roadmap._grown_node, ct_roadmap._expand, ct_roadmap._lasting_from,
-                   ct_roadmap._ranking, ct_roadmap._motions_from, ct_roadmap._longest_hold,
+                   ct_roadmap._ranking, ct_space.first_legal_goal, ct_roadmap._longest_hold,
                    ct_roadmap._empty_visited, ct_roadmap._empty_postures,
                    ct_roadmap._padded, ct_roadmap._visited_key,
                    ct_roadmap._unsigned_zero,

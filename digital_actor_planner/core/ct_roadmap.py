@@ -38,8 +38,8 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .ct_space import (_illegal_rows, _motion_failures, _motion_path, CHECK_TABLES_TYPE,
-                       CTSpace, ROW_MEMO_TYPE)
+from .ct_space import (_illegal_rows, _motion_path, CHECK_TABLES_TYPE, CTSpace,
+                       first_legal_goal, ROW_MEMO_TYPE)
 from .jit import kernel
 
 
@@ -522,23 +522,6 @@ def _ranking(ranked_frames, ranked_closeness, with_lasting, lasting):
     return order
 
 
-@kernel('Tuple((i8[::1], i8))(f8[:, :], f8[:], f8[:, :], f8[:], f8[::1], i8, f8[:, ::1], '
-        'i8[::1], b1, i8, ' + CHECK_TABLES_TYPE + ', ' + ROW_MEMO_TYPE + ')')
-def _motions_from(objective, times, frame_step, speed_cap, start, here, goals, arrivals,
-                  stop_at_legal, first, tables, memo):
-    """:meth:`CTSpace._failures` of the motions from (``start``, ``here``) to each of
-    ``goals`` (m, d) at ``arrivals`` (m,): (answers, configurations checked)."""
-    m, d = goals.shape
-    qa = np.empty((m, d))
-    ia = np.empty(m, dtype=np.int64)
-    for i in range(m):
-        for j in range(d):
-            qa[i, j] = start[j]
-        ia[i] = here
-    return _motion_failures(objective, times, frame_step, speed_cap, qa, ia, goals, arrivals,
-                            stop_at_legal, first, tables, memo)
-
-
 @kernel('i8(f8[::1], i8, f8[:, ::1], i8[::1], i8[::1])')
 def _longest_hold(deviation, arrival, before, before_arrivals, failures):
     """Arrival frame of a hold of ``deviation`` (d,) chosen to ``arrival``, made as long as the
@@ -585,8 +568,8 @@ def _expand(deviation, here, has_candidates, candidate_targets, candidate_frames
     prefers them (:func:`_lasting_from`), the neighbours' end points checked in one batch with
     the motion to the best untried one (read up to ``max_candidates`` legal ones, holds
     always); on the objective the best one (following it) is tried at once, and the motions
-    are tried in order, the first alone and the others in waves (as
-    :meth:`CTSpace.first_legal_motion` tries them), a hold chosen made as long as the failed
+    are tried in order (:func:`ct_space.first_legal_goal`, the first goal's answer taken from
+    that batch where it checked its motion), a hold chosen made as long as the failed
     longer holds before it allow (:func:`_longest_hold`). One call instead of about five
     kernels and their Python: on the pillars' slowest step 14.8 -> 11.3 ms.
 
@@ -759,9 +742,9 @@ def _expand(deviation, here, has_candidates, candidate_targets, candidate_frames
                 goal = np.empty((1, d))
                 for j in range(d):
                     goal[0, j] = objective[first_arrival, j] + first_target[j]
-                answers, more = _motions_from(objective, times, frame_step, speed_cap, start,
-                                              here, goal, np.array([first_arrival]), True, 0,
-                                              tables, memo)
+                _, answers, more = first_legal_goal(objective, times, frame_step, speed_cap,
+                                                    start, here, goal,
+                                                    np.array([first_arrival]), -2, tables, memo)
                 checks += more
                 bad = answers[0]
                 if bad < 0:
@@ -799,49 +782,27 @@ def _expand(deviation, here, has_candidates, candidate_targets, candidate_frames
         for j in range(d):
             goals[f, j] = objective[arrivals[c], j] + targets[c, j]
         goal_frames[f] = arrivals[c]
-    # CTSpace.first_legal_motion: the first goal alone (its answer read from the batch above
-    # when that checked its motion), then the others in waves.
-    answers = np.full(fresh_count, -2, dtype=np.int64)
-    chosen = -1
-    answered = 0
+    # The first goal alone (its answer read from the batch above when that checked its
+    # motion), then the others in waves (first_legal_goal, as CTSpace.first_legal_motion).
+    first_answer = -2
     if motion_arrival >= 0 and goal_frames[0] == motion_arrival:
         same = True
         for j in range(d):
             if goals[0, j] != motion_goal[j]:
                 same = False
         if same:
-            bad = -1
+            first_answer = -1
             for r in range(motion_illegal.shape[0]):
                 if motion_illegal[r]:
-                    bad = here + 1 + r
+                    first_answer = here + 1 + r
                     break
-            if bad < 0 and motion_late >= 0:
-                bad = motion_late
-            answers[0] = bad
-            answered = 1
-            if bad < 0:
-                chosen = 0
-    if answered == 0:
-        first, more = _motions_from(objective, times, frame_step, speed_cap, start, here,
-                                    goals[:1].copy(), goal_frames[:1].copy(), True, 0, tables,
-                                    memo)
-        checks += more
-        answers[0] = first[0]
-        answered = 1
-        if first[0] < 0:
-            chosen = 0
-    if chosen < 0 and fresh_count > 1:
-        others, more = _motions_from(objective, times, frame_step, speed_cap, start, here,
-                                     goals[1:].copy(), goal_frames[1:].copy(), True, 8,
-                                     tables, memo)
-        checks += more
-        for r in range(others.shape[0]):
-            answers[1 + r] = others[r]
-            answered += 1
-            if others[r] < 0:
-                chosen = 1 + r
-                break
-    for r in range(answered):
+            if first_answer < 0 and motion_late >= 0:
+                first_answer = motion_late
+    chosen, answers, more = first_legal_goal(objective, times, frame_step, speed_cap, start,
+                                             here, goals, goal_frames, first_answer, tables,
+                                             memo)
+    checks += more
+    for r in range(answers.shape[0]):
         if answers[r] >= 0:
             failures[failed] = answers[r]
             failed += 1

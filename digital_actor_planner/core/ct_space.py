@@ -970,6 +970,56 @@ def _motion_failures(objective, times, frame_step, speed_cap, qa, ia, qb, ib, st
     return answers[:answered].copy(), checks
 
 
+#: Motions after the first that first_legal_goal checks in its first wave, rows of each.
+OTHERS_WAVE = 8
+
+
+@kernel('Tuple((i8, i8[::1], i8))(f8[:, :], f8[:], f8[:, :], f8[:], f8[::1], i8, '
+        'f8[:, ::1], i8[::1], i8, ' + CHECK_TABLES_TYPE + ', ' + ROW_MEMO_TYPE + ')')
+def first_legal_goal(objective, times, frame_step, speed_cap, start, here, goals, arrivals,
+                     first_answer, tables, memo):
+    """:meth:`CTSpace.first_legal_motion`: the motions from (``start`` (d,), ``here``) to each
+    of ``goals`` (m, d) at ``arrivals`` (m,), checked in order up to the first legal one.
+
+    The first goal (the best one, usually legal) is checked alone, all its rows in one batch,
+    unless ``first_answer`` (>= -1) already gives its first illegal frame (-2: not known); the
+    others, when it fails, in one batch read goal by goal, in waves of :data:`OTHERS_WAVE`
+    rows each and twice as many each wave (they usually fail within a few frames of the
+    start). Returns (index of the first legal goal or -1, the first illegal frame of each goal
+    checked, -1 for the legal one, configurations checked).
+    """
+    m, d = goals.shape
+    answers = np.empty(m, dtype=np.int64)
+    if m == 0:
+        return -1, answers, 0
+    checks = 0
+    qa = np.empty((m, d))
+    ia = np.empty(m, dtype=np.int64)
+    for i in range(m):
+        for j in range(d):
+            qa[i, j] = start[j]
+        ia[i] = here
+    if first_answer >= -1:
+        answers[0] = first_answer
+    else:
+        first, more = _motion_failures(objective, times, frame_step, speed_cap, qa[:1].copy(),
+                                       ia[:1].copy(), goals[:1].copy(), arrivals[:1].copy(),
+                                       True, 0, tables, memo)
+        answers[0] = first[0]
+        checks += more
+    if answers[0] < 0 or m == 1:
+        return 0 if answers[0] < 0 else -1, answers[:1].copy(), checks
+    others, more = _motion_failures(objective, times, frame_step, speed_cap, qa[1:].copy(),
+                                    ia[1:].copy(), goals[1:].copy(), arrivals[1:].copy(), True,
+                                    OTHERS_WAVE, tables, memo)
+    checks += more
+    for r in range(others.shape[0]):
+        answers[1 + r] = others[r]
+        if others[r] < 0:
+            return 1 + r, answers[:2 + r].copy(), checks
+    return -1, answers[:1 + others.shape[0]].copy(), checks
+
+
 @kernel('b1(f8[::1], f8[::1], f8[::1], f8[::1])')
 def _box_within(lower, upper, outer_lower, outer_upper):
     """Whether the box [lower, upper] (3,) lies within [outer_lower, outer_upper]."""
@@ -1856,8 +1906,8 @@ class CTSpace:
                            goals: Sequence[Tuple[np.ndarray, int]]) -> Tuple[int, List[int]]:
         """Check motions from ``a`` to each goal in order; stop at the first legal one.
 
-        The first goal (the best one, usually legal) is checked alone; all the others then in
-        one batch, its answers read goal by goal.
+        One kernel (:func:`first_legal_goal`): the first goal (the best one, usually legal)
+        checked alone; all the others then in one batch, its answers read goal by goal.
 
         Returns
         -------
@@ -1866,19 +1916,17 @@ class CTSpace:
             -1 for the legal one).
 
         """
-        failures: List[int] = []
-        for first in (True, False):
-            # The others are interpolated only when the first goal fails.
-            chosen = goals[:1] if first else goals[1:]
-            if not chosen:
-                continue
-            # The other goals usually fail within a few frames of the start: their broad
-            # phase runs a few frames of each at a time rather than over whole motions.
-            for bad in self._failures([(a, b) for b in chosen], True, 0 if first else 8):
-                failures.append(bad)
-                if bad < 0:
-                    return len(failures) - 1, failures
-        return -1, failures
+        qa, ia = a
+        if not goals:
+            return -1, []
+        targets = np.array([q for q, _ in goals], dtype=float).reshape(len(goals), -1)
+        arrivals = np.array([frame for _, frame in goals], dtype=np.int64)
+        chosen, failures, checks = first_legal_goal(
+            self.objective, self.times, self.frame_step, self.speed_cap,
+            np.array(qa, dtype=float), int(ia), targets, arrivals, -2, self.check_tables,
+            self.row_memo)
+        self.checks += checks
+        return int(chosen), failures.tolist()
 
     def first_invalid_path(self, waypoints: Sequence[Tuple[np.ndarray, int]]) -> int:
         """First illegal frame along a chain of motions through ``waypoints``, or -1.
