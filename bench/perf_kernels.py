@@ -32,16 +32,10 @@ atexit.register(shutil.rmtree, os.environ['NUMBA_CACHE_DIR'], ignore_errors=True
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
 from bench_common import print_command  # noqa: E402
-from course_runs import scene, skeleton  # noqa: E402
+from course_runs import SCENES, course_names, scene, skeleton  # noqa: E402
 from digital_actor_planner.cli import read_commands  # noqa: E402
-from digital_actor_planner.core import (collision, convex, ct_roadmap, ct_space,  # noqa: E402
-                                        environment, footstep_search, gait, path,
-                                        upper_body)
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 
-ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..')
-MODULES = (collision, convex, ct_roadmap, ct_space, environment, footstep_search, gait, path,
-           upper_body)
 #: A symbol's size when no other symbol follows it closely (bytes).
 LAST_SIZE = 1 << 14
 
@@ -67,12 +61,14 @@ def readable(symbol: str) -> str:
     return prefix + '.'.join(parts[-2:]) if parts else prefix + symbol
 
 
-def kernel_symbols(modules) -> dict:
-    """Address -> name (:func:`readable`) of every function compiled into the kernels of
-    ``modules`` (those compiled in this process; a helper linked into several kernels is one
-    function, named once)."""
+def kernel_symbols() -> dict:
+    """Address -> name (:func:`readable`) of every function compiled into the kernels of the
+    core's modules loaded in this process (compiled here; a helper linked into several kernels
+    is one function, named once)."""
     import numba
     symbols = {}
+    modules = [module for name, module in list(sys.modules.items())
+               if name.startswith('digital_actor_planner.core.')]
     for module in modules:
         for dispatcher in vars(module).values():
             if not isinstance(dispatcher, numba.core.registry.CPUDispatcher):
@@ -129,29 +125,33 @@ def main(argv=None) -> None:
     args = parser.parse_args(argv)
     if not args.seconds > 0:
         parser.error(f'--seconds must be positive, got {args.seconds}')
+    if args.frequency < 1:
+        parser.error(f'--frequency must be at least 1, got {args.frequency}')
     perf = shutil.which('perf')
     if perf is None:
         parser.error('perf not found (Debian: apt install linux-perf)')
-    walks = []
+    known = course_names()
     for name in args.courses:
-        commands_file = os.path.join(ROOT, 'config', 'scenes', name + '.csv')
-        if not os.path.exists(commands_file):
-            parser.error(f'no course {name!r} (no {commands_file})')
-        walks.append((scene(name), read_commands(commands_file)))
+        if name not in known:
+            parser.error(f'no course {name!r}; the courses: {", ".join(known)}')
+    walks = [(scene(name), read_commands(os.path.join(SCENES, name + '.csv')))
+             for name in args.courses]
     walk(walks, args.whole_body)  # every kernel the walks call compiled before perf starts
+    messages = tempfile.TemporaryFile()
     recorder = subprocess.Popen([perf, 'record', '-e', 'cpu-clock', '-F', str(args.frequency),
                                  '-p', str(os.getpid()), '-o', args.out],
-                                stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+                                stdout=subprocess.DEVNULL, stderr=messages)
     time.sleep(0.5)  # perf attaches
     if recorder.poll() is not None:
-        sys.exit(f'perf record failed: {recorder.stderr.read().decode().strip()}')
+        messages.seek(0)
+        sys.exit(f'perf record failed: {messages.read().decode().strip()}')
     started, steps = time.perf_counter(), 0
     while time.perf_counter() - started < args.seconds:
         steps += walk(walks, args.whole_body)
     elapsed = time.perf_counter() - started
     recorder.send_signal(signal.SIGINT)
     recorder.wait()
-    map_path = write_perf_map(kernel_symbols(MODULES))
+    map_path = write_perf_map(kernel_symbols())
     print(f'{steps} walking steps profiled in {elapsed:.1f} s; kernel symbols in {map_path}; '
           f'{args.out}:')
     report = subprocess.run([perf, 'report', '-i', args.out, '--sort', 'sym', '--stdio'],
