@@ -541,37 +541,37 @@ def _greedy_seed(n, banned_first, banned_lengths, tables):
     return seed
 
 
-@kernel('UniTuple(f8[::1], 4)(i8[::1], ' + TABLES_TYPE + ')')
+@kernel('f8[:, ::1](i8[::1], ' + TABLES_TYPE + ')')
 def _footholds_of(config, tables):
-    """A configuration's footstep lengths (m), its footholds' arc lengths along the path (m,
-    the stance foot's plus the running sum of the lengths), sole heights (m) and pitches
-    (rad), (n,) each."""
+    """A configuration's footholds, (4, n): the footstep lengths (m), the footholds' arc
+    lengths along the path (m, the stance foot's plus the running sum of the lengths), sole
+    heights (m) and pitches (rad). One array: boxing it for Python costs a third of four."""
     ok, height, pitch, bounds, offsets, obstacle, sides, lengths, last, numbers = tables
     n = config.shape[0]
-    chosen, arcs, heights, pitches = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    footholds = np.empty((4, n))
     cumulative, total = 0, 0.0
     for i in range(n):
         cumulative += config[i]
-        chosen[i] = lengths[config[i]]
-        total += chosen[i]
-        arcs[i] = numbers[STANCE_S] + total
-        heights[i] = height[bounds[i] + cumulative]
-        pitches[i] = pitch[bounds[i] + cumulative]
-    return chosen, arcs, heights, pitches
+        footholds[0, i] = lengths[config[i]]
+        total += footholds[0, i]
+        footholds[1, i] = numbers[STANCE_S] + total
+        footholds[2, i] = height[bounds[i] + cumulative]
+        footholds[3, i] = pitch[bounds[i] + cumulative]
+    return footholds
 
 
 #: What :func:`window_search` and :func:`exhaustive_search` return: the configuration (n,)
-#: interval indices, empty when none is collision-free; its effort; configurations judged; and
-#: :func:`_footholds_of` of it (empty arrays when there is none).
-_RESULT_TYPE = 'Tuple((i8[::1], f8, i8, f8[::1], f8[::1], f8[::1], f8[::1]))'
+#: interval indices, empty when none is collision-free; :func:`_footholds_of` of it ((4, 0)
+#: when there is none); its effort; configurations judged.
+_RESULT_TYPE = 'Tuple((i8[::1], f8[:, ::1], f8, i8))'
 
 
 @kernel(_RESULT_TYPE + '(i8[::1], ' + _BANNED + ', ' + _BANNED + ', b1, '
         + PROFILE_TYPE + ')')
 def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
     """§4.2's search of one window: (configuration (n,) interval indices, empty when no
-    configuration is collision-free; its effort; configurations judged; its lengths, arc
-    lengths, sole heights and pitches, :func:`_footholds_of`).
+    configuration is collision-free; its footholds (4, n), :func:`_footholds_of`; its effort;
+    configurations judged).
 
     ``start`` (n,): the configuration the breadth-first search starts from; ``banned_first``
     (m + 1,): the interval indices the first footstep must not take; ``banned_lengths``
@@ -582,7 +582,7 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
     ok, bounds = tables[0], tables[3]
     n = start.shape[0]
     none = np.empty(0, dtype=np.int64)
-    nothing = np.empty(0)
+    nothing = np.empty((4, 0))
     # No configuration can be collision-free if some footstep has no foothold in reach.
     for i in range(n):
         usable = False
@@ -591,12 +591,12 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
                 usable = True
                 break
         if not usable:
-            return none, math.nan, 0, nothing, nothing, nothing, nothing
+            return none, nothing, math.nan, 0
     feasible, prefixes, swings = _empty_memos(n)
     current = _nearest_free(start, banned_first, banned_lengths, tables, feasible, prefixes,
                             swings)
     if current.shape[0] == 0:
-        return none, math.nan, len(feasible), nothing, nothing, nothing, nothing
+        return none, nothing, math.nan, len(feasible)
     effort = _climb(current, banned_first, banned_lengths, tables, feasible, prefixes, swings)
     if greedy_restart:
         # A second hill-climb from a configuration built footstep by footstep: on stairs and
@@ -612,8 +612,7 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
                                swings)
                 if other < effort - 1e-12:
                     current, effort = seed, other
-    chosen, arcs, heights, pitches = _footholds_of(current, tables)
-    return current, effort, len(feasible), chosen, arcs, heights, pitches
+    return current, _footholds_of(current, tables), effort, len(feasible)
 
 
 @kernel(_RESULT_TYPE + '(i8, i8, ' + PROFILE_TYPE + ')')
@@ -638,7 +637,5 @@ def exhaustive_search(n, m, profile):
         if value < best_effort:  # False for NaN
             best, best_effort = config.copy(), value
     if not best.shape[0]:
-        nothing = np.empty(0)
-        return best, best_effort, total, nothing, nothing, nothing, nothing
-    chosen, arcs, heights, pitches = _footholds_of(best, tables)
-    return best, best_effort, total, chosen, arcs, heights, pitches
+        return best, np.empty((4, 0)), best_effort, total
+    return best, _footholds_of(best, tables), best_effort, total

@@ -196,9 +196,10 @@ class Foothold:
     pitch: float
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class FootstepWindow:
-    """Result of one footstep-window search.
+    """Result of one footstep-window search (treat it as read-only: not a frozen dataclass only
+    because one is built on every planned step and freezing costs four times as much).
 
     Attributes
     ----------
@@ -297,6 +298,11 @@ class FootstepPlanner:
         self._none_banned = np.zeros(m + 1, dtype=bool)
         self._none_banned.setflags(write=False)
         self._longest = float(self._lengths.max())
+        # What plan reads on every window, as plain numbers.
+        self._window_size = (int(n), int(m))
+        self._length_min = float(config.step_length_min)
+        self._increment = float(config.step_increment)
+        self._greedy_restart = bool(config.greedy_restart)
 
     # -- the ground under a sole -----------------------------------------------------------
     def foothold(self, profile: GroundProfile, side: int, s: float) -> Foothold:
@@ -433,14 +439,16 @@ class FootstepPlanner:
         30), where the same search in Python took 300-400 us; the same configurations judged,
         the same efforts to the last bit.
         """
-        cfg = self.config
-        n, m = cfg.window_steps, cfg.step_intervals
-        init_index = int(min(max(round((s_init - cfg.step_length_min) / cfg.step_increment), 0),
-                             m))
-        q = tuple(start) if start is not None else (init_index,) * n
-        if len(q) != n or min(q) < 0 or max(q) > m:
-            raise ValueError(f'start configuration {q} is not {n} indices in [0, {m}]')
-        if stance_side not in (0, 1):
+        n, m = self._window_size
+        if start is None:
+            index = round((s_init - self._length_min) / self._increment)
+            q = np.full(n, min(max(index, 0), m), dtype=np.int64)
+        else:
+            if len(start) != n or min(start) < 0 or max(start) > m:
+                raise ValueError(f'start configuration {tuple(start)} is not {n} indices in '
+                                 f'[0, {m}]')
+            q = np.array(start, dtype=np.int64)
+        if stance_side != 0 and stance_side != 1:
             raise ValueError(f'stance side {stance_side!r} is not 0 (left) or 1 (right)')
         banned = self._none_banned
         if len(banned_first):
@@ -451,11 +459,10 @@ class FootstepPlanner:
         too_long = self._none_banned
         if self._longest > max_length + 1e-9:
             too_long = self._lengths > max_length + 1e-9
-        found = window_search(
-            np.array(q, dtype=np.int64), banned, too_long, bool(cfg.greedy_restart),
+        return self._window(window_search(
+            q, banned, too_long, self._greedy_restart,
             self.search_profile(profile, stance_side, stance_s, stance_height, swing_s,
-                                swing_height, s_init, previous_length))
-        return self._window(found, stance_side)
+                                swing_height, s_init, previous_length)), stance_side)
 
     def search_profile(self, profile: GroundProfile, stance_side: int, stance_s: float,
                        stance_height: float, swing_s: float, swing_height: float,
@@ -498,13 +505,13 @@ class FootstepPlanner:
     def _window(self, found: tuple, stance_side: int) -> Optional[FootstepWindow]:
         """The window a search found (:func:`footstep_search.window_search`'s answer), None
         when it found none."""
-        config, effort, evaluated, lengths, arcs, heights, pitches = found
+        config, footholds, effort, evaluated = found
         if not config.size:
             return None
-        return FootstepWindow(lengths=lengths, indices=tuple(config.tolist()), arc_lengths=arcs,
-                              heights=heights, pitches=pitches,
-                              sides=self._sides[stance_side][0].copy(), effort=effort,
-                              evaluated=evaluated)
+        # Positional: keywords cost a fifth more on every planned step.
+        return FootstepWindow(footholds[0], tuple(config.tolist()), footholds[1], footholds[2],
+                              footholds[3], self._sides[stance_side][0].copy(), effort,
+                              evaluated)
 
 
 def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: float,
