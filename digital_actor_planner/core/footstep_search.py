@@ -516,6 +516,9 @@ def _greedy_seed(n, banned_first, banned_lengths, tables):
     when some footstep has no usable foothold."""
     ok, height, pitch, bounds, offsets, obstacle, sides, lengths, last, numbers = tables
     up, down = numbers[UP], numbers[DOWN]
+    two, span, s_init = numbers[TWO], numbers[SPAN], numbers[S_INIT]
+    w_length, w_height, w_pitch = numbers[W_LENGTH], numbers[W_HEIGHT], numbers[W_PITCH]
+    w_smooth, up_range, pitch_range = numbers[W_SMOOTH], numbers[UP_RANGE], numbers[PITCH_RANGE]
     seed = np.empty(n, dtype=np.int64)
     cumulative, height_before = 0, numbers[STANCE_HEIGHT]
     length_before = numbers[PREVIOUS_LENGTH]
@@ -530,7 +533,19 @@ def _greedy_seed(n, banned_first, banned_lengths, tables):
             rise = height[entry] - height_before
             if rise > up or -rise > down:
                 continue
-            cost = _step_cost(lengths[j], rise, pitch[entry], length_before, numbers)
+            # _step_cost's sum term by term, given up once it reaches the best so far: the
+            # terms are >= 0 (weights >= 0, squares), so the rest could only add to it. The
+            # same value as _step_cost wherever it is finished, at a third of the powers.
+            cost = w_length * ((lengths[j] - s_init) / span) ** two
+            if cost >= best_cost:
+                continue
+            cost = cost + w_height * (rise / up_range) ** two
+            if cost >= best_cost:
+                continue
+            cost = cost + w_pitch * (pitch[entry] / pitch_range) ** two
+            if cost >= best_cost:
+                continue
+            cost = cost + w_smooth * ((lengths[j] - length_before) / span) ** two
             if cost < best_cost:
                 best, best_cost = j, cost
         if best < 0:
