@@ -14,8 +14,7 @@ DS = 0.02
 #: The compiled search's functions (footstep_search), each calling the ones before.
 SEARCH_KERNELS = ('judge_footholds', 'foothold_tables', '_empty_memos', '_prefix_key',
                   '_digits', '_step_cost', '_rise_ahead', '_swing_clear', '_effort',
-                  '_evaluate', '_lands', '_number', '_climb', '_nearest_free', '_greedy_seed',
-                  '_footholds_of', 'window_search', 'exhaustive_search')
+                  '_greedy_seed', '_footholds_of', 'window_search', 'exhaustive_search')
 
 
 @pytest.fixture(scope='module')
@@ -615,3 +614,28 @@ def test_the_search_is_the_papers_breadth_first_search_and_hill_climbing(leg, gr
             assert window.evaluated == len(judged), (name, start)
             searched += len(judged) > 14
     assert searched >= 10, 'too few searches that had to go far for the test to mean much'
+
+
+def test_a_window_of_many_configurations_keeps_its_memo_in_a_dictionary_and_searches_alike(
+        leg, search_kind):
+    """Past ``DENSE_CONFIGURATIONS`` configurations (five footsteps: 14 ** 5) the search
+    remembers what it judged in a dictionary instead of arrays: the same configuration, effort
+    and configurations judged as the plain §4.2 search, on stairs from starts far from any
+    free one."""
+    config = FootstepConfig(window_steps=5)
+    assert (config.step_intervals + 1) ** 5 > footstep_search.DENSE_CONFIGURATIONS
+    planner = FootstepPlanner(config, leg)
+    profile = profile_from(
+        lambda s: 0.12 * (np.floor((s - 0.4) / 0.3) + 1) if s > 0.4 else 0.0, length=6.0)
+    rng = np.random.default_rng(5)
+    searched = 0
+    for _ in range(6):
+        start = tuple(int(j) for j in rng.integers(0, 14, 5))
+        s_init = float(rng.uniform(0.3, 0.7))
+        expected, effort, judged = _paper_search(planner, profile, start, s_init, 0.5)
+        window = plan(planner, profile, s_init=s_init, start=start)
+        assert expected is not None and window is not None, start
+        assert window.indices == expected and window.effort == effort, start
+        assert window.evaluated == len(judged), start
+        searched += len(judged) > 30
+    assert searched >= 3, 'too few searches that had to go far for the test to mean much'

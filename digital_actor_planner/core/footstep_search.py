@@ -12,7 +12,9 @@ the most significant digit; its first L footsteps (a prefix) are numbered the sa
 keyed ``number * (n + 1) + L``. Three memos live for one search:
 
 - ``feasible[number]``: the effort of a configuration judged, NaN where it is not
-  collision-free (their count is the window's ``evaluated``);
+  collision-free (their count is the window's ``evaluated``); :func:`window_search` keeps it
+  in arrays over every configuration where there are at most
+  :data:`DENSE_CONFIGURATIONS`, in this dictionary past that;
 - ``prefixes[key]``: the state after a prefix, (effort, arc length, sole height, length,
   cumulative interval index), or :data:`_INFEASIBLE` where the prefix already fails; a
   configuration is judged from the longest prefix known, so neighbours that share their first
@@ -218,7 +220,7 @@ def _prefix_key(prefix_number, length, n):
 
 @kernel('void(i8, i8, i8[::1])')
 def _digits(number, base, config):
-    """Write configuration ``number``'s interval indices into ``config`` (:func:`_number`
+    """Write configuration ``number``'s interval indices into ``config`` (its numbering
     undone)."""
     for i in range(config.shape[0] - 1, -1, -1):
         config[i] = number % base
@@ -366,149 +368,6 @@ def _effort(config, banned_first, tables, prefixes, swings):
     return effort
 
 
-@kernel('f8(i8[::1], i8, ' + _BANNED + ', ' + _BANNED + ', ' + TABLES_TYPE + ', '
-        + _FEASIBLE_TYPE + ', ' + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE + ')')
-def _evaluate(config, number, banned_first, banned_lengths, tables, feasible, prefixes,
-              swings):
-    """Effort of configuration ``config`` (numbered ``number``), NaN if it is not
-    collision-free; remembered in ``feasible``."""
-    known = feasible.get(number, _UNJUDGED)
-    if known != _UNJUDGED:  # True for NaN
-        return known
-    n = config.shape[0]
-    for i in range(n):
-        if banned_lengths[config[i]]:
-            feasible[number] = math.nan
-            return math.nan
-    if n > 1:
-        # All but the last footstep already found infeasible (the breadth-first search walks
-        # through many of these): the answer without resuming the effort.
-        key = _prefix_key(number // banned_lengths.shape[0], n - 1, n)
-        if key in prefixes and prefixes[key][4] < 0:
-            feasible[number] = math.nan
-            return math.nan
-    result = _effort(config, banned_first, tables, prefixes, swings)
-    feasible[number] = result
-    return result
-
-
-@kernel('b1(i8[::1], i8, ' + TABLES_TYPE + ', ' + _FEASIBLE_TYPE + ')')
-def _lands(config, number, tables, feasible):
-    """Whether every footstep of ``config`` has a foothold where it lands (the table alone;
-    False is recorded as infeasible, as :func:`_evaluate` would). Most configurations the
-    breadth-first search visits on stairs land on a riser."""
-    ok, bounds = tables[0], tables[3]
-    cumulative = 0
-    for i in range(config.shape[0]):
-        cumulative += config[i]
-        if not ok[bounds[i] + cumulative]:
-            feasible[number] = math.nan
-            return False
-    return True
-
-
-@kernel('i8(i8[::1], i8)')
-def _number(config, base):
-    """A configuration's number, base ``base``, footstep 0 the most significant digit."""
-    number = 0
-    for i in range(config.shape[0]):
-        number = number * base + config[i]
-    return number
-
-
-@kernel('f8(i8[::1], ' + _BANNED + ', ' + _BANNED + ', ' + TABLES_TYPE + ', '
-        + _FEASIBLE_TYPE + ', ' + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE + ')')
-def _climb(current, banned_first, banned_lengths, tables, feasible, prefixes, swings):
-    """Hill-climbing from ``current`` (changed in place): to the best neighbour while it
-    lowers the effort by more than 1e-12; returns the effort. The neighbours, in order: each
-    footstep one interval shorter, then longer, each followed by that change with the next
-    footstep changed the opposite way (so the footholds after them stay; without it
-    hill-climbing stalls on ridges of the effort)."""
-    n = current.shape[0]
-    base = banned_lengths.shape[0]
-    m = base - 1
-    effort = _evaluate(current, _number(current, base), banned_first, banned_lengths, tables,
-                       feasible, prefixes, swings)
-    neighbour = current.copy()
-    best = current.copy()
-    while True:
-        best_effort = effort
-        moved = False
-        for i in range(n):
-            for delta in (-1, 1):
-                j = current[i] + delta
-                if not 0 <= j <= m:
-                    continue
-                for paired in range(2):
-                    neighbour[:] = current
-                    neighbour[i] = j
-                    if paired:
-                        if i + 1 >= n or not 0 <= current[i + 1] - delta <= m:
-                            continue
-                        neighbour[i + 1] = current[i + 1] - delta
-                    value = _evaluate(neighbour, _number(neighbour, base), banned_first,
-                                      banned_lengths, tables, feasible, prefixes, swings)
-                    if value < best_effort - 1e-12:  # False for NaN
-                        best[:] = neighbour
-                        best_effort = value
-                        moved = True
-        if not moved:
-            return effort
-        current[:] = best
-        effort = best_effort
-
-
-@kernel('i8[::1](i8[::1], ' + _BANNED + ', ' + _BANNED + ', ' + TABLES_TYPE + ', '
-        + _FEASIBLE_TYPE + ', ' + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE + ')')
-def _nearest_free(start, banned_first, banned_lengths, tables, feasible, prefixes, swings):
-    """Breadth-first search from ``start`` to the nearest collision-free configuration (empty
-    when there is none).
-
-    The paper's single-footstep moves, footstep by footstep, shorter before longer. Each
-    configuration is tested when it is queued: the first one found free is the first the queue
-    would hand out (first in, first out), so the result and the configurations tested are those
-    of testing on the way out, without expanding the rest of the last level. ``feasible`` must
-    start empty: then the configurations it holds are those the search has seen (each is
-    judged, by :func:`_lands` or :func:`_evaluate`, when it is queued).
-    """
-    n = start.shape[0]
-    base = banned_lengths.shape[0]
-    m = base - 1
-    number = _number(start, base)
-    value = _evaluate(start, number, banned_first, banned_lengths, tables, feasible, prefixes,
-                      swings)
-    if value == value:  # not NaN
-        return start.copy()
-    strides = np.empty(n, dtype=np.int64)
-    stride = 1
-    for i in range(n - 1, -1, -1):
-        strides[i] = stride
-        stride *= base
-    queue = [number]
-    head = 0
-    config = np.empty(n, dtype=np.int64)
-    neighbour = np.empty(n, dtype=np.int64)
-    while head < len(queue):
-        number = queue[head]
-        head += 1
-        _digits(number, base, config)
-        for i in range(n):
-            j = config[i]
-            for delta in (-1, 1):
-                other = number + delta * strides[i]
-                if not 0 <= j + delta <= m or other in feasible:
-                    continue
-                neighbour[:] = config
-                neighbour[i] = j + delta
-                if _lands(neighbour, other, tables, feasible):
-                    value = _evaluate(neighbour, other, banned_first, banned_lengths, tables,
-                                      feasible, prefixes, swings)
-                    if value == value:
-                        return neighbour
-                queue.append(other)
-    return np.empty(0, dtype=np.int64)
-
-
 @kernel('i8[::1](i8, ' + _BANNED + ', ' + _BANNED + ', ' + TABLES_TYPE + ')')
 def _greedy_seed(n, banned_first, banned_lengths, tables):
     """A configuration built footstep by footstep, each the cheapest given the ones before by
@@ -581,6 +440,12 @@ def _footholds_of(config, tables):
 _RESULT_TYPE = 'Tuple((i8[::1], f8[:, ::1], f8, i8))'
 
 
+#: The most configurations a window may have for the search to remember which it judged in
+#: arrays over all of them (the paper's n = 3, m = 13: 2,744; 9 bytes each, one of them zeroed
+#: for every search); past it, in a dictionary.
+DENSE_CONFIGURATIONS = 1 << 16
+
+
 @kernel(_RESULT_TYPE + '(i8[::1], ' + _BANNED + ', ' + _BANNED + ', b1, '
         + PROFILE_TYPE + ')')
 def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
@@ -592,10 +457,17 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
     (m + 1,): the interval indices the first footstep must not take; ``banned_lengths``
     (m + 1,): those no footstep may take; ``greedy_restart``: climb a second time from
     :func:`_greedy_seed` and keep the better; ``profile``: :data:`PROFILE_TYPE`.
+
+    One function: the search's own steps (the memo of judged configurations, the
+    breadth-first search, the climbs) are its inner functions, which numba compiles into it,
+    so that they pass nothing between them; only the effort (:func:`_effort`, shared with
+    :func:`exhaustive_search`) is called.
     """
     tables = foothold_tables(profile)
     ok, bounds = tables[0], tables[3]
     n = start.shape[0]
+    base = banned_lengths.shape[0]
+    m = base - 1
     none = np.empty(0, dtype=np.int64)
     nothing = np.empty((4, 0))
     # No configuration can be collision-free if some footstep has no foothold in reach.
@@ -607,27 +479,170 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
                 break
         if not usable:
             return none, nothing, math.nan, 0
-    feasible, prefixes, swings = _empty_memos(n)
-    current = _nearest_free(start, banned_first, banned_lengths, tables, feasible, prefixes,
-                            swings)
-    if current.shape[0] == 0:
-        return none, nothing, math.nan, len(feasible)
-    effort = _climb(current, banned_first, banned_lengths, tables, feasible, prefixes, swings)
-    if greedy_restart:
-        # A second hill-climb from a configuration built footstep by footstep: on stairs and
-        # blocks the feasible configurations fall apart into basins (a foothold on every
-        # tread or on every other one) and the first climb cannot leave its basin.
-        seed = _greedy_seed(n, banned_first, banned_lengths, tables)
-        base = banned_lengths.shape[0]
-        if seed.shape[0] and not (seed == current).all():
-            value = _evaluate(seed, _number(seed, base), banned_first, banned_lengths, tables,
-                              feasible, prefixes, swings)
-            if value == value:
-                other = _climb(seed, banned_first, banned_lengths, tables, feasible, prefixes,
-                               swings)
-                if other < effort - 1e-12:
-                    current, effort = seed, other
-    return current, _footholds_of(current, tables), effort, len(feasible)
+    table, prefixes, swings = _empty_memos(n)
+    # The configurations judged: their efforts (NaN where not collision-free), in arrays over
+    # every configuration where there are few enough of them, else in ``table``.
+    configurations = 1
+    for _ in range(n):
+        configurations *= base
+        if configurations > DENSE_CONFIGURATIONS:
+            configurations = 0
+            break
+    judged = np.zeros(configurations, dtype=np.uint8)
+    efforts = np.empty(configurations)
+
+    def known(number):
+        if configurations:
+            return efforts[number] if judged[number] else _UNJUDGED
+        return table.get(number, _UNJUDGED)
+
+    def remember(number, value):
+        if configurations:
+            judged[number] = 1
+            efforts[number] = value
+        else:
+            table[number] = value
+
+    def judged_count():
+        count = len(table)
+        for state in judged:
+            if state:
+                count += 1
+        return count
+
+    def number_of(config):
+        number = 0
+        for i in range(n):
+            number = number * base + config[i]
+        return number
+
+    def evaluate(config, number):
+        # The effort of ``config`` (numbered ``number``), NaN if it is not collision-free;
+        # remembered.
+        value = known(number)
+        if value != _UNJUDGED:  # True for NaN
+            return value
+        for i in range(n):
+            if banned_lengths[config[i]]:
+                remember(number, math.nan)
+                return math.nan
+        if n > 1:
+            # All but the last footstep already found infeasible (the breadth-first search
+            # walks through many of these): the answer without resuming the effort.
+            key = _prefix_key(number // base, n - 1, n)
+            if key in prefixes and prefixes[key][4] < 0:
+                remember(number, math.nan)
+                return math.nan
+        value = _effort(config, banned_first, tables, prefixes, swings)
+        remember(number, value)
+        return value
+
+    # The breadth-first search from ``start`` to the nearest collision-free configuration:
+    # the paper's single-footstep moves, footstep by footstep, shorter before longer. Each
+    # configuration is tested when it is queued: the first one found free is the first the
+    # queue would hand out (first in, first out), so the result and the configurations tested
+    # are those of testing on the way out, without expanding the rest of the last level. The
+    # memo holds exactly the configurations the search has seen (each judged when queued: by
+    # its footholds alone where one has none, most of those on stairs land on a riser).
+    current = start.copy()
+    number = number_of(start)
+    value = evaluate(start, number)
+    if value != value:  # NaN: not free
+        strides = np.empty(n, dtype=np.int64)
+        stride = 1
+        for i in range(n - 1, -1, -1):
+            strides[i] = stride
+            stride *= base
+        queue = [number]
+        head = 0
+        config = np.empty(n, dtype=np.int64)
+        found = False
+        while head < len(queue) and not found:
+            number = queue[head]
+            head += 1
+            rest = number
+            for i in range(n - 1, -1, -1):
+                config[i] = rest % base
+                rest //= base
+            for i in range(n):
+                j = config[i]
+                for delta in (-1, 1):
+                    other = number + delta * strides[i]
+                    if not 0 <= j + delta <= m or known(other) != _UNJUDGED:
+                        continue
+                    current[:] = config
+                    current[i] = j + delta
+                    lands, cumulative = True, 0
+                    for k in range(n):
+                        cumulative += current[k]
+                        if not ok[bounds[k] + cumulative]:
+                            lands = False
+                            break
+                    if not lands:
+                        remember(other, math.nan)
+                    else:
+                        value = evaluate(current, other)
+                        if value == value:
+                            found = True
+                            break
+                    queue.append(other)
+                if found:
+                    break
+        if not found:
+            return none, nothing, math.nan, judged_count()
+
+    # Hill-climbing from the configuration found, then (greedy_restart) from the greedy one:
+    # to the best neighbour while it lowers the effort by more than 1e-12. The neighbours, in
+    # order: each footstep one interval shorter, then longer, each followed by that change
+    # with the next footstep changed the opposite way (so the footholds after them stay;
+    # without it hill-climbing stalls on ridges of the effort). The greedy climb's result is
+    # kept where it is better by more than 1e-12.
+    neighbour = np.empty(n, dtype=np.int64)
+    best = np.empty(n, dtype=np.int64)
+    result = current
+    effort = math.nan
+    for attempt in range(2):
+        if attempt == 1:
+            if not greedy_restart:
+                break
+            # On stairs and blocks the feasible configurations fall apart into basins (a
+            # foothold on every tread or on every other one) and the first climb cannot leave
+            # its basin.
+            current = _greedy_seed(n, banned_first, banned_lengths, tables)
+            if current.shape[0] == 0 or (current == result).all():
+                break
+        value = evaluate(current, number_of(current))
+        if value != value:  # only the greedy configuration can be not collision-free
+            break
+        while True:
+            best_value = value
+            moved = False
+            for i in range(n):
+                for delta in (-1, 1):
+                    j = current[i] + delta
+                    if not 0 <= j <= m:
+                        continue
+                    for paired in range(2):
+                        neighbour[:] = current
+                        neighbour[i] = j
+                        if paired:
+                            if i + 1 >= n or not 0 <= current[i + 1] - delta <= m:
+                                continue
+                            neighbour[i + 1] = current[i + 1] - delta
+                        other = evaluate(neighbour, number_of(neighbour))
+                        if other < best_value - 1e-12:  # False for NaN
+                            best[:] = neighbour
+                            best_value = other
+                            moved = True
+            if not moved:
+                break
+            current[:] = best
+            value = best_value
+        if attempt == 0:
+            effort = value
+        elif value < effort - 1e-12:
+            result, effort = current, value
+    return result, _footholds_of(result, tables), effort, judged_count()
 
 
 @kernel(_RESULT_TYPE + '(i8, i8, ' + PROFILE_TYPE + ')')
