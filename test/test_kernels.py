@@ -514,6 +514,29 @@ def test_a_kernel_compiles_without_a_cache_when_numba_can_cache_it_nowhere(monke
     assert total.py_func is not total
 
 
+def test_an_inline_kernel_is_compiled_into_the_kernels_that_call_it():
+    """``kernel(..., inline=True)``: numba compiles it into its callers (no call between
+    them); the same answers compiled and as Python."""
+    from digital_actor_planner.core import jit
+
+    @jit.kernel('f8(f8, f8)', inline=True)
+    def weighted_square(weight, x):
+        return weight * x * x
+
+    @jit.kernel('f8(f8[::1])')
+    def total(values):
+        out = 0.0
+        for value in values:
+            out += weighted_square(0.5, value)
+        return out
+
+    assert total(np.arange(4.0)) == total.py_func(np.arange(4.0)) == 7.0
+    assert weighted_square(2.0, 3.0) == 18.0
+    if COMPILED:
+        assert weighted_square.targetoptions['inline'] == 'always'
+        assert total.targetoptions['inline'] == 'never'
+
+
 def test_motion_patterns_kernel(skeleton):
     """The patterns' columns, compiled and as Python, against the pattern written in NumPy
     (each column of each arm, then np.clip's arithmetic over the upper body), to the last bit:

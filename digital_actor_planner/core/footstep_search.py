@@ -227,7 +227,7 @@ def _digits(number, base, config):
         number //= base
 
 
-@kernel('f8(f8, f8, f8, f8, f8[::1])')
+@kernel('f8(f8, f8, f8, f8, f8[::1])', inline=True)
 def _step_cost(length, rise, pitch, length_before, numbers):
     """One footstep's share of the effort: length off the neutral one, height change, sole
     pitch and change of length, each normalised by its range, in the plain effort's order
@@ -239,7 +239,7 @@ def _step_cost(length, rise, pitch, length_before, numbers):
             + numbers[W_SMOOTH] * ((length - length_before) / span) ** two)
 
 
-@kernel('f8(i8, i8, ' + TABLES_TYPE + ')')
+@kernel('f8(i8, i8, ' + TABLES_TYPE + ')', inline=True)
 def _rise_ahead(row, cumulative, tables):
     """How far the ground within ``lift_room`` ahead of a foothold's toe rises above its sole's
     plane carried on, m: -inf where nothing does (or no room is asked for), NaN where the
@@ -270,7 +270,7 @@ def _rise_ahead(row, cumulative, tables):
     return value
 
 
-@kernel('b1(i8, f8, f8, f8, f8, i8, i8, ' + TABLES_TYPE + ')')
+@kernel('b1(i8, f8, f8, f8, f8, i8, i8, ' + TABLES_TYPE + ')', inline=True)
 def _swing_clear(side, s_from, h_from, s_to, h_to, from_row, from_cumulative, tables):
     """Whether a foot can swing from one foothold (arc length, sole height) to the next over
     the profile's obstacles, at most ``max_swing_height`` above the higher of the two; where it

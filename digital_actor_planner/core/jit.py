@@ -20,24 +20,29 @@ except ImportError:  # pragma: no cover
 COMPILED = numba is not None
 
 
-def kernel(signature: str) -> Callable:
+def kernel(signature: str, inline: bool = False) -> Callable:
     """Decorator: compile ``function`` for ``signature`` if numba is installed, else return it
     unchanged. The plain function stays reachable as ``py_func`` either way (the tests compare
     the two).
 
     ``signature`` is numba's type string (``'f8(f8[::1], i8)'``), where ``readonly(T)`` is
     the array type T that also accepts read-only arrays (shared tables).
+    ``inline``: numba compiles the kernel into every kernel that calls it (``inline='always'``)
+    instead of calling it: for small helpers called many times from one kernel, whose call
+    would cost more than their work (each array argument is reference counted at a call).
     """
     def wrap(function: Callable) -> Callable:
         if numba is None:
             function.py_func = function
             return function
         try:
-            return numba.njit(_parse(signature), cache=True, nogil=True)(function)
+            return numba.njit(_parse(signature), cache=True, nogil=True,
+                              inline='always' if inline else 'never')(function)
         except RuntimeError:
             # numba found nowhere writable to cache it (a read-only install and home):
             # compiled for this process alone.
-            return numba.njit(_parse(signature), nogil=True)(function)
+            return numba.njit(_parse(signature), nogil=True,
+                              inline='always' if inline else 'never')(function)
     return wrap
 
 
