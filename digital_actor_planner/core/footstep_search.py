@@ -378,12 +378,36 @@ def _greedy_seed(n, banned_first, banned_lengths, tables):
     two, span, s_init = numbers[TWO], numbers[SPAN], numbers[S_INIT]
     w_length, w_height, w_pitch = numbers[W_LENGTH], numbers[W_HEIGHT], numbers[W_PITCH]
     w_smooth, up_range, pitch_range = numbers[W_SMOOTH], numbers[UP_RANGE], numbers[PITCH_RANGE]
+    base = lengths.shape[0]
+    # The length term of each interval, the same for every footstep, and the intervals in
+    # the order of it (nearest the neutral length first; the lengths ascend): the cheapest
+    # candidate tends to come first, and once a length term alone exceeds the best so far so
+    # do all after it.
+    length_terms = np.empty(base)
+    for j in range(base):
+        length_terms[j] = w_length * ((lengths[j] - s_init) / span) ** two
+    order = np.empty(base, dtype=np.int64)
+    right = 0
+    while right < base and lengths[right] < s_init:
+        right += 1
+    left = right - 1
+    for k in range(base):
+        if right >= base or (left >= 0 and length_terms[left] <= length_terms[right]):
+            order[k] = left
+            left -= 1
+        else:
+            order[k] = right
+            right += 1
     seed = np.empty(n, dtype=np.int64)
     cumulative, height_before = 0, numbers[STANCE_HEIGHT]
     length_before = numbers[PREVIOUS_LENGTH]
     for i in range(n):
+        # The cheapest candidate, the shortest of equals (as scanning them shortest first).
         best, best_cost = -1, math.inf
-        for j in range(lengths.shape[0]):
+        for k in range(base):
+            j = order[k]
+            if length_terms[j] > best_cost:
+                break
             if banned_lengths[j] or (i == 0 and banned_first[j]):
                 continue
             entry = bounds[i] + cumulative + j
@@ -392,20 +416,20 @@ def _greedy_seed(n, banned_first, banned_lengths, tables):
             rise = height[entry] - height_before
             if rise > up or -rise > down:
                 continue
-            # _step_cost's sum term by term, given up once it reaches the best so far: the
-            # terms are >= 0 (weights >= 0, squares), so the rest could only add to it. The
-            # same value as _step_cost wherever it is finished, at a third of the powers.
-            cost = w_length * ((lengths[j] - s_init) / span) ** two
-            if cost >= best_cost:
+            # _step_cost's sum term by term, given up once it exceeds the best so far (or
+            # equals it for a longer interval): the terms are >= 0 (weights >= 0, squares), so
+            # the rest could only add to it. The same value as _step_cost where it finishes.
+            cost = length_terms[j]
+            if cost > best_cost or (cost == best_cost and j > best):
                 continue
             cost = cost + w_height * (rise / up_range) ** two
-            if cost >= best_cost:
+            if cost > best_cost or (cost == best_cost and j > best):
                 continue
             cost = cost + w_pitch * (pitch[entry] / pitch_range) ** two
-            if cost >= best_cost:
+            if cost > best_cost or (cost == best_cost and j > best):
                 continue
             cost = cost + w_smooth * ((lengths[j] - length_before) / span) ** two
-            if cost < best_cost:
+            if cost < best_cost or (cost == best_cost and j < best):
                 best, best_cost = j, cost
         if best < 0:
             return np.empty(0, dtype=np.int64)
