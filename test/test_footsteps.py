@@ -12,9 +12,10 @@ from digital_actor_planner.core.skeleton import Skeleton
 
 DS = 0.02
 #: The compiled search's functions (footstep_search), each calling the ones before.
-SEARCH_KERNELS = ('judge_footholds', 'foothold_tables', '_empty_memos', '_prefix_key',
-                  '_digits', '_step_cost', '_rise_ahead', '_swing_clear', '_effort',
-                  '_greedy_seed', '_footholds_of', 'window_search', 'exhaustive_search')
+SEARCH_KERNELS = ('_judge_sole', 'judge_footholds', '_unjudged_tables', 'foothold_tables',
+                  '_empty_memos', '_prefix_key', '_digits', '_step_cost', '_rise_ahead',
+                  '_swing_clear', '_effort', '_footholds_of', 'window_search',
+                  'exhaustive_search')
 
 
 @pytest.fixture(scope='module')

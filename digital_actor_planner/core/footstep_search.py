@@ -52,102 +52,102 @@ from .jit import kernel
 NUMBER_COUNT = 28
 
 
+@kernel('Tuple((b1, f8, f8))(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8, f8, i8, f8, f8, f8, f8, '
+        'f8, f8, f8)', inline=True)
+def _judge_sole(high, low, headroom, s0, ds, row, sn, heel, toe, min_headroom, max_pitch,
+                tolerance, min_fraction):
+    """One sole of :func:`judge_footholds`, its ankle at arc length ``sn`` on side ``row``:
+    (ok, height, pitch). A maximum or minimum over a NaN sample is NaN, as NumPy's: a missing
+    sample makes the sole neither flat nor supported at an edge."""
+    samples = high.shape[1]
+    # The samples from the heel to the toe, none beyond them.
+    i0 = int(math.ceil((sn - heel - s0) / ds - 1e-9))
+    i1 = int(math.floor((sn + toe - s0) / ds + 1e-9))
+    if i0 < 0 or i1 >= samples or i1 < i0:
+        return False, math.nan, 0.0
+    # One pass: the headroom, the sum of the slope's fit and whether a sample is missing.
+    # The least-squares slope through evenly spaced samples: their mean is the middle of
+    # the first and the last, and the squares of their distances from it sum to
+    # ds^2 W (W^2 - 1) / 12. Two samples or fewer fit no slope.
+    width = i1 - i0 + 1
+    middle = s0 + (0.5 * ds) * (i0 + i1) - sn
+    total = 0.0
+    clean = True
+    for i in range(i0, i1 + 1):
+        if not headroom[row, i] >= min_headroom:  # NaN has no headroom either
+            return False, math.nan, 0.0
+        h = high[row, i]
+        total += ((s0 + ds * i - sn) - middle) * h
+        if h != h or low[row, i] != low[row, i]:
+            clean = False
+    slope = 0.0
+    if width > 2:
+        slope = total / max((ds * ds / 12.0) * width * (width * width - 1), 1e-30)
+    pitch = math.atan(slope)
+    # The sole rests on the highest point above the fitted plane and must not bridge a dip
+    # below it deeper than the tolerance. Without a NaN the plain comparisons give the
+    # NaN-propagating ones' answers, faster.
+    lift, dip, top = -np.inf, np.inf, -np.inf
+    if clean and slope == slope:
+        for i in range(i0, i1 + 1):
+            plane = slope * (s0 + ds * i - sn)
+            h = high[row, i]
+            above, below = h - plane, low[row, i] - plane
+            if above > lift:
+                lift = above
+            if below < dip:
+                dip = below
+            if h > top:
+                top = h
+    else:
+        for i in range(i0, i1 + 1):
+            plane = slope * (s0 + ds * i - sn)
+            above, below, h = high[row, i] - plane, low[row, i] - plane, high[row, i]
+            if lift == lift and (above != above or above > lift):
+                lift = above
+            if dip == dip and (below != below or below < dip):
+                dip = below
+            if top == top and (h != h or h > top):
+                top = h
+    if abs(pitch) <= max_pitch and lift - dip <= tolerance:
+        return True, lift, pitch
+    # At an edge a flat sole may overhang lower ground: the ankle's sample (the lower of
+    # two as near) and its neighbours on the sole must be supported, and most of the sole.
+    # Not the pitch limit: the plane through the overhung ground tilts too (a heel over a
+    # stair's nosing, 0.2 m lower, tilted it past the limit).
+    level = top - tolerance
+    ankle = int(min(max(math.ceil((sn - s0) / ds - 0.5), i0), i1))
+    supported, around = 0, True
+    for i in range(i0, i1 + 1):
+        if high[row, i] >= level and low[row, i] >= level:
+            supported += 1
+        elif ankle - 1 <= i <= ankle + 1:
+            around = False
+    if around and supported / width >= min_fraction:
+        return True, top, 0.0
+    return False, math.nan, pitch
+
+
 @kernel('Tuple((b1[::1], f8[::1], f8[::1]))(f8[:, ::1], f8[:, ::1], f8[:, ::1], f8, f8, '
         'readonly(i8[::1]), '
         'f8[::1], f8, f8, f8, f8, f8, f8)')
 def judge_footholds(high, low, headroom, s0, ds, side, s, heel, toe, min_headroom, max_pitch,
                     tolerance, min_fraction):
     """:meth:`footsteps.FootstepPlanner.footholds` for every sole in one pass (see there for
-    the rules).
+    the rules): :func:`_judge_sole` of each.
 
     Returns (ok, sole height under the ankle (NaN where not ok), pitch of the sole's plane,
     the C library's arctangent of its slope: 0 on an edge and where the sole is not usable).
-    A maximum or minimum over a NaN sample is NaN, as NumPy's: a missing sample makes the sole
-    neither flat nor supported at an edge.
     """
     count = s.shape[0]
-    samples = high.shape[1]
     ok = np.zeros(count, dtype=np.bool_)
     height = np.full(count, np.nan)
-    pitch_out = np.zeros(count)
+    pitch = np.zeros(count)
     for n in range(count):
-        sn = s[n]
-        row = side[n]
-        # The samples from the heel to the toe, none beyond them.
-        i0 = int(math.ceil((sn - heel - s0) / ds - 1e-9))
-        i1 = int(math.floor((sn + toe - s0) / ds + 1e-9))
-        if i0 < 0 or i1 >= samples or i1 < i0:
-            continue
-        # One pass: the headroom, the sum of the slope's fit and whether a sample is missing.
-        # The least-squares slope through evenly spaced samples: their mean is the middle of
-        # the first and the last, and the squares of their distances from it sum to
-        # ds^2 W (W^2 - 1) / 12. Two samples or fewer fit no slope.
-        width = i1 - i0 + 1
-        middle = s0 + (0.5 * ds) * (i0 + i1) - sn
-        total = 0.0
-        usable, clean = True, True
-        for i in range(i0, i1 + 1):
-            if not headroom[row, i] >= min_headroom:  # NaN has no headroom either
-                usable = False
-                break
-            h = high[row, i]
-            total += ((s0 + ds * i - sn) - middle) * h
-            if h != h or low[row, i] != low[row, i]:
-                clean = False
-        if not usable:
-            continue
-        slope = 0.0
-        if width > 2:
-            slope = total / max((ds * ds / 12.0) * width * (width * width - 1), 1e-30)
-        pitch = math.atan(slope)
-        # The sole rests on the highest point above the fitted plane and must not bridge a dip
-        # below it deeper than the tolerance. Without a NaN the plain comparisons give the
-        # NaN-propagating ones' answers, faster.
-        lift, dip, top = -np.inf, np.inf, -np.inf
-        if clean and slope == slope:
-            for i in range(i0, i1 + 1):
-                plane = slope * (s0 + ds * i - sn)
-                h = high[row, i]
-                above, below = h - plane, low[row, i] - plane
-                if above > lift:
-                    lift = above
-                if below < dip:
-                    dip = below
-                if h > top:
-                    top = h
-        else:
-            for i in range(i0, i1 + 1):
-                plane = slope * (s0 + ds * i - sn)
-                above, below, h = high[row, i] - plane, low[row, i] - plane, high[row, i]
-                if lift == lift and (above != above or above > lift):
-                    lift = above
-                if dip == dip and (below != below or below < dip):
-                    dip = below
-                if top == top and (h != h or h > top):
-                    top = h
-        if abs(pitch) <= max_pitch and lift - dip <= tolerance:
-            ok[n] = True
-            height[n] = lift
-            pitch_out[n] = pitch
-            continue
-        # At an edge a flat sole may overhang lower ground: the ankle's sample (the lower of
-        # two as near) and its neighbours on the sole must be supported, and most of the sole.
-        # Not the pitch limit: the plane through the overhung ground tilts too (a heel over a
-        # stair's nosing, 0.2 m lower, tilted it past the limit).
-        level = top - tolerance
-        ankle = int(min(max(math.ceil((sn - s0) / ds - 0.5), i0), i1))
-        supported, around = 0, True
-        for i in range(i0, i1 + 1):
-            if high[row, i] >= level and low[row, i] >= level:
-                supported += 1
-            elif ankle - 1 <= i <= ankle + 1:
-                around = False
-        if around and supported / width >= min_fraction:
-            ok[n] = True
-            height[n] = top
-        else:
-            pitch_out[n] = pitch
-    return ok, height, pitch_out
+        ok[n], height[n], pitch[n] = _judge_sole(high, low, headroom, s0, ds, side[n], s[n],
+                                                 heel, toe, min_headroom, max_pitch,
+                                                 tolerance, min_fraction)
+    return ok, height, pitch
 
 
 #: A prefix that already fails (its cumulative interval index is -1).
@@ -177,24 +177,38 @@ _BANNED = 'readonly(b1[::1])'
 
 
 @kernel(TABLES_TYPE + '(' + PROFILE_TYPE + ')')
-def foothold_tables(profile):
-    """The window's foothold table (:func:`judge_footholds` of every entry, the pitch as the
-    arctangent of its slope) and the profile's obstacle with -inf over empty space: the
-    :data:`TABLES_TYPE` the search reads, from the :data:`PROFILE_TYPE` it is given."""
+def _unjudged_tables(profile):
+    """:func:`foothold_tables` before any entry is judged (not ok, height NaN, pitch 0):
+    :func:`window_search` judges the entries it reads, as it first reads them."""
     (high, low, headroom, obstacle, entry_sides, offsets, bounds, sides, lengths,
      numbers) = profile
-    s = numbers[STANCE_S] + offsets
-    ok, height, pitch = judge_footholds(high, low, headroom, numbers[S0], numbers[DS],
-                                        entry_sides, s, numbers[HEEL], numbers[TOE],
-                                        numbers[MIN_HEADROOM], numbers[MAX_PITCH],
-                                        numbers[TOLERANCE], numbers[MIN_FRACTION])
+    count = offsets.shape[0]
     swing_obstacle = np.empty_like(obstacle)
     for side in range(obstacle.shape[0]):
         for i in range(obstacle.shape[1]):
             value = obstacle[side, i]
             swing_obstacle[side, i] = -math.inf if value != value else value
-    return (ok, height, pitch, bounds, offsets, swing_obstacle, sides, lengths,
-            high.shape[1] - 1, numbers)
+    return (np.zeros(count, dtype=np.bool_), np.full(count, np.nan), np.zeros(count), bounds,
+            offsets, swing_obstacle, sides, lengths, high.shape[1] - 1, numbers)
+
+
+@kernel(TABLES_TYPE + '(' + PROFILE_TYPE + ')')
+def foothold_tables(profile):
+    """The window's foothold table (:func:`judge_footholds` of every entry, the pitch as the
+    arctangent of its slope) and the profile's obstacle with -inf over empty space: the
+    :data:`TABLES_TYPE` the search reads, from the :data:`PROFILE_TYPE` it is given."""
+    high, low, headroom = profile[0], profile[1], profile[2]
+    entry_sides, offsets, numbers = profile[4], profile[5], profile[9]
+    tables = _unjudged_tables(profile)
+    ok, height, pitch = judge_footholds(high, low, headroom, numbers[S0], numbers[DS],
+                                        entry_sides, numbers[STANCE_S] + offsets,
+                                        numbers[HEEL], numbers[TOE], numbers[MIN_HEADROOM],
+                                        numbers[MAX_PITCH], numbers[TOLERANCE],
+                                        numbers[MIN_FRACTION])
+    tables[0][:] = ok
+    tables[1][:] = height
+    tables[2][:] = pitch
+    return tables
 
 
 @kernel('Tuple((' + _FEASIBLE_TYPE + ', ' + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE + '))(i8)')
@@ -368,77 +382,6 @@ def _effort(config, banned_first, tables, prefixes, swings):
     return effort
 
 
-@kernel('i8[::1](i8, ' + _BANNED + ', ' + _BANNED + ', ' + TABLES_TYPE + ')')
-def _greedy_seed(n, banned_first, banned_lengths, tables):
-    """A configuration built footstep by footstep, each the cheapest given the ones before by
-    the effort's terms (not the swing test: the caller judges the whole configuration); empty
-    when some footstep has no usable foothold."""
-    ok, height, pitch, bounds, offsets, obstacle, sides, lengths, last, numbers = tables
-    up, down = numbers[UP], numbers[DOWN]
-    two, span, s_init = numbers[TWO], numbers[SPAN], numbers[S_INIT]
-    w_length, w_height, w_pitch = numbers[W_LENGTH], numbers[W_HEIGHT], numbers[W_PITCH]
-    w_smooth, up_range, pitch_range = numbers[W_SMOOTH], numbers[UP_RANGE], numbers[PITCH_RANGE]
-    base = lengths.shape[0]
-    # The length term of each interval, the same for every footstep, and the intervals in
-    # the order of it (nearest the neutral length first; the lengths ascend): the cheapest
-    # candidate tends to come first, and once a length term alone exceeds the best so far so
-    # do all after it.
-    length_terms = np.empty(base)
-    for j in range(base):
-        length_terms[j] = w_length * ((lengths[j] - s_init) / span) ** two
-    order = np.empty(base, dtype=np.int64)
-    right = 0
-    while right < base and lengths[right] < s_init:
-        right += 1
-    left = right - 1
-    for k in range(base):
-        if right >= base or (left >= 0 and length_terms[left] <= length_terms[right]):
-            order[k] = left
-            left -= 1
-        else:
-            order[k] = right
-            right += 1
-    seed = np.empty(n, dtype=np.int64)
-    cumulative, height_before = 0, numbers[STANCE_HEIGHT]
-    length_before = numbers[PREVIOUS_LENGTH]
-    for i in range(n):
-        # The cheapest candidate, the shortest of equals (as scanning them shortest first).
-        best, best_cost = -1, math.inf
-        for k in range(base):
-            j = order[k]
-            if length_terms[j] > best_cost:
-                break
-            if banned_lengths[j] or (i == 0 and banned_first[j]):
-                continue
-            entry = bounds[i] + cumulative + j
-            if not ok[entry]:
-                continue
-            rise = height[entry] - height_before
-            if rise > up or -rise > down:
-                continue
-            # _step_cost's sum term by term, given up once it exceeds the best so far (or
-            # equals it for a longer interval): the terms are >= 0 (weights >= 0, squares), so
-            # the rest could only add to it. The same value as _step_cost where it finishes.
-            cost = length_terms[j]
-            if cost > best_cost or (cost == best_cost and j > best):
-                continue
-            cost = cost + w_height * (rise / up_range) ** two
-            if cost > best_cost or (cost == best_cost and j > best):
-                continue
-            cost = cost + w_pitch * (pitch[entry] / pitch_range) ** two
-            if cost > best_cost or (cost == best_cost and j > best):
-                continue
-            cost = cost + w_smooth * ((lengths[j] - length_before) / span) ** two
-            if cost < best_cost or (cost == best_cost and j < best):
-                best, best_cost = j, cost
-        if best < 0:
-            return np.empty(0, dtype=np.int64)
-        seed[i] = best
-        cumulative += best
-        height_before, length_before = height[bounds[i] + cumulative], lengths[best]
-    return seed
-
-
 @kernel('f8[:, ::1](i8[::1], ' + TABLES_TYPE + ')')
 def _footholds_of(config, tables):
     """A configuration's footholds, (4, n): the footstep lengths (m), the footholds' arc
@@ -479,26 +422,55 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
 
     ``start`` (n,): the configuration the breadth-first search starts from; ``banned_first``
     (m + 1,): the interval indices the first footstep must not take; ``banned_lengths``
-    (m + 1,): those no footstep may take; ``greedy_restart``: climb a second time from
-    :func:`_greedy_seed` and keep the better; ``profile``: :data:`PROFILE_TYPE`.
+    (m + 1,): those no footstep may take; ``greedy_restart``: climb a second time from a
+    configuration built footstep by footstep and keep the better; ``profile``:
+    :data:`PROFILE_TYPE`.
 
     One function: the search's own steps (the memo of judged configurations, the
     breadth-first search, the climbs) are its inner functions, which numba compiles into it,
     so that they pass nothing between them; only the effort (:func:`_effort`, shared with
     :func:`exhaustive_search`) is called.
     """
-    tables = foothold_tables(profile)
-    ok, bounds = tables[0], tables[3]
+    high, low, headroom, entry_sides = profile[0], profile[1], profile[2], profile[4]
+    tables = _unjudged_tables(profile)
+    ok, height, pitch, bounds, offsets, obstacle, sides, lengths, last, numbers = tables
     n = start.shape[0]
     base = banned_lengths.shape[0]
     m = base - 1
     none = np.empty(0, dtype=np.int64)
     nothing = np.empty((4, 0))
+    # The foothold table judged entry by entry, as the search first reads an entry (a search
+    # reads about a third of them): ``ensure(entry)`` judges it if it is not yet and answers
+    # whether it is ok. The effort reads only the entries of configurations whose entries the
+    # search has read (up to the first that is not ok, where it stops too).
+    stance_s, s0, ds, heel, toe = (numbers[STANCE_S], numbers[S0], numbers[DS], numbers[HEEL],
+                                   numbers[TOE])
+    min_headroom, max_pitch = numbers[MIN_HEADROOM], numbers[MAX_PITCH]
+    tolerance, min_fraction = numbers[TOLERANCE], numbers[MIN_FRACTION]
+    read = np.zeros(ok.shape[0], dtype=np.uint8)
+
+    def ensure(entry):
+        if not read[entry]:
+            read[entry] = 1
+            ok[entry], height[entry], pitch[entry] = _judge_sole(
+                high, low, headroom, s0, ds, entry_sides[entry], stance_s + offsets[entry],
+                heel, toe, min_headroom, max_pitch, tolerance, min_fraction)
+        return ok[entry]
+
+    def lands(config):
+        # Whether every footstep of ``config`` has a foothold where it lands.
+        cumulative = 0
+        for i in range(n):
+            cumulative += config[i]
+            if not ensure(bounds[i] + cumulative):
+                return False
+        return True
+
     # No configuration can be collision-free if some footstep has no foothold in reach.
     for i in range(n):
         usable = False
         for entry in range(bounds[i], bounds[i + 1]):
-            if ok[entry]:
+            if ensure(entry):
                 usable = True
                 break
         if not usable:
@@ -557,9 +529,79 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
             if key in prefixes and prefixes[key][4] < 0:
                 remember(number, math.nan)
                 return math.nan
+        lands(config)  # the entries the effort reads
         value = _effort(config, banned_first, tables, prefixes, swings)
         remember(number, value)
         return value
+
+    def greedy():
+        # A configuration built footstep by footstep, each the cheapest given the ones before
+        # by the effort's terms (not the swing test: the caller judges the whole
+        # configuration); empty when some footstep has no usable foothold.
+        up, down = numbers[UP], numbers[DOWN]
+        two, span, s_init = numbers[TWO], numbers[SPAN], numbers[S_INIT]
+        w_length, w_height, w_pitch = numbers[W_LENGTH], numbers[W_HEIGHT], numbers[W_PITCH]
+        w_smooth, up_range = numbers[W_SMOOTH], numbers[UP_RANGE]
+        pitch_range = numbers[PITCH_RANGE]
+        # The length term of each interval, the same for every footstep, and the intervals in
+        # the order of it (nearest the neutral length first; the lengths ascend): the
+        # cheapest candidate tends to come first, and once a length term alone exceeds the
+        # best so far so do all after it.
+        length_terms = np.empty(base)
+        for j in range(base):
+            length_terms[j] = w_length * ((lengths[j] - s_init) / span) ** two
+        order = np.empty(base, dtype=np.int64)
+        right = 0
+        while right < base and lengths[right] < s_init:
+            right += 1
+        left = right - 1
+        for k in range(base):
+            if right >= base or (left >= 0 and length_terms[left] <= length_terms[right]):
+                order[k] = left
+                left -= 1
+            else:
+                order[k] = right
+                right += 1
+        seed = np.empty(n, dtype=np.int64)
+        cumulative, height_before = 0, numbers[STANCE_HEIGHT]
+        length_before = numbers[PREVIOUS_LENGTH]
+        for i in range(n):
+            # The cheapest candidate, the shortest of equals (as scanning them shortest first).
+            best, best_cost = -1, math.inf
+            for k in range(base):
+                j = order[k]
+                if length_terms[j] > best_cost:
+                    break
+                if banned_lengths[j] or (i == 0 and banned_first[j]):
+                    continue
+                entry = bounds[i] + cumulative + j
+                if not ensure(entry):
+                    continue
+                rise = height[entry] - height_before
+                if rise > up or -rise > down:
+                    continue
+                # _step_cost's sum term by term, given up once it exceeds the best so far (or
+                # equals it for a longer interval): the terms are >= 0 (weights >= 0,
+                # squares), so the rest could only add to it. The same value as _step_cost
+                # where it finishes.
+                cost = length_terms[j]
+                if cost > best_cost or (cost == best_cost and j > best):
+                    continue
+                cost = cost + w_height * (rise / up_range) ** two
+                if cost > best_cost or (cost == best_cost and j > best):
+                    continue
+                cost = cost + w_pitch * (pitch[entry] / pitch_range) ** two
+                if cost > best_cost or (cost == best_cost and j > best):
+                    continue
+                cost = cost + w_smooth * ((lengths[j] - length_before) / span) ** two
+                if cost < best_cost or (cost == best_cost and j < best):
+                    best, best_cost = j, cost
+            if best < 0:
+                return np.empty(0, dtype=np.int64)
+            seed[i] = best
+            cumulative += best
+            height_before, length_before = height[bounds[i] + cumulative], lengths[best]
+        return seed
 
     # The breadth-first search from ``start`` to the nearest collision-free configuration:
     # the paper's single-footstep moves, footstep by footstep, shorter before longer. Each
@@ -596,13 +638,7 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
                         continue
                     current[:] = config
                     current[i] = j + delta
-                    lands, cumulative = True, 0
-                    for k in range(n):
-                        cumulative += current[k]
-                        if not ok[bounds[k] + cumulative]:
-                            lands = False
-                            break
-                    if not lands:
+                    if not lands(current):
                         remember(other, math.nan)
                     else:
                         value = evaluate(current, other)
@@ -632,7 +668,7 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
             # On stairs and blocks the feasible configurations fall apart into basins (a
             # foothold on every tread or on every other one) and the first climb cannot leave
             # its basin.
-            current = _greedy_seed(n, banned_first, banned_lengths, tables)
+            current = greedy()
             if current.shape[0] == 0 or (current == result).all():
                 break
         value = evaluate(current, number_of(current))
