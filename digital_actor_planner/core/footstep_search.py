@@ -1,11 +1,14 @@
 """The footstep window's search (§4.2) as compiled kernels.
 
 :meth:`footsteps.FootstepPlanner.plan` hands the profile's samples and the layout of the
-window's foothold table here. One call builds the table (every foothold the window can reach,
-:func:`judge_footholds`) and searches: a breadth-first search from the start configuration to
-the nearest collision-free one, then hill-climbing on the effort while a neighbour improves it,
-then (``greedy_restart``) a second climb from a configuration built footstep by footstep. No
-Python runs between the configurations it judges.
+window's foothold table here. One call (:func:`window_search`) searches: a breadth-first search
+from the start configuration to the nearest collision-free one, then hill-climbing on the
+effort while a neighbour improves it, then (``greedy_restart``) a second climb from a
+configuration built footstep by footstep. It judges the footholds of the table (every
+foothold the window can reach, :func:`_judge_sole`) as it first reads them: a sixth of them
+at the median on the courses' windows, at most three fifths; :func:`exhaustive_search` builds
+the whole table first (:func:`foothold_tables`). No Python runs between the configurations it
+judges.
 
 A configuration (j_0, ..., j_{n-1}) of interval indices is numbered in base m + 1, footstep 0
 the most significant digit; its first L footsteps (a prefix) are numbered the same way and
@@ -196,7 +199,8 @@ def _unjudged_tables(profile):
 def foothold_tables(profile):
     """The window's foothold table (:func:`judge_footholds` of every entry, the pitch as the
     arctangent of its slope) and the profile's obstacle with -inf over empty space: the
-    :data:`TABLES_TYPE` the search reads, from the :data:`PROFILE_TYPE` it is given."""
+    :data:`TABLES_TYPE` the searches read, from the :data:`PROFILE_TYPE` they are given
+    (:func:`window_search` judges its entries as it reads them instead)."""
     high, low, headroom = profile[0], profile[1], profile[2]
     entry_sides, offsets, numbers = profile[4], profile[5], profile[9]
     tables = _unjudged_tables(profile)
@@ -439,8 +443,8 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
     m = base - 1
     none = np.empty(0, dtype=np.int64)
     nothing = np.empty((4, 0))
-    # The foothold table judged entry by entry, as the search first reads an entry (a search
-    # reads about a third of them): ``ensure(entry)`` judges it if it is not yet and answers
+    # The foothold table judged entry by entry, as the search first reads an entry (a sixth
+    # of them at the median): ``ensure(entry)`` judges it if it is not yet and answers
     # whether it is ok. The effort reads only the entries of configurations whose entries the
     # search has read (up to the first that is not ok, where it stops too).
     stance_s, s0, ds, heel, toe = (numbers[STANCE_S], numbers[S0], numbers[DS], numbers[HEEL],
