@@ -197,21 +197,20 @@ def _unjudged_tables(profile):
 
 @kernel(TABLES_TYPE + '(' + PROFILE_TYPE + ')')
 def foothold_tables(profile):
-    """The window's foothold table (:func:`judge_footholds` of every entry, the pitch as the
-    arctangent of its slope) and the profile's obstacle with -inf over empty space: the
+    """The window's foothold table (:func:`_judge_sole` of every entry, as
+    :func:`judge_footholds` judges them, written into :func:`_unjudged_tables`' arrays) and
+    the profile's obstacle with -inf over empty space: the
     :data:`TABLES_TYPE` the searches read, from the :data:`PROFILE_TYPE` they are given
     (:func:`window_search` judges its entries as it reads them instead)."""
-    high, low, headroom = profile[0], profile[1], profile[2]
-    entry_sides, offsets, numbers = profile[4], profile[5], profile[9]
+    high, low, headroom, entry_sides = profile[0], profile[1], profile[2], profile[4]
     tables = _unjudged_tables(profile)
-    ok, height, pitch = judge_footholds(high, low, headroom, numbers[S0], numbers[DS],
-                                        entry_sides, numbers[STANCE_S] + offsets,
-                                        numbers[HEEL], numbers[TOE], numbers[MIN_HEADROOM],
-                                        numbers[MAX_PITCH], numbers[TOLERANCE],
-                                        numbers[MIN_FRACTION])
-    tables[0][:] = ok
-    tables[1][:] = height
-    tables[2][:] = pitch
+    ok, height, pitch, offsets, numbers = tables[0], tables[1], tables[2], tables[4], tables[9]
+    for entry in range(ok.shape[0]):
+        ok[entry], height[entry], pitch[entry] = _judge_sole(
+            high, low, headroom, numbers[S0], numbers[DS], entry_sides[entry],
+            numbers[STANCE_S] + offsets[entry], numbers[HEEL], numbers[TOE],
+            numbers[MIN_HEADROOM], numbers[MAX_PITCH], numbers[TOLERANCE],
+            numbers[MIN_FRACTION])
     return tables
 
 
