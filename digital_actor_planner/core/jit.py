@@ -35,14 +35,13 @@ def kernel(signature: str, inline: bool = False) -> Callable:
         if numba is None:
             function.py_func = function
             return function
+        options = dict(nogil=True, inline='always' if inline else 'never')
         try:
-            return numba.njit(_parse(signature), cache=True, nogil=True,
-                              inline='always' if inline else 'never')(function)
+            return numba.njit(_parse(signature), cache=True, **options)(function)
         except RuntimeError:
             # numba found nowhere writable to cache it (a read-only install and home):
             # compiled for this process alone.
-            return numba.njit(_parse(signature), nogil=True,
-                              inline='always' if inline else 'never')(function)
+            return numba.njit(_parse(signature), **options)(function)
     return wrap
 
 
