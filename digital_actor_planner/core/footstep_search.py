@@ -537,13 +537,6 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
             if banned_lengths[config[i]]:
                 remember(number, value)
                 return value
-        if n > 1:
-            # All but the last footstep already found infeasible (the breadth-first search
-            # walks through many of these): the answer without resuming the effort.
-            key = _prefix_key(number // base, n - 1, n)
-            if key in prefixes and prefixes[key][4] < 0:
-                remember(number, value)
-                return value
         # Most configurations the breadth-first search meets on stairs land on a riser: their
         # footholds alone answer (the effort would stop at the same foothold).
         if lands(config):
