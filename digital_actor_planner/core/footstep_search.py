@@ -474,15 +474,6 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
                 return False
         return True
 
-    # No configuration can be collision-free if some footstep has no foothold in reach.
-    for i in range(n):
-        usable = False
-        for entry in range(bounds[i], bounds[i + 1]):
-            if ensure(entry):
-                usable = True
-                break
-        if not usable:
-            return none, nothing, math.nan, 0
     table, prefixes, swings = _empty_memos(n)
     # The configurations judged: their efforts (NaN where not collision-free), in arrays over
     # every configuration where there are few enough of them, else in ``table``.
@@ -683,6 +674,17 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
         elif phase == restart:  # the greedy configuration is not collision-free
             break
         else:
+            if phase == start_phase:
+                # No configuration can be collision-free if some footstep has no foothold in
+                # reach: the breadth-first search would judge every one.
+                for i in range(n):
+                    usable = False
+                    for entry in range(bounds[i], bounds[i + 1]):
+                        if ensure(entry):
+                            usable = True
+                            break
+                    if not usable:
+                        return none, nothing, math.nan, judged_count()
             # The breadth-first search: the next configuration in the queue, its neighbours.
             phase = breadth
             size = 0
