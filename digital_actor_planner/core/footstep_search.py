@@ -516,13 +516,13 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
     def evaluate(number):
         # The effort of configuration ``number`` (its indices left in ``config``), NaN if it
         # is not collision-free; remembered.
+        value = known(number)
+        if value != _UNJUDGED:  # True for NaN
+            return value
         rest = number
         for i in range(n - 1, -1, -1):
             config[i] = rest % base
             rest //= base
-        value = known(number)
-        if value != _UNJUDGED:  # True for NaN
-            return value
         value = math.nan
         for i in range(n):
             if banned_lengths[config[i]]:
