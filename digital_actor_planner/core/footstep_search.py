@@ -179,7 +179,7 @@ _SWINGS_TYPE = 'DictType(i8, i8)'
 _BANNED = 'readonly(b1[::1])'
 
 
-@kernel(TABLES_TYPE + '(' + PROFILE_TYPE + ')')
+@kernel(TABLES_TYPE + '(' + PROFILE_TYPE + ')', inline=True)
 def _unjudged_tables(profile):
     """:func:`foothold_tables` before any entry is judged (not ok, height NaN, pitch 0):
     :func:`window_search` judges the entries it reads, as it first reads them."""
@@ -214,7 +214,8 @@ def foothold_tables(profile):
     return tables
 
 
-@kernel('Tuple((' + _FEASIBLE_TYPE + ', ' + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE + '))(i8)')
+@kernel('Tuple((' + _FEASIBLE_TYPE + ', ' + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE + '))(i8)',
+        inline=True)
 def _empty_memos(n):
     """Empty ``feasible``, ``prefixes`` and ``swings`` memos for one search. Typed by their
     first entries (computed, not literal values: a literal one would be part of the
@@ -228,7 +229,7 @@ def _empty_memos(n):
     return feasible, prefixes, swings
 
 
-@kernel('i8(i8, i8, i8)')
+@kernel('i8(i8, i8, i8)', inline=True)
 def _prefix_key(prefix_number, length, n):
     """The ``prefixes`` key of a configuration's first ``length`` footsteps, numbered
     ``prefix_number``, in a window of ``n``."""
@@ -385,7 +386,7 @@ def _effort(config, banned_first, tables, prefixes, swings):
     return effort
 
 
-@kernel('f8[:, ::1](i8[::1], ' + TABLES_TYPE + ')')
+@kernel('f8[:, ::1](i8[::1], ' + TABLES_TYPE + ')', inline=True)
 def _footholds_of(config, tables):
     """A configuration's footholds, (4, n): the footstep lengths (m), the footholds' arc
     lengths along the path (m, the stance foot's plus the running sum of the lengths), sole
