@@ -70,6 +70,24 @@ def test_a_hole_is_strided_over_and_no_foot_lands_in_it(leg):
         assert s + leg.toe <= hole[0] + 1e-9 or s - leg.heel >= hole[1] - 1e-9
 
 
+def test_a_footstep_with_nowhere_to_land_ends_the_search_at_once(leg, search_kind):
+    """Where the ground ends a little ahead, the second and third footsteps have no foothold
+    in reach: the search answers none having judged the start alone, not the breadth-first
+    search through all 2,744 configurations (it looks for a footstep without footholds only
+    once the start is not free)."""
+    planner = FootstepPlanner(FootstepConfig(), leg)
+    cliff = profile_from(lambda s: 0.0 if s < 0.4 else np.nan)
+    arguments = (cliff, RIGHT, 0.0, 0.0, 0.0, 0.0, 0.5, 0.5)
+    assert planner.plan(*arguments) is None
+    config, footholds, effort, judged = footstep_search.window_search(
+        np.full(3, 6, dtype=np.int64), planner._none_banned, planner._none_banned, True,
+        planner.search_profile(*arguments))
+    assert config.size == 0 and footholds.shape == (4, 0) and np.isnan(effort)
+    assert judged == 1
+    # The exhaustive search agrees that no configuration is free.
+    assert planner.plan_exhaustive(*arguments) is None
+
+
 def test_a_step_up_higher_than_allowed_makes_the_window_infeasible(leg):
     planner = FootstepPlanner(FootstepConfig(), leg)
     wall = profile_from(lambda s: 0.0 if s < 0.6 else 0.5)
