@@ -51,6 +51,9 @@ class ComparingPlanner(FootstepPlanner):
         super().__init__(inner.config, inner.leg)
         self.records = []
         self.calls = 0
+        # Per window (a call not banning a first footstep): its configuration and the
+        # exhaustive search's first time, None where either search found none.
+        self.windows = []
 
     def plan(self, profile, stance_side, stance_s, stance_height, swing_s, swing_height, s_init,
              previous_length, start=None, banned_first=(), max_length=np.inf):
@@ -77,12 +80,54 @@ class ComparingPlanner(FootstepPlanner):
                 t2 = time.process_time()
                 super().plan(*arguments, start=start, max_length=max_length)
                 ours = min(ours, time.process_time() - t2)
-            if window is not None and best is not None:
+            found = window is not None and best is not None
+            self.windows.append((window.indices if window is not None else None,
+                                 exhaustive[0] if found else None))
+            if found:
                 self.records.append(((window.effort + 1e-3) / (best.effort + 1e-3),
                                      (t1 - t0) / max(exhaustive[0], 1e-9),
                                      ours / max(min(exhaustive), 1e-9),
                                      window.evaluated / best.evaluated, first))
         return window
+
+
+class TimingPlanner(FootstepPlanner):
+    """Footstep planner that records the CPU time of each window's search (a call not banning
+    a first footstep) and its configuration, and runs nothing else."""
+
+    def __init__(self, inner):
+        super().__init__(inner.config, inner.leg)
+        self.windows = []
+
+    def plan(self, *arguments, banned_first=(), **keywords):
+        started = time.process_time()
+        window = super().plan(*arguments, banned_first=banned_first, **keywords)
+        elapsed = time.process_time() - started
+        if not banned_first:
+            self.windows.append((window.indices if window is not None else None, elapsed))
+        return window
+
+
+def _alone_ratios(sc, commands, compared, walks):
+    """The default search timed alone in ``walks`` more walks of a course, nothing but the
+    actor running between its calls: each window's median time over the walks divided by the
+    exhaustive search's first time in the compared walk (``compared.windows``), and whether
+    the window is the walk's first."""
+    times = []
+    for _ in range(walks):
+        actor = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False),
+                      start=sc.start)
+        timing = TimingPlanner(actor._planner)
+        actor._planner = timing
+        run_commands(actor, [c.time for c in commands], [c.linear_x for c in commands],
+                     [c.angular_z for c in commands])
+        # The walks are deterministic: the same windows as the compared walk's.
+        assert [w[0] for w in timing.windows] == [w[0] for w in compared.windows]
+        times.append([w[1] for w in timing.windows])
+    medians = np.median(np.array(times), axis=0)
+    return [(median / exhaustive, k == 0)
+            for k, (median, (_, exhaustive)) in enumerate(zip(medians, compared.windows))
+            if exhaustive is not None]
 
 
 def _load_other(root):
@@ -203,6 +248,8 @@ def main(argv=None):
                         help='compare with the package in another checkout, paired in one '
                              'process')
     parser.add_argument('--rounds', type=int, default=8, help='rounds of --against')
+    parser.add_argument('--walks', type=int, default=5,
+                        help='walks of each course timing the default footstep search alone')
     args = parser.parse_args(argv)
     courses = args.courses or (OBSTACLE_COURSES if args.whole_body else COURSES)
     if args.against:
@@ -211,6 +258,7 @@ def main(argv=None):
     upper = args.whole_body
     wall_all, cpu_all, slowest = [], [], []
     ratios, speed, warm, judged, firsts = ({False: [], True: []} for _ in range(5))
+    alone = []
     print(f'load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores')
     print('| course | steps | wall p50 ms | wall p99 ms | CPU p50 ms | CPU p99 ms | x real time |')
     print('|---|---:|---:|---:|---:|---:|---:|')
@@ -247,6 +295,8 @@ def main(argv=None):
             warm[greedy] += [r[2] for r in comparing.records]
             judged[greedy] += [r[3] for r in comparing.records]
             firsts[greedy] += [r[4] for r in comparing.records]
+            if greedy and args.walks > 0:
+                alone += _alone_ratios(sc, commands, comparing, args.walks)
     print(f'| all | {len(wall_all)} | {1e3 * np.percentile(wall_all, 50):.2f} | '
           f'{1e3 * np.percentile(wall_all, 99):.2f} | {1e3 * np.percentile(cpu_all, 50):.2f} | '
           f'{1e3 * np.percentile(cpu_all, 99):.2f} | |')
@@ -282,6 +332,14 @@ def main(argv=None):
     print("the default search's first window of each walk, time ratio in the walk: "
           + ', '.join(f'{ratio:.3f}' for ratio, first in sorted(zip(speed[True], firsts[True]))
                       if first))
+    if alone:
+        every = [ratio for ratio, _ in alone]
+        stepped = [ratio for ratio, first in alone if not first]
+        print(f'the default search timed alone in {args.walks} more walks of each course '
+              f'(nothing but the actor between its calls), each window\'s median time over '
+              f'the walks against the exhaustive search\'s: median {np.median(every):.4f}, '
+              f'p95 {np.percentile(every, 95):.4f}, after a step p95 '
+              f'{np.percentile(stepped, 95):.4f}')
 
 
 if __name__ == '__main__':
