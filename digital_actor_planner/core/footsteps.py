@@ -434,11 +434,12 @@ class FootstepPlanner:
             None when no collision-free configuration exists in the window.
 
         The search runs compiled, its foothold table included
-        (:func:`footstep_search.window_search`): on the stairs' windows 8.8 us at the median in
-        the kernel (p90 18, max 29), 11 us called from Python and 15 us through this method
-        (11-109 configurations judged; each window planned again in a loop, session 33; 15.5,
-        19 and 24 us at its start), where the same search in Python took 300-400 us; the same
-        configurations judged, the same efforts to the last bit.
+        (:func:`footstep_search.window_search`): on the stairs' windows 7.5 us at the median in
+        the kernel (p90 14, max 23), 10 us called from Python and 13 us through this method
+        (11-109 configurations judged; each window planned again in a loop, session 34; 8.7,
+        11 and 14 us at its start, 15.5, 19 and 24 us at session 33's), where the same search
+        in Python took 300-400 us; the same configurations judged, the same efforts to the last
+        bit.
         """
         n, m = self._window_size
         if start is None:
