@@ -122,7 +122,9 @@ def _alone_ratios(sc, commands, compared, walks):
         run_commands(actor, [c.time for c in commands], [c.linear_x for c in commands],
                      [c.angular_z for c in commands])
         # The walks are deterministic: the same windows as the compared walk's.
-        assert [w[0] for w in timing.windows] == [w[0] for w in compared.windows]
+        if [w[0] for w in timing.windows] != [w[0] for w in compared.windows]:
+            raise RuntimeError('a walk timing the search alone planned other windows than the '
+                               'compared walk: the walks are no longer deterministic')
         times.append([w[1] for w in timing.windows])
     medians = np.median(np.array(times), axis=0)
     return [(median / exhaustive, k == 0)
@@ -249,7 +251,8 @@ def main(argv=None):
                              'process')
     parser.add_argument('--rounds', type=int, default=8, help='rounds of --against')
     parser.add_argument('--walks', type=int, default=5,
-                        help='walks of each course timing the default footstep search alone')
+                        help='walks of each course timing the default footstep search alone '
+                             '(0: none)')
     args = parser.parse_args(argv)
     courses = args.courses or (OBSTACLE_COURSES if args.whole_body else COURSES)
     if args.against:

@@ -695,9 +695,8 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
                 head += 1
                 rest = number
                 for i in range(n - 1, -1, -1):
-                    j = rest % base
+                    config[i] = rest % base
                     rest //= base
-                    config[i] = j
                 for i in range(n):
                     j = config[i]
                     for delta in (-1, 1):
