@@ -167,11 +167,17 @@ TABLES_TYPE = ('Tuple((b1[::1], f8[::1], f8[::1], readonly(i8[::1]), readonly(f8
                'f8[:, ::1], readonly(i8[::1]), readonly(f8[::1]), i8, f8[::1]))')
 #: What a window's search is given (see ``FootstepPlanner.search_profile``): the profile's
 #: (2, K) height, low, headroom and obstacle (NaN over empty space); the side (T,) and the
-#: offset beyond the stance foot (T,) m of each entry of the foothold table; bounds, sides,
-#: lengths and numbers as in :data:`TABLES_TYPE`.
+#: offset beyond the stance foot (T,) m of each entry of the foothold table; bounds, sides and
+#: lengths as in :data:`TABLES_TYPE`; the planner's numbers (NUMBER_COUNT,) and the window's
+#: own, in the order of :data:`WINDOW_NUMBERS` (the search writes them into a copy of the
+#: planner's: in Python eight assignments to an array cost more than the search's setting-up).
 PROFILE_TYPE = ('Tuple((f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], readonly(i8[::1]), '
                 'readonly(f8[::1]), readonly(i8[::1]), readonly(i8[::1]), readonly(f8[::1]), '
-                'f8[::1]))')
+                'readonly(f8[::1]), UniTuple(f8, 8)))')
+#: The window's own numbers in a :data:`PROFILE_TYPE`, as indices into ``numbers``: the stance
+#: and the swing foot's arc length and sole height, the neutral footstep length, the length of
+#: the step just taken, the profile's first arc length and its spacing.
+WINDOW_NUMBERS = (STANCE_S, STANCE_HEIGHT, SWING_S, SWING_HEIGHT, S_INIT, PREVIOUS_LENGTH, S0, DS)
 _FEASIBLE_TYPE = 'DictType(i8, f8)'
 _PREFIXES_TYPE = 'DictType(i8, UniTuple(f8, 5))'
 _SWINGS_TYPE = 'DictType(i8, i8)'
@@ -183,8 +189,11 @@ _BANNED = 'readonly(b1[::1])'
 def _unjudged_tables(profile):
     """:func:`foothold_tables` before any entry is judged (not ok, height NaN, pitch 0):
     :func:`window_search` judges the entries it reads, as it first reads them."""
-    (high, low, headroom, obstacle, entry_sides, offsets, bounds, sides, lengths,
-     numbers) = profile
+    (high, low, headroom, obstacle, entry_sides, offsets, bounds, sides, lengths, planner,
+     window) = profile
+    numbers = planner.copy()
+    for k in range(len(WINDOW_NUMBERS)):
+        numbers[WINDOW_NUMBERS[k]] = window[k]
     count = offsets.shape[0]
     swing_obstacle = np.empty_like(obstacle)
     for side in range(obstacle.shape[0]):
@@ -500,13 +509,6 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
         else:
             table[number] = value
 
-    def judged_count():
-        count = len(table)
-        for state in judged:
-            if state:
-                count += 1
-        return count
-
     def number_of(config):
         number = 0
         for i in range(n):
@@ -517,10 +519,11 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
 
     def evaluate(number):
         # The effort of configuration ``number`` (its indices left in ``config``), NaN if it
-        # is not collision-free; remembered.
+        # is not collision-free, remembered; and 1 where it is judged here, 0 where it was
+        # already.
         value = known(number)
         if value != _UNJUDGED:  # True for NaN
-            return value
+            return value, 0
         rest = number
         for i in range(n - 1, -1, -1):
             config[i] = rest % base
@@ -529,13 +532,13 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
         for i in range(n):
             if banned_lengths[config[i]]:
                 remember(number, value)
-                return value
+                return value, 1
         # Most configurations the breadth-first search meets on stairs land on a riser: their
         # footholds alone answer (the effort would stop at the same foothold).
         if lands(config):
             value = _effort(config, banned_first, tables, prefixes, swings)
         remember(number, value)
-        return value
+        return value, 1
 
     def greedy():
         # A configuration built footstep by footstep, each the cheapest given the ones before
@@ -639,13 +642,15 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
     queue = [batch[0]]
     head = 0
     current, value = -1, math.nan  # the configuration climbed from, its effort
+    judged_count = 0  # configurations judged
     result, effort = -1, math.nan  # the first climb's
     while True:
         # Judge the batch.
         found, best, best_value = -1, -1, value
         for k in range(size):
             number = batch[k]
-            judged_value = evaluate(number)
+            judged_value, fresh = evaluate(number)
+            judged_count += fresh
             if phase == climb:
                 if judged_value < best_value - 1e-12:  # False for NaN
                     best, best_value = number, judged_value
@@ -686,7 +691,7 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
                             usable = True
                             break
                     if not usable:
-                        return none, nothing, math.nan, judged_count()
+                        return none, nothing, math.nan, judged_count
             # The breadth-first search: the next configuration in the queue, its neighbours.
             phase = breadth
             size = 0
@@ -705,7 +710,7 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
                             batch[size] = neighbour
                             size += 1
             if size == 0:
-                return none, nothing, math.nan, judged_count()
+                return none, nothing, math.nan, judged_count
             continue
         # The neighbours of ``current`` to climb to.
         rest = current
@@ -727,7 +732,7 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
     for i in range(n - 1, -1, -1):
         final[i] = rest % base
         rest //= base
-    return final, _footholds_of(final, tables), effort, judged_count()
+    return final, _footholds_of(final, tables), effort, judged_count
 
 
 @kernel(_RESULT_TYPE + '(i8, i8, ' + PROFILE_TYPE + ')')

@@ -14,12 +14,11 @@ from typing import Optional, Tuple
 
 import numpy as np
 
-from .footstep_search import (DOWN, DS, HEEL, LIFT_RISE, LIFT_ROOM, LIFT_STEP_UP, MAX_PITCH,
+from .footstep_search import (DOWN, HEEL, LIFT_RISE, LIFT_ROOM, LIFT_STEP_UP, MAX_PITCH,
                               MAX_SWING, MIN_FRACTION, MIN_HEADROOM, NUMBER_COUNT, PITCH_RANGE,
-                              PREVIOUS_LENGTH, S0, S_INIT, SPAN, STANCE_HEIGHT, STANCE_S,
-                              SWING_HEIGHT, SWING_S, TOE, TOLERANCE, TWO, UP, UP_RANGE,
-                              W_HEIGHT, W_LENGTH, W_PITCH, W_SMOOTH, exhaustive_search,
-                              foothold_tables, judge_footholds, window_search)
+                              SPAN, TOE, TOLERANCE, TWO, UP, UP_RANGE, W_HEIGHT, W_LENGTH,
+                              W_PITCH, W_SMOOTH, exhaustive_search, foothold_tables,
+                              judge_footholds, window_search)
 from .jit import float_array
 from .skeleton import LegGeometry
 
@@ -262,7 +261,8 @@ class FootstepPlanner:
         for table in (self._bounds, self._table_layout[1], self._lengths):
             table.setflags(write=False)
         # The side of each footstep of a window, by the side of the stance foot: the other
-        # foot steps first. As an array (read-only: windows get copies) and as a list.
+        # foot steps first. As an array (read-only: every window of that stance side holds
+        # it) and as a list.
         self._sides = {}
         for stance_side in (0, 1):
             sides = np.array([(1 - stance_side) if i % 2 == 0 else stance_side
@@ -282,8 +282,9 @@ class FootstepPlanner:
             float(config.weight_pitch), float(config.weight_smooth),
             float(config.step_length_max - config.step_length_min),
             float(max(config.max_step_up, 1e-6)), float(max(config.max_foot_pitch, 1e-6)))
-        # The numbers the compiled search reads (footstep_search.NUMBER_COUNT); plan fills in
-        # the window's own (the feet, the speed, the profile's sampling).
+        # The numbers the compiled search reads (footstep_search.NUMBER_COUNT), read-only: the
+        # search writes the window's own (the feet, the speed, the profile's sampling) into a
+        # copy.
         numbers = np.zeros(NUMBER_COUNT)
         numbers[[UP, DOWN]] = self._rise_limits
         numbers[[W_LENGTH, W_HEIGHT, W_PITCH, W_SMOOTH, SPAN, UP_RANGE, PITCH_RANGE]] = \
@@ -293,6 +294,7 @@ class FootstepPlanner:
             leg.toe, leg.heel, config.max_swing_height, config.lift_room, config.lift_rise,
             config.lift_step_up, 2.0, config.min_headroom, config.max_foot_pitch,
             config.flatness_tolerance, config.min_support_fraction)
+        numbers.setflags(write=False)
         self._search_numbers = numbers
         # No interval index banned (read-only: every window shares it).
         self._none_banned = np.zeros(m + 1, dtype=bool)
@@ -435,11 +437,11 @@ class FootstepPlanner:
 
         The search runs compiled, its foothold table included
         (:func:`footstep_search.window_search`): on the stairs' windows 7.5 us at the median in
-        the kernel (p90 14, max 23), 10 us called from Python and 13 us through this method
-        (11-109 configurations judged; each window planned again in a loop, session 34; 8.7,
-        11 and 14 us at its start, 15.5, 19 and 24 us at session 33's), where the same search
-        in Python took 300-400 us; the same configurations judged, the same efforts to the last
-        bit.
+        the kernel (p90 14, max 23), 10 us called from Python and 12.3 us through this method
+        (11-109 configurations judged; each window planned again in a loop, session 35; 13.4 us
+        through this method at its start, where the window's numbers were written into an array
+        here; 15.5, 19 and 24 us at session 33's start), where the same search in Python took
+        300-400 us; the same configurations judged, the same efforts to the last bit.
         """
         n, m = self._window_size
         if start is None:
@@ -471,21 +473,15 @@ class FootstepPlanner:
                        s_init: float, previous_length: float) -> tuple:
         """What the compiled search of a window is given
         (:data:`footstep_search.PROFILE_TYPE`): the profile's samples, the layout of the
-        window's foothold table and the window's numbers (the arguments are :meth:`plan`'s).
-        The search builds the table itself (:func:`footstep_search.foothold_tables`)."""
-        numbers = self._search_numbers.copy()
-        # One by one: an index list and a tuple take NumPy five times longer.
-        numbers[STANCE_S] = stance_s
-        numbers[STANCE_HEIGHT] = stance_height
-        numbers[SWING_S] = swing_s
-        numbers[SWING_HEIGHT] = swing_height
-        numbers[S_INIT] = s_init
-        numbers[PREVIOUS_LENGTH] = previous_length
-        numbers[S0] = profile.s0
-        numbers[DS] = profile.ds
+        window's foothold table, the planner's numbers and the window's own as a tuple (the
+        arguments are :meth:`plan`'s; the search copies them into one array, which in Python
+        took 0.76 us a window, now 0.26). The search builds the table itself
+        (:func:`footstep_search.foothold_tables`)."""
         return (profile.height, profile.low, profile.headroom, profile.obstacle,
                 self._entry_sides[stance_side], self._table_layout[1], self._bounds,
-                self._sides[stance_side][0], self._lengths, numbers)
+                self._sides[stance_side][0], self._lengths, self._search_numbers,
+                (stance_s, stance_height, swing_s, swing_height, s_init, previous_length,
+                 profile.s0, profile.ds))
 
     def search_tables(self, *arguments) -> tuple:
         """The foothold table and numbers the search reads
@@ -512,8 +508,7 @@ class FootstepPlanner:
             return None
         # Positional: keywords cost a fifth more on every planned step.
         return FootstepWindow(footholds[0], tuple(config.tolist()), footholds[1], footholds[2],
-                              footholds[3], self._sides[stance_side][0].copy(), effort,
-                              evaluated)
+                              footholds[3], self._sides[stance_side][0], effort, evaluated)
 
 
 def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: float,
