@@ -80,7 +80,7 @@ def test_a_footstep_with_nowhere_to_land_ends_the_search_at_once(leg, search_kin
     arguments = (cliff, RIGHT, 0.0, 0.0, 0.0, 0.0, 0.5, 0.5)
     assert planner.plan(*arguments) is None
     config, footholds, effort, judged = footstep_search.window_search(
-        np.full(3, 6, dtype=np.int64), planner._none_banned, planner._none_banned, True,
+        (6 * 14 + 6) * 14 + 6, planner._none_banned, planner._none_banned, True,
         planner.search_profile(*arguments))
     assert config.size == 0 and footholds.shape == (4, 0) and np.isnan(effort)
     assert judged == 1

@@ -165,16 +165,18 @@ _UNJUDGED = -1.0
 #: last sample index of the profile; numbers (NUMBER_COUNT,)).
 TABLES_TYPE = ('Tuple((b1[::1], f8[::1], f8[::1], readonly(i8[::1]), readonly(f8[::1]), '
                'f8[:, ::1], readonly(i8[::1]), readonly(f8[::1]), i8, f8[::1]))')
-#: What a window's search is given (see ``FootstepPlanner.search_profile``): the profile's
-#: (2, K) height, low, headroom and obstacle (NaN over empty space); the side (T,) and the
-#: offset beyond the stance foot (T,) m of each entry of the foothold table; bounds, sides and
-#: lengths as in :data:`TABLES_TYPE`; the planner's numbers (NUMBER_COUNT,) and the window's
-#: own, in the order of :data:`WINDOW_NUMBERS` (the search writes them into a copy of the
-#: planner's: in Python eight assignments to an array took 0.76 us a window, about as long as
-#: the whole of the search's setting-up).
-PROFILE_TYPE = ('Tuple((f8[:, ::1], f8[:, ::1], f8[:, ::1], f8[:, ::1], readonly(i8[::1]), '
-                'readonly(f8[::1]), readonly(i8[::1]), readonly(i8[::1]), readonly(f8[::1]), '
-                'readonly(f8[::1]), UniTuple(f8, 8)))')
+#: What a window's search is given (see ``FootstepPlanner.search_profile``), in four pieces:
+#: only four arrays for numba to unbox (each ~0.07 us warm; fourteen took ~2 us more than
+#: four in the walk, cold): the profile's samples (4, 2, K): height, low, headroom and
+#: obstacle with -inf over empty space (``GroundProfile.stacked``); the planner's numbers
+#: (:data:`NUMBER_COUNT`), the footstep lengths (m + 1,) m and the offset beyond the stance
+#: foot (T,) m of each entry of the foothold table, in one array; the layout: n, m, bounds
+#: (n + 1,), sides (n,) and the side of each entry of the table (T,), in one array; the
+#: window's own numbers, in the order of :data:`WINDOW_NUMBERS` (the search writes them into
+#: a copy of the planner's: in Python eight assignments to an array took 0.76 us a window,
+#: about as long as the whole of the search's setting-up).
+PROFILE_TYPE = ('Tuple((f8[:, :, ::1], readonly(f8[::1]), readonly(i8[::1]), '
+                'UniTuple(f8, 8)))')
 #: The window's own numbers in a :data:`PROFILE_TYPE`, as indices into ``numbers``: the stance
 #: and the swing foot's arc length and sole height, the neutral footstep length, the length of
 #: the step just taken, the profile's first arc length and its spacing.
@@ -186,24 +188,30 @@ _SWINGS_TYPE = 'DictType(i8, i8)'
 _BANNED = 'readonly(b1[::1])'
 
 
+@kernel('readonly(i8[::1])(' + PROFILE_TYPE + ')', inline=True)
+def _entry_sides(profile):
+    """The side of each entry of the foothold table (T,), from a :data:`PROFILE_TYPE`."""
+    layout = profile[2]
+    n = layout[0]
+    return layout[2 * n + 3:]
+
+
 @kernel(TABLES_TYPE + '(' + PROFILE_TYPE + ')', inline=True)
 def _unjudged_tables(profile):
     """:func:`foothold_tables` before any entry is judged (not ok, height NaN, pitch 0):
     :func:`window_search` judges the entries it reads, as it first reads them. Its numbers
     are the planner's with the window's own (:data:`WINDOW_NUMBERS`) written in."""
-    (high, low, headroom, obstacle, entry_sides, offsets, bounds, sides, lengths, planner,
-     window) = profile
-    numbers = planner.copy()
+    samples, constants, layout, window = profile
+    n, m = layout[0], layout[1]
+    numbers = constants[:NUMBER_COUNT].copy()
     for k in range(len(WINDOW_NUMBERS)):
         numbers[WINDOW_NUMBERS[k]] = window[k]
+    lengths = constants[NUMBER_COUNT:NUMBER_COUNT + m + 1]
+    offsets = constants[NUMBER_COUNT + m + 1:]
     count = offsets.shape[0]
-    swing_obstacle = np.empty_like(obstacle)
-    for side in range(obstacle.shape[0]):
-        for i in range(obstacle.shape[1]):
-            value = obstacle[side, i]
-            swing_obstacle[side, i] = -math.inf if value != value else value
-    return (np.zeros(count, dtype=np.bool_), np.full(count, np.nan), np.zeros(count), bounds,
-            offsets, swing_obstacle, sides, lengths, high.shape[1] - 1, numbers)
+    return (np.zeros(count, dtype=np.bool_), np.full(count, np.nan), np.zeros(count),
+            layout[2:n + 3], offsets, samples[3], layout[n + 3:2 * n + 3], lengths,
+            samples.shape[2] - 1, numbers)
 
 
 @kernel(TABLES_TYPE + '(' + PROFILE_TYPE + ')')
@@ -213,7 +221,8 @@ def foothold_tables(profile):
     the profile's obstacle with -inf over empty space: the
     :data:`TABLES_TYPE` the searches read, from the :data:`PROFILE_TYPE` they are given
     (:func:`window_search` judges its entries as it reads them instead)."""
-    high, low, headroom, entry_sides = profile[0], profile[1], profile[2], profile[4]
+    samples, entry_sides = profile[0], _entry_sides(profile)
+    high, low, headroom = samples[0], samples[1], samples[2]
     tables = _unjudged_tables(profile)
     ok, height, pitch, offsets, numbers = tables[0], tables[1], tables[2], tables[4], tables[9]
     for entry in range(ok.shape[0]):
@@ -428,14 +437,14 @@ _RESULT_TYPE = 'Tuple((i8[::1], f8[:, ::1], f8, i8))'
 DENSE_CONFIGURATIONS = 1 << 16
 
 
-@kernel(_RESULT_TYPE + '(i8[::1], ' + _BANNED + ', ' + _BANNED + ', b1, '
-        + PROFILE_TYPE + ')')
+@kernel(_RESULT_TYPE + '(i8, ' + _BANNED + ', ' + _BANNED + ', b1, ' + PROFILE_TYPE + ')')
 def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
     """§4.2's search of one window: (configuration (n,) interval indices, empty when no
     configuration is collision-free; its footholds (4, n), :func:`_footholds_of`; its effort;
     configurations judged).
 
-    ``start`` (n,): the configuration the breadth-first search starts from; ``banned_first``
+    ``start``: the configuration the breadth-first search starts from, numbered (base m + 1,
+    footstep 0 the most significant digit: one number to pass, not an array); ``banned_first``
     (m + 1,): the interval indices the first footstep must not take; ``banned_lengths``
     (m + 1,): those no footstep may take; ``greedy_restart``: climb a second time from a
     configuration built footstep by footstep and keep the better; ``profile``:
@@ -452,10 +461,11 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
     in the walk, where the search's code is no longer in the processor's caches, the p95 of
     its first calls' time 15 % lower, session 34).
     """
-    high, low, headroom, entry_sides = profile[0], profile[1], profile[2], profile[4]
+    samples, entry_sides = profile[0], _entry_sides(profile)
+    high, low, headroom = samples[0], samples[1], samples[2]
     tables = _unjudged_tables(profile)
     ok, height, pitch, bounds, offsets, obstacle, sides, lengths, last, numbers = tables
-    n = start.shape[0]
+    n = sides.shape[0]
     base = banned_lengths.shape[0]
     m = base - 1
     none = np.empty(0, dtype=np.int64)
@@ -616,11 +626,12 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
     #
     # - START: the start configuration alone;
     # - BREADTH: the breadth-first search from it to the nearest collision-free configuration,
-    #   a batch per configuration taken from the queue: its neighbours not yet judged, the
-    #   paper's single-footstep moves, footstep by footstep, shorter before longer. Each is
-    #   judged when queued and the first found free ends the search, the first the queue would
-    #   hand out (first in, first out): the result and the configurations judged are those of
-    #   judging them on the way out, without expanding the rest of the last level;
+    #   over the paper's single-footstep moves (footstep by footstep, shorter before longer),
+    #   as first in, first out: a batch of the configurations it reaches next, each judged as
+    #   it is reached, the first found free ending the search. Without a queue: with these
+    #   moves the order in which such a search reaches the configurations is known beforehand
+    #   (see ``level`` below), so they are enumerated in it; the same configurations judged,
+    #   the same found first, as the queue's (the tests' plain search keeps one);
     # - CLIMB: hill-climbing, a batch per move: the neighbours of the current configuration,
     #   in order each footstep one interval shorter, then longer, each followed by that change
     #   with the next footstep changed the opposite way (so the footholds after them stay;
@@ -638,11 +649,31 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
         strides[i] = stride
         stride *= base
     batch = np.empty(4 * n, dtype=np.int64)
-    batch[0] = number_of(start)
+    batch[0] = start
     size = 1
     phase = start_phase
-    queue = [batch[0]]
-    head = 0
+    # The breadth-first search's order. A queue reaches a configuration first from the
+    # first-reached neighbour one move nearer the start; by induction the configurations
+    # ``level`` moves away come in the order of their offsets from the start taken footstep
+    # by footstep: footstep 0's offset -level, ..., -1, then +level, ..., +1, then 0, each
+    # followed by the offsets of the footsteps after it over the moves left in the same order
+    # (the last footstep's: -left, then +left). Those outside [0, m] are passed over, as the
+    # queue never holds them (a neighbour nearer the start of one inside lies inside too).
+    # State: the level, the footstep whose offset comes next (-1: the level is done), each
+    # footstep's place in its order and the moves left for it and those after it, the
+    # numbers of the configuration's first footsteps (``partial``) and the most moves the
+    # footsteps from each on can take inside [0, m] (``reach``).
+    level, depth = 0, -1
+    places = np.empty(n, dtype=np.int64)
+    left = np.empty(n, dtype=np.int64)
+    partial = np.zeros(n + 1, dtype=np.int64)
+    reach = np.zeros(n + 1, dtype=np.int64)
+    origin = np.empty(n, dtype=np.int64)  # the start's interval indices
+    rest = start
+    for i in range(n - 1, -1, -1):
+        origin[i] = rest % base
+        rest //= base
+        reach[i] = reach[i + 1] + max(origin[i], m - origin[i])
     current, value = -1, math.nan  # the configuration climbed from, its effort
     judged_count = 0  # configurations judged
     result, effort = -1, math.nan  # the first climb's
@@ -659,8 +690,6 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
             elif judged_value == judged_value:
                 found = number
                 break
-            elif phase == breadth:
-                queue.append(number)
         # What comes next.
         if phase == climb and best >= 0:
             current, value = best, best_value
@@ -694,23 +723,38 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
                             break
                     if not usable:
                         return none, nothing, math.nan, judged_count
-            # The breadth-first search: the next configuration in the queue, its neighbours.
+            # The breadth-first search: the next configurations in its order.
             phase = breadth
             size = 0
-            while size == 0 and head < len(queue):
-                number = queue[head]
-                head += 1
-                rest = number
-                for i in range(n - 1, -1, -1):
-                    config[i] = rest % base
-                    rest //= base
-                for i in range(n):
-                    j = config[i]
-                    for delta in (-1, 1):
-                        neighbour = number + delta * strides[i]
-                        if 0 <= j + delta <= m and known(neighbour) == _UNJUDGED:
-                            batch[size] = neighbour
-                            size += 1
+            while size < batch.shape[0]:
+                if depth < 0:
+                    level += 1
+                    if level > reach[0]:
+                        break
+                    depth, left[0], places[0] = 0, level, -1
+                places[depth] += 1
+                place, moves = places[depth], left[depth]
+                if depth == n - 1:
+                    if place > (1 if moves else 0):
+                        depth -= 1
+                        continue
+                    offset = moves if place else -moves
+                else:
+                    if place > 2 * moves:
+                        depth -= 1
+                        continue
+                    offset = place - moves if place < moves else 2 * moves - place
+                j = origin[depth] + offset
+                if j < 0 or j > m:
+                    continue
+                partial[depth + 1] = partial[depth] + j * strides[depth]
+                if depth == n - 1:
+                    batch[size] = partial[n]
+                    size += 1
+                elif moves - abs(offset) <= reach[depth + 1]:
+                    left[depth + 1] = moves - abs(offset)
+                    depth += 1
+                    places[depth] = -1
             if size == 0:
                 return none, nothing, math.nan, judged_count
             continue

@@ -8,7 +8,7 @@ neighbour until every neighbour is worse. Only s_1 is executed; the next call st
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 import math
 from typing import Optional, Tuple
 
@@ -134,6 +134,16 @@ class GroundProfile:
     obstacle
         (2, K) height a swinging foot must clear, m: ``height`` where it exists, the top of the
         solid where the sample lies inside one, NaN over empty space (a gap).
+    stacked
+        (4, 2, K) the samples as the compiled footstep search takes them, in one array (one to
+        unbox instead of four): ``height``, ``low`` and ``headroom`` (which are views of it)
+        and ``obstacle`` with -inf over empty space. Made from the other four when not given;
+        :func:`sample_ground_profile` gives it, having written the samples into it.
+
+    Raises
+    ------
+    ValueError
+        If the four sample arrays are not all (2, K) with the same K.
 
     """
 
@@ -143,12 +153,26 @@ class GroundProfile:
     low: np.ndarray
     headroom: np.ndarray
     obstacle: np.ndarray
+    stacked: Optional[np.ndarray] = field(default=None, repr=False, compare=False)
 
     def __post_init__(self):
         # The compiled kernels take the samples as C-contiguous, writable float64: made so once
         # here (copied only where they are not), not at every search of a window.
-        for name in ('height', 'low', 'headroom', 'obstacle'):
-            object.__setattr__(self, name, _samples(getattr(self, name)))
+        if self.stacked is not None:
+            return
+        arrays = [_samples(getattr(self, name))
+                  for name in ('height', 'low', 'headroom', 'obstacle')]
+        shapes = [a.shape for a in arrays]
+        if len(shapes[0]) != 2 or shapes[0][0] != 2 or any(x != shapes[0] for x in shapes):
+            raise ValueError(f'ground profile samples must all be (2, K): height, low, '
+                             f'headroom, obstacle are {shapes}')
+        stacked = np.empty((4,) + shapes[0])
+        stacked[:3] = arrays[:3]
+        stacked[3] = np.where(np.isnan(arrays[3]), -np.inf, arrays[3])
+        for k, name in enumerate(('height', 'low', 'headroom')):
+            object.__setattr__(self, name, stacked[k])
+        object.__setattr__(self, 'obstacle', arrays[3])
+        object.__setattr__(self, 'stacked', stacked)
 
     @property
     def samples(self) -> int:
@@ -296,6 +320,19 @@ class FootstepPlanner:
             config.flatness_tolerance, config.min_support_fraction)
         numbers.setflags(write=False)
         self._search_numbers = numbers
+        # The same numbers, lengths and layout as the compiled search takes them
+        # (footstep_search.PROFILE_TYPE): the numbers, lengths and entries' offsets in one
+        # array; n, m, the rows' first entries and the sides of the footsteps and the entries
+        # in another, by the side of the stance foot. Read-only: every window shares them.
+        self._search_constants = np.concatenate([numbers, self._lengths,
+                                                 self._table_layout[1]])
+        self._search_constants.setflags(write=False)
+        self._search_layout = {}
+        for stance_side in (0, 1):
+            layout = np.concatenate([[n, m], self._bounds, self._sides[stance_side][0],
+                                     self._entry_sides[stance_side]]).astype(np.int64)
+            layout.setflags(write=False)
+            self._search_layout[stance_side] = layout
         # No interval index banned (read-only: every window shares it).
         self._none_banned = np.zeros(m + 1, dtype=bool)
         self._none_banned.setflags(write=False)
@@ -446,12 +483,14 @@ class FootstepPlanner:
         n, m = self._window_size
         if start is None:
             index = round((s_init - self._length_min) / self._increment)
-            q = np.full(n, min(max(index, 0), m), dtype=np.int64)
-        else:
-            if len(start) != n or min(start) < 0 or max(start) > m:
-                raise ValueError(f'start configuration {tuple(start)} is not {n} indices in '
-                                 f'[0, {m}]')
-            q = np.array(start, dtype=np.int64)
+            start = (min(max(index, 0), m),) * n
+        elif len(start) != n or min(start) < 0 or max(start) > m:
+            raise ValueError(f'start configuration {tuple(start)} is not {n} indices in '
+                             f'[0, {m}]')
+        # Numbered as the search numbers configurations (base m + 1, footstep 0 first).
+        number = 0
+        for j in start:
+            number = number * (m + 1) + int(j)
         if stance_side != 0 and stance_side != 1:
             raise ValueError(f'stance side {stance_side!r} is not 0 (left) or 1 (right)')
         banned = self._none_banned
@@ -464,9 +503,10 @@ class FootstepPlanner:
         if self._longest > max_length + 1e-9:
             too_long = self._lengths > max_length + 1e-9
         return self._window(window_search(
-            q, banned, too_long, self._greedy_restart,
-            self.search_profile(profile, stance_side, stance_s, stance_height, swing_s,
-                                swing_height, s_init, previous_length)), stance_side)
+            number, banned, too_long, self._greedy_restart,
+            (profile.stacked, self._search_constants, self._search_layout[stance_side],
+             (stance_s, stance_height, swing_s, swing_height, s_init, previous_length,
+              profile.s0, profile.ds))), stance_side)
 
     def search_profile(self, profile: GroundProfile, stance_side: int, stance_s: float,
                        stance_height: float, swing_s: float, swing_height: float,
@@ -474,12 +514,9 @@ class FootstepPlanner:
         """What the compiled search of a window is given
         (:data:`footstep_search.PROFILE_TYPE`): the profile's samples, the layout of the
         window's foothold table, the planner's numbers and the window's own as a tuple (the
-        arguments are :meth:`plan`'s; the search copies them into one array, which in Python
-        took 0.76 us a window, now 0.26). The search builds the table itself
-        (:func:`footstep_search.foothold_tables`)."""
-        return (profile.height, profile.low, profile.headroom, profile.obstacle,
-                self._entry_sides[stance_side], self._table_layout[1], self._bounds,
-                self._sides[stance_side][0], self._lengths, self._search_numbers,
+        arguments are :meth:`plan`'s, which builds the same tuple itself, a call fewer). The
+        search builds the table itself (:func:`footstep_search.foothold_tables`)."""
+        return (profile.stacked, self._search_constants, self._search_layout[stance_side],
                 (stance_s, stance_height, swing_s, swing_height, s_init, previous_length,
                  profile.s0, profile.ds))
 
@@ -569,12 +606,15 @@ def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: f
     height = height.reshape(shape)
     clearance = clearance.reshape(shape)
     obstacle = obstacle.reshape(shape)
-    # Maxima, minima and comparisons with NaN raise no floating-point warnings: no errstate.
-    high = height.max(axis=1)
-    low = height.min(axis=1)
-    room = np.where(np.isnan(clearance), 0.0, clearance).min(axis=1)
+    # Written into the array the footstep search takes (GroundProfile.stacked). Maxima, minima
+    # and comparisons with NaN raise no floating-point warnings: no errstate.
+    stacked = np.empty((4, 2, count))
+    height.max(axis=1, out=stacked[0])
+    height.min(axis=1, out=stacked[1])
+    np.where(np.isnan(clearance), 0.0, clearance).min(axis=1, out=stacked[2])
     # NaN (nothing to hit) read as -inf, so a plain max is the NaN-ignoring one.
-    tops = np.where(np.isnan(obstacle), -np.inf, obstacle).max(axis=1)
+    np.where(np.isnan(obstacle), -np.inf, obstacle).max(axis=1, out=stacked[3])
+    tops = stacked[3].copy()
     tops[tops == -np.inf] = np.nan
-    return GroundProfile(s0=float(s_start), ds=float(ds), height=high, low=low, headroom=room,
-                         obstacle=tops)
+    return GroundProfile(s0=float(s_start), ds=float(ds), height=stacked[0], low=stacked[1],
+                         headroom=stacked[2], obstacle=tops, stacked=stacked)
