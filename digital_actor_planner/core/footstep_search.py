@@ -468,8 +468,23 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
     n = sides.shape[0]
     base = banned_lengths.shape[0]
     m = base - 1
-    none = np.empty(0, dtype=np.int64)
-    nothing = np.empty((4, 0))
+    # The configurations judged: their efforts (NaN where not collision-free), in arrays over
+    # every configuration where there are few enough of them, else in ``table``.
+    configurations = 1
+    for _ in range(n):
+        configurations *= base
+        if configurations > DENSE_CONFIGURATIONS:
+            configurations = 0
+            break
+    # The search's small arrays in one allocation each (an allocation ~40 ns): which entries
+    # of the foothold table are judged and which configurations; the indices (see their uses).
+    flags = np.zeros(ok.shape[0] + configurations, dtype=np.uint8)
+    read, judged = flags[:ok.shape[0]], flags[ok.shape[0]:]
+    efforts = np.empty(configurations)
+    work = np.zeros(11 * n + 2 + base, dtype=np.int64)
+    config, strides, batch = work[:n], work[n:2 * n], work[2 * n:6 * n]
+    places, budget, origin = work[6 * n:7 * n], work[7 * n:8 * n], work[8 * n:9 * n]
+    partial, reach, order = work[9 * n:10 * n + 1], work[10 * n + 1:11 * n + 2], work[11 * n + 2:]
     # The foothold table judged entry by entry, as the search first reads an entry (a sixth
     # of them at the median): ``ensure(entry)`` judges it if it is not yet and answers
     # whether it is ok. The effort reads only the entries of configurations whose entries the
@@ -478,7 +493,6 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
                                    numbers[TOE])
     min_headroom, max_pitch = numbers[MIN_HEADROOM], numbers[MAX_PITCH]
     tolerance, min_fraction = numbers[TOLERANCE], numbers[MIN_FRACTION]
-    read = np.zeros(ok.shape[0], dtype=np.uint8)
 
     def ensure(entry):
         if not read[entry]:
@@ -498,16 +512,6 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
         return True
 
     table, prefixes, swings = _empty_memos(n)
-    # The configurations judged: their efforts (NaN where not collision-free), in arrays over
-    # every configuration where there are few enough of them, else in ``table``.
-    configurations = 1
-    for _ in range(n):
-        configurations *= base
-        if configurations > DENSE_CONFIGURATIONS:
-            configurations = 0
-            break
-    judged = np.zeros(configurations, dtype=np.uint8)
-    efforts = np.empty(configurations)
 
     def known(number):
         if configurations:
@@ -520,14 +524,6 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
             efforts[number] = value
         else:
             table[number] = value
-
-    def number_of(config):
-        number = 0
-        for i in range(n):
-            number = number * base + config[i]
-        return number
-
-    config = np.empty(n, dtype=np.int64)
 
     def evaluate(number):
         # The effort of configuration ``number`` (its indices left in ``config``), NaN if it
@@ -555,7 +551,7 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
     def greedy():
         # A configuration built footstep by footstep, each the cheapest given the ones before
         # by the effort's terms (not the swing test: the caller judges the whole
-        # configuration); empty when some footstep has no usable foothold.
+        # configuration), numbered; -1 when some footstep has no usable foothold.
         up, down = numbers[UP], numbers[DOWN]
         two, span, s_init = numbers[TWO], numbers[SPAN], numbers[S_INIT]
         w_length, w_height, w_pitch = numbers[W_LENGTH], numbers[W_HEIGHT], numbers[W_PITCH]
@@ -568,7 +564,6 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
         length_terms = np.empty(base)
         for j in range(base):
             length_terms[j] = w_length * ((lengths[j] - s_init) / span) ** two
-        order = np.empty(base, dtype=np.int64)
         right = 0
         while right < base and lengths[right] < s_init:
             right += 1
@@ -580,7 +575,7 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
             else:
                 order[k] = right
                 right += 1
-        seed = np.empty(n, dtype=np.int64)
+        seed = 0
         cumulative, height_before = 0, numbers[STANCE_HEIGHT]
         length_before = numbers[PREVIOUS_LENGTH]
         for i in range(n):
@@ -615,8 +610,8 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
                 if cost < best_cost or (cost == best_cost and j < best):
                     best, best_cost = j, cost
             if best < 0:
-                return np.empty(0, dtype=np.int64)
-            seed[i] = best
+                return -1
+            seed = seed * base + best
             cumulative += best
             height_before, length_before = height[bounds[i] + cumulative], lengths[best]
         return seed
@@ -643,12 +638,10 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
     #   or on every other one) and the first climb cannot leave its basin. The second climb's
     #   result is kept where it is better by more than 1e-12.
     start_phase, breadth, climb, restart = 0, 1, 2, 3
-    strides = np.empty(n, dtype=np.int64)
     stride = 1
     for i in range(n - 1, -1, -1):
         strides[i] = stride
         stride *= base
-    batch = np.empty(4 * n, dtype=np.int64)
     batch[0] = start
     size = 1
     phase = start_phase
@@ -657,18 +650,14 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
     # ``level`` moves away come in the order of their offsets from the start taken footstep
     # by footstep: footstep 0's offset -level, ..., -1, then +level, ..., +1, then 0, each
     # followed by the offsets of the footsteps after it over the moves left in the same order
-    # (the last footstep's: -left, then +left). Those outside [0, m] are passed over, as the
+    # (the last footstep's: -moves, then +moves). Those outside [0, m] are passed over, as the
     # queue never holds them (a neighbour nearer the start of one inside lies inside too).
     # State: the level, the footstep whose offset comes next (-1: the level is done), each
-    # footstep's place in its order and the moves left for it and those after it, the
-    # numbers of the configuration's first footsteps (``partial``) and the most moves the
-    # footsteps from each on can take inside [0, m] (``reach``).
+    # footstep's place in its order (``places``) and the moves left for it and those after
+    # it (``budget``), the numbers of the configuration's first footsteps (``partial``) and
+    # the most moves the footsteps from each on can take inside [0, m] (``reach``); the
+    # start's interval indices (``origin``).
     level, depth = 0, -1
-    places = np.empty(n, dtype=np.int64)
-    left = np.empty(n, dtype=np.int64)
-    partial = np.zeros(n + 1, dtype=np.int64)
-    reach = np.zeros(n + 1, dtype=np.int64)
-    origin = np.empty(n, dtype=np.int64)  # the start's interval indices
     rest = start
     for i in range(n - 1, -1, -1):
         origin[i] = rest % base
@@ -697,10 +686,12 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
             # The climb ends here.
             if result < 0:
                 result, effort = current, value
-                seed = greedy() if greedy_restart else none
-                if seed.shape[0] == 0 or number_of(seed) == current:
+                if not greedy_restart:
                     break
-                batch[0] = number_of(seed)
+                seed = greedy()
+                if seed < 0 or seed == current:
+                    break
+                batch[0] = seed
                 size = 1
                 phase = restart
                 continue
@@ -722,7 +713,8 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
                             usable = True
                             break
                     if not usable:
-                        return none, nothing, math.nan, judged_count
+                        return (np.empty(0, dtype=np.int64), np.empty((4, 0)), math.nan,
+                                judged_count)
             # The breadth-first search: the next configurations in its order.
             phase = breadth
             size = 0
@@ -731,9 +723,9 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
                     level += 1
                     if level > reach[0]:
                         break
-                    depth, left[0], places[0] = 0, level, -1
+                    depth, budget[0], places[0] = 0, level, -1
                 places[depth] += 1
-                place, moves = places[depth], left[depth]
+                place, moves = places[depth], budget[depth]
                 if depth == n - 1:
                     if place > (1 if moves else 0):
                         depth -= 1
@@ -752,11 +744,11 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
                     batch[size] = partial[n]
                     size += 1
                 elif moves - abs(offset) <= reach[depth + 1]:
-                    left[depth + 1] = moves - abs(offset)
+                    budget[depth + 1] = moves - abs(offset)
                     depth += 1
                     places[depth] = -1
             if size == 0:
-                return none, nothing, math.nan, judged_count
+                return np.empty(0, dtype=np.int64), np.empty((4, 0)), math.nan, judged_count
             continue
         # The neighbours of ``current`` to climb to.
         rest = current
