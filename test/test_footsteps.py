@@ -12,7 +12,8 @@ from digital_actor_planner.core.skeleton import Skeleton
 
 DS = 0.02
 #: The compiled search's functions (footstep_search), each calling the ones before.
-SEARCH_KERNELS = ('_judge_sole', 'judge_footholds', '_unjudged_tables', 'foothold_tables',
+SEARCH_KERNELS = ('_judge_sole', 'judge_footholds', '_entry_sides', '_unjudged_tables',
+                  'foothold_tables',
                   '_empty_memos', '_prefix_key', '_digits', '_step_cost', '_rise_ahead',
                   '_swing_clear', '_effort', '_footholds_of', 'window_search',
                   'exhaustive_search')
@@ -49,6 +50,56 @@ def profile_from(height_of, length=4.0, s0=-0.3):
 def plan(planner, profile, s_init=0.5, start=None, banned=()):
     return planner.plan(profile, RIGHT, 0.0, 0.0, 0.0, 0.0, s_init, 0.5, start=start,
                         banned_first=banned)
+
+
+def test_a_profile_keeps_its_samples_stacked_for_the_search_and_refuses_mismatched_ones():
+    """The search reads the profile's samples as one (4, 2, K) array: height, low and headroom
+    are views of it, the obstacle is there with -inf over empty space (NaN in the profile's
+    own), and the sampler's profile (which writes the array itself) is the same as one made
+    from its four arrays. Sample arrays of different shapes are refused, naming the shapes."""
+    profile = profile_from(lambda s: np.nan if 0.5 < s < 0.7 else 0.1 * s)
+    stacked = profile.stacked
+    assert stacked.shape == (4,) + profile.height.shape and stacked.flags.c_contiguous
+    for k, name in enumerate(('height', 'low', 'headroom')):
+        assert np.shares_memory(getattr(profile, name), stacked[k]), name
+    empty = np.isnan(profile.obstacle)
+    assert empty.any() and np.all(stacked[3][empty] == -np.inf)
+    np.testing.assert_array_equal(stacked[3][~empty], profile.obstacle[~empty])
+    remade = GroundProfile(s0=profile.s0, ds=profile.ds, height=profile.height.copy(),
+                           low=profile.low.copy(), headroom=profile.headroom.copy(),
+                           obstacle=profile.obstacle.copy())
+    np.testing.assert_array_equal(remade.stacked, stacked)
+    with pytest.raises(ValueError, match=r'\(2, 200\).*\(2, 199\)'):
+        GroundProfile(s0=0.0, ds=DS, height=np.zeros((2, 200)), low=np.zeros((2, 200)),
+                      headroom=np.zeros((2, 200)), obstacle=np.zeros((2, 199)))
+    with pytest.raises(ValueError, match='must all be'):
+        GroundProfile(s0=0.0, ds=DS, height=np.zeros(200), low=np.zeros(200),
+                      headroom=np.zeros(200), obstacle=np.zeros(200))
+
+
+def test_the_sampled_profile_writes_the_stacked_samples_itself():
+    """sample_ground_profile hands its (4, 2, K) array to the profile; the profile made from the
+    same four arrays stacks them alike."""
+    from digital_actor_planner.core.environment import Environment
+    from digital_actor_planner.core.path import predict_path
+    import trimesh
+    near = trimesh.creation.box(extents=(4.6, 6.0, 0.2))
+    near.apply_translation((-0.7, 0.0, -0.1))  # to x = 1.6, then a gap of 0.3 m
+    far = trimesh.creation.box(extents=(2.0, 6.0, 0.2))
+    far.apply_translation((2.9, 0.0, -0.1))
+    step = trimesh.creation.box(extents=(0.4, 6.0, 0.15))
+    step.apply_translation((1.0, 0.0, 0.075))
+    environment = Environment([near, far, step])
+    path = predict_path(0.0, 0.0, 0.0, 0.8, 0.0, 3.0)
+    profile = footsteps.sample_ground_profile(environment, path, -0.3, 2.5, DS, 0.1, 0.1,
+                                              0.0, 0.2, 3)
+    assert np.shares_memory(profile.height, profile.stacked)
+    assert np.isnan(profile.obstacle).any()  # over the gap
+    remade = GroundProfile(s0=profile.s0, ds=profile.ds, height=profile.height.copy(),
+                           low=profile.low.copy(), headroom=profile.headroom.copy(),
+                           obstacle=profile.obstacle.copy())
+    np.testing.assert_array_equal(remade.stacked, profile.stacked)
+    assert np.nanmax(profile.height) == pytest.approx(0.15, abs=1e-6)
 
 
 def test_flat_ground_keeps_the_neutral_length(leg):
