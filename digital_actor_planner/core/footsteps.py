@@ -473,12 +473,13 @@ class FootstepPlanner:
             None when no collision-free configuration exists in the window.
 
         The search runs compiled, its foothold table included
-        (:func:`footstep_search.window_search`): on the stairs' windows 7.5 us at the median in
-        the kernel (p90 14, max 23), 10 us called from Python and 12.3 us through this method
-        (11-109 configurations judged; each window planned again in a loop, session 35; 13.4 us
-        through this method at its start, where the window's numbers were written into an array
-        here; 15.5, 19 and 24 us at session 33's start), where the same search in Python took
-        300-400 us; the same configurations judged, the same efforts to the last bit.
+        (:func:`footstep_search.window_search`): on the stairs' windows 9.3 us at the median in
+        the kernel's call (p90 17, max 25) and 11.5 us through this method (11-109
+        configurations judged; each window planned again in a loop, session 36, which handed
+        the kernel 4 arrays instead of 13 and built its argument here: 10.0 and 12.8 us before,
+        the same hour; session 35 measured 7.5 and 12.3 us in a faster one, 15.5, 19 and 24 us
+        at session 33's start), where the same search in Python took 300-400 us; the same
+        configurations judged, the same efforts to the last bit.
         """
         n, m = self._window_size
         if start is None:
