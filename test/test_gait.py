@@ -4,6 +4,7 @@ import pytest
 
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment
+from digital_actor_planner.core import gait as gait_module
 from digital_actor_planner.core.footsteps import LEFT, RIGHT
 from digital_actor_planner.core.gait import (
     GaitConfig, GaitError, leg_inverse_kinematics, standing_stance, validate_gait_config,
@@ -155,6 +156,44 @@ def test_a_heel_lifting_over_an_edge_its_toes_overhang_does_not_sink_into_it(ske
             assert report.ok, (yaw, overhang, report.failures())
     # The steps are long enough that the stance heel lifts in most of them.
     assert lifted >= 12
+
+
+def test_a_step_that_would_leave_a_knee_too_bent_for_the_next_is_refused(
+        skeleton, walker, monkeypatch):
+    """Stepping 0.75 m down off a 0.33 m platform, the rear foot left at its edge: the rear
+    knee would end the step at 2.27 rad, 0.03 from its limit, from where no next step can
+    lift that foot (a weaving walk on the blocks was trapped so, bench_steer_away seed 32). The
+    step is refused, naming the knee; a shorter step off a lower platform is not; and without
+    the margin (``END_KNEE_MARGIN``) the same step is realised, its knee within the margin."""
+    leg = skeleton.leg
+    limit = walker._leg_upper[RIGHT][2]
+
+    def step_down(height, length):
+        environment = Environment([box_mesh([-1, -1, -0.1], [3, 1, 0]),
+                                   box_mesh([-1, -1, 0], [0, 1, height])], resolution=0.02)
+
+        def ground(xy, z_ref):
+            top, _ = environment.ground_height(xy, z_ref)
+            missing = np.isnan(top)
+            top[missing] = environment.ground_height(xy[missing], z_ref + 3.0)[0]
+            return top
+
+        # The right toe tip at the platform's edge (x = 0), the left foot beside it.
+        pelvis = np.array([-leg.toe, leg.hip_half_width])
+        stance = standing_stance(skeleton, pelvis[0], pelvis[1], 0.0, height, stance_side=RIGHT)
+        return walker.step(stance, stance.feet[LEFT].xy + np.array([length, 0.0]), 0.0, 0.0, 0.0,
+                           np.array([pelvis[0] + 0.5 * length, pelvis[1], 0.0]),
+                           walker.step_duration(length, 0.8, -height), ground)
+
+    def rear_knee(motion):
+        return float(motion.frames[-1, walker._leg_columns[RIGHT]][2])
+
+    with pytest.raises(GaitError, match=r'right_knee would end the step at 2\.2\d rad, too bent'):
+        step_down(0.33, 0.75)
+    assert rear_knee(step_down(0.30, 0.6)) < limit - gait_module.END_KNEE_MARGIN
+    monkeypatch.setattr(gait_module, 'END_KNEE_MARGIN', -1.0)
+    bent = rear_knee(step_down(0.33, 0.75))
+    assert limit - 0.1 < bent < limit
 
 
 def test_unreachable_step_is_refused(skeleton, walker):
