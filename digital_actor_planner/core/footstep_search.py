@@ -47,7 +47,7 @@ import numpy as np
 from .jit import kernel
 
 #: Indices into the ``numbers`` array of :func:`window_search` (see
-#: ``FootstepPlanner._search_numbers``).
+#: ``FootstepPlanner._search_constants``, whose first NUMBER_COUNT they are).
 (STANCE_S, STANCE_HEIGHT, SWING_S, SWING_HEIGHT, S_INIT, PREVIOUS_LENGTH, UP, DOWN,
  W_LENGTH, W_HEIGHT, W_PITCH, W_SMOOTH, SPAN, UP_RANGE, PITCH_RANGE, TOE, HEEL, S0, DS,
  MAX_SWING, LIFT_ROOM, LIFT_RISE, LIFT_STEP_UP, TWO, MIN_HEADROOM, MAX_PITCH, TOLERANCE,

@@ -279,10 +279,7 @@ class FootstepPlanner:
                             + config.step_increment * np.arange(counts[i]) for i in range(n)]),
             [int(b) for b in np.cumsum([0] + counts)])
         self._lengths = config.lengths()
-        # The same layout for the compiled search: table rows' first entries, read-only (every
-        # window shares them).
-        self._bounds = np.array(self._table_layout[2], dtype=np.int64)
-        for table in (self._bounds, self._table_layout[1], self._lengths):
+        for table in (self._table_layout[1], self._lengths):
             table.setflags(write=False)
         # The side of each footstep of a window, by the side of the stance foot: the other
         # foot steps first. As an array (read-only: every window of that stance side holds
@@ -293,12 +290,6 @@ class FootstepPlanner:
                               for i in range(n)])
             sides.setflags(write=False)
             self._sides[stance_side] = (sides, sides.tolist())
-        # The side of each entry of the foothold table, by the side of the stance foot.
-        self._entry_sides = {}
-        for stance_side in (0, 1):
-            entry_sides = self._sides[stance_side][0][self._table_layout[0]]
-            entry_sides.setflags(write=False)
-            self._entry_sides[stance_side] = entry_sides
         self._rise_limits = (float(config.max_step_up), float(config.max_step_down))
         # Weights and ranges of the effort terms (footstep_search._effort), as plain floats.
         self._effort_terms = (
@@ -318,19 +309,18 @@ class FootstepPlanner:
             leg.toe, leg.heel, config.max_swing_height, config.lift_room, config.lift_rise,
             config.lift_step_up, 2.0, config.min_headroom, config.max_foot_pitch,
             config.flatness_tolerance, config.min_support_fraction)
-        numbers.setflags(write=False)
-        self._search_numbers = numbers
-        # The same numbers, lengths and layout as the compiled search takes them
-        # (footstep_search.PROFILE_TYPE): the numbers, lengths and entries' offsets in one
-        # array; n, m, the rows' first entries and the sides of the footsteps and the entries
-        # in another, by the side of the stance foot. Read-only: every window shares them.
+        # The numbers, the lengths and the table entries' offsets in one array, as the compiled
+        # search takes them (footstep_search.PROFILE_TYPE); n, m, the table rows' first
+        # entries, the sides of the footsteps and of the table's entries in another, by the
+        # side of the stance foot. Read-only: every window shares them.
         self._search_constants = np.concatenate([numbers, self._lengths,
                                                  self._table_layout[1]])
         self._search_constants.setflags(write=False)
         self._search_layout = {}
         for stance_side in (0, 1):
-            layout = np.concatenate([[n, m], self._bounds, self._sides[stance_side][0],
-                                     self._entry_sides[stance_side]]).astype(np.int64)
+            sides = self._sides[stance_side][0]
+            layout = np.concatenate([[n, m], self._table_layout[2], sides,
+                                     sides[self._table_layout[0]]]).astype(np.int64)
             layout.setflags(write=False)
             self._search_layout[stance_side] = layout
         # No interval index banned (read-only: every window shares it).
@@ -474,9 +464,9 @@ class FootstepPlanner:
 
         The search runs compiled, its foothold table included
         (:func:`footstep_search.window_search`): on the stairs' windows 9.3 us at the median in
-        the kernel's call (p90 17, max 25) and 11.5 us through this method (11-109
+        the kernel's call (p90 17, max 25) and 11.6 us through this method (11-109
         configurations judged; each window planned again in a loop, session 36, which handed
-        the kernel 4 arrays instead of 13 and built its argument here: 10.0 and 12.8 us before,
+        the kernel 4 arrays instead of 13: 10.0 and 12.8 us before,
         the same hour; session 35 measured 7.5 and 12.3 us in a faster one, 15.5, 19 and 24 us
         at session 33's start), where the same search in Python took 300-400 us; the same
         configurations judged, the same efforts to the last bit.
@@ -505,9 +495,8 @@ class FootstepPlanner:
             too_long = self._lengths > max_length + 1e-9
         return self._window(window_search(
             number, banned, too_long, self._greedy_restart,
-            (profile.stacked, self._search_constants, self._search_layout[stance_side],
-             (stance_s, stance_height, swing_s, swing_height, s_init, previous_length,
-              profile.s0, profile.ds))), stance_side)
+            self.search_profile(profile, stance_side, stance_s, stance_height, swing_s,
+                                swing_height, s_init, previous_length)), stance_side)
 
     def search_profile(self, profile: GroundProfile, stance_side: int, stance_s: float,
                        stance_height: float, swing_s: float, swing_height: float,
@@ -515,8 +504,8 @@ class FootstepPlanner:
         """What the compiled search of a window is given
         (:data:`footstep_search.PROFILE_TYPE`): the profile's samples, the layout of the
         window's foothold table, the planner's numbers and the window's own as a tuple (the
-        arguments are :meth:`plan`'s, which builds the same tuple itself, a call fewer). The
-        search builds the table itself (:func:`footstep_search.foothold_tables`)."""
+        arguments are :meth:`plan`'s). The search builds the table itself
+        (:func:`footstep_search.foothold_tables`)."""
         return (profile.stacked, self._search_constants, self._search_layout[stance_side],
                 (stance_s, stance_height, swing_s, swing_height, s_init, previous_length,
                  profile.s0, profile.ds))
