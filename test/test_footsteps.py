@@ -7,14 +7,13 @@ import footstep_reference as reference
 from digital_actor_planner.core import footstep_search, footsteps
 from digital_actor_planner.core.footsteps import (
     FootstepConfig, FootstepPlanner, GroundProfile, LEFT, RIGHT, validate_footstep_config)
-from digital_actor_planner.core.jit import COMPILED
 from digital_actor_planner.core.skeleton import Skeleton
 
 DS = 0.02
 #: The compiled search's functions (footstep_search), each calling the ones before.
 SEARCH_KERNELS = ('_judge_sole', 'judge_footholds', '_entry_sides', '_unjudged_tables',
                   'foothold_tables',
-                  '_empty_memos', '_prefix_key', '_digits', '_step_cost', '_rise_ahead',
+                  '_empty_memos', '_digits', '_step_cost', '_rise_ahead',
                   '_swing_clear', '_effort', '_footholds_of', 'window_search',
                   'exhaustive_search')
 
@@ -442,20 +441,24 @@ def test_search_rise_ahead_agrees_with_the_batched_one(leg):
     assert faces > 0
 
 
-def _memos(kind):
-    """Empty prefix and swing memos for the search's kernels: numba's typed dictionaries for
-    the compiled ones, Python's for their plain versions."""
-    if kind == 'compiled' and COMPILED:
-        from numba import typed, types
-        return (typed.Dict.empty(types.int64, types.UniTuple(types.float64, 5)),
-                typed.Dict.empty(types.int64, types.int64))
-    return {}, {}
+def _memos(n=3, m=13, prefix_rows=None, swings=True):
+    """Empty prefix and swing memos as a search of a window of ``n`` footsteps and ``m``
+    intervals makes them (``footstep_search._empty_memos``), the prefix memo cut to its first
+    ``prefix_rows`` rows (the prefixes of fewer footsteps) and the swing memo left out if
+    asked: the effort must come out the same with less remembered."""
+    _, prefixes, swing_memo = footstep_search._empty_memos(n, m, True)
+    if prefix_rows is not None:
+        prefixes = np.ascontiguousarray(prefixes[:prefix_rows])
+    return prefixes, swing_memo if swings else swing_memo[:0].copy()
 
 
-def test_the_compiled_effort_from_prefixes_is_the_plain_effort(leg, search_kind):
+@pytest.mark.parametrize('memo', ['whole', 'one-footstep prefixes, no swings', 'none'])
+def test_the_compiled_effort_from_prefixes_is_the_plain_effort(leg, search_kind, memo):
     """The compiled search's effort, resumed from the prefixes of the configurations judged
     before it, is the plain effort to the last bit (NaN where that is None), feasible or not,
-    whatever order the configurations come in."""
+    whatever order the configurations come in; also where the memos hold only the prefixes
+    of one footstep and no swing (as in a window with too many to keep) or nothing (as the
+    exhaustive search judges)."""
     rng = np.random.default_rng(5)
     planner = FootstepPlanner(FootstepConfig(), leg)
     lengths = planner.config.lengths().tolist()
@@ -473,7 +476,10 @@ def test_the_compiled_effort_from_prefixes_is_the_plain_effort(leg, search_kind)
         configs += [c[:2] + (int(j),) for c in configs[:200] for j in rng.integers(0, 14, 2)]
         for banned in (set(), {5}):
             banned_first = np.isin(np.arange(14), list(banned))
-            prefixes, swings = _memos(search_kind)
+            prefixes, swings = {'whole': _memos(),
+                                'one-footstep prefixes, no swings': _memos(prefix_rows=14,
+                                                                           swings=False),
+                                'none': _memos(prefix_rows=0, swings=False)}[memo]
             for config in configs:
                 expected = reference.plain_effort(planner, profile, config, lengths,
                                                   sides.tolist(), *arguments, plain, banned)
@@ -484,7 +490,10 @@ def test_the_compiled_effort_from_prefixes_is_the_plain_effort(leg, search_kind)
                 else:
                     assert got == expected, (name, config)
                 answers.add(expected is None)
-            assert len(prefixes) > 100 and len(swings) > 20  # resumed, not judged afresh
+            # Resumed, not judged afresh, wherever there is room to remember.
+            remembered = (prefixes[:, 5] != 0).sum()
+            assert remembered > {'whole': 100, 'none': -1}.get(memo, 10), memo
+            assert (swings >= 0).sum() > 20 or memo != 'whole'
     assert answers == {True, False}
 
 
@@ -520,7 +529,7 @@ def test_the_compiled_effort_is_the_plain_effort_on_random_tables(leg, search_ki
         plain.height = [height[a:b].tolist() for a, b in rows]
         plain.pitch = [pitch[a:b].tolist() for a, b in rows]
         plain.obstacle = (obstacle[0].tolist(), obstacle[1].tolist())
-        prefixes, swings = _memos(search_kind)
+        prefixes, swings = _memos()
         for config in rng.integers(0, 14, (150, 3)):
             config = tuple(int(j) for j in config)
             expected = reference.plain_effort(planner, profile, config, lengths,

@@ -97,7 +97,7 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    footstep_search._unjudged_tables,
                    footstep_search._footholds_of, footstep_search.window_search,
                    footstep_search.exhaustive_search, footstep_search._empty_memos,
-                   footstep_search._prefix_key, footstep_search._digits,
+                   footstep_search._digits,
                    footstep_search._step_cost):
         assert kernel.py_func is not kernel
 

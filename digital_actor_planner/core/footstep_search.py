@@ -11,25 +11,30 @@ the whole table first (:func:`foothold_tables`). No Python runs between the conf
 judges.
 
 A configuration (j_0, ..., j_{n-1}) of interval indices is numbered in base m + 1, footstep 0
-the most significant digit; its first L footsteps (a prefix) are numbered the same way and
-keyed ``number * (n + 1) + L``. Three memos live for one search:
+the most significant digit; its first L footsteps (a prefix) are numbered the same way, and
+its row in the prefix memo is that number after the rows of the shorter prefixes (1 to L - 1
+footsteps: m + 1, (m + 1) ** 2, ... rows). Three memos live for one search:
 
 - ``feasible[number]``: the effort of a configuration judged, NaN where it is not
   collision-free (their count is the window's ``evaluated``); :func:`window_search` keeps it
   in arrays over every configuration where there are at most
   :data:`DENSE_CONFIGURATIONS`, in this dictionary past that;
-- ``prefixes[key]``: the state after a prefix, (effort, arc length, sole height, length,
-  cumulative interval index), or :data:`_INFEASIBLE` where the prefix already fails; a
-  configuration is judged from the longest prefix known, so neighbours that share their first
-  footsteps (hill-climbing changes one or two) reuse them, with the same sums in the same
-  order;
-- ``swings[key]``: whether a foot can swing from one foothold to the next, 1 or 0 (the key
-  numbers the footstep, the foothold it leaves (-1: where the foot stands now) and where it
-  lands).
+- ``prefixes[row]``: the state after a prefix, (effort, arc length, sole height, length,
+  cumulative interval index, 1), the cumulative index -1 where the prefix already fails, and
+  all 0 where it is not known; a configuration is judged from the longest prefix known, so
+  neighbours that share their first footsteps (hill-climbing changes one or two) reuse them,
+  with the same sums in the same order. An array over every prefix of 1 to n - 1 footsteps
+  (the paper's window: 210 rows), or of as many footsteps as fit in :data:`PREFIX_ROWS`
+  (longer ones are not remembered); the exhaustive search's has no rows: it judges each
+  configuration whole;
+- ``swings[key]``: whether a foot can swing from one foothold to the next, 1 or 0, -1 not
+  known yet (the key numbers the footstep, the foothold it leaves (-1: where the foot stands
+  now) and where it lands): an array over every key, none where there would be more than
+  :data:`SWING_KEYS`.
 
-``feasible`` and ``swings`` are read with one lookup each (``get`` with a default that no
-entry holds; numba types its answer as optional, which a tuple cannot be indexed as, so
-``prefixes`` is asked whether it holds a key first).
+Session 37 made the last two arrays; they were numba dictionaries (a lookup hashed its key,
+an insertion could resize the dictionary): the search 0.86 of its time warm, the exhaustive
+search 0.66 (which had also cleared its prefix dictionary for every configuration).
 
 The arithmetic is the plain effort's term by term (the Python search's until session 29, kept
 as the tests' reference, ``test/footstep_reference.py``):
@@ -153,8 +158,12 @@ def judge_footholds(high, low, headroom, s0, ds, side, s, heel, toe, min_headroo
     return ok, height, pitch
 
 
-#: A prefix that already fails (its cumulative interval index is -1).
-_INFEASIBLE = (math.nan, math.nan, math.nan, math.nan, -1.0)
+#: The most rows the prefix memo of one search may have (48 bytes each, zeroed for every
+#: search): the prefixes of up to as many footsteps as fit are remembered.
+PREFIX_ROWS = 1 << 12
+#: The most keys the swing memo of one search may have (a byte each, set for every search;
+#: the paper's window: 5,043); a window with more remembers no swing.
+SWING_KEYS = 1 << 16
 #: The answer of ``feasible`` for a configuration not judged yet (an effort is >= 0).
 _UNJUDGED = -1.0
 
@@ -182,8 +191,8 @@ PROFILE_TYPE = ('Tuple((f8[:, :, ::1], readonly(f8[::1]), readonly(i8[::1]), '
 #: the step just taken, the profile's first arc length and its spacing.
 WINDOW_NUMBERS = (STANCE_S, STANCE_HEIGHT, SWING_S, SWING_HEIGHT, S_INIT, PREVIOUS_LENGTH, S0, DS)
 _FEASIBLE_TYPE = 'DictType(i8, f8)'
-_PREFIXES_TYPE = 'DictType(i8, UniTuple(f8, 5))'
-_SWINGS_TYPE = 'DictType(i8, i8)'
+_PREFIXES_TYPE = 'f8[:, ::1]'
+_SWINGS_TYPE = 'i1[::1]'
 #: The banned interval indices (m + 1,) bool, read-only (the planner's shared none-banned).
 _BANNED = 'readonly(b1[::1])'
 
@@ -234,26 +243,25 @@ def foothold_tables(profile):
     return tables
 
 
-@kernel('Tuple((' + _FEASIBLE_TYPE + ', ' + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE + '))(i8)',
-        inline=True)
-def _empty_memos(n):
-    """Empty ``feasible``, ``prefixes`` and ``swings`` memos for one search. Typed by their
-    first entries (computed, not literal values: a literal one would be part of the
-    dictionary's type), removed at once."""
+@kernel('Tuple((' + _FEASIBLE_TYPE + ', ' + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE
+        + '))(i8, i8, b1)', inline=True)
+def _empty_memos(n, m, resume):
+    """Empty ``feasible``, ``prefixes`` and ``swings`` memos for one search of a window of
+    ``n`` footsteps and ``m`` intervals; ``prefixes`` without rows unless ``resume``. The
+    dictionary typed by a first entry (computed, not a literal value: a literal one would be
+    part of its type), removed at once."""
     feasible = {-1: math.nan}
     del feasible[-1]
-    prefixes = {-1: _INFEASIBLE}
-    del prefixes[-1]
-    swings = {-1: n}
-    del swings[-1]
-    return feasible, prefixes, swings
-
-
-@kernel('i8(i8, i8, i8)', inline=True)
-def _prefix_key(prefix_number, length, n):
-    """The ``prefixes`` key of a configuration's first ``length`` footsteps, numbered
-    ``prefix_number``, in a window of ``n``."""
-    return prefix_number * (n + 1) + length
+    rows, power = 0, 1
+    if resume:
+        for _ in range(n - 1):
+            power *= m + 1
+            if rows + power > PREFIX_ROWS:
+                break
+            rows += power
+    keys = n * (n * m + 2) ** 2
+    return (feasible, np.zeros((rows, 6)),
+            np.full(keys if keys <= SWING_KEYS else 0, -1, dtype=np.int8))
 
 
 @kernel('void(i8, i8, i8[::1])')
@@ -346,62 +354,74 @@ def _effort(config, banned_first, tables, prefixes, swings):
         return math.nan
     n = config.shape[0]
     base = lengths.shape[0]
-    # Prefix keys: number * (n + 1) + length.
-    keys = np.empty(n + 1, dtype=np.int64)
-    number = 0
-    keys[0] = 0
-    for i in range(n):
-        number = number * base + config[i]
-        keys[i + 1] = _prefix_key(number, i + 1, n)
-    start = n - 1
-    while start > 0 and keys[start] not in prefixes:
-        start -= 1
-    if start:
-        state = prefixes[keys[start]]
-        if state[4] < 0:
+    rows = prefixes.shape[0]
+    effort, s, height_before = 0.0, numbers[STANCE_S], numbers[STANCE_HEIGHT]
+    length_before, cumulative = numbers[PREVIOUS_LENGTH], 0
+    # Where the next two footsteps' feet swing from (each from where it was two footsteps
+    # before, the same side): the cumulative index of that foothold (-1: where the foot stands
+    # now: the swing foot for footstep 0, the stance foot for footstep 1), its arc length and
+    # sole height.
+    origin, s_from, h_from = -1, numbers[SWING_S], numbers[SWING_HEIGHT]
+    origin_next, s_next, h_next = -1, s, height_before
+    # The longest prefix remembered: prefixes are written footstep by footstep, so the ones
+    # remembered of a configuration are its first 1, 2, ... footsteps. ``number`` numbers
+    # the prefix so far, ``offset`` is the first row of the next longer prefixes, ``power``
+    # their count over ``base``.
+    start, number, offset, power = 0, 0, 0, 1
+    while start < n - 1:
+        row = offset + number * base + config[start]
+        if row >= rows or prefixes[row, 5] == 0.0:
+            break
+        if prefixes[row, 4] < 0:
             return math.nan
-        effort, s, height_before, length_before = state[0], state[1], state[2], state[3]
-        cumulative = int(state[4])
-    else:
-        effort, s, height_before = 0.0, numbers[STANCE_S], numbers[STANCE_HEIGHT]
-        length_before, cumulative = numbers[PREVIOUS_LENGTH], 0
+        effort, s, height_before, length_before = (prefixes[row, 0], prefixes[row, 1],
+                                                   prefixes[row, 2], prefixes[row, 3])
+        cumulative = int(prefixes[row, 4])
+        origin, s_from, h_from = origin_next, s_next, h_next
+        origin_next, s_next, h_next = cumulative, s, height_before
+        number = number * base + config[start]
+        power *= base
+        offset += power
+        start += 1
     up, down = numbers[UP], numbers[DOWN]
     spots = (bounds[-1] - bounds[-2]) + 1  # cumulative indices 0..n m, and -1
     for i in range(start, n):
         j = config[i]
+        number = number * base + j
+        row = offset + number  # past the rows when the prefix is not remembered
+        power *= base
+        offset += power
         length = lengths[j]
         s += length
         cumulative += j
         entry = bounds[i] + cumulative
         if not ok[entry]:
-            prefixes[keys[i + 1]] = _INFEASIBLE
+            if row < rows:
+                prefixes[row, 4], prefixes[row, 5] = -1.0, 1.0
             return math.nan
         hold_height = height[entry]
         rise = hold_height - height_before
         if rise > up or -rise > down:
-            prefixes[keys[i + 1]] = _INFEASIBLE
+            if row < rows:
+                prefixes[row, 4], prefixes[row, 5] = -1.0, 1.0
             return math.nan
-        # The foot swings from where it was two footsteps before (the same side): the swing
-        # foot's or the stance foot's place (-1), or footstep i - 2's foothold.
-        if i >= 2:
-            before = prefixes[keys[i - 1]]
-            origin, s_from, h_from = int(before[4]), before[1], before[2]
-        elif i == 1:
-            origin, s_from, h_from = -1, numbers[STANCE_S], numbers[STANCE_HEIGHT]
-        else:
-            origin, s_from, h_from = -1, numbers[SWING_S], numbers[SWING_HEIGHT]
         swing_key = (i * spots + origin + 1) * spots + cumulative
-        clear = swings.get(swing_key, np.int64(-1))
+        clear = swings[swing_key] if swing_key < swings.shape[0] else -1
         if clear < 0:
             clear = 1 if _swing_clear(sides[i], s_from, h_from, s, hold_height,
                                       i - 2 if i >= 2 else -1, origin, tables) else 0
-            swings[swing_key] = clear
+            if swing_key < swings.shape[0]:
+                swings[swing_key] = clear
         if clear == 0:
-            prefixes[keys[i + 1]] = _INFEASIBLE
+            if row < rows:
+                prefixes[row, 4], prefixes[row, 5] = -1.0, 1.0
             return math.nan
         effort += _step_cost(length, rise, pitch[entry], length_before, numbers)
-        if i + 1 < n:  # a whole configuration's state is never resumed from
-            prefixes[keys[i + 1]] = (effort, s, hold_height, length, float(cumulative))
+        if row < rows:  # never a whole configuration's: its state is never resumed from
+            prefixes[row, 0], prefixes[row, 1], prefixes[row, 2] = effort, s, hold_height
+            prefixes[row, 3], prefixes[row, 4], prefixes[row, 5] = length, cumulative, 1.0
+        origin, s_from, h_from = origin_next, s_next, h_next
+        origin_next, s_next, h_next = cumulative, s, hold_height
         height_before, length_before = hold_height, length
     return effort
 
@@ -511,7 +531,7 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
                 return False
         return True
 
-    table, prefixes, swings = _empty_memos(n)
+    table, prefixes, swings = _empty_memos(n, m, True)
 
     def known(number):
         if configurations:
@@ -778,10 +798,10 @@ def exhaustive_search(n, m, profile):
     """The optimum over every configuration of the window, the first of equals: as
     :func:`window_search` returns it, the configurations judged (m + 1) ** n. For benchmarks, what
     :func:`window_search` is measured against: each configuration judged whole by
-    :func:`_effort` (no prefix of another resumed), the swing tests remembered, as the plain
-    effort judges them."""
+    :func:`_effort` (its prefix memo has no rows: nothing of another configuration is resumed
+    or written), the swing tests remembered, as the plain effort judges them."""
     tables = foothold_tables(profile)
-    _, prefixes, swings = _empty_memos(n)
+    _, prefixes, swings = _empty_memos(n, m, False)
     base = m + 1
     total = base ** n
     banned = np.zeros(base, dtype=np.bool_)
@@ -790,7 +810,6 @@ def exhaustive_search(n, m, profile):
     best_effort = math.inf
     for number in range(total):
         _digits(number, base, config)
-        prefixes.clear()
         value = _effort(config, banned, tables, prefixes, swings)
         if value < best_effort:  # False for NaN
             best, best_effort = config.copy(), value
