@@ -9,16 +9,17 @@ neighbour until every neighbour is worse. Only s_1 is executed; the next call st
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import itertools
 import math
 from typing import Optional, Tuple
 
 import numpy as np
 
-from .footstep_search import (DOWN, HEEL, LIFT_RISE, LIFT_ROOM, LIFT_STEP_UP, MAX_PITCH,
-                              MAX_SWING, MIN_FRACTION, MIN_HEADROOM, NUMBER_COUNT, PITCH_RANGE,
-                              SPAN, TOE, TOLERANCE, TWO, UP, UP_RANGE, W_HEIGHT, W_LENGTH,
-                              W_PITCH, W_SMOOTH, exhaustive_search, foothold_tables,
-                              judge_footholds, window_search)
+from .footstep_search import (DENSE_CONFIGURATIONS, DOWN, HEEL, LIFT_RISE, LIFT_ROOM,
+                              LIFT_STEP_UP, MAX_PITCH, MAX_SWING, MIN_FRACTION, MIN_HEADROOM,
+                              NUMBER_COUNT, PITCH_RANGE, SPAN, TOE, TOLERANCE, TWO, UP, UP_RANGE,
+                              W_HEIGHT, W_LENGTH, W_PITCH, W_SMOOTH, exhaustive_search,
+                              foothold_tables, judge_footholds, window_search)
 from .jit import float_array
 from .skeleton import LegGeometry
 
@@ -332,6 +333,11 @@ class FootstepPlanner:
         self._length_min = float(config.step_length_min)
         self._increment = float(config.step_increment)
         self._greedy_restart = bool(config.greedy_restart)
+        # Every configuration's interval indices by its number, as the searches number them
+        # (a list index where a search's answer would be an array to box and convert; past
+        # DENSE_CONFIGURATIONS worked out from the number instead).
+        self._configurations = (list(itertools.product(range(m + 1), repeat=n))
+                                if (m + 1) ** n <= DENSE_CONFIGURATIONS else None)
 
     # -- the ground under a sole -----------------------------------------------------------
     def foothold(self, profile: GroundProfile, side: int, s: float) -> Foothold:
@@ -530,11 +536,20 @@ class FootstepPlanner:
     def _window(self, found: tuple, stance_side: int) -> Optional[FootstepWindow]:
         """The window a search found (:func:`footstep_search.window_search`'s answer), None
         when it found none."""
-        config, footholds, effort, evaluated = found
-        if not config.size:
+        number, footholds, effort, evaluated = found
+        if number < 0:
             return None
+        if self._configurations is not None:
+            indices = self._configurations[number]
+        else:
+            n, m = self._window_size
+            digits = []
+            for _ in range(n):
+                number, j = divmod(number, m + 1)
+                digits.append(j)
+            indices = tuple(digits[::-1])
         # Positional: keywords cost a fifth more on every planned step.
-        return FootstepWindow(footholds[0], tuple(config.tolist()), footholds[1], footholds[2],
+        return FootstepWindow(footholds[0], indices, footholds[1], footholds[2],
                               footholds[3], self._sides[stance_side][0], effort, evaluated)
 
 
