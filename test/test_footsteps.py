@@ -74,6 +74,19 @@ def test_a_profile_keeps_its_samples_stacked_for_the_search_and_refuses_mismatch
     with pytest.raises(ValueError, match='must all be'):
         GroundProfile(s0=0.0, ds=DS, height=np.zeros(200), low=np.zeros(200),
                       headroom=np.zeros(200), obstacle=np.zeros(200))
+    # Samples handed over already stacked are read by the search without numba's checks of
+    # its arguments: one of another layout or type is refused, not read as if it were right.
+    views = dict(height=stacked[0], low=stacked[1], headroom=stacked[2],
+                 obstacle=profile.obstacle)
+    for bad, named in ((stacked[:, :, ::2], r'\(4, 2, 100\)'),
+                       (stacked.astype(np.float32), 'float32'),
+                       (stacked[:3], r'\(3, 2, 200\)'), (stacked.tolist(), 'list')):
+        with pytest.raises(ValueError, match='stacked ground profile samples.*' + named):
+            GroundProfile(s0=0.0, ds=DS, stacked=bad, **views)
+    frozen = stacked.copy()
+    frozen.setflags(write=False)
+    with pytest.raises(ValueError, match='writable'):
+        GroundProfile(s0=0.0, ds=DS, stacked=frozen, **views)
 
 
 def test_the_sampled_profile_writes_the_stacked_samples_itself():

@@ -9,6 +9,7 @@ neighbour until every neighbour is worse. Only s_1 is executed; the next call st
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+import functools
 import itertools
 import math
 from typing import Optional, Tuple
@@ -20,10 +21,15 @@ from .footstep_search import (DENSE_CONFIGURATIONS, DOWN, HEEL, LIFT_RISE, LIFT_
                               NUMBER_COUNT, PITCH_RANGE, SPAN, TOE, TOLERANCE, TWO, UP, UP_RANGE,
                               W_HEIGHT, W_LENGTH, W_PITCH, W_SMOOTH, exhaustive_search,
                               foothold_tables, judge_footholds, window_search)
-from .jit import float_array
+from .jit import direct, float_array
 from .skeleton import LegGeometry
 
 LEFT, RIGHT = 0, 1
+
+#: The search of a window, called as :meth:`FootstepPlanner.plan` calls it: without numba's
+#: dispatch (``jit.direct``; every argument is the planner's own or a GroundProfile's checked
+#: samples).
+window_search = direct(window_search)
 
 #: The lines along which the ground map is read under a sole, as fractions of its width from
 #: its centre line. Both the footholds (sample_ground_profile) and the swing's clearance (gait)
@@ -160,6 +166,16 @@ class GroundProfile:
         # The compiled kernels take the samples as C-contiguous, writable float64: made so once
         # here (copied only where they are not), not at every search of a window.
         if self.stacked is not None:
+            # The search is called without numba's checks of its arguments (jit.direct):
+            # samples of another layout would be read as if they had this one.
+            stacked = self.stacked
+            if (not isinstance(stacked, np.ndarray) or stacked.dtype != np.float64
+                    or stacked.ndim != 3 or stacked.shape[:2] != (4, 2)
+                    or not stacked.flags.c_contiguous or not stacked.flags.writeable):
+                raise ValueError('stacked ground profile samples must be a C-contiguous, '
+                                 'writable float64 array of shape (4, 2, K), got '
+                                 f'{getattr(stacked, "dtype", type(stacked).__name__)} '
+                                 f'{getattr(stacked, "shape", "")}')
             return
         arrays = [_samples(getattr(self, name))
                   for name in ('height', 'low', 'headroom', 'obstacle')]
@@ -254,6 +270,20 @@ class FootstepWindow:
     evaluated: int
 
 
+@functools.lru_cache(maxsize=None)
+def _numbering(n: int, m: int) -> tuple:
+    """Every configuration of a window of ``n`` footsteps and ``m`` intervals by its number as
+    the searches number them (base m + 1, footstep 0 first), a list of index tuples, and the
+    numbers by the tuples, a dictionary: (None, None) past ``DENSE_CONFIGURATIONS``. The
+    planner looks up a search's answer in the list (where the search would return an array
+    to box and convert) and a start's number in the dictionary (where a loop would check and
+    number it); planners of one window size share them."""
+    if (m + 1) ** n > DENSE_CONFIGURATIONS:
+        return None, None
+    configurations = list(itertools.product(range(m + 1), repeat=n))
+    return configurations, {config: k for k, config in enumerate(configurations)}
+
+
 class FootstepPlanner:
     """Sliding-window footstep planner (§4.2) over a ground profile.
 
@@ -333,11 +363,7 @@ class FootstepPlanner:
         self._length_min = float(config.step_length_min)
         self._increment = float(config.step_increment)
         self._greedy_restart = bool(config.greedy_restart)
-        # Every configuration's interval indices by its number, as the searches number them
-        # (a list index where a search's answer would be an array to box and convert; past
-        # DENSE_CONFIGURATIONS worked out from the number instead).
-        self._configurations = (list(itertools.product(range(m + 1), repeat=n))
-                                if (m + 1) ** n <= DENSE_CONFIGURATIONS else None)
+        self._configurations, self._numbers = _numbering(n, m)
 
     # -- the ground under a sole -----------------------------------------------------------
     def foothold(self, profile: GroundProfile, side: int, s: float) -> Foothold:
@@ -481,13 +507,16 @@ class FootstepPlanner:
         if start is None:
             index = round((s_init - self._length_min) / self._increment)
             start = (min(max(index, 0), m),) * n
-        elif len(start) != n or min(start) < 0 or max(start) > m:
-            raise ValueError(f'start configuration {tuple(start)} is not {n} indices in '
-                             f'[0, {m}]')
         # Numbered as the search numbers configurations (base m + 1, footstep 0 first).
-        number = 0
-        for j in start:
-            number = number * (m + 1) + int(j)
+        number = (self._numbers.get(start)
+                  if self._numbers is not None and type(start) is tuple else None)
+        if number is None:
+            if len(start) != n or min(start) < 0 or max(start) > m:
+                raise ValueError(f'start configuration {tuple(start)} is not {n} indices in '
+                                 f'[0, {m}]')
+            number = 0
+            for j in start:
+                number = number * (m + 1) + int(j)
         if stance_side != 0 and stance_side != 1:
             raise ValueError(f'stance side {stance_side!r} is not 0 (left) or 1 (right)')
         banned = self._none_banned

@@ -45,6 +45,21 @@ def kernel(signature: str, inline: bool = False) -> Callable:
     return wrap
 
 
+def direct(function: Callable) -> Callable:
+    """Kernel ``function``'s compiled code as Python calls it without numba's dispatch: no
+    typing of the arguments to choose among signatures (0.46 us a call warm for the footstep
+    search's, more in a walk, where that code is no longer in the processor's caches). Only
+    for a caller that passes exactly the signature's types and array layouts: it converts
+    numbers and refuses what is not an array of the element type, but reads an array of
+    another layout (not C-contiguous where the signature says ``::1``) as if it were one.
+    Without numba, or with more than one signature, ``function`` itself.
+    """
+    overloads = getattr(function, 'overloads', None)
+    if not overloads or len(overloads) != 1:
+        return function
+    return next(iter(overloads.values())).entry_point
+
+
 def _parse(signature: str):
     """numba's signature string with ``readonly`` added to its type names."""
     names = dict(vars(numba.types))
