@@ -18,7 +18,7 @@ from digital_actor_planner.core import skeleton as skeleton_module, upper_body
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment, start_configuration
 from digital_actor_planner.core.footsteps import FootstepConfig
-from digital_actor_planner.core.jit import COMPILED, float_array
+from digital_actor_planner.core.jit import COMPILED, direct, float_array
 from digital_actor_planner.core.skeleton import Skeleton
 from scene_helpers import box
 
@@ -100,6 +100,33 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
                    footstep_search._digits,
                    footstep_search._step_cost):
         assert kernel.py_func is not kernel
+
+
+def test_a_kernel_called_without_numbas_dispatch_answers_alike():
+    """``jit.direct``: the footstep search as the planner calls it (its compiled code, not
+    numba's dispatcher) answers exactly what the dispatcher's call answers; a plain function,
+    or a kernel of more than one signature, is handed back as it is."""
+    from digital_actor_planner.core import footsteps
+    from digital_actor_planner.core.footsteps import FootstepPlanner, GroundProfile
+    assert footsteps.window_search is not footstep_search.window_search
+    assert footsteps.window_search is direct(footstep_search.window_search)
+    planner = FootstepPlanner(FootstepConfig(), Skeleton().leg)
+    s = -0.3 + 0.02 * np.arange(200)
+    height = np.vstack([np.where(s > 0.6, 0.12, 0.0)] * 2)
+    profile = GroundProfile(s0=-0.3, ds=0.02, height=height, low=height.copy(),
+                            headroom=np.full_like(height, np.inf),
+                            obstacle=np.full_like(height, np.nan))
+    arguments = (6 * 14 + 6) * 14 + 6, planner._none_banned, planner._none_banned, True, \
+        planner.search_profile(profile, 1, 0.0, 0.0, -0.1, 0.0, 0.5, 0.5)
+    through, direct_answer = (footstep_search.window_search(*arguments),
+                              footsteps.window_search(*arguments))
+    assert through[0] >= 0 and through[0] == direct_answer[0]
+    np.testing.assert_array_equal(through[1], direct_answer[1])
+    assert through[2:] == direct_answer[2:]
+
+    def plain(x):
+        return x
+    assert direct(plain) is plain
 
 
 def test_footholds(skeleton):
