@@ -495,12 +495,12 @@ class FootstepPlanner:
             None when no collision-free configuration exists in the window.
 
         The search runs compiled, its foothold table included
-        (:func:`footstep_search.window_search`): on the stairs' windows 9.3 us at the median in
-        the kernel's call (p90 17, max 25) and 11.6 us through this method (11-109
-        configurations judged; each window planned again in a loop, session 36, which handed
-        the kernel 4 arrays instead of 13: 10.0 and 12.8 us before,
-        the same hour; session 35 measured 7.5 and 12.3 us in a faster one, 15.5, 19 and 24 us
-        at session 33's start), where the same search in Python took 300-400 us; the same
+        (:func:`footstep_search.window_search`): on the stairs' windows 6.4 us at the median in
+        the kernel's call through numba's dispatcher (p90 12, max 17) and 7.5 us through this
+        method, which skips the dispatcher (11-109 configurations judged; each window planned
+        again in a loop, session 37, which made the search's memos arrays and compiled the
+        effort into it: 9.2 and 11.5 us before, the same hour; 15.5, 19 and 24 us at session
+        33's start), where the same search in Python took 300-400 us; the same
         configurations judged, the same efforts to the last bit.
         """
         n, m = self._window_size
