@@ -313,7 +313,8 @@ def main(argv=None):
     print('footstep windows compared with the exhaustive optimum '
           '(each course walked again with each search):')
     print('both compiled (footstep_search), the exhaustive one judging every configuration with '
-          "the search's own effort kernel, each with its foothold table; time ratio in the walk: "
+          "the search's own effort kernel from scratch (no prefix memo), each with its foothold "
+          'table; time ratio in the walk: '
           'the first call of each search, ours right after planning the step before (cold '
           'caches), then the exhaustive one, over every window and over the windows after a '
           'step (not the first of each walk, which follows the scene\'s loading); warm: each '
