@@ -1,0 +1,56 @@
+"""The lower-body benchmark still runs and says what the README quotes from it: the machine on
+its first line and issue 2's verdict on its last, with the default search's effort within the
+target of the exhaustive optimum's. Time ratios depend on the machine: only a generous bound
+is asserted (one that a search judging most configurations would break)."""
+import os
+import re
+import subprocess
+import sys
+
+import pytest
+
+ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..')
+SCRIPT = os.path.join(ROOT, 'bench', 'bench_lower_body.py')
+
+
+def _run(*arguments):
+    done = subprocess.run([sys.executable, SCRIPT, *arguments], cwd=ROOT, capture_output=True,
+                          text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return done.stdout.strip().splitlines()
+
+
+@pytest.fixture(scope='module')
+def stairs_report():
+    return _run('--courses', 'stairs_up', 'gap', '--walks', '1')
+
+
+def test_the_first_line_names_the_machine(stairs_report):
+    first = stairs_report[0]
+    assert first.startswith('load average '), first
+    assert f'{os.cpu_count()} CPUs' in first, first
+
+
+def test_the_last_line_gives_issue_2s_verdict_from_the_table(stairs_report):
+    last = stairs_report[-1]
+    verdict = re.fullmatch(
+        r'issue 2 \(default search, (\d+) windows\): effort ratio mean ([\d.]+), p95 ([\d.]+) '
+        r'\(target <= 1\.05: (met|NOT met)\); time ratio in the walk p95 ([\d.]+) \(target <= '
+        r'1/20: (met|NOT met)\), median ([\d.]+), every window together ([\d.]+) ms against '
+        r'([\d.]+) ms = ([\d.]+)', last)
+    assert verdict, last
+    windows, mean, p95 = int(verdict[1]), float(verdict[2]), float(verdict[3])
+    # The table's row of the default search says the same.
+    row = next(line for line in stairs_report if line.startswith('| + climb from a greedy'))
+    cells = [cell.strip() for cell in row.strip('|').split('|')]
+    assert int(cells[1]) == windows and float(cells[2]) == pytest.approx(mean, abs=1e-3)
+    assert float(cells[4]) == pytest.approx(p95, abs=1e-3)
+    assert float(cells[7]) == pytest.approx(float(verdict[5]), abs=1e-4)
+    # The stairs up and the gap: 16 walking steps each, a window planned for every one.
+    assert windows == 32
+    assert mean <= 1.05 and p95 <= 1.05 and verdict[4] == 'met'
+    assert verdict[6] == ('met' if float(verdict[5]) <= 0.05 else 'NOT met')
+    ours, exhaustive = float(verdict[8]), float(verdict[9])
+    assert float(verdict[10]) == pytest.approx(ours / exhaustive, abs=2e-4)
+    # Generous: the search judges well under 2 % of the configurations on these windows.
+    assert float(verdict[5]) < 0.5 and ours / exhaustive < 0.3
