@@ -21,34 +21,33 @@ def spread(values) -> str:
 
 
 def machine() -> str:
-    """The processor's model, its count and the first one's caches (Linux's sysfs), for the
-    top of a table: footstep search ratios, for one, differ from host to host (session 38's
-    in-walk p95 0.042-0.045 where session 37's host gave 0.060 with the same code)."""
+    """The processor's model, the CPU count and CPU 0's caches (Linux's sysfs), for the top of
+    a table: some ratios, the footstep search's against the exhaustive one for instance,
+    differ from machine to machine (docs/BENCHMARKS.md, session 38)."""
     import platform
     model = platform.processor() or platform.machine()
     try:
         with open('/proc/cpuinfo') as cpuinfo:
-            for line in cpuinfo:
-                if line.startswith('model name'):
-                    model = line.split(':', 1)[1].strip()
-                    break
+            model = next((line.split(':', 1)[1].strip() for line in cpuinfo
+                          if line.startswith('model name')), model)
     except OSError:
         pass
     caches = []
     root = '/sys/devices/system/cpu/cpu0/cache'
     try:
-        for index in sorted(os.listdir(root)):
-            if not index.startswith('index'):
-                continue
-
-            def read(name, index=index):
-                with open(os.path.join(root, index, name)) as f:
-                    return f.read().strip()
-            kind = {'Data': 'd', 'Instruction': 'i'}.get(read('type'), '')
-            caches.append(f'L{read("level")}{kind} {read("size")}')
+        for index in sorted(name for name in os.listdir(root) if name.startswith('index')):
+            kind, level, size = (_first_line(os.path.join(root, index, name))
+                                 for name in ('type', 'level', 'size'))
+            suffix = {'Data': 'd', 'Instruction': 'i'}.get(kind, '')
+            caches.append(f'L{level}{suffix} {size}')
     except OSError:
         pass
     described = f'{model}, {os.cpu_count()} CPUs'
     if caches:
         described += f'; caches of CPU 0: {", ".join(caches)}'
     return described
+
+
+def _first_line(path: str) -> str:
+    with open(path) as f:
+        return f.readline().strip()
