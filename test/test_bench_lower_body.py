@@ -49,8 +49,13 @@ def test_the_last_line_gives_issue_2s_verdict_from_the_table(stairs_report):
     # The stairs up and the gap: 16 walking steps each, a window planned for every one.
     assert windows == 32
     assert mean <= 1.05 and p95 <= 1.05 and verdict[4] == 'met'
-    assert verdict[6] == ('met' if float(verdict[5]) <= 0.05 else 'NOT met')
+    # The verdict is taken on the unrounded p95; printed to 4 places, 0.0500 may go either way.
+    if float(verdict[5]) != 0.05:
+        assert verdict[6] == ('met' if float(verdict[5]) < 0.05 else 'NOT met')
+    # The quotient is of the unrounded sums, printed to 0.01 ms and 0.1 ms: allow their rounding
+    # (a sum of 0.36 ms is off by up to 1.4 %) and the quotient's own.
     ours, exhaustive = float(verdict[8]), float(verdict[9])
-    assert float(verdict[10]) == pytest.approx(ours / exhaustive, abs=2e-4)
+    rounding = ours / exhaustive * (0.005 / ours + 0.05 / exhaustive) + 5e-5
+    assert float(verdict[10]) == pytest.approx(ours / exhaustive, abs=rounding * 1.01)
     # Generous: the search judges well under 2 % of the configurations on these windows.
     assert float(verdict[5]) < 0.5 and ours / exhaustive < 0.3
