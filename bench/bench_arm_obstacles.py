@@ -8,8 +8,8 @@ path (left or right, its near side 0.17-0.32 m from the path, top 0.65-1.05 m, 0
 and, in half of them, a smaller box standing on it at the near edge. The actor walks along +x
 at 0.8 m/s for 8 s with the whole body planned, once with the upper-body planner's default (the
 arms prefer lasting postures, ``UpperBodyConfig.lasting_branches``) and once with the
-preference off (``()``: session 10's search, which plans every course exactly as session 10
-did). Reported per setting: scenes passed (x >= 6 m), stuck, how far the arm on the box's side
+preference off (``()``: plain best-first ranking by closeness to the pattern). Reported per
+setting: scenes passed (x >= 6 m), stuck, how far the arm on the box's side
 swung off its pattern at the shoulder (mean, max), in how many scenes its elbow flexed >= 0.3
 rad beyond the pattern, and the slowest step of each run (p50, p90, max over the scenes, wall
 ms). The same scenes and commands for both settings. ``--planner-seed`` seeds the upper-body

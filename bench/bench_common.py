@@ -23,7 +23,7 @@ def spread(values) -> str:
 def machine() -> str:
     """The processor's model, the CPU count and CPU 0's caches (Linux's sysfs), for the top of
     a table: some ratios, the footstep search's against the exhaustive one for instance,
-    differ from machine to machine (docs/BENCHMARKS.md, session 38)."""
+    differ from machine to machine (docs/BENCHMARKS.md)."""
     import platform
     model = platform.processor() or platform.machine()
     try:

@@ -5,7 +5,7 @@ Run: .venv/bin/python bench/bench_lower_body.py [--courses flat stairs_up ...]
 
 For every walking step on the lower-body courses (upper-body planning off) it records the wall
 and CPU time of the whole step (profile + footstep window + leg motion + 3D check), and for every
-footstep window it also solves the same window exhaustively to compare effort and time (issue 2:
+footstep window it also solves the same window exhaustively to compare effort and time (targets:
 effort ratio <= 1.05, time <= 1/20). CPU time is reported because the machine may be shared.
 
      .venv/bin/python bench/bench_lower_body.py --against ../other-checkout [--rounds 8]
@@ -348,14 +348,14 @@ def main(argv=None):
               f'the walks against the exhaustive search\'s: median {np.median(every):.4f}, '
               f'p95 {np.percentile(every, 95):.4f}, after a step p95 '
               f'{np.percentile(stepped, 95):.4f}')
-    # Issue 2's footstep targets, judged on the default search: the effort ratio on average
+    # The footstep targets, judged on the default search: the effort ratio on average
     # and at p95, the time ratio at p95 of the first calls in the walk (the strictest of the
     # readings above; the median and the sum of all windows' times are printed beside it).
     ours_total = sum(o for o, _ in spent[True])
     exhaustive_total = sum(e for _, e in spent[True])
     effort_mean, effort_p95 = np.mean(ratios[True]), np.percentile(ratios[True], 95)
     time_p95 = np.percentile(speed[True], 95)
-    print(f'issue 2 (default search, {len(speed[True])} windows): effort ratio mean '
+    print(f'footstep targets (default search, {len(speed[True])} windows): effort ratio mean '
           f'{effort_mean:.3f}, p95 {effort_p95:.3f} (target <= 1.05: '
           f'{"met" if max(effort_mean, effort_p95) <= 1.05 else "NOT met"}); time ratio in the '
           f'walk p95 {time_p95:.4f} (target <= 1/20: {"met" if time_p95 <= 0.05 else "NOT met"}'

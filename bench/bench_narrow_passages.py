@@ -13,7 +13,7 @@ whole body planned, with three settings of ``ActorConfig``: the defaults
 less than that after the step is refused; ``upper_body_pause`` 0.2 s: when the upper body
 refused every footstep, the first is tried once more after standing that long;
 ``upper_body_preview_distance`` 0.5 m: the preview covers at least that), the margin without
-the pause, and none of the three (session 11). Outcome of each walk: passed (x > 4.5 m),
+the pause, and none of the three. Outcome of each walk: passed (x > 4.5 m),
 stopped in front (stuck before the chest reaches the pillars) or held between them (stuck
 with the body among the pillars); and the slowest step (wall ms).
 """
@@ -32,7 +32,7 @@ from scene_helpers import pillars_moved_sideways  # noqa: E402
 #: Label -> (upper_body_preview_margin s, upper_body_pause s, upper_body_preview_distance m).
 SETTINGS = {'defaults (margin 0.1 s, pause 0.2 s, preview >= 0.5 m)': (0.1, 0.2, 0.5),
             'margin, no pause': (0.1, 0.0, 0.5),
-            'none of them (session 11)': (0.0, 0.0, 0.0)}
+            'none of them': (0.0, 0.0, 0.0)}
 
 #: Pelvis x beyond which the chest (0.15 m ahead of it) reaches the pillars' front (x 2.88 m).
 IN_FRONT = 3.0 - 0.12 - 0.15

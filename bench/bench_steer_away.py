@@ -15,7 +15,7 @@ Where a walk first stops (stuck), the walk is replayed to 0.3 s after the stop a
 then steers away with each of five commands for 4 s: turn on the spot left and right (0, +-1),
 walk a tight arc left and right (0.3 m/s, +-0.8 rad/s), and walk slowly on (0.5 m/s). The stop
 counts as *left* when one of them takes at least two steps; otherwise the actor is *trapped*
-there (issue 2: "a later command that turns it away lets it go on"). Also counted: walks in
+there (a later command that turns it away should let it go on). Also counted: walks in
 which the two legs (thigh, shank, foot) pass into each other, which the checker judges too, and
 the time stopped because a step would have.
 

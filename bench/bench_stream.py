@@ -93,7 +93,7 @@ def health_line(name: str, h: dict) -> str:
             f'{h["longest_gap_ms"]:.1f} ms')
 
 
-#: The courses the stream-health run walks in turn (the issue: "walking the obstacle courses").
+#: The courses the stream-health run walks in turn (the obstacle courses).
 OBSTACLE_COURSES = ('stairs_up', 'stairs_down', 'blocks', 'rough', 'gap', 'low_beam', 'table',
                     'pillars', 'uneven_beam')
 

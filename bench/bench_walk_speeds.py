@@ -7,8 +7,8 @@ Each upper-body course (low_beam, table, pillars, uneven_beam) is walked straigh
 each speed for the time 7 m takes (at 0.7 m/s at least: faster commands do not make the steps
 much faster than that), with the whole body planned, once per
 ``ActorConfig.upper_body_preview_distance`` in ``--distances`` (0.5 m: the default, the upper
-body's preview covers at least that far; 0: a fixed 0.5 s, which at 0.4 m/s sees 0.2 m ahead,
-session 11). A walk passes when it ends within 0.3 m of the course's ``reach_x``; every walk is
+body's preview covers at least that far; 0: a fixed 0.5 s, which at 0.4 m/s sees 0.2 m ahead).
+A walk passes when it ends within 0.3 m of the course's ``reach_x``; every walk is
 judged by the independent checker (``check_trajectory``: every link against the meshes, a foot
 always down, limits, no jumps). Reported per setting: walks passed, stopped, failing the checker,
 and the slowest step (wall ms).

@@ -11,8 +11,8 @@ writes ``/tmp/perf-PID.map``, from which perf names every kernel and every helpe
 it (``module.function``; ``NRT_incref`` / ``NRT_decref`` are numba's reference counts),
 and prints the top of ``perf report --sort sym``. ``perf report -i OUT --sort sym`` shows it
 again while the map file is there. The ``cpu-clock`` event is a software one: it works in a
-virtual machine without hardware counters (session 32 found a third of the footstep search's
-time in ``pow`` and reference counts this way; docs/BENCHMARKS.md). Needs ``perf`` (Debian:
+virtual machine without hardware counters (it names time spent in ``pow`` or in reference
+counts inside a kernel). Needs ``perf`` (Debian:
 ``linux-perf``) and permission to attach to one's own process.
 """
 import argparse

@@ -1,4 +1,4 @@
-"""Shared, cached course simulations for the tests (each course is planned once per session)."""
+"""Shared, cached course simulations for the tests (each course is planned once per test run)."""
 import functools
 import os
 

@@ -1,8 +1,7 @@
 """The footstep window's effort written out plainly, in Python on lists: the reference the
 compiled search (``core/footstep_search.py``) is tested against, term by term and bit for bit.
 
-Each function takes the ``FootstepPlanner`` whose settings and table layout it reads. These
-were the planner's own until session 29 compiled its search.
+Each function takes the ``FootstepPlanner`` whose settings and table layout it reads.
 """
 import math
 from dataclasses import dataclass, field

@@ -339,8 +339,7 @@ def test_beside_the_tables_corner_the_foot_that_landed_last_pivots(monkeypatch):
     beside its corner, the left thigh 4 cm from the edge: every step and every pivot of the
     left foot (the one due to swing) puts that thigh into the edge. Told to turn away on the
     spot, the right foot, the one that landed last, pivots instead, and the actor walks its
-    turn. (Session 15's code stopped 6 cm further back, where a left landing 10 cm behind the
-    stance foot cleared the edge; pivoting the left foot only, it is now trapped there.)"""
+    turn. (Pivoting the left foot only, the actor would be trapped there.)"""
     sc = scene('table')
     commands = [(0.0, 1.07, 0.179), (1.669, 0.427, -0.838), (3.342, 1.095, 0.538),
                 (3.65, 0.0, -1.0), (7.65, 0.0, 0.0)]
@@ -558,9 +557,8 @@ def test_walking_straight_up_and_down_a_steep_flight():
     two speeds, up and then down. Going up, a heel must overhang the tread's nosing (the plane
     fitted through the lower tread under it was too steep for an edge placement, and the
     sample past the toe read the next riser) and the swinging knee would pass its limit over the
-    tread in between; going down, a toe overhangs each nosing. Session 15's code stopped in
-    front of or on the flight in 12 of these 24 walks; every one now gets to the top or the
-    bottom, and the checker passes each."""
+    tread in between; going down, a toe overhangs each nosing. Every one of these 24 walks
+    gets to the top or the bottom, and the checker passes each."""
     rise, tread, steps = 0.2, 0.26, 4
     for going_up in (True, False):
         for x in (1.6, 1.75, 1.9):

@@ -1,7 +1,8 @@
 """The lower-body benchmark still runs and says what the README quotes from it: the machine on
-its first line and issue 2's verdict on its last, with the default search's effort within the
-target of the exhaustive optimum's. Time ratios depend on the machine: only a generous bound
-is asserted (one that a search judging most configurations would break)."""
+its first line and the footstep targets' verdict on its last, with the default search's
+effort within the target of the exhaustive optimum's. Time ratios depend on the machine:
+only a generous bound is asserted (one that a search judging most configurations would
+break)."""
 import os
 import re
 import subprocess
@@ -31,10 +32,11 @@ def test_the_first_line_names_the_machine(stairs_report):
     assert f'{os.cpu_count()} CPUs' in first, first
 
 
-def test_the_last_line_gives_issue_2s_verdict_from_the_table(stairs_report):
+def test_the_last_line_gives_the_footstep_targets_verdict_from_the_table(stairs_report):
     last = stairs_report[-1]
     verdict = re.fullmatch(
-        r'issue 2 \(default search, (\d+) windows\): effort ratio mean ([\d.]+), p95 ([\d.]+) '
+        r'footstep targets \(default search, (\d+) windows\): effort ratio mean ([\d.]+), '
+        r'p95 ([\d.]+) '
         r'\(target <= 1\.05: (met|NOT met)\); time ratio in the walk p95 ([\d.]+) \(target <= '
         r'1/20: (met|NOT met)\), median ([\d.]+), every window together ([\d.]+) ms against '
         r'([\d.]+) ms = ([\d.]+)', last)

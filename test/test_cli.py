@@ -1,4 +1,4 @@
-"""`digital-actor simulate`: files in, trajectory/summary/pictures out, clear errors (issue 2)."""
+"""`digital-actor simulate`: files in, trajectory/summary/pictures out, clear errors."""
 import csv
 import json
 import os

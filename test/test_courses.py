@@ -1,6 +1,6 @@
 """The shipped courses: files well-formed, and the upper-body courses geometrically as designed.
 
-The upper-body courses (issue 3) are checked with the URDF's own collision shapes placed by
+The upper-body courses are checked with the URDF's own collision shapes placed by
 forward kinematics and tested against the course meshes with python-fcl, independently of the
 planners: an obstacle must block the posture the motion pattern would use and let through the
 posture the planner is meant to find.

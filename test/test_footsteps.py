@@ -247,7 +247,7 @@ def test_banned_first_step_is_avoided(leg):
 
 
 def test_search_is_near_optimal_and_much_cheaper_than_exhaustive(leg):
-    """BFS + hill-climbing vs the exhaustive optimum of the same window (issue 2 benchmark)."""
+    """BFS + hill-climbing vs the exhaustive optimum of the same window."""
     rng = np.random.default_rng(7)
     planner = FootstepPlanner(FootstepConfig(), leg)
     ratios, evaluated = [], []

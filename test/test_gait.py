@@ -314,8 +314,8 @@ def test_turn_ease_must_be_a_finite_non_negative_angle():
 def test_a_large_turn_keeps_the_swing_hip_yaw_in_range_in_mid_swing(skeleton, walker):
     """After a zigzag the feet point 0.35 rad in (as far as ``ActorConfig.max_toe_in`` lets a
     landing turn in) and the next step turns the swing foot 1.25 rad, to 0.9 rad out (a stance
-    captured from such a walk, its left foot and pelvis turned to those bounds; it was 0.87 rad
-    in before the bound, where the thighs meet). The hip yaw starts and ends inside its +-0.6
+    captured from such a walk, its left foot and pelvis turned to those bounds; without the bound
+    it would be 0.87 rad in, where the thighs meet). The hip yaw starts and ends inside its +-0.6
     rad range, but the foot's and the pelvis's turns follow different ramps: the swing foot
     lags in the air instead of the step failing at the hip's limit."""
     from digital_actor_planner.core.gait import FootPose, Stance

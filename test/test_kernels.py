@@ -613,7 +613,7 @@ def test_motion_patterns_kernel(skeleton):
 def _swing_plane_in_numpy(progress, plane_turn, pinned, release, take, swing_hip, yaw, foot_x,
                           foot_y, foot_yaw, turn, landing_x, landing_y, turning, inward,
                           stance_yaw, toe_in, low, high, lift_pitch, landing_pitch):
-    """The swing foot's plane as WalkGenerator.step computed it with NumPy before session 25
+    """The swing foot's plane as WalkGenerator.step computes it in NumPy
     (the reference of gait._swing_plane); also says which corrections applied."""
     wrap = gait._wrap
     foot_xy, landing_xy = np.array([foot_x, foot_y]), np.array([landing_x, landing_y])
@@ -815,7 +815,7 @@ def test_points_beside_the_path():
         path = path_module.PredictedPath(rng.uniform(-3, 3), rng.uniform(-3, 3),
                                          rng.uniform(-np.pi, np.pi), curvature, 2.0)
         s = rng.uniform(-0.5, 2.5, 40)
-        # The NumPy code the kernel replaced: the centre line, then the offset along the normal.
+        # The same arithmetic in NumPy: the centre line, then the offset along the normal.
         heading = path.heading + path.curvature * s
         sin, cos = np.sin(heading), np.cos(heading)
         if abs(path.curvature) < 1e-9:
@@ -847,8 +847,7 @@ def test_points_beside_the_path():
 
 
 def _heel_off_in_numpy(leg, hip, foot, pelvis_yaw, joints, limit, toe):
-    """WalkGenerator._heel_off as it was written with NumPy before session 25 (the reference
-    of gait._rolled_stance)."""
+    """WalkGenerator._heel_off written in NumPy (the reference of gait._rolled_stance)."""
     direction = np.array([np.cos(foot.yaw), np.sin(foot.yaw)])
     p0 = foot.pitch
     toe_xy = foot.xy + (toe * np.cos(p0) + leg.ankle_height * np.sin(p0)) * direction

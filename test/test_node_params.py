@@ -62,7 +62,6 @@ def test_bad_parameter_exits_non_zero_naming_it(case, runs):
     parameter = CASES[case][0]
     returncode, output = runs[case]
     assert returncode != 0, output
-    # The exit status too: once (session 14, the machine loaded by two benchmarks) one run
-    # exited non-zero with no output at all.
+    # The exit status too: under heavy load a run can exit non-zero with no output at all.
     assert f"parameter '{parameter}'" in output, (returncode, output)
     assert 'Traceback' not in output, output

@@ -261,7 +261,7 @@ def test_diagnostics_report_state_planning_time_and_stream_health(actor):
     # The node's own account of its publishing instants over the last 2 s, in ms. Each
     # interval's jitter is |interval - 10 ms|, so the p99 cannot exceed the larger of the
     # longest interval's excess and one period. The bounds are generous: one interval doubled
-    # by a loaded CI machine puts the p99 of 200 intervals at 10 ms (seen: 10.04 ms); a stream
+    # by a loaded CI machine puts the p99 of 200 intervals at about 10 ms; a stream
     # sent in bursts would be far above them. The rate itself is held to +-5 % over 10 s in
     # the walking test.
     jitter = float(values['stream_jitter_p99_ms'])
@@ -293,7 +293,7 @@ def test_an_actor_at_rest_is_not_planned_for_and_its_stream_does_not_run_dry(act
     began = time.monotonic()
     probe.spin(3.0)
     rested_blocks, rested_underruns = counts()
-    # A resting actor used to plan a 0.1 s hold ten times a second.
+    # A resting actor with an unchanged command is not planned for (no 0.1 s holds).
     assert rested_blocks - blocks <= 1, f'{rested_blocks - blocks} blocks planned at rest'
     assert rested_underruns == underruns, 'holding still was counted as running dry'
     stamps = [t for t, _ in list(probe.joint_states) if t >= began]

@@ -1,4 +1,4 @@
-"""Upper-body compliant motion on the obstacle courses (issue 3, paper §5).
+"""Upper-body compliant motion on the obstacle courses (paper §5).
 
 Collision-freedom of every link on these courses is judged in test_walk_courses.py; here: the
 upper body keeps its motion pattern on open ground, leaves it where the course demands (bend the
@@ -54,7 +54,7 @@ def test_upper_body_leaves_its_pattern_only_at_the_obstacle_and_returns(name):
 
 @pytest.mark.slow
 def test_table_is_passed_with_the_left_elbow_flexed_not_the_arm_swung_back():
-    """Issue 3: at the table 'the arm must flex'. Somewhere along the table the left elbow is
+    """At the table the arm must flex. Somewhere along the table the left elbow is
     flexed at least 0.3 rad beyond its pattern, and the shoulder never swings more than 0.5 rad
     off its own (a flexed elbow at the pattern's swing clears the table and the things on it:
     test_courses.py::test_table_needs_the_left_elbow_flexed)."""
@@ -195,7 +195,7 @@ def test_the_moved_pillars_plan_the_same_with_the_expansion_compiled_as_in_pytho
 def test_what_the_preview_margin_and_the_pause_change_at_the_pillars(
         tmp_path, margin, pause, outcome):
     """Pillars 3 cm to the left of the path, 0.50 m apart (the course's gap). Without the
-    preview margin or the pause (session 11) a step whose preview was blocked 0.03 s after it
+    preview margin or the pause a step whose preview was blocked 0.03 s after it
     is taken (the plan without the preview passes) and every next step finds the right arm
     blocked within 0.12 s: held between the pillars. With the margin that footstep is refused
     and the actor stops in front. With the pause too (the defaults) the refused footstep is
@@ -221,7 +221,7 @@ def test_a_slow_walk_bends_under_the_beam_in_time(name):
     """At 0.4 m/s the 0.5 s preview sees only 0.2 m ahead: the waist must start bending when
     the head is farther from the beam than that. The preview covers at least 0.5 m
     (ActorConfig.upper_body_preview_distance); without that the actor stops in front of both
-    beams (session 11). The walk is judged by the independent checker."""
+    beams. The walk is judged by the independent checker."""
     sk = skeleton()
     sc = scene(name)
     for distance, passes in ((0.5, True), (0.0, False)):

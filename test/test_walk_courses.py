@@ -1,4 +1,4 @@
-"""The actor walks every shipped course, judged by the independent checker (issue 2 + 3).
+"""The actor walks every shipped course, judged by the independent checker.
 
 The checker uses the URDF's own collision geometry with FCL at every frame, not the planner's
 ground map: no link penetrates by more than 3 mm (feet resting <= 15 mm), a foot is always down,
@@ -108,9 +108,9 @@ def turning_walk(speed, rate, gait=None):
 @pytest.mark.parametrize('speed, rate', [(1.1, 0.7), (0.8, 0.7), (1.1, 0.5), (0.5, 1.0),
                                          (0.8, 1.0), (1.1, 1.0), (0.8, -0.7)])
 def test_a_sharp_fast_turn_keeps_the_stance_feet_within_1_cm(speed, rate):
-    """The sharpest turns of bench_turns.py. Before session 12 the first three slid a foot
-    12-15 mm; until the pelvis eased towards lift-off in turns (gait: ``turn_ease_heading``)
-    the last four slid one 11-15 mm."""
+    """The sharpest turns of bench_turns.py. Without the swing plane's turn through the foot
+    the first three slide a foot 12-15 mm; without the pelvis easing towards lift-off in turns
+    (gait: ``turn_ease_heading``) the last four slide one 11-15 mm."""
     report, heading = turning_walk(speed, rate)
     assert abs(heading) > 1.0, 'it turned'
     assert report.ok and max(report.slip.values()) <= 0.010, report.failures()

@@ -450,8 +450,8 @@ class BodyCollision:
         Batched: forward kinematics for all frames at once, a conservative height bound that
         clears the shapes lying above everything near their footprint (``top_bound``), then
         exact FCL tests of the rest in time order. Nothing else clears a shape: reading the
-        ground map at a few points of a footprint (the centre and the corners, before session
-        19) missed a post between them, and a swinging foot went 62 mm into one.
+        ground map at a few points of a footprint (the centre and the corners) misses a post
+        between them, and a swinging foot can go tens of millimetres into one.
 
         Parameters
         ----------

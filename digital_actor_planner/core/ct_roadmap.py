@@ -610,10 +610,10 @@ def _expand(deviation, here, has_candidates, candidate_targets, candidate_frames
         # the objective would arrive as it becomes legal), else for hold_frames. Before a
         # blocked stretch, a search that prefers lasting postures holds a lasting one up to it
         # in one advance, not hold_frames at a time (re-ranking the same neighbours at every
-        # hold, the table's arm took 7 of them to get there); from the stretch on, as before
-        # (held into it in one advance, the arm that met the second pillar swung back 1.0 rad
-        # instead of 0.35). Equally close: sooner arrival first, except holds and the
-        # objective, longest first.
+        # hold costs the table's arm several holds to get there); from the stretch on,
+        # hold_frames at a time (held into it in one advance, the arm that meets the second
+        # pillar swings back about three times further than it needs). Equally close: sooner
+        # arrival first, except holds and the objective, longest first.
         (table_targets, table_frames, closeness, approach, holds, ranked_frames,
          ranked_closeness, rounded, q) = _neighbour_table(
             allowed if in_sub_goal else nodes, deviation, here, last, hold_frames,
@@ -890,11 +890,10 @@ def warm_up(space: CTSpace, patterns: np.ndarray, weights: np.ndarray) -> None:
 
     numba works out the types of a kernel's arguments the first time it meets them in a
     process (the check tables hold 45 arrays: about 2.5 ms for a search's kernels), a cost
-    that would otherwise fall on the first step of a walk that searches (on the low beam 6.0
-    instead of 3.7 ms). A throwaway roadmap of the branch's ``patterns`` and ``weights``
-    ranks and tries the neighbours of a state off the objective (the objective taken as
-    blocked everywhere: the lasting check runs too), checks rows and a motion; no roadmap
-    of a planner changes.
+    that would otherwise fall on the first step of a walk that searches. A throwaway roadmap
+    of the branch's ``patterns`` and ``weights`` ranks and tries the neighbours of a state
+    off the objective (the objective taken as blocked everywhere: the lasting check runs
+    too), checks rows and a motion; no roadmap of a planner changes.
     """
     roadmap = CTRoadmap(patterns, weights, radius=0.1, max_nodes=len(patterns) + 1,
                         rng=np.random.default_rng(0), prefer_lasting=True)

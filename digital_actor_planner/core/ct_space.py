@@ -594,7 +594,7 @@ def _sweeps(rows, shapes, triangles):
 
 #: numba type of a branch's row memo (see _illegal_rows): (frame, the row's bits, zero-padded
 #: to MEMO_WIDTH joints) -> 1 illegal, 0 legal. Passed on its own, not inside the tables: numba
-#: types a dictionary inside a tuple argument slowly (about 50 us a call, growing with it).
+#: types a dictionary inside a tuple argument through its slow path, dearer than the check.
 ROW_MEMO_TYPE = 'DictType(UniTuple(i8, 5), i8)'
 #: Widest branch whose rows are remembered (the key holds the frame and this many joints).
 MEMO_WIDTH = 4
@@ -1410,8 +1410,7 @@ class EnvironmentIndex:
 
     def triangles_near(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
         """Indices (int64, in order) of triangles whose boxes overlap the box [lower, upper]
-        (3,) m (on the 38k triangles of uneven ground: 60 us; NumPy, coordinate by
-        coordinate, 102 us)."""
+        (3,) m."""
         return _candidates_meeting(float_array(lower).reshape(3), float_array(upper).reshape(3),
                                    self.lower, self.upper, self._every)
 

@@ -32,12 +32,11 @@ footsteps: m + 1, (m + 1) ** 2, ... rows). Three memos live for one search:
   now) and where it lands): an array over every key, none where there would be more than
   :data:`SWING_KEYS`.
 
-Session 37 made the last two arrays; they were numba dictionaries (a lookup hashed its key,
-an insertion could resize the dictionary): the search 0.86 of its time warm, the exhaustive
-search 0.66 (which had also cleared its prefix dictionary for every configuration).
+The last two are arrays rather than numba dictionaries, whose lookups hash their keys and whose
+insertions can resize them.
 
-The arithmetic is the plain effort's term by term (the Python search's until session 29, kept
-as the tests' reference, ``test/footstep_reference.py``):
+The arithmetic is the plain effort's term by term (the Python search kept as the tests'
+reference, ``test/footstep_reference.py``):
 the squares are ``x ** two`` with ``two`` = 2.0 read from ``numbers``, because numba turns a
 constant square into ``x * x``, which differs from the C library's ``pow`` (what Python's
 ``**`` calls) in the last bit for about one value in 1,200. Without numba the same functions run
@@ -175,15 +174,15 @@ _UNJUDGED = -1.0
 TABLES_TYPE = ('Tuple((b1[::1], f8[::1], f8[::1], readonly(i8[::1]), readonly(f8[::1]), '
                'f8[:, ::1], readonly(i8[::1]), readonly(f8[::1]), i8, f8[::1]))')
 #: What a window's search is given (see ``FootstepPlanner.search_profile``), in four pieces:
-#: only four arrays for numba to unbox (each ~0.07 us warm; fourteen took ~2 us more than
-#: four in the walk, cold): the profile's samples (4, 2, K): height, low, headroom and
+#: only four arrays for numba to unbox (each array costs its unboxing, more in the walk,
+#: cold): the profile's samples (4, 2, K): height, low, headroom and
 #: obstacle with -inf over empty space (``GroundProfile.stacked``); the planner's numbers
 #: (:data:`NUMBER_COUNT`), the footstep lengths (m + 1,) m and the offset beyond the stance
 #: foot (T,) m of each entry of the foothold table, in one array; the layout: n, m, bounds
 #: (n + 1,), sides (n,) and the side of each entry of the table (T,), in one array; the
 #: window's own numbers, in the order of :data:`WINDOW_NUMBERS` (the search writes them into
-#: a copy of the planner's: in Python eight assignments to an array took 0.76 us a window,
-#: about as long as the whole of the search's setting-up).
+#: a copy of the planner's: in Python eight assignments to an array cost about as long as
+#: the whole of the search's setting-up).
 PROFILE_TYPE = ('Tuple((f8[:, :, ::1], readonly(f8[::1]), readonly(i8[::1]), '
                 'UniTuple(f8, 8)))')
 #: The window's own numbers in a :data:`PROFILE_TYPE`, as indices into ``numbers``: the stance
@@ -349,8 +348,7 @@ def _swing_clear(side, s_from, h_from, s_to, h_to, from_row, from_cumulative, ta
 def _effort(config, banned_first, tables, prefixes, swings):
     """Effort of a configuration, NaN if it is not collision-free, resumed from the longest
     prefix of it already in ``prefixes`` (and adding its own). Compiled into both searches
-    (session 37; a call before): warm, the search 0.87 of its time, the exhaustive one 0.89
-    (a call reference-counts every array it is given, the table's too)."""
+    rather than called (a call reference-counts every array it is given, the table's too)."""
     ok, height, pitch, bounds, offsets, obstacle, sides, lengths, last, numbers = tables
     if banned_first[config[0]]:
         return math.nan
@@ -451,7 +449,7 @@ def _footholds_of(config, tables):
 #: number (base m + 1, footstep 0 the most significant digit), -1 when none is
 #: collision-free; :func:`_footholds_of` of it ((4, 0) when there is none); its effort;
 #: configurations judged. A number, not an array of indices: boxing an array for Python costs
-#: 0.35 us (the planner looks the indices up).
+#: more than the lookup (the planner looks the indices up).
 _RESULT_TYPE = 'Tuple((i8, f8[:, ::1], f8, i8))'
 
 
@@ -480,10 +478,9 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
     :func:`exhaustive_search`) is compiled in too. Numba copies an inner function into every
     place that calls it, so the search is one loop over batches of configurations judged at
     one place (the start, a breadth-first expansion, a climb's neighbours): the judging, the
-    foothold rules in it and the effort are compiled once (6,700 instructions with the small
-    helpers it calls compiled in too, where calling the judging from each step took 12,500;
-    in the walk, where the search's code is no longer in the processor's caches, the p95 of
-    its first calls' time 15 % lower, session 34).
+    foothold rules in it and the effort are compiled once, about half the code of calling the
+    judging from each step, which matters in the walk, where the search's code is no longer
+    in the processor's caches.
     """
     samples, entry_sides = profile[0], _entry_sides(profile)
     high, low, headroom = samples[0], samples[1], samples[2]
@@ -500,7 +497,7 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
         if configurations > DENSE_CONFIGURATIONS:
             configurations = 0
             break
-    # The search's small arrays in one allocation each (an allocation ~40 ns): which entries
+    # The search's small arrays in one allocation each (each has a fixed cost): which entries
     # of the foothold table are judged and which configurations; the indices (see their uses).
     flags = np.zeros(ok.shape[0] + configurations, dtype=np.uint8)
     read, judged = flags[:ok.shape[0]], flags[ok.shape[0]:]

@@ -47,8 +47,9 @@ def kernel(signature: str, inline: bool = False) -> Callable:
 
 def direct(function: Callable) -> Callable:
     """Kernel ``function``'s compiled code as Python calls it without numba's dispatch: no
-    typing of the arguments to choose among signatures (0.46 us a call warm for the footstep
-    search's, more in a walk, where that code is no longer in the processor's caches). Only
+    typing of the arguments to choose among signatures (a measurable share of a call as
+    short as the footstep search's, more in a walk, where that code is out of the processor's
+    caches). Only
     for a caller that passes exactly the signature's types and array layouts: it converts
     numbers and refuses what is not an array of the element type, but reads an array of
     another layout (not C-contiguous where the signature says ``::1``) as if it were one.

@@ -1,6 +1,6 @@
 """The independent judge of a timed 22-DOF trajectory against an environment.
 
-The courses' tests use this to decide whether a walk "works" (issue criteria): no link deeper
+The courses' tests use this to decide whether a walk "works": no link deeper
 in the environment than a few millimetres, a foot always down, joint limits, no NaN, no jumps,
 no sliding stance foot, the two legs not in each other. It deliberately shares nothing with
 the planners' shortcuts (the ground height map, the sagittal leg model): geometry is the URDF's

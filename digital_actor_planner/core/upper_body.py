@@ -576,9 +576,8 @@ class UpperBodyPlanner:
         ``seeds``: as :meth:`plan` takes them; a branch whose seed is still off the pattern
         where the way back would be on it is not tried (the last plan saw this step coming and
         kept it off: something is in the way). Where the batch finds anything illegal, the
-        branches are planned one by one as before, and its cost, about that of a pattern check
-        (0.2-0.3 ms), is lost (on the obstacle courses, 2 steps of 66; 10 without the seed
-        rule).
+        branches are planned one by one, and its cost, about that of a pattern check, is lost
+        (on the obstacle courses rarely; far more often without the seed rule).
         """
         k = len(times)
         config = self.config

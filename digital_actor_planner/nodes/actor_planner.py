@@ -1535,8 +1535,7 @@ def main(args=None) -> int:
         executor.add_node(node)
     # Everything built so far (scene meshes for the markers, messages, modules) is moved out of
     # the garbage collector's reach, so its full collections, which run in whatever thread
-    # allocates and hold the GIL, no longer delay a tick by milliseconds (100 s on stairs_up:
-    # jitter p99 2.6 ms -> 0.6-1.3 ms).
+    # allocates and hold the GIL, cannot delay a tick by milliseconds.
     gc.freeze()
     try:
         # Bounded waits, so that the SIGTERM handler (Python code, run by the main thread)
