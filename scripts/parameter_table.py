@@ -9,6 +9,7 @@ fails when they differ. Run from the repository root::
     python scripts/parameter_table.py --check    # exit 1 when README.md's table is stale
 """
 import argparse
+import enum
 import os
 import sys
 from typing import Any, List, Sequence, Tuple
@@ -30,6 +31,9 @@ def _cell(text: str) -> str:
 
 
 def _type_and_default(default: Any) -> Tuple[str, str]:
+    if isinstance(default, enum.Enum):
+        # Declared by type only (Parameter.Type): the node treats it as unset.
+        return default.name.lower().replace('_array', '[]'), 'unset'
     if isinstance(default, bool):
         return 'bool', str(default).lower()
     if isinstance(default, int):
@@ -41,9 +45,7 @@ def _type_and_default(default: Any) -> Tuple[str, str]:
             # An installed or source path: show where it lies inside the package.
             default = 'config' + default.split(os.sep + 'config', 1)[1]
         return 'string', f'`{default}`' if default else '""'
-    # Declared by type only: the node treats it as unset.
-    name = getattr(default, 'name', str(default)).lower()
-    return name.replace('_array', '[]'), 'unset'
+    raise ValueError(f'parameter default of unknown type: {default!r}')
 
 
 def _range(descriptor: Any) -> str:
