@@ -9,7 +9,7 @@ computed from the bytes that actually crossed the bus in the same run.
 The emulator stands in for hardware, which is never descheduled: it serves from a SCHED_FIFO
 thread (when run as root) pinned to the second core, waits out the last 60 us of each wire
 deadline by spinning, and the bridge side is pinned to the first core. Without that, a
-preempted emulator thread (up to 10 ms on this 2-vCPU VM) was being charged to the bridge.
+preempted emulator thread (up to 10 ms on a 2-vCPU VM) would be charged to the bridge.
 
     .venv/bin/python bench/bench_dynamixel.py [--cycles 1000] [--return-delay-us 0]
 """

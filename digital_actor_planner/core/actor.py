@@ -26,7 +26,10 @@ LEG_LINKS = ('pelvis', 'left_hip', 'left_thigh', 'left_shank', 'left_foot', 'rig
 
 @dataclass(frozen=True)
 class ActorConfig:
-    """Settings of the whole pipeline. Speeds in m/s and rad/s, lengths in m, times in s."""
+    """Settings of the whole pipeline. Speeds in m/s and rad/s, lengths in m, times in s.
+
+    Why each rule and default is as it is: docs/LOWER_BODY.md and docs/UPPER_BODY.md.
+    """
 
     window_steps: int = 3
     step_intervals: int = 13

@@ -43,6 +43,8 @@ SOLE_LINES = (-0.4, 0.0, 0.4)
 class FootstepConfig:
     """Footstep planner settings (paper defaults n = 3, m = 13). Lengths in m, angles in rad.
 
+    Why each rule and default is as it is: docs/LOWER_BODY.md.
+
     ``greedy_restart``: after the paper's breadth-first search and hill-climbing, climb once
     more from a footstep-by-footstep greedy configuration and keep the better result (False:
     the paper's search alone).

@@ -50,7 +50,10 @@ class GaitError(Exception):
 
 @dataclass(frozen=True)
 class GaitConfig:
-    """Walk generation settings. Lengths in m, times in s, angles in rad."""
+    """Walk generation settings. Lengths in m, times in s, angles in rad.
+
+    Why each rule and default is as it is: docs/LOWER_BODY.md.
+    """
 
     frame_rate: float = 100.0
     reach_fraction: float = 0.975

@@ -131,6 +131,8 @@ _ARM_LINKS = {side: (f'{side}_shoulder_roll_link', f'{side}_upper_arm', f'{side}
 class UpperBodyConfig:
     """Settings of the upper-body compliant motion planner (§5.2).
 
+    Why each rule and default is as it is: docs/UPPER_BODY.md.
+
     Attributes
     ----------
     roadmap_radius
