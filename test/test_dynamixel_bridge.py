@@ -38,6 +38,8 @@ OFFSET = {'left_knee': 0.25, 'right_knee': -0.25, 'waist_pitch': -0.1, 'left_elb
 DIRECTION = {joint: (-1 if joint.startswith('right_') else 1) for joint in JOINTS}
 SAFE = {'left_knee': (0.1, 1.5), 'left_hip_pitch': (-0.5, 1.0)}
 SPEED = {'left_knee': 1.0, 'left_hip_pitch': 2.0}
+#: Bound on a bridge process's start (s): generous, a wait ends as soon as it is up.
+STARTUP_S = 90.0
 
 
 def expected_ticks(joint: str, angle: float) -> int:
@@ -103,10 +105,11 @@ class Rig:
         return wait_for(predicate, timeout, spin=self.spin)
 
     def wait_connected(self):
+        # A process start on a busy machine (imports, DDS discovery) can take tens of seconds.
         assert self.wait(lambda: self.publisher.get_subscription_count() >= 1
                          and self.status('dynamixel_bridge: bus') is not None
-                         and self.emulator.register(1, emu.TORQUE_ENABLE) == 1), (
-            self.bridge.output())
+                         and self.emulator.register(1, emu.TORQUE_ENABLE) == 1,
+                         timeout=STARTUP_S), self.bridge.output()
 
     def publish(self, positions: dict):
         message = JointState()
@@ -313,7 +316,7 @@ def test_missing_servo_is_fatal_when_all_are_required(rig):
     r = rig(ids=[i for i in range(1, 19) if i != ID['right_ankle']])
     r.emulator.start()
     bridge = r.start_bridge(require_all_servos=True)
-    assert bridge.proc.wait(timeout=20) == 3
+    assert bridge.proc.wait(timeout=STARTUP_S) == 3
     assert 'right_ankle (ID 18)' in bridge.output()
 
 
@@ -361,7 +364,7 @@ def test_missing_port_at_start_up_is_retried(rig):
     r = rig()
     bridge = r.start_bridge()
     assert r.wait(lambda: r.status('dynamixel_bridge: bus') is not None
-                  and _level(r.status('dynamixel_bridge: bus')) == 2, timeout=10.0)
+                  and _level(r.status('dynamixel_bridge: bus')) == 2, timeout=STARTUP_S)
     assert bridge.alive()
     r.emulator.start()
     r.wait_connected()
@@ -370,7 +373,7 @@ def test_missing_port_at_start_up_is_retried(rig):
 def test_dry_run_logs_ticks_and_opens_no_port(rig, tmp_path):
     r = rig()
     bridge = r.start_bridge(dry_run=True)
-    assert r.wait(lambda: r.publisher.get_subscription_count() >= 1, timeout=10.0)
+    assert r.wait(lambda: r.publisher.get_subscription_count() >= 1, timeout=STARTUP_S)
     r.stream({'left_knee': 0.7}, 0.4)
     assert r.wait(lambda: (r.stream({'left_knee': 0.7}, 0.05) or True)
                   and f'left_knee[13]={expected_ticks("left_knee", 0.7)}' in bridge.output(),
@@ -388,7 +391,7 @@ def test_invalid_configuration_exits_naming_the_item(tmp_path, override, named):
     params = write_params(tmp_path / 'bridge.yaml')
     result = subprocess.run(
         BRIDGE + ['--ros-args', '--params-file', params, '-p', 'port:=/nonexistent', *override],
-        env=ros_env(next(_DOMAINS)), capture_output=True, text=True, timeout=60)
+        env=ros_env(next(_DOMAINS)), capture_output=True, text=True, timeout=STARTUP_S)
     assert result.returncode == 2, result.stderr
     assert named in result.stderr
 
