@@ -284,7 +284,7 @@ def _simulate(args, outputs: '_Outputs') -> int:
             with open(skeleton.urdf_path) as urdf:
                 description = urdf.read()
             write_bag(out, skeleton.joint_names, times, frames, blocks,
-                      robot_description=description)
+                      robot_description=description, meshes=scene.environment.meshes)
         else:
             _write_trajectory(out, skeleton.joint_names, times, frames)
         if summary_file:

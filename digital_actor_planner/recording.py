@@ -3,8 +3,9 @@
 The bag holds what the live planner node publishes, under the node's topic names: the joint
 stream (``/joint_states``, one sensor_msgs/JointState per frame), the footstep markers
 (``/actor_planner/markers``) and the predicted path (``/actor_planner/path``) once per
-planned block, and the URDF on ``/robot_description`` for RViz's robot model. The
-``rosbags`` library builds, serialises (CDR) and writes everything; no ROS install is needed.
+planned block, the scene's meshes (``/actor_planner/environment``) and the URDF
+(``/robot_description``) once at the start, for RViz. The ``rosbags`` library builds,
+serialises (CDR) and writes everything; no ROS install is needed.
 
 Stamps are the run's own clock (s from the start of the simulation): every header stamp and
 the bag's receive time of a message are the time of the frame or block it belongs to, so that
@@ -19,7 +20,10 @@ import numpy as np
 
 #: Topic names of the live node (nodes/actor_planner.py) under its default name, no namespace.
 TOPICS = {'joint_states': '/joint_states', 'markers': '/actor_planner/markers',
-          'path': '/actor_planner/path', 'robot_description': '/robot_description'}
+          'path': '/actor_planner/path', 'environment': '/actor_planner/environment',
+          'robot_description': '/robot_description'}
+#: Mesh triangles drawn at most (one TRIANGLE_LIST per mesh), as the live node draws them.
+MAX_MARKER_TRIANGLES = 200_000
 #: Footsteps already taken that the markers keep showing (as the live node does).
 PAST_FOOTSTEPS = 20
 _FOOTSTEP_COLOURS = {'footsteps_past': (0.5, 0.5, 0.5, 0.6),
@@ -32,7 +36,7 @@ class RecordingError(ValueError):
 
 def write_bag(path: str, joint_names: Sequence[str], times: np.ndarray, frames: np.ndarray,
               blocks: Sequence = (), frame_id: str = 'world',
-              robot_description: Optional[str] = None) -> None:
+              robot_description: Optional[str] = None, meshes: Sequence = ()) -> None:
     """Write a run as a rosbag2 bag (a folder: ``metadata.yaml`` and one ``.mcap`` file).
 
     Parameters
@@ -52,6 +56,9 @@ def write_bag(path: str, joint_names: Sequence[str], times: np.ndarray, frames: 
         ``header.frame_id`` of every message, as the node's ``frame_id`` parameter.
     robot_description
         The URDF text, recorded once at the start (transient-local, as the node offers it).
+    meshes
+        The scene's triangle meshes (``vertices`` (v, 3) m and ``faces`` (f, 3) each, world
+        frame), recorded once at the start as the environment markers; none: no such topic.
 
     Raises
     ------
@@ -80,8 +87,10 @@ def write_bag(path: str, joint_names: Sequence[str], times: np.ndarray, frames: 
         for key, msgtype in (('joint_states', 'sensor_msgs/msg/JointState'),
                              ('markers', 'visualization_msgs/msg/MarkerArray'),
                              ('path', 'nav_msgs/msg/Path'),
+                             ('environment', 'visualization_msgs/msg/MarkerArray'),
                              ('robot_description', 'std_msgs/msg/String')):
-            if key == 'robot_description' and robot_description is None:
+            if ((key == 'robot_description' and robot_description is None)
+                    or (key == 'environment' and not len(meshes))):
                 continue
             latched = key != 'joint_states'
             connections[key] = writer.add_connection(
@@ -95,6 +104,8 @@ def write_bag(path: str, joint_names: Sequence[str], times: np.ndarray, frames: 
         start = float(times[0]) if times.size else 0.0
         if robot_description is not None:
             write('robot_description', start, types.String(data=robot_description))
+        if len(meshes):
+            write('environment', start, types.environment(meshes))
         # Messages go in time order: a block's markers and path before its first frame.
         block_at = sorted(((float(b.times[0]), n) for n, b in enumerate(blocks)
                            if len(b.times)), reverse=True)
@@ -181,6 +192,24 @@ class _Types:
                 markers.append(self.marker(stamp, ns, number, Marker.CUBE, Marker.ADD,
                                            self.pose(x, y, z + 0.005, yaw), (0.25, 0.1, 0.01),
                                            _FOOTSTEP_COLOURS[ns]))
+        return self.MarkerArray(markers=markers)
+
+    def environment(self, meshes: Sequence):
+        """DELETEALL, then one grey TRIANGLE_LIST per mesh, stamped zero (static)."""
+        Marker = self.Marker  # noqa: N806 (a message type)
+        markers = [self.marker(0.0, '', 0, Marker.ARROW, Marker.DELETEALL, self.pose(0, 0, 0))]
+        budget = MAX_MARKER_TRIANGLES
+        for index, mesh in enumerate(meshes):
+            faces = np.asarray(mesh.faces)[:max(budget, 0)]
+            budget -= len(faces)
+            if not len(faces):
+                continue
+            marker = self.marker(0.0, 'environment', index, Marker.TRIANGLE_LIST, Marker.ADD,
+                                 self.pose(0, 0, 0), (1.0, 1.0, 1.0), (0.62, 0.64, 0.66, 1.0))
+            corners = np.asarray(mesh.vertices, dtype=float)[faces].reshape(-1, 3)
+            marker.points = [self.Point(x=float(x), y=float(y), z=float(z))
+                             for x, y, z in corners]
+            markers.append(marker)
         return self.MarkerArray(markers=markers)
 
     def path(self, stamp: float, points: np.ndarray):

@@ -7,6 +7,7 @@ import yaml
 
 from digital_actor_planner import cli
 from digital_actor_planner.cli import read_trajectory
+from digital_actor_planner.core.environment import load_scene
 
 rosbags = pytest.importorskip('rosbags')
 from rosbags.rosbag2 import Reader  # noqa: E402 (after the skip)
@@ -45,6 +46,7 @@ def test_the_bag_has_the_frames_of_the_csv_in_order_with_stamps(recorded):
     assert topics == {'/joint_states': 'sensor_msgs/msg/JointState',
                       '/actor_planner/markers': 'visualization_msgs/msg/MarkerArray',
                       '/actor_planner/path': 'nav_msgs/msg/Path',
+                      '/actor_planner/environment': 'visualization_msgs/msg/MarkerArray',
                       '/robot_description': 'std_msgs/msg/String'}
     joint_states = [(t, m) for topic, t, m in messages if topic == '/joint_states']
     assert len(joint_states) == times.size > 100
@@ -78,3 +80,12 @@ def test_the_bag_has_the_planned_footsteps_and_paths_along_the_run(recorded):
     assert all(m.markers[0].action == 3 for _, m in markers)  # DELETEALL first
     description = [m for topic, _, m in messages if topic == '/robot_description']
     assert len(description) == 1 and '<robot' in description[0].data
+    # the stairs themselves, for RViz: as many triangles as the scene's meshes have
+    environment = [m for topic, _, m in messages if topic == '/actor_planner/environment']
+    assert len(environment) == 1
+    triangles = [mk for mk in environment[0].markers if mk.type == 11]  # TRIANGLE_LIST
+    scene = load_scene(os.path.join(SCENES, 'stairs_up.yaml'))
+    assert sum(len(mk.points) for mk in triangles) == 3 * sum(
+        len(mesh.faces) for mesh in scene.environment.meshes)
+    top = max(p.z for mk in triangles for p in mk.points)
+    assert top == pytest.approx(max(mesh.bounds[1][2] for mesh in scene.environment.meshes))
