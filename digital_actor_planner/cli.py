@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import csv
 from dataclasses import dataclass
+import importlib.util
 import json
 import math
 import os
@@ -219,6 +220,9 @@ def _simulate(args, outputs: '_Outputs') -> int:
     try:
         # Every output is checked (and its temporary made) before the long part: planning.
         bag = args.out.lower().endswith(BAG_SUFFIX)
+        if bag and importlib.util.find_spec('rosbags') is None:
+            raise InputError(f'--out {args.out}: writing a bag needs the rosbags package '
+                             '(pip install -r requirements.txt)')
         out = outputs.add(args.out, '--out', bag=bag)
         summary_file = outputs.add(args.summary, '--summary') if args.summary else None
         render_file = (outputs.add(args.render, '--render', formats=RENDER_FORMATS)
