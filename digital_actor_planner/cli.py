@@ -1,7 +1,9 @@
 """`digital-actor` command line: offline simulation, the interactive demo and the viewer.
 
 Argument parsing, files and pictures live here, not in the core. Exit codes: 0 success, 1 a run
-failed, 2 bad input (a message names the file, line or value).
+failed (its outputs could not be written), 2 bad input (a message names the file, line, value or
+output path; nothing was planned), 130 interrupted. Outputs appear only when complete, all
+together: an existing file is replaced only by a complete one.
 """
 from __future__ import annotations
 
@@ -118,6 +120,8 @@ class _Outputs:
             ``formats``, is an input of the run, is named twice, or cannot be written.
 
         """
+        if bag:
+            path = os.path.normpath(path)  # 'run.mcap/' names the folder 'run.mcap'
         real = os.path.realpath(path)
         if bag and os.path.lexists(path):
             raise InputError(f'{option} {path}: exists already (a bag is never overwritten)')
