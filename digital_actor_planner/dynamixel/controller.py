@@ -15,6 +15,8 @@ from digital_actor_planner.dynamixel.config import BridgeConfig
 from digital_actor_planner.dynamixel.safety import SafetyEnvelope
 
 OK, WARN, ERROR = 0, 1, 2
+#: Torque Enable writes per servo at shutdown before it is reported as possibly still on.
+SHUTDOWN_ATTEMPTS = 3
 HARDWARE_ERROR_BITS = {0: 'input voltage', 2: 'overheating', 3: 'motor encoder',
                        4: 'electrical shock', 5: 'overload'}
 
@@ -311,18 +313,23 @@ class BridgeController:
         try:
             if not self.connected:
                 self.bus.open()  # the port may be back; a servo keeps torque without it
-            done = self.bus.set_torque(ids, False)
-            self.torqued.difference_update(i for i, ok in done.items() if ok)
-            if self.torqued:
-                problem = 'no acknowledgement'
+            # A reply can be late on a busy host; asking again is harmless.
+            for _ in range(SHUTDOWN_ATTEMPTS):
+                done = self.bus.set_torque([i for i in ids if i in self.torqued], False)
+                self.torqued.difference_update(i for i, ok in done.items() if ok)
+                if not self.torqued:
+                    break
+            else:
+                problem = f'no acknowledgement after {SHUTDOWN_ATTEMPTS} attempts'
         except self.bus_error as error:
             problem = str(error)
         self.bus.close()
         self.connected = False
         if problem:
             still = [i for i in ids if i in self.torqued]
+            servos = f'{len(still)} servo' + ('s' if len(still) != 1 else '')
             self.log('error', f'TORQUE COULD NOT BE SWITCHED OFF ({problem}): '
-                     f'{len(still)} servos may still hold torque: {self._names(still)}')
+                     f'{servos} may still hold torque: {self._names(still)}')
             return False
         self.log('info', 'torque off')
         return True
