@@ -1,16 +1,21 @@
 """`digital-actor` command line: offline simulation, the interactive demo and the viewer.
 
 Argument parsing, files and pictures live here, not in the core. Exit codes: 0 success, 1 a run
-failed, 2 bad input (a message names the file, line or value).
+failed (its outputs could not be written), 2 bad input (a message names the file, line, value or
+output path; nothing was planned), 130 interrupted. Outputs appear only when complete, all
+together: an existing file is replaced only by a complete one.
 """
 from __future__ import annotations
 
 import argparse
 import csv
 from dataclasses import dataclass
+import importlib.util
 import json
 import math
 import os
+import shutil
+import stat
 import sys
 import tempfile
 import time
@@ -46,7 +51,8 @@ def read_commands(path: str) -> List[CommandRow]:
 
     """
     try:
-        with open(path, newline='') as f:
+        # utf-8-sig: spreadsheet programs start a CSV with a byte-order mark.
+        with open(path, newline='', encoding='utf-8-sig') as f:
             rows = list(csv.reader(f))
     except OSError as error:
         raise InputError(f'{path}: cannot read command file: {error.strerror or error}') from None
@@ -77,21 +83,138 @@ def read_commands(path: str) -> List[CommandRow]:
     return commands
 
 
-def _atomic_writer(path: str, mode: str = 'w'):
-    """A temporary file next to ``path``; :func:`_publish` renames it into place when complete."""
-    folder = os.path.dirname(os.path.abspath(path)) or '.'
-    os.makedirs(folder, exist_ok=True)
-    handle, temporary = tempfile.mkstemp(prefix='.' + os.path.basename(path) + '.', dir=folder)
-    os.close(handle)
-    return temporary
+#: What ``--render`` can write, by file name extension.
+RENDER_FORMATS = ('.png', '.gif')
+#: ``--out`` ending so is a rosbag2 bag with MCAP storage (a folder, as ``ros2 bag record``
+#: makes), not a CSV file.
+BAG_SUFFIX = '.mcap'
 
 
-def _publish(temporary: str, path: str) -> None:
-    os.replace(temporary, path)
+class _Outputs:
+    """The output files of one run: checked before planning, put in place together at the end.
+
+    Each output is first a hidden temporary beside its final path, created when it is
+    checked, so that a path that cannot be written fails before any planning. Nothing
+    replaces an existing file until every output is complete; an error or Ctrl-C leaves the
+    existing files as they were and no temporary files behind.
+    """
+
+    def __init__(self, inputs: Sequence[str] = ()):
+        self._inputs = {os.path.realpath(p): p for p in inputs}
+        self._pending: List[tuple] = []  # (temporary, final path, is a bag)
+        self._created_folders: List[str] = []
+
+    def add(self, path: str, option: str, bag: bool = False,
+            formats: Sequence[str] = ()) -> str:
+        """Check ``path`` and return where to write it instead, until :meth:`publish`.
+
+        A file gets a temporary file with the same extension; a bag (a folder that must not
+        exist yet) gets a path inside a temporary folder, named like the bag without its
+        extension (the bag's MCAP file is named after it). ``formats``, if given, are the
+        file name extensions allowed.
+
+        Raises
+        ------
+        InputError
+            The path is a directory (or, for a bag, exists), has an extension not in
+            ``formats``, is an input of the run, is named twice, or cannot be written.
+
+        """
+        if bag:
+            path = os.path.normpath(path)  # 'run.mcap/' names the folder 'run.mcap'
+        real = os.path.realpath(path)
+        if bag and os.path.lexists(path):
+            raise InputError(f'{option} {path}: exists already (a bag is never overwritten)')
+        if os.path.isdir(path):
+            raise InputError(f'{option} {path}: is a directory')
+        extension = os.path.splitext(path)[1].lower()
+        if formats and extension not in formats:
+            raise InputError(f'{option} {path}: writes {" or ".join(formats)}, not '
+                             f'{extension or "a file without an extension"}')
+        if real in self._inputs:
+            raise InputError(f'{option} {path}: would overwrite the input {self._inputs[real]}')
+        if any(os.path.realpath(final) == real for _, final, _ in self._pending):
+            raise InputError(f'{option} {path}: named for two outputs')
+        folder = os.path.dirname(os.path.abspath(path))
+        missing = []
+        parent = folder
+        while not os.path.lexists(parent):
+            missing.append(parent)
+            parent = os.path.dirname(parent)
+        name = os.path.basename(path)
+        try:
+            os.makedirs(folder, exist_ok=True)
+            self._created_folders.extend(missing)
+            if bag:
+                temporary = tempfile.mkdtemp(prefix=f'.{name}.', dir=folder)
+            else:
+                handle, temporary = tempfile.mkstemp(prefix=f'.{name}.', dir=folder,
+                                                     suffix=os.path.splitext(path)[1])
+                os.close(handle)
+        except OSError as error:
+            raise InputError(f'{option} {path}: cannot write: '
+                             f'{error.strerror or error}') from None
+        self._pending.append((temporary, path, bag))
+        return os.path.join(temporary, os.path.splitext(name)[0]) if bag else temporary
+
+    def publish(self) -> None:
+        """Give each output its final name; a new file gets the mode the umask allows."""
+        umask = os.umask(0)
+        os.umask(umask)
+        for temporary, path, bag in self._pending:
+            if bag:
+                continue
+            try:
+                mode = stat.S_IMODE(os.stat(path).st_mode)  # replacing: keep its mode
+            except OSError:
+                mode = 0o666 & ~umask
+            os.chmod(temporary, mode)
+        for temporary, path, bag in self._pending:
+            if bag:
+                inner = os.path.join(temporary, os.path.splitext(os.path.basename(path))[0])
+                os.rename(inner, path)
+                os.rmdir(temporary)
+            else:
+                os.replace(temporary, path)
+        self._pending = []
+        self._created_folders = []
+
+    def discard(self) -> None:
+        """Remove the temporaries not yet published, and folders made for them if empty."""
+        for temporary, _, bag in self._pending:
+            if bag:
+                shutil.rmtree(temporary, ignore_errors=True)
+                continue
+            for leftover in (temporary, _render_partial(temporary)):
+                try:
+                    os.remove(leftover)
+                except FileNotFoundError:
+                    pass
+        self._pending = []
+        for folder in self._created_folders:  # deepest first
+            try:
+                os.rmdir(folder)
+            except OSError:
+                break
+        self._created_folders = []
+
+
+def _render_partial(path: str) -> str:
+    # The renderer writes <base>.partial<extension> and renames it: see core.render.
+    base, extension = os.path.splitext(path)
+    return f'{base}.partial{extension}'
 
 
 def simulate(args) -> int:
     """Run ``digital-actor simulate``."""
+    outputs = _Outputs(inputs=(args.scene, args.commands))
+    try:
+        return _simulate(args, outputs)
+    finally:
+        outputs.discard()  # whatever was not put in place: an error or Ctrl-C
+
+
+def _simulate(args, outputs: '_Outputs') -> int:
     from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands, validate
     from digital_actor_planner.core.environment import load_scene, SceneError
     from digital_actor_planner.core.footsteps import FootstepConfig
@@ -99,6 +222,15 @@ def simulate(args) -> int:
 
     skeleton = Skeleton()
     try:
+        # Every output is checked (and its temporary made) before the long part: planning.
+        bag = args.out.lower().endswith(BAG_SUFFIX)
+        if bag and importlib.util.find_spec('rosbags') is None:
+            raise InputError(f'--out {args.out}: writing a bag needs the rosbags package '
+                             '(pip install -r requirements.txt)')
+        out = outputs.add(args.out, '--out', bag=bag)
+        summary_file = outputs.add(args.summary, '--summary') if args.summary else None
+        render_file = (outputs.add(args.render, '--render', formats=RENDER_FORMATS)
+                       if args.render else None)
         commands = read_commands(args.commands)
         scene = load_scene(args.scene, skeleton)
         config = ActorConfig(window_steps=args.window_steps, step_intervals=args.step_intervals,
@@ -133,7 +265,6 @@ def simulate(args) -> int:
     wall = time.perf_counter() - wall_start
     times = np.concatenate([b.times for b in blocks]) if blocks else np.zeros(0)
     frames = np.vstack([b.frames for b in blocks]) if blocks else np.zeros((0, 22))
-    _write_trajectory(args.out, skeleton.joint_names, times, frames)
     steps = [b for b in blocks if b.status == 'walking']
     planning = [b.planning_time for b in steps]
     summary = {
@@ -155,24 +286,32 @@ def simulate(args) -> int:
         'window_steps': config.window_steps, 'step_intervals': config.step_intervals,
         'greedy_restart': config.footsteps.greedy_restart,
     }
-    if args.summary:
-        temporary = _atomic_writer(args.summary)
-        with open(temporary, 'w') as f:
-            json.dump(summary, f, indent=2)
-        _publish(temporary, args.summary)
-    if args.render:
-        from digital_actor_planner.core import render
-        footsteps = _landed_feet(skeleton, frames)
-        temporary = _atomic_writer(args.render)
-        render_path = temporary + os.path.splitext(args.render)[1]
-        if args.render.lower().endswith('.gif'):
-            render.render_gif(render_path, skeleton, scene.environment.meshes, times, frames,
-                              footsteps=footsteps)
+    try:
+        if bag:
+            from digital_actor_planner.recording import write_bag
+            with open(skeleton.urdf_path) as urdf:
+                description = urdf.read()
+            write_bag(out, skeleton.joint_names, times, frames, blocks,
+                      robot_description=description, meshes=scene.environment.meshes)
         else:
-            render.render_png(render_path, skeleton, scene.environment.meshes, times, frames,
-                              footsteps=footsteps, title=os.path.basename(args.scene))
-        os.remove(temporary)
-        _publish(render_path, args.render)
+            _write_trajectory(out, skeleton.joint_names, times, frames)
+        if summary_file:
+            with open(summary_file, 'w') as f:
+                json.dump(summary, f, indent=2)
+        if render_file:
+            from digital_actor_planner.core import render
+            footsteps = _landed_feet(skeleton, frames)
+            if render_file.lower().endswith('.gif'):
+                render.render_gif(render_file, skeleton, scene.environment.meshes, times,
+                                  frames, footsteps=footsteps)
+            else:
+                render.render_png(render_file, skeleton, scene.environment.meshes, times,
+                                  frames, footsteps=footsteps, title=os.path.basename(args.scene))
+        outputs.publish()
+    except (OSError, ValueError) as error:
+        print(f'digital-actor simulate: error: cannot write the outputs: {error}',
+              file=sys.stderr)
+        return 1
     simulated = float(times[-1]) if times.size else 0.0
     print(f'{os.path.basename(args.scene)}: {len(steps)} steps, {simulated:.2f}'
           f' s simulated in {wall:.2f} s, final status {actor.status}'
@@ -200,13 +339,11 @@ def _landed_feet(skeleton, frames: np.ndarray) -> np.ndarray:
 
 def _write_trajectory(path: str, names: Sequence[str], times: np.ndarray,
                       frames: np.ndarray) -> None:
-    temporary = _atomic_writer(path)
-    with open(temporary, 'w', newline='') as f:
+    with open(path, 'w', newline='') as f:
         writer = csv.writer(f)
         writer.writerow(['time'] + list(names))
         for t, q in zip(times, frames):
             writer.writerow([f'{t:.4f}'] + [f'{v:.6f}' for v in q])
-    _publish(temporary, path)
 
 
 def read_trajectory(path: str):
@@ -232,7 +369,9 @@ def build_parser() -> argparse.ArgumentParser:
     sim = sub.add_parser('simulate', help='plan a whole course offline and write the trajectory')
     sim.add_argument('--scene', required=True, help='scene YAML or a bare mesh file')
     sim.add_argument('--commands', required=True, help='CSV time,linear_x,angular_z')
-    sim.add_argument('--out', required=True, help='trajectory CSV to write')
+    sim.add_argument('--out', required=True,
+                     help='trajectory CSV to write; a name ending in .mcap writes a rosbag2 bag '
+                          '(MCAP storage) of /joint_states, the markers and the path instead')
     sim.add_argument('--summary', help='JSON summary to write')
     sim.add_argument('--render', help='PNG (key poses) or GIF (animation) to write')
     sim.add_argument('--window-steps', type=int, default=3, help='n, footsteps per window')
@@ -263,6 +402,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     try:
         return simulate(args)
     except KeyboardInterrupt:
+        print('digital-actor simulate: interrupted; no output was written or replaced',
+              file=sys.stderr)
         return 130
 
 

@@ -204,6 +204,13 @@ class Servo:
         self.table[MOVING] = 1 if (moving and self.table[TORQUE_ENABLE]) else 0
         self._set(PRESENT_POSITION, int(round(self._position)))
 
+    def place(self, ticks: int) -> None:
+        """Put the horn at ``ticks`` (goal and present position), as if moved by hand."""
+        self.update()
+        self._position = float(ticks)
+        self._set(GOAL_POSITION, ticks)
+        self._set(PRESENT_POSITION, ticks)
+
     def error_byte(self) -> int:
         return ALERT if self.table[HARDWARE_ERROR_STATUS] else 0
 
@@ -290,6 +297,10 @@ class DynamixelEmulator:
         self._stop = threading.Event()
         self._thread: Optional[threading.Thread] = None
         self._wire_free = 0.0
+        #: Seconds by which the replies to the next sync reads are held back (see
+        #: :meth:`delay_sync_read_replies`), and how many sync reads that still applies to.
+        self._late_by = 0.0
+        self._late_count = 0
 
     # -- lifecycle -------------------------------------------------------------------------
     @property
@@ -359,6 +370,16 @@ class DynamixelEmulator:
             if shutdown:
                 servo.table[TORQUE_ENABLE] = 0
 
+    def place(self, servo_id: int, ticks: int) -> None:
+        """Put a servo's horn at ``ticks`` (goal and present position), as if moved by hand."""
+        with self.lock:
+            self.servos[servo_id].place(ticks)
+
+    def delay_sync_read_replies(self, seconds: float, count: int = 1) -> None:
+        """Answer the next ``count`` sync reads ``seconds`` late (after the reader gave up)."""
+        with self.lock:
+            self._late_by, self._late_count = float(seconds), int(count)
+
     def disconnect_servo(self, servo_id: int) -> Servo:
         """Take one servo off the bus (a broken cable): it stops answering."""
         with self.lock:
@@ -411,6 +432,13 @@ class DynamixelEmulator:
                         replies = self._crc_failure(packet)
                     else:
                         replies = self._handle(*packet)
+                    late_by = 0.0
+                    if crc_ok and packet[1] == SYNC_READ and self._late_count > 0:
+                        self._late_count -= 1
+                        late_by = self._late_by
+                if late_by:
+                    # A stalled bus or host: nothing else is served meanwhile either.
+                    time.sleep(late_by)
                 self._transmit(received_at, raw_length, replies)
 
     def _transmit(self, received_at: float, instruction_bytes: int,

@@ -2,8 +2,10 @@
 import csv
 import json
 import os
+import signal
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -177,3 +179,127 @@ def test_trajectory_columns_are_in_csv_order(stairs_run):
     with open(out / 'traj.csv') as f:
         header = next(csv.reader(f))
     assert header[0] == 'time' and header[1:5] == ['root_x', 'root_y', 'root_z', 'root_yaw']
+
+
+def _simulate_here(capsys, *args):
+    """``digital-actor simulate`` in this process (the checks of its outputs come first)."""
+    from digital_actor_planner import cli
+    code = cli.main(['simulate', *args])
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def _short_run(tmp_path):
+    return ['--scene', os.path.join(SCENES, 'flat.yaml'),
+            '--commands', write_commands(tmp_path / 'c.csv', ['0,0.8,0', '1.5,0,0'])]
+
+
+@pytest.mark.parametrize('option, name, expected', [
+    ('--out', 'folder', 'is a directory'),
+    ('--summary', 'folder', 'is a directory'),
+    ('--render', 'folder', 'is a directory'),
+    ('--render', 'x.bmp', 'writes .png or .gif, not .bmp'),
+    ('--render', 'picture', 'not a file without an extension'),
+    ('--out', 'plain.txt/t.csv', 'cannot write'),
+    ('--summary', 'plain.txt/deeper/s.json', 'cannot write'),
+    ('--out', 'c.csv', 'would overwrite the input'),
+    ('--summary', 'old.csv', 'named for two outputs'),
+    ('--out', 'bag.mcap', 'exists already'),
+])
+def test_bad_outputs_exit_2_before_planning_and_leave_everything_as_it_was(
+        tmp_path, capsys, option, name, expected):
+    (tmp_path / 'folder').mkdir()
+    (tmp_path / 'bag.mcap').mkdir()
+    (tmp_path / 'plain.txt').write_text('a file, not a folder\n')
+    (tmp_path / 'old.csv').write_text('the previous trajectory\n')
+    args = _short_run(tmp_path)
+    outputs = {'--out': str(tmp_path / 'old.csv')}
+    outputs[option] = str(tmp_path / name)
+    before = sorted(os.listdir(tmp_path))
+    code, _, err = _simulate_here(capsys, *args, *[a for o in outputs.items() for a in o])
+    assert code == 2, err
+    assert str(tmp_path / name) in err and expected in err
+    assert 'Traceback' not in err
+    assert sorted(os.listdir(tmp_path)) == before  # no hidden temporaries, nothing replaced
+    assert (tmp_path / 'old.csv').read_text() == 'the previous trajectory\n'
+
+
+def test_an_unwritable_out_is_refused_naming_it(tmp_path, capsys):
+    target = '/proc/digital_actor_trajectory.csv'  # no one can create files there, root neither
+    code, _, err = _simulate_here(capsys, *_short_run(tmp_path), '--out', target)
+    assert code == 2 and target in err and 'cannot write' in err, err
+
+
+def test_outputs_get_normal_modes_and_a_failed_render_replaces_nothing(
+        tmp_path, capsys, monkeypatch):
+    from digital_actor_planner.core import render
+    args = _short_run(tmp_path)
+    (tmp_path / 's.json').write_text('{}')
+    os.chmod(tmp_path / 's.json', 0o640)  # a file replaced keeps its mode
+    old_umask = os.umask(0o022)
+    try:
+        code, out, err = _simulate_here(capsys, *args, '--out', str(tmp_path / 'new' / 't.csv'),
+                                        '--summary', str(tmp_path / 's.json'))
+    finally:
+        os.umask(old_umask)
+    assert code == 0, err
+    assert os.stat(tmp_path / 'new' / 't.csv').st_mode & 0o777 == 0o644
+    assert os.stat(tmp_path / 's.json').st_mode & 0o777 == 0o640
+    trajectory = (tmp_path / 'new' / 't.csv').read_text()
+    summary = (tmp_path / 's.json').read_text()
+    # the picture fails after planning: the trajectory and summary are not replaced either
+
+    def broken(*_, **__):
+        raise OSError(28, 'No space left on device')
+    monkeypatch.setattr(render, 'render_png', broken)
+    before = sorted(os.listdir(tmp_path)), sorted(os.listdir(tmp_path / 'new'))
+    code, _, err = _simulate_here(capsys, *args[:2], '--commands',
+                                  write_commands(tmp_path / 'c.csv', ['0,0.5,0', '1,0,0']),
+                                  '--out', str(tmp_path / 'new' / 't.csv'),
+                                  '--summary', str(tmp_path / 's.json'),
+                                  '--render', str(tmp_path / 'p.png'))
+    assert code == 1 and 'No space left on device' in err and 'Traceback' not in err
+    assert (sorted(os.listdir(tmp_path)), sorted(os.listdir(tmp_path / 'new'))) == before
+    assert (tmp_path / 'new' / 't.csv').read_text() == trajectory
+    assert (tmp_path / 's.json').read_text() == summary
+
+
+def test_ctrl_c_during_a_run_leaves_no_temporary_files(tmp_path):
+    (tmp_path / 't.csv').write_text('the previous trajectory\n')
+    env = dict(os.environ, MPLBACKEND='Agg')
+    process = subprocess.Popen(
+        [sys.executable, '-m', 'digital_actor_planner.cli', 'simulate',
+         '--scene', os.path.join(SCENES, 'stairs_up.yaml'),
+         '--commands', os.path.join(SCENES, 'stairs_up.csv'), '--out', str(tmp_path / 't.csv'),
+         '--render', str(tmp_path / 'walk.gif')],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        deadline = time.monotonic() + 600
+        # the outputs' temporaries appear once they are checked, before planning starts
+        while not any(n.startswith('.') for n in os.listdir(tmp_path)):
+            assert process.poll() is None and time.monotonic() < deadline, process.stderr.read()
+            time.sleep(0.05)
+        process.send_signal(signal.SIGINT)
+        _, err = process.communicate(timeout=120)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode == 130, err
+    assert 'Traceback' not in err and 'interrupted' in err
+    assert os.listdir(tmp_path) == ['t.csv']
+    assert (tmp_path / 't.csv').read_text() == 'the previous trajectory\n'
+
+
+def test_a_command_file_with_a_byte_order_mark_is_read(tmp_path):
+    path = tmp_path / 'excel.csv'
+    path.write_bytes(b'\xef\xbb\xbftime,linear_x,angular_z\r\n0,0.8,0\r\n2,0,0\r\n')
+    rows = read_commands(str(path))
+    assert [(r.time, r.linear_x, r.angular_z) for r in rows] == [(0, 0.8, 0), (2, 0, 0)]
+
+
+def test_a_scene_that_is_a_directory_is_named_as_one(tmp_path, capsys):
+    commands = write_commands(tmp_path / 'c.csv', ['0,0.8,0', '1,0,0'])
+    code, _, err = _simulate_here(capsys, '--scene', str(tmp_path), '--commands', commands,
+                                  '--out', str(tmp_path / 't.csv'))
+    assert code == 2 and f'{tmp_path}: is a directory' in err, err

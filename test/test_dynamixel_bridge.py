@@ -38,6 +38,8 @@ OFFSET = {'left_knee': 0.25, 'right_knee': -0.25, 'waist_pitch': -0.1, 'left_elb
 DIRECTION = {joint: (-1 if joint.startswith('right_') else 1) for joint in JOINTS}
 SAFE = {'left_knee': (0.1, 1.5), 'left_hip_pitch': (-0.5, 1.0)}
 SPEED = {'left_knee': 1.0, 'left_hip_pitch': 2.0}
+#: Bound on a bridge process's start (s): generous, a wait ends as soon as it is up.
+STARTUP_S = 90.0
 
 
 def expected_ticks(joint: str, angle: float) -> int:
@@ -70,6 +72,10 @@ class Rig:
         self.domain = next(_DOMAINS)
         self.port = str(tmp_path / 'ttyDXL')
         self.emulator = emu.DynamixelEmulator(ids, self.port)
+        # Switched on with every joint inside its safe range (the horn's 2048 is outside some).
+        for joint, (low, high) in SAFE.items():
+            if ID[joint] in ids:
+                self.emulator.place(ID[joint], expected_ticks(joint, (low + high) / 2))
         self.bridge = None
         self.context = rclpy.Context()
         self.context.init(domain_id=self.domain)
@@ -99,10 +105,11 @@ class Rig:
         return wait_for(predicate, timeout, spin=self.spin)
 
     def wait_connected(self):
+        # A process start on a busy machine (imports, DDS discovery) can take tens of seconds.
         assert self.wait(lambda: self.publisher.get_subscription_count() >= 1
                          and self.status('dynamixel_bridge: bus') is not None
-                         and self.emulator.register(1, emu.TORQUE_ENABLE) == 1), (
-            self.bridge.output())
+                         and self.emulator.register(1, emu.TORQUE_ENABLE) == 1,
+                         timeout=STARTUP_S), self.bridge.output()
 
     def publish(self, positions: dict):
         message = JointState()
@@ -222,6 +229,7 @@ def test_hostile_stream_is_clamped_and_rate_limited(rig):
 
 def test_watchdog_holds_the_last_position(rig):
     r = rig()
+    r.emulator.place(ID['left_knee'], expected_ticks('left_knee', 0.1) + 1)  # the bottom end
     r.emulator.start()
     r.start_bridge(watchdog_timeout=0.3)
     r.wait_connected()
@@ -308,7 +316,7 @@ def test_missing_servo_is_fatal_when_all_are_required(rig):
     r = rig(ids=[i for i in range(1, 19) if i != ID['right_ankle']])
     r.emulator.start()
     bridge = r.start_bridge(require_all_servos=True)
-    assert bridge.proc.wait(timeout=20) == 3
+    assert bridge.proc.wait(timeout=STARTUP_S) == 3
     assert 'right_ankle (ID 18)' in bridge.output()
 
 
@@ -356,7 +364,7 @@ def test_missing_port_at_start_up_is_retried(rig):
     r = rig()
     bridge = r.start_bridge()
     assert r.wait(lambda: r.status('dynamixel_bridge: bus') is not None
-                  and _level(r.status('dynamixel_bridge: bus')) == 2, timeout=10.0)
+                  and _level(r.status('dynamixel_bridge: bus')) == 2, timeout=STARTUP_S)
     assert bridge.alive()
     r.emulator.start()
     r.wait_connected()
@@ -365,7 +373,7 @@ def test_missing_port_at_start_up_is_retried(rig):
 def test_dry_run_logs_ticks_and_opens_no_port(rig, tmp_path):
     r = rig()
     bridge = r.start_bridge(dry_run=True)
-    assert r.wait(lambda: r.publisher.get_subscription_count() >= 1, timeout=10.0)
+    assert r.wait(lambda: r.publisher.get_subscription_count() >= 1, timeout=STARTUP_S)
     r.stream({'left_knee': 0.7}, 0.4)
     assert r.wait(lambda: (r.stream({'left_knee': 0.7}, 0.05) or True)
                   and f'left_knee[13]={expected_ticks("left_knee", 0.7)}' in bridge.output(),
@@ -383,6 +391,98 @@ def test_invalid_configuration_exits_naming_the_item(tmp_path, override, named):
     params = write_params(tmp_path / 'bridge.yaml')
     result = subprocess.run(
         BRIDGE + ['--ros-args', '--params-file', params, '-p', 'port:=/nonexistent', *override],
-        env=ros_env(next(_DOMAINS)), capture_output=True, text=True, timeout=60)
+        env=ros_env(next(_DOMAINS)), capture_output=True, text=True, timeout=STARTUP_S)
     assert result.returncode == 2, result.stderr
     assert named in result.stderr
+
+
+def _eased_in(r, joint, placed, since):
+    """The goals sent to ``joint`` from ``since`` on: start where it was placed, bounded steps."""
+    ticks = [t for _, t in r.emulator.goal_history(ID[joint])[since:]]
+    assert ticks, f'no goals for {joint}\n{r.bridge.output()}'
+    assert abs(ticks[0] - placed) <= 1, (joint, ticks[:3], placed)  # torque on moves nothing
+    max_step = SPEED[joint] * 0.02 / TICK + 1  # at most 2 control periods per cycle
+    steps = [abs(b - a) for a, b in zip(ticks, ticks[1:])]
+    assert max(steps, default=0) <= max_step, (joint, max(steps), max_step)
+
+
+def test_servos_found_outside_their_range_ease_in_at_their_speed_limit(rig):
+    """Start-up, a reconnect and a servo coming back: each starts where it is, then eases in."""
+    r = rig()
+    # the knee folded back past its safe range (0.1, 1.5), the hip pitch past (-0.5, 1.0)
+    placed = {'left_knee': expected_ticks('left_knee', -0.5),
+              'left_hip_pitch': expected_ticks('left_hip_pitch', 1.6)}
+    inside = {'left_knee': expected_ticks('left_knee', 0.1),
+              'left_hip_pitch': expected_ticks('left_hip_pitch', 1.0)}
+
+    def in_range():
+        return (r.goal('left_knee') >= inside['left_knee']
+                and r.goal('left_hip_pitch') <= inside['left_hip_pitch'])
+
+    def place_all():
+        for joint, ticks in placed.items():
+            r.emulator.place(ID[joint], ticks)
+        return {j: len(r.emulator.goal_history(ID[j])) for j in placed}
+
+    since = place_all()
+    r.emulator.start()
+    r.start_bridge()
+    r.wait_connected()
+    assert r.wait(in_range, timeout=15.0), ({j: r.goal(j) for j in placed}, r.bridge.output())
+    for joint in placed:
+        _eased_in(r, joint, placed[joint], since[joint])
+    # unplugged, moved by hand, plugged back in
+    r.emulator.stop()
+    assert r.wait(lambda: r.status('dynamixel_bridge: bus') is not None
+                  and 'unavailable' in r.status('dynamixel_bridge: bus').message, timeout=10.0)
+    since = place_all()
+    r.emulator.start()
+    assert r.wait(lambda: r.goal('left_knee') != placed['left_knee'] and in_range(),
+                  timeout=15.0), ({j: r.goal(j) for j in placed}, r.bridge.output())
+    for joint in placed:
+        _eased_in(r, joint, placed[joint], since[joint])
+    # one servo's cable pulled; it comes back folded out of range, switched off
+    servo = r.emulator.disconnect_servo(ID['left_knee'])
+    assert r.wait(lambda: r.status('dynamixel_bridge: left_knee') is not None
+                  and 'missing' in r.status('dynamixel_bridge: left_knee').message,
+                  timeout=15.0)
+    servo.table[emu.TORQUE_ENABLE] = 0
+    servo.place(placed['left_knee'])
+    since = len(servo.goal_history)
+    r.emulator.connect_servo(servo)
+    assert r.wait(lambda: r.emulator.register(ID['left_knee'], emu.TORQUE_ENABLE) == 1
+                  and r.goal('left_knee') >= inside['left_knee'], timeout=15.0), (
+        r.goal('left_knee'), r.bridge.output())
+    _eased_in(r, 'left_knee', placed['left_knee'], since)
+
+
+@pytest.mark.parametrize('noticed', [True, False], ids=['port-lost-noticed', 'port-just-gone'])
+def test_sigint_with_the_port_gone_says_torque_is_still_on(rig, noticed):
+    r = rig()
+    r.emulator.start()
+    bridge = r.start_bridge()
+    r.wait_connected()
+    r.emulator.stop()  # unplugged: the servos keep their power and their torque
+    if noticed:
+        assert r.wait(lambda: r.status('dynamixel_bridge: bus') is not None
+                      and 'unavailable' in r.status('dynamixel_bridge: bus').message,
+                      timeout=10.0)
+    code = bridge.stop()  # SIGINT
+    output = bridge.output()
+    assert code == 4, output
+    assert 'TORQUE COULD NOT BE SWITCHED OFF' in output
+    assert 'left_knee (ID 13)' in output and '18 servos' in output
+    assert all(r.emulator.register(i, emu.TORQUE_ENABLE) == 1 for i in range(1, 19))
+
+
+def test_goals_beyond_a_limit_stay_inside_it(rig):
+    """A command past the range gets the last tick inside the range, not the nearest one."""
+    r = rig()
+    r.emulator.start()
+    r.start_bridge()
+    r.wait_connected()
+    knee_top = 2048 + (1.5 + OFFSET['left_knee']) / TICK  # SAFE: (0.1, 1.5)
+    assert r.wait(lambda: (r.stream({'left_knee': 9.0}, 0.05) or True)
+                  and r.goal('left_knee') >= math.floor(knee_top), timeout=15.0)
+    r.stream({'left_knee': 9.0}, 0.3)
+    assert r.goal('left_knee') == math.floor(knee_top) != round(knee_top)

@@ -119,3 +119,47 @@ def test_envelope_rejects_bad_construction():
         SafetyEnvelope(['a'], [0.0], [1.0], [0.0], 0.5)
     with pytest.raises(ValueError, match='watchdog_timeout'):
         SafetyEnvelope(['a'], [0.0], [1.0], [1.0], float('nan'))
+
+
+def test_goals_at_and_beyond_the_limits_stay_inside_the_safe_range(skeleton):
+    """The ends of a range rarely fall on a tick: the goal tick is the nearest one inside."""
+    config = config_from_parameters({}, skeleton)
+    servos = list(config.servos) + [
+        ServoConfig('left_knee', 40, offset=0.25, min_position=0.1, max_position=1.5),
+        ServoConfig('right_knee', 41, offset=-0.25, direction=-1, min_position=0.1,
+                    max_position=1.5)]
+    past = 0
+    for servo in servos:
+        for end, beyond in ((servo.min_position, -1e-4), (servo.max_position, 1e-4)):
+            nearest = round(2048 + (servo.direction * end + servo.offset) / (2 * math.pi / 4096))
+            past += servo.to_angle(nearest) < servo.min_position or servo.to_angle(
+                nearest) > servo.max_position
+            for angle in (end, end - beyond):  # the end itself and just inside it
+                reached = servo.to_angle(servo.to_ticks(angle))
+                assert servo.min_position - 1e-12 <= reached <= servo.max_position + 1e-12, (
+                    servo.joint, angle, reached)
+                # still the closest such tick: less than one tick from where it was asked
+                assert abs(reached - angle) < 2 * math.pi / 4096
+    assert past > 0  # plain rounding would have put some of these past their limit
+
+
+def _ease_in(envelope, start, seconds, period=0.01):
+    envelope.reset(start, now=0.0)
+    return np.array([envelope.step(period * k) for k in range(int(seconds / period) + 1)])
+
+
+def test_a_joint_found_outside_its_range_eases_in_at_its_speed_limit():
+    # 'b' (range [0, 2], 0.5 rad/s) switched on at -0.5 rad, as a knee left folded back
+    positions = _ease_in(_envelope(), [0.3, -0.5], seconds=2.0)
+    assert positions[0].tolist() == [0.3, -0.5]  # the first goal is where the servo is
+    steps = np.abs(np.diff(positions, axis=0))
+    assert np.all(steps <= np.array([2.0, 0.5]) * 0.01 + 1e-12)
+    assert positions[-1, 1] == pytest.approx(0.0)  # at the nearest end, then held there
+    reached = int(np.argmax(positions[:, 1] >= -1e-12))
+    assert reached * 0.01 == pytest.approx(1.0, abs=0.02)  # 0.5 rad at 0.5 rad/s
+    assert np.all(positions[reached:, 1] >= -1e-12)
+    # a joint brought back alone starts from where it is too
+    envelope = _envelope()
+    envelope.reset([0.0, 1.0], now=0.0)
+    envelope.resume([0], [1.6])
+    assert envelope.commanded[0] == 1.6 and envelope.step(0.01)[0] == pytest.approx(1.58)

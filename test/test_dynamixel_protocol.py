@@ -147,21 +147,83 @@ def test_stuffed_parameters_cross_the_wire_intact(bus):
     assert b'\xff\xff\xfd\xfd' in reply
 
 
+def _answered(call, *args, result_at: int):
+    """``call(*args)`` until the reply arrives in time: the SDK waits about 35 ms for it, and
+    a loaded machine can keep the emulator thread from answering that fast. Only a timed-out
+    exchange is repeated; any answer that came back is returned as it is."""
+    deadline = time.monotonic() + 20.0
+    while True:
+        reply = call(*args)
+        if reply[result_at] != sdk.COMM_RX_TIMEOUT or time.monotonic() > deadline:
+            return reply
+
+
 def test_status_reports_access_errors_and_hardware_alert(bus):
     emulator, _ = bus
     port = sdk.PortHandler(emulator.port_path)
     assert port.openPort()
     try:
         packet = sdk.PacketHandler(2.0)
-        assert packet.write4ByteTxRx(port, 1, 132, 5)[1] == emu.ERR_ACCESS  # read-only
-        packet.write1ByteTxRx(port, 1, 64, 1)
-        assert packet.write1ByteTxRx(port, 1, 7, 9)[1] == emu.ERR_ACCESS  # EEPROM locked
+        assert _answered(packet.write4ByteTxRx, port, 1, 132, 5, result_at=1)[1] \
+            == emu.ERR_ACCESS  # read-only
+        assert _answered(packet.write1ByteTxRx, port, 1, 64, 1, result_at=0) == (
+            sdk.COMM_SUCCESS, 0)
+        assert _answered(packet.write1ByteTxRx, port, 1, 7, 9, result_at=0)[1] \
+            == emu.ERR_ACCESS  # EEPROM locked
         emulator.inject_hardware_error(1, 0x20)
-        assert packet.ping(port, 1)[2] & emu.ALERT
-        assert packet.read1ByteTxRx(port, 1, 70)[0] == 0x20
+        assert _answered(packet.ping, port, 1, result_at=1)[2] & emu.ALERT
+        value, result, error = _answered(packet.read1ByteTxRx, port, 1, 70, result_at=1)
+        assert (value, result) == (0x20, sdk.COMM_SUCCESS) and error & emu.ALERT
         assert packet.ping(port, 3)[1] == sdk.COMM_RX_TIMEOUT  # nobody has ID 3
     finally:
         port.closePort()
+
+
+def test_a_late_reply_is_not_taken_for_the_next_read(bus):
+    """A present position answered after its read gave up is not read as Hardware Error Status.
+
+    Position 2080 is 0x0820: its first byte is the overload bit. The SDK alone would take it
+    for servo 1's hardware error (a false fault that switches the servo off).
+    """
+    from digital_actor_planner.dynamixel.bus import PacketHandler
+    emulator, _ = bus
+    late = emu.build_status(1, 0, (2080).to_bytes(4, 'little'))
+    reply = emu.build_status(1, 0, bytes([0]))
+    port = sdk.PortHandler(emulator.port_path)
+    assert port.openPort()
+    try:
+        for handler, expected in ((sdk.PacketHandler(2.0), [0x20]), (PacketHandler(), [0])):
+            port.clearPort()
+            emulator._write(late + reply)  # as the wire delivers them
+            port.setPacketTimeoutMillis(5000)
+            data, result, _ = handler.readRx(port, 1, 1)
+            assert (data, result) == (expected, sdk.COMM_SUCCESS)
+    finally:
+        port.closePort()
+
+
+def test_servo_bus_reports_no_false_fault_after_a_late_position_reply(bus):
+    """End to end: the sync read of positions answered late, then the hardware error read."""
+    from digital_actor_planner.dynamixel.bus import ServoBus
+    emulator, _ = bus
+    emulator.place(1, 2080)  # first byte 0x20: the overload bit
+    servo_bus = ServoBus(emulator.port_path, 9600)
+    servo_bus.open()
+    try:
+        for _ in range(5):
+            # held past the read's timeout (about 55 ms at 9600 baud), into the next read's
+            emulator.delay_sync_read_replies(0.08)
+            servo_bus.read_positions([1, 2])
+            errors = servo_bus.read_hardware_errors([1, 2])
+            assert errors.get(1, 0) == 0, errors
+        emulator.delay_sync_read_replies(0.0, count=0)
+        deadline = time.monotonic() + 20.0  # a read that times out on a busy machine is {}
+        while not (errors := servo_bus.read_hardware_errors([1, 2])) and (
+                time.monotonic() < deadline):
+            pass
+        assert errors == {1: 0, 2: 0}
+    finally:
+        servo_bus.close()
 
 
 def test_fast_sync_read_returns_every_servo_in_one_status_packet(bus):

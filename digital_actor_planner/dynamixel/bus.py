@@ -60,6 +60,25 @@ class PacketHandler(sdk.Protocol2PacketHandler):
             return packet
         return super().removeStuffing(packet)
 
+    def readRx(self, port, dxl_id, length):  # noqa: N802 (SDK's name)
+        """One servo's reply to a sync read: skip status packets that are not that reply.
+
+        The SDK skips packets of other IDs but takes any packet of the right ID. On a busy
+        machine a reply can come after its read timed out and the next read was sent; the
+        SDK would then take, say, the first byte of a late present position for the Hardware
+        Error Status (a false fault, or a real one missed). A reply to this read carries
+        exactly ``length`` data bytes: instruction, error and CRC make up the other 4.
+        """
+        while True:
+            packet, result = self.rxPacket(port, False)
+            if result != sdk.COMM_SUCCESS:
+                return [], result, 0
+            data_length = sdk.DXL_MAKEWORD(packet[sdk.PKT_LENGTH_L],
+                                           packet[sdk.PKT_LENGTH_H]) - 4
+            if packet[sdk.PKT_ID] == dxl_id and data_length == length:
+                start = sdk.PKT_PARAMETER0 + 1
+                return list(packet[start:start + length]), result, packet[sdk.PKT_ERROR]
+
 
 class BusError(RuntimeError):
     """The serial port cannot be opened or failed (unplugged, vanished)."""

@@ -40,10 +40,26 @@ class ServoConfig:
     max_position: float = math.pi
     max_speed: float = 1.0
 
+    def _raw_ticks(self, angle: float) -> float:
+        return CENTRE_TICKS + (self.direction * angle + self.offset) / RADIANS_PER_TICK
+
     def to_ticks(self, angle: float) -> int:
-        """Joint angle (rad) -> goal position ticks, rounded and kept within 0..4095."""
-        ticks = CENTRE_TICKS + (self.direction * angle + self.offset) / RADIANS_PER_TICK
-        return int(min(max(round(ticks), 0), MAX_TICKS))
+        """Joint angle (rad) -> goal position ticks, kept within 0..4095.
+
+        An angle inside the safe range gets the nearest tick that is also inside it: the ends
+        of the range rarely fall on a tick, and rounding to the nearest one would put the
+        servo up to half a tick past its limit. Outside the range (a servo still easing in
+        from where it was switched on) the nearest tick is taken.
+        """
+        ticks = self._raw_ticks(angle)
+        goal = round(ticks)
+        low, high = sorted((self._raw_ticks(self.min_position),
+                            self._raw_ticks(self.max_position)))
+        # The tolerance keeps an end that lies on a tick (up to rounding error) usable.
+        inner_low, inner_high = math.ceil(low - 1e-6), math.floor(high + 1e-6)
+        if low <= ticks <= high and inner_low <= inner_high:
+            goal = min(max(goal, inner_low), inner_high)
+        return int(min(max(goal, 0), MAX_TICKS))
 
     def to_angle(self, ticks: int) -> float:
         """Present position ticks -> joint angle (rad)."""

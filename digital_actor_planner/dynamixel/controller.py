@@ -15,6 +15,8 @@ from digital_actor_planner.dynamixel.config import BridgeConfig
 from digital_actor_planner.dynamixel.safety import SafetyEnvelope
 
 OK, WARN, ERROR = 0, 1, 2
+#: Torque Enable writes per servo at shutdown before it is reported as possibly still on.
+SHUTDOWN_ATTEMPTS = 3
 HARDWARE_ERROR_BITS = {0: 'input voltage', 2: 'overheating', 3: 'motor encoder',
                        4: 'electrical shock', 5: 'overload'}
 
@@ -92,6 +94,8 @@ class BridgeController:
         self.last_health_check = -np.inf
         self.next_missing_ping = 0.0
         self.last_feedback: Optional[Feedback] = None
+        #: IDs that torque was switched on for and not (acknowledged) off since.
+        self.torqued: set = set()
         self._last_dry_log = -np.inf
         self._last_dry_ticks: Optional[Tuple[int, ...]] = None
 
@@ -135,7 +139,7 @@ class BridgeController:
             # Start from where the servos are, so that switching torque on moves nothing.
             self.envelope.reset(positions, now)
             self.bus.write_goals(self._goals(self.envelope.commanded))
-            self.bus.set_torque(self._active_ids(), True)
+            self._torque_on(self._active_ids())
         except self.bus_error as error:
             self._lost(now, str(error))
             return False
@@ -164,7 +168,8 @@ class BridgeController:
         self.log('error', f'hardware error on {self._names([servo_id])}: '
                  f'{describe_hardware_error(bits)}; torque off')
         try:
-            self.bus.set_torque([servo_id], False)
+            if self.bus.set_torque([servo_id], False).get(servo_id):
+                self.torqued.discard(servo_id)
         except self.bus_error:
             pass
 
@@ -260,19 +265,17 @@ class BridgeController:
             ticks = self.bus.read_positions(tuple(found))
             if len(ticks) != len(found):
                 return
-            for i, servo in enumerate(self.servos):
-                if servo.id in ticks:
-                    # Hold where it is: the rate limiter takes it from there.
-                    angle = min(max(servo.to_angle(ticks[servo.id]), servo.min_position),
-                                servo.max_position)
-                    self.envelope.commanded[i] = self.envelope.target[i] = angle
+            # Start from where it is (outside its range it eases in at its speed limit).
+            back_at = [(i, servo.to_angle(ticks[servo.id]))
+                       for i, servo in enumerate(self.servos) if servo.id in ticks]
+            self.envelope.resume([i for i, _ in back_at], [a for _, a in back_at])
             self.present = tuple(s.id for s in self.servos
                                  if s.id in self.present or s.id in found)
             self.missing = tuple(s.id for s in self.servos if s.id not in self.present)
             back = [i for i in found if i not in self.faulted]
             self.bus.write_goals({i: g for i, g in self._goals(self.envelope.commanded).items()
                                   if i in back})
-            self.bus.set_torque(back, True)
+            self._torque_on(back)
             self.log('info', f'servos answering again: {self._names(found)}')
         except self.bus_error as error:
             self._lost(now, str(error))
@@ -285,18 +288,51 @@ class BridgeController:
             self.log('info', 'dry run ticks: ' + ' '.join(
                 f'{s.joint}[{s.id}]={t}' for s, t in zip(self.servos, ticks)))
 
-    def shutdown(self) -> None:
-        """Switch torque off (unless configured otherwise) and close the port."""
+    def _torque_on(self, ids: Sequence[int]) -> None:
+        # Counted before the write: a servo may have switched on even if its reply was lost.
+        self.torqued.update(ids)
+        self.bus.set_torque(ids, True)
+
+    def shutdown(self) -> bool:
+        """Switch torque off (unless configured otherwise) and close the port.
+
+        Returns
+        -------
+        bool
+            False when servos may still hold torque that should have been switched off: the
+            port is gone or they did not acknowledge. The log names them.
+        """
         if self.bus is None:
-            return
-        if self.connected and self.config.torque_off_on_shutdown:
-            try:
-                self.bus.set_torque(self.present, False)
-                self.log('info', 'torque off')
-            except self.bus_error as error:
-                self.log('error', f'could not switch torque off: {error}')
+            return True
+        if not self.config.torque_off_on_shutdown or not self.torqued:
+            self.bus.close()
+            self.connected = False
+            return True
+        ids = [s.id for s in self.servos if s.id in self.torqued]
+        problem = ''
+        try:
+            if not self.connected:
+                self.bus.open()  # the port may be back; a servo keeps torque without it
+            # A reply can be late on a busy host; asking again is harmless.
+            for _ in range(SHUTDOWN_ATTEMPTS):
+                done = self.bus.set_torque([i for i in ids if i in self.torqued], False)
+                self.torqued.difference_update(i for i, ok in done.items() if ok)
+                if not self.torqued:
+                    break
+            else:
+                problem = f'no acknowledgement after {SHUTDOWN_ATTEMPTS} attempts'
+        except self.bus_error as error:
+            problem = str(error)
         self.bus.close()
         self.connected = False
+        if problem:
+            still = [i for i in ids if i in self.torqued]
+            servos = f'{len(still)} servo' + ('s' if len(still) != 1 else '')
+            self.log('error', f'TORQUE COULD NOT BE SWITCHED OFF ({problem}): '
+                     f'{servos} may still hold torque: {self._names(still)}')
+            return False
+        self.log('info', 'torque off')
+        return True
 
     # -- health ----------------------------------------------------------------------------
     def health(self, now: float) -> List[HealthStatus]:

@@ -13,7 +13,9 @@ class SafetyEnvelope:
     Targets are clamped to each joint's safe range; the commanded position moves toward the
     target no faster than the joint's maximum speed; NaN/inf values and unknown names are
     ignored; when no valid input has arrived for ``watchdog_timeout`` seconds the commanded
-    position is held.
+    position is held. A servo that is found outside its safe range (switched on where it was
+    left, or back on the bus) starts from where it is and eases into the range at its speed
+    limit: commanding the nearest end at once would be a jump of the whole distance.
 
     Parameters
     ----------
@@ -60,13 +62,24 @@ class SafetyEnvelope:
         self.ignored = {'not finite': 0, 'unknown name': 0, 'clamped': 0}
 
     def reset(self, positions, now: float) -> None:
-        """Start from measured positions (rad): commanded = target = clamped positions."""
-        positions = np.asarray(positions, dtype=float)
-        self.commanded = np.clip(np.where(np.isfinite(positions), positions, self.commanded),
-                                 self.lower, self.upper)
-        self.target = self.commanded.copy()
+        """Start from measured positions (n,) rad: hold there, or ease in from outside the range.
+
+        Non-finite entries keep the joint's current commanded position.
+        """
+        self.resume(range(len(self.joint_names)), positions)
         self.last_step_time = now
         self.holding = True
+
+    def resume(self, indices: Iterable[int], positions) -> None:
+        """Restart the joints ``indices`` from measured ``positions`` (rad, one per index).
+
+        The commanded position becomes the measured one, so the first goal moves nothing; the
+        target becomes its nearest point in the safe range, reached at the speed limit.
+        """
+        for i, position in zip(indices, np.asarray(positions, dtype=float)):
+            if math.isfinite(position):
+                self.commanded[i] = position
+            self.target[i] = min(max(self.commanded[i], self.lower[i]), self.upper[i])
 
     def command(self, names: Iterable[str], positions: Iterable[float], now: float) -> List[str]:
         """Take one input message; return the names whose values were ignored."""
@@ -96,14 +109,15 @@ class SafetyEnvelope:
     def step(self, now: float) -> np.ndarray:
         """Advance the commanded positions to time ``now`` (s); return them, (n,) rad."""
         if now - self.last_input_time > self.watchdog_timeout:
-            # Watchdog: stop where we are instead of chasing a stale target.
-            self.target = self.commanded.copy()
+            # Watchdog: stop where we are instead of chasing a stale target (a joint still
+            # outside its range stops at the nearest end).
+            self.target = np.clip(self.commanded, self.lower, self.upper)
             self.holding = True
         dt = 0.0 if self.last_step_time is None else now - self.last_step_time
         dt = min(max(dt, 0.0), self.max_step_time)
         self.last_step_time = now
         limit = self.max_speed * dt
-        self.commanded = np.clip(
-            self.commanded + np.clip(self.target - self.commanded, -limit, limit),
-            self.lower, self.upper)
+        # The target is always inside the range, so a joint inside stays inside and one
+        # outside only moves toward it; never clamp the commanded position (that would jump).
+        self.commanded = self.commanded + np.clip(self.target - self.commanded, -limit, limit)
         return self.commanded.copy()

@@ -2,7 +2,8 @@
 
 A thin adapter: parameters -> :class:`BridgeConfig`, messages -> :class:`BridgeController`,
 feedback -> ``~/joint_states``, health -> ``/diagnostics``. Exit codes: 0 after a clean
-shutdown, 2 for invalid configuration, 3 when required servos are missing at start-up.
+shutdown, 2 for invalid configuration, 3 when required servos are missing at start-up, 4 when
+torque could not be switched off on the way out (the servos named in the log may still hold).
 """
 from __future__ import annotations
 
@@ -30,6 +31,7 @@ from digital_actor_planner.dynamixel.controller import BridgeController, Startup
 
 EXIT_BAD_CONFIG = 2
 EXIT_MISSING_SERVOS = 3
+EXIT_TORQUE_STILL_ON = 4
 
 
 def _float_range(low: float, high: float) -> List[FloatingPointRange]:
@@ -199,7 +201,8 @@ def main(args=None) -> int:
         code = EXIT_MISSING_SERVOS
     finally:
         if node is not None:
-            node.controller.shutdown()
+            if not node.controller.shutdown() and code == 0:
+                code = EXIT_TORQUE_STILL_ON
             node.destroy_node()
         rclpy.try_shutdown()
         for sig, handler in previous.items():

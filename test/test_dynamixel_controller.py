@@ -1,0 +1,97 @@
+"""The bridge's controller against a scripted bus (no ROS, no serial port): shutdown outcomes."""
+import pytest
+
+from digital_actor_planner.core.skeleton import Skeleton
+from digital_actor_planner.dynamixel.config import config_from_parameters
+from digital_actor_planner.dynamixel.controller import BridgeController
+
+
+class PortGone(RuntimeError):
+    pass
+
+
+class ScriptedBus:
+    """Servos 1 and 2 at the centre; ``lost_replies`` torque-off replies go missing first."""
+
+    def __init__(self, lost_replies=0, gone=False):
+        self.lost_replies = lost_replies
+        self.gone = gone
+        self.torque = {1: 0, 2: 0}
+
+    def _check(self):
+        if self.gone:
+            raise PortGone('/dev/ttyUSB0: device disappeared')
+
+    def open(self):
+        self._check()
+
+    def close(self):
+        pass
+
+    def ping(self, ids, attempts=3):
+        self._check()
+        return {i: 1020 for i in ids if i in self.torque}
+
+    def read_hardware_errors(self, ids):
+        return {i: 0 for i in ids}
+
+    def read_positions(self, ids):
+        return {i: 2048 for i in ids}
+
+    def write_goals(self, goals):
+        self._check()
+
+    def set_torque(self, ids, enabled):
+        self._check()
+        done = {}
+        for i in ids:
+            self.torque[i] = int(enabled)
+            lost = not enabled and self.lost_replies > 0
+            self.lost_replies -= lost
+            done[i] = not lost
+        return done
+
+
+def _controller(bus):
+    config = config_from_parameters({'servo_joints': ['left_knee', 'right_knee']}, Skeleton())
+    log = []
+    controller = BridgeController(config, bus, log=lambda level, text: log.append((level, text)),
+                                  bus_error=PortGone)
+    controller.start(0.0)
+    assert bus.torque == {1: 1, 2: 1}
+    return controller, log
+
+
+@pytest.mark.parametrize('lost', [0, 2])
+def test_torque_off_is_confirmed_even_when_replies_are_late(lost):
+    bus = ScriptedBus(lost_replies=lost)
+    controller, log = _controller(bus)
+    assert controller.shutdown() is True
+    assert bus.torque == {1: 0, 2: 0} and ('info', 'torque off') in log
+
+
+def test_servos_that_never_confirm_are_named():
+    bus = ScriptedBus(lost_replies=100)
+    controller, log = _controller(bus)
+    assert controller.shutdown() is False
+    errors = [text for level, text in log if level == 'error']
+    assert errors and 'TORQUE COULD NOT BE SWITCHED OFF' in errors[-1]
+    assert 'left_knee (ID 1), right_knee (ID 2)' in errors[-1] and '2 servos' in errors[-1]
+
+
+def test_a_port_gone_at_shutdown_is_reported_not_ignored():
+    bus = ScriptedBus()
+    controller, log = _controller(bus)
+    bus.gone = True
+    controller.connected = False  # as after the cycle that found the port gone
+    assert controller.shutdown() is False
+    assert 'device disappeared' in log[-1][1] and bus.torque == {1: 1, 2: 1}
+
+
+def test_nothing_to_switch_off_is_not_an_error():
+    bus = ScriptedBus()
+    config = config_from_parameters({'servo_joints': ['left_knee'],
+                                     'torque_off_on_shutdown': False}, Skeleton())
+    controller = BridgeController(config, bus, bus_error=PortGone)
+    controller.start(0.0)
+    assert controller.shutdown() is True and bus.torque[1] == 1
