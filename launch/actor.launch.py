@@ -1,30 +1,42 @@
 """Launch the digital actor: planner, robot_state_publisher, RViz2 and mouse teleop.
 
     ros2 launch digital_actor_planner actor.launch.py [scene:=FILE] [use_rviz:=true]
-        [use_teleop:=true] [namespace:=NS] [use_dynamixel:=false]
+        [use_teleop:=true] [teleop_frequency:=10.0] [namespace:=NS] [use_dynamixel:=false]
 
 Drag in the mouse_teleop window to direct the actor (forward speed and turning, §3.1 of the
-paper); mouse_teleop's ``mouse_vel`` is remapped to the planner's ``cmd_vel``.
+paper); mouse_teleop's ``mouse_vel`` is remapped to the planner's ``cmd_vel`` and repeated at
+``teleop_frequency`` while the drag is held, so holding the drag keeps the actor walking.
+
+Under ``namespace:=actor1`` every topic is the namespace's and the TF frames carry the prefix
+``actor1/`` (robot_state_publisher's ``frame_prefix``, the planner's ``frame_id``, RViz's fixed
+frame), so actors launched side by side each show in their own RViz.
+
+Before anything starts, the ROS packages the chosen options need are looked up; a missing one
+stops the launch with the command that installs it.
 """
 import os
+import tempfile
 
 from ament_index_python.packages import get_package_share_directory
+from digital_actor_planner.launch_support import (
+    check_packages, frame_prefix, is_true, launched_package_switches, required_packages,
+    rviz_config, TELEOP_FREQUENCY, world_frame)
 from launch import LaunchDescription
-from launch.actions import DeclareLaunchArgument, GroupAction, IncludeLaunchDescription
-from launch.conditions import IfCondition
+from launch.actions import (
+    DeclareLaunchArgument, GroupAction, IncludeLaunchDescription, OpaqueFunction)
 from launch.launch_description_sources import PythonLaunchDescriptionSource
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import Node, PushRosNamespace
 from launch_ros.parameter_descriptions import ParameterValue
 
 PACKAGE = 'digital_actor_planner'
+ARGUMENTS = ('scene', 'use_rviz', 'use_teleop', 'teleop_frequency', 'namespace',
+             'use_dynamixel')
 
 
 def generate_launch_description():
+    """Declare the arguments; the actions are made once their values are known."""
     share = get_package_share_directory(PACKAGE)
-    with open(os.path.join(share, 'urdf', 'digital_actor.urdf')) as urdf:
-        robot_description = urdf.read()
-    scene = LaunchConfiguration('scene')
     arguments = [
         DeclareLaunchArgument(
             'scene', default_value=os.path.join(share, 'config', 'scenes', 'flat.yaml'),
@@ -32,29 +44,76 @@ def generate_launch_description():
         DeclareLaunchArgument('use_rviz', default_value='true', description='Start RViz2'),
         DeclareLaunchArgument('use_teleop', default_value='true',
                               description='Start mouse_teleop (teleop_tools) on cmd_vel'),
+        DeclareLaunchArgument(
+            'teleop_frequency', default_value=str(TELEOP_FREQUENCY),
+            description='Hz at which mouse_teleop repeats the command while a drag is held '
+                        '(0: only while the mouse moves; a held drag then stops the actor '
+                        'after the planner\'s cmd_timeout)'),
         DeclareLaunchArgument('namespace', default_value='',
-                              description='Namespace of the actor and its helpers'),
+                              description='Namespace of the actor and its helpers; also the '
+                                          'prefix of its TF frames'),
         DeclareLaunchArgument('use_dynamixel', default_value='false',
                               description='Also drive a servo figure (launch/bridge.launch.py)'),
     ]
-    actor = GroupAction([
-        PushRosNamespace(LaunchConfiguration('namespace')),
+    return LaunchDescription(arguments + [OpaqueFunction(function=_actor, args=[share])])
+
+
+def _actor(context, share):
+    """The actor's actions for the arguments' values; raises before any starts if one cannot."""
+    values = {name: LaunchConfiguration(name).perform(context) for name in ARGUMENTS}
+    # A Node of a missing package fails only when it is reached, after the planner started.
+    check_packages(required_packages(values), get_package_share_directory,
+                   launched_package_switches())
+    namespace = values['namespace']
+    prefix = frame_prefix(namespace)
+    try:
+        teleop_frequency = float(values['teleop_frequency'])
+    except ValueError:
+        raise ValueError(f'teleop_frequency must be a number (Hz), got '
+                         f'{values["teleop_frequency"]!r}') from None
+    with open(os.path.join(share, 'urdf', 'digital_actor.urdf')) as urdf:
+        robot_description = urdf.read()
+    actions = [
+        PushRosNamespace(namespace),
         Node(package=PACKAGE, executable='actor_planner', name='actor_planner',
              output='screen',
              parameters=[os.path.join(share, 'config', 'planner.yaml'),
-                         {'scene': ParameterValue(scene, value_type=str)}]),
+                         {'scene': _text(values['scene']),
+                          'frame_id': _text(world_frame(namespace))}]),
         Node(package='robot_state_publisher', executable='robot_state_publisher',
              name='robot_state_publisher', output='screen',
-             parameters=[{'robot_description': ParameterValue(robot_description,
-                                                              value_type=str)}]),
-        Node(package='rviz2', executable='rviz2', name='rviz2',
-             arguments=['-d', os.path.join(share, 'config', 'actor.rviz')],
-             condition=IfCondition(LaunchConfiguration('use_rviz'))),
-        Node(package='mouse_teleop', executable='mouse_teleop', name='mouse_teleop',
-             remappings=[('mouse_vel', 'cmd_vel')],
-             condition=IfCondition(LaunchConfiguration('use_teleop'))),
-        IncludeLaunchDescription(
-            PythonLaunchDescriptionSource(os.path.join(share, 'launch', 'bridge.launch.py')),
-            condition=IfCondition(LaunchConfiguration('use_dynamixel'))),
-    ])
-    return LaunchDescription(arguments + [actor])
+             parameters=[{'robot_description': _text(robot_description),
+                          'frame_prefix': _text(prefix)}]),
+    ]
+    if is_true(values['use_rviz']):
+        actions.append(Node(package='rviz2', executable='rviz2', name='rviz2',
+                            arguments=['-d', _rviz_config_file(share, namespace)]))
+    if is_true(values['use_teleop']):
+        actions.append(Node(package='mouse_teleop', executable='mouse_teleop',
+                            name='mouse_teleop',
+                            parameters=[{'frequency': teleop_frequency}],
+                            remappings=[('mouse_vel', 'cmd_vel')]))
+    if is_true(values['use_dynamixel']):
+        actions.append(IncludeLaunchDescription(
+            PythonLaunchDescriptionSource(os.path.join(share, 'launch', 'bridge.launch.py'))))
+    return [GroupAction(actions)]
+
+
+def _text(value):
+    """A string parameter passed as written (launch_ros would otherwise read it as YAML)."""
+    return ParameterValue(value, value_type=str)
+
+
+def _rviz_config_file(share, namespace):
+    """The shipped RViz config, or a copy of it with the namespace's frames."""
+    path = os.path.join(share, 'config', 'actor.rviz')
+    if not frame_prefix(namespace):
+        return path
+    with open(path) as source:
+        text = rviz_config(source.read(), namespace)
+    descriptor, copy = tempfile.mkstemp(
+        prefix='actor_' + frame_prefix(namespace).rstrip('/').replace('/', '_') + '_',
+        suffix='.rviz')
+    with os.fdopen(descriptor, 'w') as target:
+        target.write(text)
+    return copy
