@@ -90,9 +90,11 @@ class ActorConfig:
     # The footstep lengths of a backward window, m (the forward ones: step_length_min/max).
     backward_step_length_min: float = 0.10
     backward_step_length_max: float = 0.40
-    # The largest step up and down a backward step takes, m: the foot lands where the actor
-    # cannot see, on the toes first, the knee of the stance leg bent in front of it.
-    backward_max_step_up: float = 0.20
+    # The largest step up and down a backward step takes, m. Up, the landing foot is behind
+    # the hip and higher, its shank leaning forward over a flat sole: from 0.14 m the ankle
+    # passes its dorsiflexion limit at touchdown (a backward flight of 0.15 m risers is
+    # refused by the window, a clean stop, rather than by the legs).
+    backward_max_step_up: float = 0.12
     backward_max_step_down: float = 0.20
     footsteps: FootstepConfig = field(default_factory=FootstepConfig)
     gait: GaitConfig = field(default_factory=GaitConfig)
@@ -175,6 +177,9 @@ PIVOT_MIN_TURN = 0.05
 #: Where no pivot of the foot due to swing can be taken, whether the foot that landed last may
 #: pivot instead (both feet are down between steps).
 PIVOT_EITHER_FOOT = True
+#: How far ahead along the new direction of travel the swinging foot must stand for the other
+#: to swing instead when the actor sets off the other way from a standstill, m.
+REVERSAL_STAGGER = 0.05
 #: How far a foot may land from its planned foothold before its support is judged again, m.
 LANDING_DRIFT = 0.02
 
@@ -292,6 +297,8 @@ class Actor:
         self._preview_plan = None
         # (step count after the last pivot, pelvis heading before it, rad).
         self._last_pivot = None
+        # Whether the last step of a footstep window walked backward (None: none yet).
+        self._walked_backward: Optional[bool] = None
 
     # -- state ---------------------------------------------------------------------------
     @property
@@ -548,6 +555,12 @@ class Actor:
             planner = self._backward_planner
         else:
             fcfg, leg, planner = self._footstep_config, self.skeleton.leg, self._planner
+        reversing = self._walked_backward is not None and self._walked_backward != backward
+        if reversing and not self._stance.at_rest:
+            # The pelvis moves the other way: the actor stops (feet side by side) first.
+            block = self._closing_step(started, 'walking', '')
+            if block is not None:
+                return block
         stance = self._stance
         x, y, _, yaw = stance.pelvis
         horizon = fcfg.window_steps * fcfg.step_length_max + 1.0
@@ -557,6 +570,13 @@ class Actor:
         swing_foot = stance.feet[1 - stance.stance_side]
         stance_s = path.project(stance_foot.xy)
         swing_s = path.project(swing_foot.xy)
+        if reversing and stance.at_rest and swing_s > stance_s + REVERSAL_STAGGER:
+            # From a standstill with the feet apart (stopped at an obstacle), the foot ahead in
+            # the new direction of travel stays down: the one behind steps past it, instead of
+            # the window drawing it back to a step length beside the other.
+            stance = replace(stance, stance_side=1 - stance.stance_side)
+            stance_foot, swing_foot = swing_foot, stance_foot
+            stance_s, swing_s = swing_s, stance_s
         s_start = min(stance_s, swing_s) - leg.heel - 0.06
         s_end = stance_s + fcfg.window_steps * fcfg.step_length_max + leg.toe + 0.06
         # Side 0 of the profile is the left foot's track (right of a backward path).
@@ -576,13 +596,14 @@ class Actor:
         max_length = cfg.gait.max_heading_change / max(abs(path.curvature), 1e-9)
         if max_length < fcfg.step_length_min:
             max_length = fcfg.step_length_min
-        banned, reason, upper_failures = [], 'no collision-free footstep window', 0
+        reason = 'no collision-free footstep window' + (' behind the actor' if backward else '')
+        banned, upper_failures = [], 0
         first_blocked = None  # the first footstep the upper body could not take
         for _ in range(cfg.max_attempts):
             window = planner.plan(profile, stance.stance_side, stance_s, stance_foot.sole,
-                                        swing_s, swing_foot.sole, s_init, self._previous_length,
-                                        start=start, banned_first=tuple(banned),
-                                        max_length=max_length)
+                                  swing_s, swing_foot.sole, s_init, self._previous_length,
+                                  start=start, banned_first=tuple(banned),
+                                  max_length=max_length)
             if window is None:
                 break
             footsteps = self._footstep_poses(path, window)
@@ -621,6 +642,7 @@ class Actor:
             self._window, self._window_command = window, (v, w)
             self._previous_length = float(window.lengths[0])
             self._upper_seed = self._preview_plan
+            self._walked_backward = backward
             return self._commit('walking', '', motion.times, frames, motion.stance, footsteps,
                                 path_points, started, motion.category)
         if first_blocked is not None and cfg.upper_body_pause > 0:
@@ -819,6 +841,7 @@ class Actor:
             return None
         self._window, self._window_command = window, (v, w)
         self._previous_length = float(window.lengths[0])
+        self._walked_backward = v <= -1e-3
         return self._commit('walking', '', times, frames, motion.stance, footsteps,
                             path_points, started, motion.category)
 
@@ -934,8 +957,10 @@ class Actor:
             raise GaitError('the landing foot would not rest on the ground where its hip '
                             'puts it')
 
-    def _closing_step(self, started: float) -> Optional[StepBlock]:
-        """Bring the feet side by side when the command stops (the actor stops within a step)."""
+    def _closing_step(self, started: float, status: str = 'idle',
+                      reason: str = 'stopping') -> Optional[StepBlock]:
+        """Bring the feet side by side when the command stops (the actor stops within a step),
+        or before it walks the other way (``status`` and ``reason`` of the block)."""
         leg = self.skeleton.leg
         stance = self._stance
         foot = stance.feet[stance.stance_side]
@@ -959,7 +984,7 @@ class Actor:
                                       to_rest=True)
         except GaitError:
             return None
-        return self._checked_step_to_rest(motion, started, 'idle', 'stopping', 'closing')
+        return self._checked_step_to_rest(motion, started, status, reason, 'closing')
 
     def _obstacles(self, xy: np.ndarray, z_ref: float) -> np.ndarray:
         """Heights a swinging sole must clear at ``xy`` (NaN over empty space)."""

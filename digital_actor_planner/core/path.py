@@ -27,7 +27,7 @@ class PredictedPath:
     length
         Arc length covered, m.
     backward
-        The actor walks this path backward: it faces ``heading + pi`` wherever it is on it,
+        The actor walks this path backward: it faces ``heading - pi`` wherever it is on it,
         and its left foot's track lies to the right of the path.
 
     """
@@ -41,8 +41,9 @@ class PredictedPath:
 
     @property
     def facing_offset(self) -> float:
-        """What to add to the path's heading for the way the actor faces on it, rad."""
-        return math.pi if self.backward else 0.0
+        """What to add to the path's heading for the way the actor faces on it, rad (the
+        inverse of :func:`predict_path`'s half turn, so the facing stays unwrapped as given)."""
+        return -math.pi if self.backward else 0.0
 
     @property
     def track_sign(self) -> float:
