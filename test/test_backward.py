@@ -120,6 +120,24 @@ def test_turning_while_walking_backward_follows_the_commanded_arc(angular):
     assert np.sign(angular) * (travelled[-1] - travelled[0]) > 1.2
 
 
+@pytest.mark.slow
+def test_the_actor_stops_before_it_walks_the_other_way():
+    sc = scene('flat')
+    commands = [(0.0, 0.8, 0.0), (3.0, -0.4, 0.0), (7.0, 0.6, 0.0), (10.0, 0.0, 0.0),
+                (11.0, 0.0, 0.0)]
+    _, blocks, frames, report = walk(sc.environment, (4.0, 0.0, 0.0), commands)
+    assert_judged_ok(report)
+    assert not any(b.status == 'stuck' for b in blocks)
+    times = np.concatenate([b.times for b in blocks])
+    x = frames[:, 0]
+    turned_back, turned_on = x[times <= 3.5].max(), x[(times > 3.5) & (times <= 7.5)].min()
+    assert turned_back - turned_on > 0.8 and x[-1] - turned_on > 0.8
+    # Each reversal brings the feet side by side first.
+    for at in (3.0, 7.0):
+        following = [b for b in blocks if b.times[0] >= at - 0.05][0]
+        assert following.category == 'closing', following.category
+
+
 def step_scene(height):
     """Flat ground with a step ``height`` m up at x = 1 m, its top running on to x = 4 m."""
     return Environment([box((-2, -2, -0.2), (4, 2, 0.0)), box((1.0, -2, -0.2), (4, 2, height))])
