@@ -84,12 +84,15 @@ def test_backward_walk_on_the_flat_course():
     duration = sum(b.times[-1] - b.times[0] for b in walking)
     assert 0.5 * abs(speed) < (moving[0] - moving[-1]) / duration < 1.2 * abs(speed)
     # Backward steps are shorter than forward ones and land behind the stance foot.
-    for block in walking:
-        if len(block.footsteps):
-            steps = np.diff(np.concatenate([[block.frames[0, 0]], block.footsteps[:, 0]]))
-            assert np.all(block.footsteps[:, 0] < block.frames[0, 0])
-            assert np.all(np.abs(block.footsteps[:, 3]) < 0.05), 'the feet face forward'
-    assert np.abs(steps).max() <= LEGS_ONLY.backward_step_length_max + 1e-9
+    windowed = [b for b in walking if len(b.footsteps)]
+    assert len(windowed) >= 6
+    for block in windowed:
+        window = block.footsteps
+        assert np.all(window[:, 0] < block.frames[0, 0])
+        assert np.all(np.diff(window[:, 0]) < 0)
+        assert np.abs(np.diff(window[:, 0])).max() <= LEGS_ONLY.backward_step_length_max + 1e-9
+        assert np.all(np.abs(window[:, 3]) < 0.05), 'the feet face forward'
+    assert LEGS_ONLY.backward_step_length_max < LEGS_ONLY.step_length_max
     # The arms swing in counter-phase to the legs: each shoulder against its own hip.
     index = skeleton().index
     for side in ('left', 'right'):
