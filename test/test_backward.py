@@ -141,6 +141,24 @@ def test_the_actor_stops_before_it_walks_the_other_way():
         assert following.category == 'closing', following.category
 
 
+@pytest.mark.slow
+def test_backward_into_the_wall_stops_cleanly_and_a_forward_drag_frees_it():
+    sc = scene('wall')
+    actor = Actor(skeleton(), sc.environment, ActorConfig(), start=(4.6, 0.0, 0.0))
+    before = run_commands(actor, [0.0, 5.0], [-0.4, -0.4], [0.0, 0.0])
+    assert before[-1].status == 'stuck' and 'behind the actor' in before[-1].reason
+    stuck_x = actor.configuration[0]
+    assert 3.2 < stuck_x < 4.0
+    last = np.vstack([b.frames for b in before if b.times[0] > before[-1].times[-1] - 1.0])
+    assert np.ptp(last, axis=0).max() < 1e-9
+    actor.set_command(0.5, 0.0)
+    after = [actor.plan_next() for _ in range(4)]
+    assert all(b.status == 'walking' for b in after), [b.reason for b in after]
+    _, frames, report = judged(before + after, sc.environment)
+    assert_judged_ok(report)
+    assert frames[-1, 0] > stuck_x + 0.5
+
+
 def step_scene(height):
     """Flat ground with a step ``height`` m up at x = 1 m, its top running on to x = 4 m."""
     return Environment([box((-2, -2, -0.2), (4, 2, 0.0)), box((1.0, -2, -0.2), (4, 2, height))])
