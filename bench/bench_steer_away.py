@@ -78,7 +78,7 @@ def main(argv=None):
     args = parser.parse_args(argv)
     config = ActorConfig(max_toe_in=args.max_toe_in)
     sk = skeleton()
-    walks = failures = stops = trapped = only_backward = 0
+    walks = failures = stops = trapped = only_backward = backward_left = 0
     steps = legs_walks = 0
     walked = legs_stuck = stuck_time = inner_stuck_time = total_time = 0.0
     for name in args.courses:
@@ -119,6 +119,7 @@ def main(argv=None):
             left = max(taken) >= 2
             trapped += not left
             only_backward += left and max(taken[:-1]) < 2
+            backward_left += taken[-1] >= 2
             if args.list or not left:
                 x, y, _, yaw = first.frames[-1, :4]
                 print(f'{name} seed {seed}: stopped at t = {first.times[0]:.2f} s, '
@@ -134,7 +135,8 @@ def main(argv=None):
     print(f'| {walks} | {failures} | {walked:.0f} | {100 * stuck_time / total_time:.1f} % | '
           f'{100 * inner_stuck_time / total_time:.1f} % | {stops} | {stops - trapped} | '
           f'{trapped} |')
-    print(f'\nStops only the backward drag left (trapped without it): {only_backward}.')
+    print(f'\nStops the backward drag left: {backward_left} of {stops}; only it (trapped '
+          f'without it): {only_backward}.')
     print(f'\n{steps} steps; walks with the legs passing into each other: {legs_walks}; '
           f'time stopped because the legs would: {legs_stuck:.1f} s.')
     if not args.no_edge_turns:
