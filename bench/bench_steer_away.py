@@ -13,9 +13,11 @@ meshes, a foot always down, limits, no jumps, stance slip <= 1 cm).
 
 Where a walk first stops (stuck), the walk is replayed to 0.3 s after the stop and the user
 then steers away with each of five commands for 4 s: turn on the spot left and right (0, +-1),
-walk a tight arc left and right (0.3 m/s, +-0.8 rad/s), and walk slowly on (0.5 m/s). The stop
-counts as *left* when one of them takes at least two steps; otherwise the actor is *trapped*
-there (a later command that turns it away should let it go on). Also counted: walks in
+walk a tight arc left and right (0.3 m/s, +-0.8 rad/s), walk slowly on (0.5 m/s), and drag it
+backward (-0.4 m/s). The stop counts as *left* when one of them takes at least two steps;
+otherwise the actor is *trapped* there (a later command that turns it away lets it go on). The
+stops only the backward drag left are counted too, and the stops the forward commands alone
+would leave trapped. Also counted: walks in
 which the two legs (thigh, shank, foot) pass into each other, which the checker judges too, and
 the time stopped because a step would have.
 
@@ -37,7 +39,7 @@ from course_runs import judged, scene, skeleton  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 
 COURSES = ('flat', 'rough', 'blocks', 'stairs_up', 'gap', 'low_beam', 'table', 'pillars')
-AWAY = ((0.0, 1.0), (0.0, -1.0), (0.3, 0.8), (0.3, -0.8), (0.5, 0.0))
+AWAY = ((0.0, 1.0), (0.0, -1.0), (0.3, 0.8), (0.3, -0.8), (0.5, 0.0), (-0.4, 0.0))
 # Stops with the pelvis farther than this (m) from the scene's sides (its meshes' extent
 # across the start line, 1.5-2 m either side) are away from the floor's edges, where weaving
 # walks end up stopped facing the edge.
@@ -76,7 +78,7 @@ def main(argv=None):
     args = parser.parse_args(argv)
     config = ActorConfig(max_toe_in=args.max_toe_in)
     sk = skeleton()
-    walks = failures = stops = trapped = 0
+    walks = failures = stops = trapped = only_backward = backward_left = 0
     steps = legs_walks = 0
     walked = legs_stuck = stuck_time = inner_stuck_time = total_time = 0.0
     for name in args.courses:
@@ -116,6 +118,8 @@ def main(argv=None):
                 taken.append(sum(b.status == 'walking' for b in replay if b.times[0] > at))
             left = max(taken) >= 2
             trapped += not left
+            only_backward += left and max(taken[:-1]) < 2
+            backward_left += taken[-1] >= 2
             if args.list or not left:
                 x, y, _, yaw = first.frames[-1, :4]
                 print(f'{name} seed {seed}: stopped at t = {first.times[0]:.2f} s, '
@@ -131,6 +135,8 @@ def main(argv=None):
     print(f'| {walks} | {failures} | {walked:.0f} | {100 * stuck_time / total_time:.1f} % | '
           f'{100 * inner_stuck_time / total_time:.1f} % | {stops} | {stops - trapped} | '
           f'{trapped} |')
+    print(f'\nStops the backward drag left: {backward_left} of {stops}; only it (trapped '
+          f'without it): {only_backward}.')
     print(f'\n{steps} steps; walks with the legs passing into each other: {legs_walks}; '
           f'time stopped because the legs would: {legs_stuck:.1f} s.')
     if not args.no_edge_turns:

@@ -59,7 +59,9 @@ def test_commands_are_clamped_and_nan_is_refused(actor):
     with pytest.raises(ValueError, match='finite'):
         actor.set_command(float('nan'), 0.0)
     assert actor.command == (0.5, 0.2)  # the bad command did not replace the good one
-    assert actor.set_command(-1.0, 0.0) is not None and actor.command[0] == 0.0
+    # Backward no faster than max_backward_speed.
+    assert (actor.set_command(-9.0, 0.0) is not None
+            and actor.command[0] == -actor.config.max_backward_speed)
 
 
 def test_speed_follows_the_command(actor):

@@ -41,7 +41,7 @@ def test_offset_tracks_and_projection():
 
 @pytest.mark.parametrize('args, word', [
     ((0, 0, 0, float('nan'), 0, 1), 'non-finite'),
-    ((0, 0, 0, -0.5, 0, 1), 'linear speed'),
+    ((0, 0, 0, -0.5, 0, float('inf')), 'non-finite'),
     ((0, 0, 0, 0.5, 0, 0), 'length'),
 ])
 def test_bad_input_is_named(args, word):

@@ -84,6 +84,21 @@ class ActorConfig:
     follow_check_rise: float = 0.03
     upper_body_check_budget: int = 15000
     upper_body_attempts: int = 6
+    # Backward walking (a mouse drag downwards, negative linear speed; see docs/backward.md).
+    # False: the paper's actor, which walks forward only (a backward command becomes 0).
+    allow_backward: bool = True
+    # Fastest backward walk, m/s: people walk backward at about half their forward speed, with
+    # shorter steps that the hip's extension range bounds.
+    max_backward_speed: float = 0.5
+    # The footstep lengths of a backward window, m (the forward ones: step_length_min/max).
+    backward_step_length_min: float = 0.10
+    backward_step_length_max: float = 0.40
+    # The largest step up and down a backward step takes, m. Up, the landing foot is behind
+    # the hip and higher, its shank leaning forward over a flat sole: from 0.14 m the ankle
+    # passes its dorsiflexion limit at touchdown (a backward flight of 0.15 m risers is
+    # refused by the window, a clean stop, rather than by the legs).
+    backward_max_step_up: float = 0.12
+    backward_max_step_down: float = 0.20
     footsteps: FootstepConfig = field(default_factory=FootstepConfig)
     gait: GaitConfig = field(default_factory=GaitConfig)
 
@@ -92,6 +107,14 @@ class ActorConfig:
         return replace(self.footsteps, window_steps=self.window_steps,
                        step_intervals=self.step_intervals, step_length_min=self.step_length_min,
                        step_length_max=self.step_length_max)
+
+    def backward_footstep_config(self) -> FootstepConfig:
+        """The footstep settings of a backward window: this config's backward lengths and
+        step heights in :meth:`footstep_config`."""
+        return replace(self.footstep_config(), step_length_min=self.backward_step_length_min,
+                       step_length_max=self.backward_step_length_max,
+                       max_step_up=self.backward_max_step_up,
+                       max_step_down=self.backward_max_step_down)
 
     def gait_config(self) -> GaitConfig:
         """The gait settings with this config's frame rate."""
@@ -108,6 +131,9 @@ def validate(config: ActorConfig) -> None:
             raise ValueError(f'{f.name} must be a finite number, got {value!r}')
     if config.max_linear_speed <= 0 or config.max_linear_speed > 3.0:
         raise ValueError(f'max_linear_speed must be in (0, 3] m/s, got {config.max_linear_speed}')
+    if not 0 < config.max_backward_speed <= config.max_linear_speed:
+        raise ValueError(f'max_backward_speed must be in (0, max_linear_speed = '
+                         f'{config.max_linear_speed}] m/s, got {config.max_backward_speed}')
     if config.max_angular_speed <= 0 or config.max_angular_speed > 3.0:
         raise ValueError(f'max_angular_speed must be in (0, 3] rad/s, got '
                          f'{config.max_angular_speed}')
@@ -133,6 +159,10 @@ def validate(config: ActorConfig) -> None:
         raise ValueError(f'upper_body_check_budget must be >= 1, got '
                          f'{config.upper_body_check_budget}')
     validate_footstep_config(config.footstep_config())
+    try:
+        validate_footstep_config(config.backward_footstep_config())
+    except ValueError as error:
+        raise ValueError(f'backward footsteps: {error}') from None
     validate_gait_config(config.gait_config())
 
 
@@ -150,6 +180,9 @@ PIVOT_MIN_TURN = 0.05
 #: Where no pivot of the foot due to swing can be taken, whether the foot that landed last may
 #: pivot instead (both feet are down between steps).
 PIVOT_EITHER_FOOT = True
+#: How far ahead along the new direction of travel the swinging foot must stand for the other
+#: to swing instead when the actor sets off the other way from a standstill, m.
+REVERSAL_STAGGER = 0.05
 #: How far a foot may land from its planned foothold before its support is judged again, m.
 LANDING_DRIFT = 0.02
 
@@ -222,6 +255,13 @@ class Actor:
         self.config = config
         self._footstep_config = config.footstep_config()
         self._planner = FootstepPlanner(self._footstep_config, skeleton.leg)
+        # Backward the window runs along the path behind the actor, where its heel leads: the
+        # same search over that ground profile with the sole's ends exchanged (and the
+        # backward lengths and step heights).
+        self._backward_leg = replace(skeleton.leg, heel=skeleton.leg.toe, toe=skeleton.leg.heel)
+        self._backward_footstep_config = config.backward_footstep_config()
+        self._backward_planner = FootstepPlanner(self._backward_footstep_config,
+                                                 self._backward_leg)
         self._walk = WalkGenerator(skeleton, config.gait_config(), self._footstep_config)
         self._collision = body_collision or BodyCollision(skeleton, environment)
         self._leg_links = LEG_LINKS
@@ -260,6 +300,8 @@ class Actor:
         self._preview_plan = None
         # (step count after the last pivot, pelvis heading before it, rad).
         self._last_pivot = None
+        # Whether the last step of a footstep window walked backward (None: none yet).
+        self._walked_backward: Optional[bool] = None
 
     # -- state ---------------------------------------------------------------------------
     @property
@@ -285,7 +327,10 @@ class Actor:
     def set_command(self, linear: float, angular: float) -> Optional[str]:
         """Set the velocity command (the mouse drag of §3.1).
 
-        Backward speeds are not walked (the paper's actor walks forward): they become 0.
+        A negative ``linear`` walks backward, up to ``max_backward_speed``, along the arc
+        ``cmd_vel`` means (the actor keeps facing against its travel and turns at
+        ``angular``). With ``allow_backward`` off (the paper's actor walks forward only) it
+        becomes 0.
 
         Returns
         -------
@@ -301,12 +346,13 @@ class Actor:
         if not (np.isfinite(linear) and np.isfinite(angular)):
             raise ValueError(f'command must be finite, got linear={linear}, angular={angular}')
         cfg = self.config
-        v = float(min(max(linear, 0.0), cfg.max_linear_speed))
+        slowest = -cfg.max_backward_speed if cfg.allow_backward else 0.0
+        v = float(min(max(linear, slowest), cfg.max_linear_speed))
         w = float(min(max(angular, -cfg.max_angular_speed), cfg.max_angular_speed))
         self._command = (v, w)
         if v != linear or w != angular:
             return (f'command ({linear:g}, {angular:g}) clamped to ({v:g}, {w:g}): limits are '
-                    f'linear [0, {cfg.max_linear_speed:g}] m/s, angular '
+                    f'linear [{slowest:g}, {cfg.max_linear_speed:g}] m/s, angular '
                     f'+-{cfg.max_angular_speed:g} rad/s')
         return None
 
@@ -315,7 +361,7 @@ class Actor:
         """Plan and commit the next block of frames (one step, or a short hold)."""
         started = _time.perf_counter()
         v, w = self._command
-        if v < 1e-3 and abs(w) < 1e-3:
+        if abs(v) < 1e-3 and abs(w) < 1e-3:
             if not self._stance.at_rest:
                 block = self._closing_step(started)
                 if block is not None:
@@ -502,22 +548,46 @@ class Actor:
         return None
 
     def _walk_step(self, v: float, w: float, started: float) -> StepBlock:
-        cfg, fcfg, leg = self.config, self._footstep_config, self.skeleton.leg
+        cfg = self.config
+        # Backward (v <= -1e-3; a pure turn walks forward) the same stages run along the path
+        # behind the actor, with the planner of backward windows; ``leg`` is the sole as that
+        # path sees it, its heel leading.
+        backward = v <= -1e-3
+        if backward:
+            fcfg, leg = self._backward_footstep_config, self._backward_leg
+            planner = self._backward_planner
+        else:
+            fcfg, leg, planner = self._footstep_config, self.skeleton.leg, self._planner
+        reversing = self._walked_backward is not None and self._walked_backward != backward
+        if reversing and not self._stance.at_rest:
+            # The pelvis moves the other way: the actor stops (feet side by side) first.
+            block = self._closing_step(started, 'walking', '')
+            if block is not None:
+                return block
         stance = self._stance
         x, y, _, yaw = stance.pelvis
         horizon = fcfg.window_steps * fcfg.step_length_max + 1.0
-        path = predict_path(x, y, yaw, v, w, horizon, cfg.gait.min_turn_speed)
+        path = predict_path(x, y, yaw, v if backward else max(v, 0.0), w, horizon,
+                            cfg.gait.min_turn_speed)
         stance_foot = stance.feet[stance.stance_side]
         swing_foot = stance.feet[1 - stance.stance_side]
         stance_s = path.project(stance_foot.xy)
         swing_s = path.project(swing_foot.xy)
+        if reversing and stance.at_rest and swing_s > stance_s + REVERSAL_STAGGER:
+            # From a standstill with the feet apart (stopped at an obstacle), the foot ahead in
+            # the new direction of travel stays down: the one behind steps past it, instead of
+            # the window drawing it back to a step length beside the other.
+            stance = replace(stance, stance_side=1 - stance.stance_side)
+            stance_foot, swing_foot = swing_foot, stance_foot
+            stance_s, swing_s = swing_s, stance_s
         s_start = min(stance_s, swing_s) - leg.heel - 0.06
         s_end = stance_s + fcfg.window_steps * fcfg.step_length_max + leg.toe + 0.06
+        # Side 0 of the profile is the left foot's track (right of a backward path).
         profile = sample_ground_profile(self.environment, path, s_start, s_end, 0.02,
-                                        leg.hip_half_width, leg.foot_width, stance_foot.sole,
-                                        fcfg.max_step_up, fcfg.window_steps)
+                                        path.track_sign * leg.hip_half_width, leg.foot_width,
+                                        stance_foot.sole, fcfg.max_step_up, fcfg.window_steps)
         path_points = self._path_points(path, s_end)
-        s_init = float(min(max(v * cfg.nominal_step_time, fcfg.step_length_min),
+        s_init = float(min(max(abs(v) * cfg.nominal_step_time, fcfg.step_length_min),
                            fcfg.step_length_max))
         init_index = int(min(max(round((s_init - fcfg.step_length_min) / fcfg.step_increment),
                                  0), fcfg.step_intervals))
@@ -529,13 +599,14 @@ class Actor:
         max_length = cfg.gait.max_heading_change / max(abs(path.curvature), 1e-9)
         if max_length < fcfg.step_length_min:
             max_length = fcfg.step_length_min
-        banned, reason, upper_failures = [], 'no collision-free footstep window', 0
+        reason = 'no collision-free footstep window' + (' behind the actor' if backward else '')
+        banned, upper_failures = [], 0
         first_blocked = None  # the first footstep the upper body could not take
         for _ in range(cfg.max_attempts):
-            window = self._planner.plan(profile, stance.stance_side, stance_s, stance_foot.sole,
-                                        swing_s, swing_foot.sole, s_init, self._previous_length,
-                                        start=start, banned_first=tuple(banned),
-                                        max_length=max_length)
+            window = planner.plan(profile, stance.stance_side, stance_s, stance_foot.sole,
+                                  swing_s, swing_foot.sole, s_init, self._previous_length,
+                                  start=start, banned_first=tuple(banned),
+                                  max_length=max_length)
             if window is None:
                 break
             footsteps = self._footstep_poses(path, window)
@@ -552,7 +623,8 @@ class Actor:
                 reason = collision
                 start = None
                 continue
-            follow = self._follow_failure(profile, stance, stance_s, path, window, motion, v)
+            follow = self._follow_failure(profile, stance, stance_s, path, window, motion, v,
+                                          leg)
             if follow is not None:
                 banned.append(window.indices[0])
                 reason = follow
@@ -573,6 +645,7 @@ class Actor:
             self._window, self._window_command = window, (v, w)
             self._previous_length = float(window.lengths[0])
             self._upper_seed = self._preview_plan
+            self._walked_backward = backward
             return self._commit('walking', '', motion.times, frames, motion.stance, footsteps,
                                 path_points, started, motion.category)
         if first_blocked is not None and cfg.upper_body_pause > 0:
@@ -606,7 +679,7 @@ class Actor:
         is not a tight turn or no such step can be taken.
         """
         cfg, leg = self.config, self.skeleton.leg
-        if cfg.pivot_turn <= 0 or abs(w) < 0.2 or v >= PIVOT_RADIUS * abs(w):
+        if cfg.pivot_turn <= 0 or abs(w) < 0.2 or abs(v) >= PIVOT_RADIUS * abs(w):
             return None
         foot = stance.feet[stance.stance_side]
         if abs(foot.pitch) > self._footstep_config.max_foot_pitch:
@@ -771,6 +844,7 @@ class Actor:
             return None
         self._window, self._window_command = window, (v, w)
         self._previous_length = float(window.lengths[0])
+        self._walked_backward = v <= -1e-3
         return self._commit('walking', '', times, frames, motion.stance, footsteps,
                             path_points, started, motion.category)
 
@@ -779,17 +853,17 @@ class Actor:
         return self._hold('stuck', reason, started, footsteps, path_points)
 
     def _follow_failure(self, profile, stance: Stance, stance_s: float, path,
-                        window: FootstepWindow, motion, v: float) -> Optional[str]:
+                        window: FootstepWindow, motion, v: float, leg) -> Optional[str]:
         """Why the window's second footstep cannot follow this step, or None.
 
         Only where that footstep swings the other foot over ground (the profile's swing
         obstacle between the toe it lifts and the heel it lands) higher than its sole by
         ``follow_check_rise`` and than its landing by ``FOLLOW_OVER_LANDING``, and only its leg
         motion (the next window may choose another footstep; this one it starts from).
+        ``leg``: the sole as the path sees it (heel and toe exchanged walking backward).
         """
         if window.arc_lengths.size < 2 or not self.config.check_follow:
             return None
-        leg = self.skeleton.leg
         top = profile.swing_top(int(window.sides[1]), stance_s + leg.toe,
                                 float(window.arc_lengths[1]) - leg.heel)
         # NaN (nothing to pass over) asks nothing. Up a flight the foot passes over the tread
@@ -813,10 +887,12 @@ class Actor:
         leg = self.skeleton.leg
         s1 = float(window.arc_lengths[0])
         side = int(window.sides[0])
-        offset = leg.hip_half_width if side == LEFT else -leg.hip_half_width
+        offset = path.track_sign * (leg.hip_half_width if side == LEFT else -leg.hip_half_width)
         stance_s = s1 - float(window.lengths[0])
-        # The landing foothold and heading and the middle of the step, from one call.
+        # The landing foothold and heading and the middle of the step, from one call; the
+        # headings the way the actor faces (against a backward path).
         poses = path.offset_poses(np.array([s1, 0.5 * (stance_s + s1)]), np.array([offset, 0.0]))
+        poses[:, 2] += path.facing_offset
         landing_yaw = float(poses[0, 2])
         landing_xy = poses[0, :2]
         middle = poses[1]
@@ -832,7 +908,7 @@ class Actor:
         landing_yaw = stance_yaw + turn
         middle[2] = stance_yaw + 0.5 * turn
         rise = float(window.heights[0]) - stance.feet[stance.stance_side].sole
-        duration = self._walk.step_duration(float(window.lengths[0]), v, rise)
+        duration = self._walk.step_duration(float(window.lengths[0]), abs(v), rise)
         return self._timed_step(stance, landing_xy, landing_yaw, float(window.heights[0]),
                                 float(window.pitches[0]), middle, duration,
                                 configuration=configuration)
@@ -884,8 +960,10 @@ class Actor:
             raise GaitError('the landing foot would not rest on the ground where its hip '
                             'puts it')
 
-    def _closing_step(self, started: float) -> Optional[StepBlock]:
-        """Bring the feet side by side when the command stops (the actor stops within a step)."""
+    def _closing_step(self, started: float, status: str = 'idle',
+                      reason: str = 'stopping') -> Optional[StepBlock]:
+        """Bring the feet side by side when the command stops (the actor stops within a step),
+        or before it walks the other way (``status`` and ``reason`` of the block)."""
         leg = self.skeleton.leg
         stance = self._stance
         foot = stance.feet[stance.stance_side]
@@ -909,7 +987,7 @@ class Actor:
                                       to_rest=True)
         except GaitError:
             return None
-        return self._checked_step_to_rest(motion, started, 'idle', 'stopping', 'closing')
+        return self._checked_step_to_rest(motion, started, status, reason, 'closing')
 
     def _obstacles(self, xy: np.ndarray, z_ref: float) -> np.ndarray:
         """Heights a swinging sole must clear at ``xy`` (NaN over empty space)."""
@@ -923,11 +1001,11 @@ class Actor:
     def _footstep_poses(self, path, window: FootstepWindow) -> np.ndarray:
         leg = self.skeleton.leg
         offsets = np.where(window.sides == LEFT, leg.hip_half_width, -leg.hip_half_width)
-        poses = path.offset_poses(window.arc_lengths, offsets)
+        poses = path.offset_poses(window.arc_lengths, path.track_sign * offsets)
         out = np.empty((window.arc_lengths.size, 4))
         out[:, :2] = poses[:, :2]
         out[:, 2] = window.heights
-        out[:, 3] = poses[:, 2]
+        out[:, 3] = poses[:, 2] + path.facing_offset
         return out
 
     def _path_points(self, path, s_end: float) -> np.ndarray:

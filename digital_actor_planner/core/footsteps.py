@@ -600,7 +600,9 @@ def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: f
     s_start, s_end, ds
         Arc-length range and spacing of the samples, m.
     hip_half_width, foot_width
-        Lateral track offset and sole width, m.
+        Lateral track offset and sole width, m: side 0 (the left foot) lies ``hip_half_width``
+        to the left of the path, so a negative offset puts it on the right (a path walked
+        backward, ``PredictedPath.track_sign``).
     base_height
         Sole height of the stance foot, m: ground within reach is looked for at or below
         ``base_height + max_step_up`` first, then one step-up higher per level (stairs).

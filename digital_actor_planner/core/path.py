@@ -26,6 +26,9 @@ class PredictedPath:
         1/m, positive turns left (counter-clockwise seen from above).
     length
         Arc length covered, m.
+    backward
+        The actor walks this path backward: it faces ``heading - pi`` wherever it is on it,
+        and its left foot's track lies to the right of the path.
 
     """
 
@@ -34,6 +37,18 @@ class PredictedPath:
     heading: float
     curvature: float
     length: float
+    backward: bool = False
+
+    @property
+    def facing_offset(self) -> float:
+        """What to add to the path's heading for the way the actor faces on it, rad (the
+        inverse of :func:`predict_path`'s half turn, so the facing stays unwrapped as given)."""
+        return -math.pi if self.backward else 0.0
+
+    @property
+    def track_sign(self) -> float:
+        """+1 where the left foot's track lies to the left of the path, -1 walking backward."""
+        return -1.0 if self.backward else 1.0
 
     def poses(self, s: np.ndarray) -> np.ndarray:
         """Poses on the path at arc lengths ``s``.
@@ -158,7 +173,8 @@ def predict_path(x: float, y: float, heading: float, linear: float, angular: flo
     x, y, heading
         Current pelvis pose, m and rad.
     linear, angular
-        Commanded forward speed (m/s, >= 0) and turn rate (rad/s, positive = left).
+        Commanded speed (m/s, negative walks backward) and turn rate (rad/s, positive =
+        left, the facing turns so walking backward too).
     length
         Arc length to predict, m.
     min_turn_speed
@@ -168,14 +184,19 @@ def predict_path(x: float, y: float, heading: float, linear: float, angular: flo
     Returns
     -------
     PredictedPath
+        Backward (``linear < 0``): heading ``heading + pi``, curvature ``angular / |linear|``
+        (at least ``min_turn_speed`` in the denominator), ``backward`` set.
 
     """
     values = (x, y, heading, linear, angular, length, min_turn_speed)
     if not all(np.isfinite(v) for v in values):
         raise ValueError(f'predict_path: non-finite input {values}')
-    if linear < 0:
-        raise ValueError(f'predict_path: linear speed must be >= 0, got {linear}')
     if length <= 0:
         raise ValueError(f'predict_path: length must be > 0, got {length}')
-    speed = max(linear, min_turn_speed)
-    return PredictedPath(float(x), float(y), float(heading), float(angular / speed), float(length))
+    backward = linear < 0
+    speed = max(abs(linear), min_turn_speed)
+    # Backward the pelvis travels opposite to its facing while both turn at ``angular``: the
+    # travel direction's curvature keeps the sign of the turn rate.
+    travel = heading + math.pi if backward else heading
+    return PredictedPath(float(x), float(y), float(travel), float(angular / speed),
+                         float(length), bool(backward))

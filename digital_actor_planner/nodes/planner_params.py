@@ -122,6 +122,12 @@ def parameter_declarations() -> List[Tuple[str, Any, ParameterDescriptor]]:
         ('max_angular_speed', 1.0, _descriptor(
             'Turning speed limit (rad/s); commands beyond it are clamped.',
             floats=(0.01, 3.0))),
+        ('max_backward_speed', 0.5, _descriptor(
+            'Backward speed limit (m/s): a negative linear.x walks backward, clamped to '
+            '-this.', floats=(0.01, 3.0), constraints='max_backward_speed <= max_linear_speed')),
+        ('allow_backward', True, _descriptor(
+            'Walk backward on a negative linear.x; false: the paper\'s actor, which walks '
+            'forward only (a negative linear.x becomes 0).')),
         ('cmd_timeout', 0.5, _descriptor(
             'No cmd_vel for this long (s) makes the actor come to a stop.', read_only=False,
             floats=(0.01, 3600.0))),
@@ -166,6 +172,8 @@ class PlannerNodeConfig:
     publish_robot_description: bool
     planning_lead: float = 0.3
     stream_priority: int = 0
+    max_backward_speed: float = 0.5
+    allow_backward: bool = True
 
     def actor_config_fields(self) -> Dict[str, Any]:
         """Return the keyword arguments of the core ``ActorConfig`` these parameters set."""
@@ -176,7 +184,13 @@ class PlannerNodeConfig:
             'step_length_max': self.step_length_max,
             'max_linear_speed': self.max_linear_speed,
             'max_angular_speed': self.max_angular_speed,
+            'max_backward_speed': self.max_backward_speed,
+            'allow_backward': self.allow_backward,
         }
+
+
+def _value_or(value: Any, default: Any) -> Any:
+    return default if value is None else value
 
 
 def read_node_config(get_value: Callable[[str], Any]) -> PlannerNodeConfig:
@@ -221,6 +235,9 @@ def read_node_config(get_value: Callable[[str], Any]) -> PlannerNodeConfig:
         publish_robot_description=bool(get_value('publish_robot_description')),
         planning_lead=float(get_value('planning_lead')),
         stream_priority=int(get_value('stream_priority')),
+        # Unset: the declared defaults.
+        max_backward_speed=float(_value_or(get_value('max_backward_speed'), 0.5)),
+        allow_backward=bool(_value_or(get_value('allow_backward'), True)),
     )
 
 
@@ -241,7 +258,8 @@ def validate_node_config(config: PlannerNodeConfig) -> None:
     if config.start_pose is not None and not all(math.isfinite(v) for v in config.start_pose):
         raise ConfigurationError('start_pose', f'not finite: {list(config.start_pose)!r}')
     for name in ('publish_rate', 'cmd_timeout', 'step_length_min', 'step_length_max',
-                 'max_linear_speed', 'max_angular_speed', 'planning_lead'):
+                 'max_linear_speed', 'max_angular_speed', 'max_backward_speed',
+                 'planning_lead'):
         value = getattr(config, name)
         if not math.isfinite(value) or value < 0.0:
             raise ConfigurationError(name, f'must be a finite non-negative number, got {value!r}')
@@ -251,6 +269,10 @@ def validate_node_config(config: PlannerNodeConfig) -> None:
         raise ConfigurationError('scene', 'must name a scene YAML or mesh file')
     if not os.path.isfile(config.scene):
         raise ConfigurationError('scene', f'no such file: {config.scene!r}')
+    if config.max_backward_speed > config.max_linear_speed:
+        raise ConfigurationError(
+            'max_backward_speed', f'{config.max_backward_speed} must not exceed '
+            f'max_linear_speed {config.max_linear_speed}')
     if config.step_length_min >= config.step_length_max:
         raise ConfigurationError(
             'step_length_min', f'{config.step_length_min} must be below step_length_max '
