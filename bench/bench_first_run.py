@@ -15,6 +15,7 @@ import glob
 import os
 import subprocess
 import sys
+import tempfile
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -86,8 +87,10 @@ def one_start(probe, port, timeout):
     """Start the demo once; return (to address, address to stream, address to ready) in s."""
     probe.reset()
     launched = time.monotonic()
+    log = tempfile.NamedTemporaryFile(prefix='bench_first_run_', suffix='.log', delete=False)
+    log.close()
     demo = NodeProcess([sys.executable, '-m', 'digital_actor_planner.demo', '--port', str(port)],
-                       ros_env(DOMAIN_ID))
+                       ros_env(DOMAIN_ID), log_path=log.name)
     try:
         wait_for(lambda: 'the actor is at http://' in demo.output() or not demo.alive(),
                  timeout, interval=0.05, spin=probe.spin)
@@ -97,6 +100,10 @@ def one_start(probe, port, timeout):
         wait_for(lambda: probe.ready is not None or not demo.alive(), timeout, spin=probe.spin)
     finally:
         demo.stop(timeout=30)
+        os.remove(log.name)
+        # Frames still queued from this start must not count for the next one.
+        drained = time.monotonic() + 3.0
+        wait_for(lambda: time.monotonic() > drained, 5.0, spin=probe.spin)
 
     def since(t):
         return float('nan') if t is None else t - address
