@@ -113,6 +113,9 @@ def test_warming_up_is_said_and_what_it_means():
     text = status_text(0.02, stream, warming, planner_present=True)
     assert text.startswith('warming up') and 'compiling' in text
     assert 'published' not in text, 'an unknown published rate is not shown as a number'
+    silent = StreamMonitor(window=1.0)
+    text = status_text(0.02, silent, warming, planner_present=True)
+    assert text.startswith('warming up') and 'compiling' in text
 
 
 def test_every_shipped_course_is_offered():

@@ -157,6 +157,8 @@ def _to_ms(key: str, text: str) -> Optional[float]:
 #: What to do when stuck: the planner takes a turn on the spot (a sideways drag) and a step back
 #: (a downward drag) wherever a forward step is not possible.
 UNSTUCK_ADVICE = 'turn on the spot (drag sideways) or step back (drag down)'
+WARMING_UP_ADVICE = ('The planner is compiling its kernels (once per installation; '
+                     '`digital-actor warm-up` does it ahead). The actor walks when it is done.')
 
 
 def stuck_in_plain_words(reason: str) -> str:
@@ -186,6 +188,9 @@ def status_text(now: float, stream: StreamMonitor, diagnostics: Optional[Planner
     silence_limit : s without a frame after which the planner counts as silent.
     """
     silent = stream.silent_for(now)
+    warming = diagnostics is not None and diagnostics.state == 'warming up'
+    if silent is None and warming:
+        return f'warming up, no joint_states yet\n\n{WARMING_UP_ADVICE}'
     if silent is None:
         if not planner_present:
             return 'waiting for joint_states (no planner found yet: the demo starts one)'
@@ -200,10 +205,8 @@ def status_text(now: float, stream: StreamMonitor, diagnostics: Optional[Planner
         if state == 'stuck':
             state = f'stuck: {stuck_in_plain_words(diagnostics.reason)}'
             advice = f'To get going again: {UNSTUCK_ADVICE}.'
-        elif state == 'warming up':
-            state = 'warming up'
-            advice = ('The planner is compiling its kernels (once per installation; '
-                      '`digital-actor warm-up` does it ahead). The actor walks when it is done.')
+        elif warming:
+            advice = WARMING_UP_ADVICE
         elif diagnostics.reason and state != 'walking':
             state += f' ({diagnostics.reason})'
         parts.append(state)
