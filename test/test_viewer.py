@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from digital_actor_planner.nodes.viewer import (
-    config_from_args, build_parser, course_catalog, drag_to_command, follow_target,
+    along_view_plane, config_from_args, build_parser, course_catalog, drag_to_command,
+    follow_target,
     normalize_namespace, pad_pose, parse_planner_diagnostics, pick_port, shipped_scenes,
     smooth_step, status_text, StreamMonitor, triangle_list_mesh, ViewerConfig, validate)
 
@@ -165,6 +166,14 @@ def test_follow_camera_keeps_the_actor_left_of_the_panel():
     assert _screen_u(actor, moved_camera, goal, fov, aspect) == pytest.approx(0.36, abs=1e-6)
     centred = follow_target(actor, camera, look_at, fov, aspect, screen_u=0.5)
     assert centred == pytest.approx(actor)
+
+
+def test_during_a_drag_the_camera_keeps_its_distance_to_the_pad():
+    # The pad (and viser's drag plane) faces the camera half a metre ahead of it.
+    view = np.array([0.7, -0.6, -0.3])
+    move = along_view_plane(np.array([0.4, 0.1, 0.0]), view)
+    assert move @ view == pytest.approx(0.0, abs=1e-12)
+    assert np.linalg.norm(move) > 0.1, 'the sideways part of the move is kept'
 
 
 def test_follow_camera_glides_and_does_not_overshoot():

@@ -12,6 +12,7 @@ import socket
 import sys
 import time
 
+import numpy as np
 import pytest
 
 from ros_harness import NodeProcess, ros_env, wait_for
@@ -157,10 +158,20 @@ def test_viewer_page_waits_steers_and_survives_planner_death(
         blocker.close()
 
 
-def _latest_target(page, last):
-    """The camera target (look_at, m) the page reported last, or ``last`` if none since."""
+def _latest_camera(page, last):
+    """The camera the page reported last (see ChromiumPage.camera_reports), or ``last``."""
     reports = page.camera_reports()
-    return reports[-1][1] if reports else last
+    return reports[-1] if reports else last
+
+
+def _on_screen(camera, point):
+    """Where ``point`` (3,) m is drawn in ``camera``: (u, v), 0..1 from the top left."""
+    from viser import transforms
+    rotation = transforms.SO3(np.asarray(camera['wxyz'])).as_matrix()
+    x, y, z = rotation.T @ (np.asarray(point) - np.asarray(camera['position']))
+    half_height = np.tan(camera['fov'] / 2.0)
+    aspect = camera['image_width'] / camera['image_height']
+    return 0.5 + 0.5 * x / z / (half_height * aspect), 0.5 + 0.5 * y / z / half_height
 
 
 def test_viewer_follows_restarts_and_describes_courses(page, artifacts_dir, tmp_path,
@@ -191,27 +202,39 @@ def test_viewer_follows_restarts_and_describes_courses(page, artifacts_dir, tmp_
         text = page.wait_for_text_gone('Software WebGL', 60)
         assert 'Software WebGL' not in text, text
 
-        # Drag up and hold: the camera target moves with the actor while the hand is down.
-        target = _latest_target(page, None)
+        # Drag up and hold: the camera moves with the actor while the hand is down, keeping it
+        # where it was on the screen, left of the control panel.
+        camera = _latest_camera(page, None)
         center = page.pad_center()
         page.press(*center)
         page.move_to(center, (center[0], center[1] - 100))
         start = listener.actor
-        assert wait_for(lambda: listener.actor[0] > start[0] + 1.5, 90, spin=listener.spin), \
+        assert wait_for(lambda: listener.actor[0] > start[0] + 1.0, 90, spin=listener.spin), \
             listener.actor
-        target_before = _latest_target(page, target)
-        assert target_before is not None, 'the page reported no camera'
-        actor_before = listener.actor
-        assert wait_for(lambda: listener.actor[0] > actor_before[0] + 1.5, 90,
+        camera = _latest_camera(page, camera)
+        assert camera is not None, 'the page reported no camera'
+        actor_before = listener.actor + (0.9,)
+        seen_before = _on_screen(camera, actor_before)
+        assert 0.0 < seen_before[0] < 0.6, f'the actor is drawn at {seen_before}, under the panel'
+        assert wait_for(lambda: listener.actor[0] > actor_before[0] + 3.0, 90,
                         spin=listener.spin), listener.actor
-        moved = listener.actor[0] - actor_before[0]
-        followed = {}
+        later = {}
 
-        def caught_up():
-            followed['target'] = _latest_target(page, followed.get('target', target_before))
-            return followed['target'][0] - target_before[0] > 0.7 * moved
-        assert wait_for(caught_up, 30, interval=0.3, spin=listener.spin), \
-            f'camera target {target_before} -> {followed.get("target")}, actor moved {moved:.2f} m'
+        def kept_in_place():
+            later['camera'] = _latest_camera(page, later.get('camera', camera))
+            seen = _on_screen(later['camera'], listener.actor + (0.9,))
+            later['seen'] = seen
+            return abs(seen[0] - seen_before[0]) < 0.06 and abs(seen[1] - seen_before[1]) < 0.08
+        assert wait_for(kept_in_place, 30, interval=0.3, spin=listener.spin), \
+            f'the actor went from {seen_before} to {later.get("seen")} on the screen'
+        camera_moved = np.linalg.norm(np.subtract(later['camera']['position'],
+                                                  camera['position']))
+        assert camera_moved > 1.0, f'the camera moved only {camera_moved:.2f} m'
+        text = page.text()
+        assert 'walking' in text, 'the drag still steers after the camera moved'
+        page.move_to((center[0], center[1] - 100), (center[0] - 100, center[1] - 100))
+        assert wait_for(lambda: any(c[2] > 0.3 for c in listener.commands), 60,
+                        spin=listener.spin), 'a sideways drag after the camera moved must turn'
         page.release()
         assert wait_for(lambda: any(c[1] == 0.0 for c in listener.commands[-5:]), 30,
                         spin=listener.spin)

@@ -299,6 +299,24 @@ def follow_target(actor_position: Sequence[float], camera_position: Sequence[flo
     return actor + (0.5 - screen_u) * 2.0 * half_width * right / norm
 
 
+def along_view_plane(move: np.ndarray, view_direction: np.ndarray) -> np.ndarray:
+    """``move`` (3,) m without its part along ``view_direction`` (3,): a camera move that
+    keeps the camera's distance to every plane facing it.
+
+    viser follows a drag's pointer on a plane facing the camera through the grab point, which is
+    the drag pad just in front of the camera: a camera moved forwards through that plane would
+    lose the drag (the pointer's ray no longer meets it), and the steering with it. So during a
+    drag the camera slides sideways and up or down only; it catches up in depth on release.
+    """
+    view = np.asarray(view_direction, dtype=np.float64)
+    norm = float(np.linalg.norm(view))
+    move = np.asarray(move, dtype=np.float64)
+    if norm < 1e-9:
+        return move.copy()
+    view = view / norm
+    return move - float(move @ view) * view
+
+
 def smooth_step(current: np.ndarray, target: np.ndarray, dt: float,
                 time_constant: float) -> np.ndarray:
     """Move ``current`` towards ``target`` as a first-order lag with ``time_constant`` s over
@@ -960,6 +978,8 @@ def _build_node_class():
             # jumping, and keeps the actor left of the centre, clear of the control panel.
             now = time.monotonic()
             actor = self._actor_position
+            with self._lock:
+                dragging = self._dragging
             for client in list(self.server.get_clients().values()):
                 camera = client.camera
                 try:
@@ -974,15 +994,20 @@ def _build_node_class():
                 self._camera_moved[client.client_id] = now
                 if error < self.FOLLOW_SLACK:
                     continue
-                if error > self.FOLLOW_JUMP:
+                if error > self.FOLLOW_JUMP and not dragging:
                     new_look_at = goal
                 else:
                     new_look_at = smooth_step(look_at, goal, min(now - last, 0.5),
                                               self.FOLLOW_TIME_CONSTANT)
+                move = new_look_at - look_at
+                if dragging:
+                    move = along_view_plane(move, look_at - position)
+                if float(np.linalg.norm(move)) < 1e-3:
+                    continue
                 # Setting the position translates the camera and its look-at point together,
                 # so the user's orbit angle and distance are kept.
                 with client.atomic():
-                    camera.position = position + (new_look_at - look_at)
+                    camera.position = position + move
                     self._place_pad(client)
 
         def _refresh_status(self) -> None:

@@ -104,8 +104,9 @@ class ChromiumPage:
         self.send(cmd='click', name=name)
 
     def camera_reports(self):
-        """The camera poses the page reported to the viewer since the last call: a list of
-        (position (3,), look_at (3,)) in world metres, oldest first."""
+        """The camera poses the page reported to the viewer since the last call, oldest first:
+        viser's ViewerCameraMessage as a dict (position, look_at in world metres, wxyz from the
+        camera's OpenCV frame to the world, fov (vertical, rad), image_width, image_height)."""
         import base64
         import msgspec
         reports = []
@@ -115,7 +116,7 @@ class ChromiumPage:
             except msgspec.DecodeError:
                 continue
             if isinstance(message, dict) and message.get('type') == 'ViewerCameraMessage':
-                reports.append((tuple(message['position']), tuple(message['look_at'])))
+                reports.append(message)
         return reports
 
     def wait_for_text_gone(self, fragment, timeout):
