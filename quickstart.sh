@@ -2,7 +2,7 @@
 # One entry point that does all set-up itself on a fresh Debian/Ubuntu machine:
 #   ./quickstart.sh demo   the main job (see README)
 #   ./quickstart.sh test   the whole test suite (CI runs this)
-#   ./quickstart.sh setup  only the set-up
+#   ./quickstart.sh setup  only the set-up (ends by compiling the planner's kernels once)
 #   ./quickstart.sh shell  a shell with the project's environment
 # Set-up is idempotent: a stamp file records what was installed, so a second run is fast.
 set -euo pipefail
@@ -74,6 +74,13 @@ setup_test_tools() {
   fi
 }
 
+warm_up() {
+  # Compile the planner's kernels now, with progress, not inside the first node start (where
+  # the page would wait minutes for a planner that looks stuck). Seconds when already cached.
+  "$PY" -m digital_actor_planner.warmup \
+    || log "warm-up failed; the planner compiles its kernels on its first start instead"
+}
+
 ros_env() {
   # Keep DDS discovery on this machine: Kilted ignores ROS_LOCALHOST_ONLY.
   export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
@@ -87,12 +94,13 @@ cmd="${1:-demo}"
 [ $# -gt 0 ] && shift
 case "$cmd" in
   setup)
-    setup_python; setup_test_tools ;;
+    setup_python; setup_test_tools; warm_up ;;
   demo)
+    # The demo warms the kernel cache itself when it is not current.
     setup_python; ros_env
     exec "$PY" -m digital_actor_planner.cli demo "$@" ;;
   test)
-    setup_python; setup_test_tools; ros_env
+    setup_python; setup_test_tools; warm_up; ros_env
     cd "$HERE"
     exec "$PY" -m pytest "$@" ;;
   shell)

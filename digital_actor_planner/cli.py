@@ -387,11 +387,16 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_parser('demo', help='the interactive demo (browser viewer + planner node)',
                    add_help=False)
     sub.add_parser('view', help='attach a browser viewer to a running planner', add_help=False)
+    sub.add_parser('warm-up', help="compile the planner's kernels once (set-up does it)",
+                   add_help=False)
     return parser
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
+    if argv and argv[0] == 'warm-up':
+        from digital_actor_planner import warmup
+        return warmup.main(argv[1:])
     if argv and argv[0] in ('demo', 'view'):
         if argv[0] == 'demo':
             from digital_actor_planner import demo

@@ -60,6 +60,18 @@ def child_environment() -> dict:
     return env
 
 
+def _warm_up(env: dict) -> None:
+    """Compile the planner's kernels first when they are not cached (progress printed), so the
+    planner streams as soon as it starts; a failure is reported and the demo goes on."""
+    from digital_actor_planner.warmup import is_warm
+    if is_warm():
+        return
+    code = subprocess.call([sys.executable, '-m', 'digital_actor_planner.warmup'], env=env)
+    if code != 0:
+        print('digital-actor demo: warm-up failed; the planner compiles its kernels when it '
+              'starts (a minute or more)', file=sys.stderr, flush=True)
+
+
 def _die_with_parent() -> None:
     """In the child before exec: get SIGTERM when the demo process dies (Linux)."""
     try:
@@ -103,6 +115,11 @@ def main(argv: Optional[List[str]] = None) -> int:
         print(f'digital-actor demo: {error}', file=sys.stderr)
         return 2
     env = child_environment()
+    try:
+        _warm_up(env)
+    except KeyboardInterrupt:
+        print('digital-actor demo: stopped', flush=True)
+        return 130
     ros_args = ['--ros-args', '-r', f'__ns:={namespace}']
     planner_cmd = [sys.executable, '-m', 'digital_actor_planner.nodes.actor_planner'] + ros_args
     if scene is not None:

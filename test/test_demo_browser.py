@@ -2,8 +2,9 @@
 
 The page renders (screenshot in test-artifacts/, not blank); dragging the pad up walks the actor
 forward (root_x in /joint_states grows), dragging sideways turns it (root_yaw changes), releasing
-stops it, and on the wall course walking into the wall shows 'stuck' in the status line. Ctrl-C
-(SIGINT) to the demo stops it and both of its children.
+stops it, the restart button puts it back at the course start, and on the wall course walking
+into the wall shows 'stuck' in the status line with what to do. Ctrl-C (SIGINT) to the demo stops
+it and both of its children.
 
 Set DAP_UPDATE_SCREENSHOT=1 to also write the screenshot to docs/images/demo.png for the README.
 """
@@ -105,7 +106,7 @@ def test_demo_in_browser_walk_turn_stop_and_stuck(artifacts_dir, monkeypatch):
         page.open(url)
         # The planner builds its course first; the page says so until joint_states flow.
         text = page.wait_for_text('idle', 300)
-        assert 'idle' in text and 'stream' in text, text
+        assert 'idle' in text and 'received' in text, text
         assert wait_for(lambda: recorder.latest() is not None, 60, spin=recorder.spin)
 
         shot = os.path.join(artifacts_dir, 'demo_page.png')
@@ -143,14 +144,20 @@ def test_demo_in_browser_walk_turn_stop_and_stuck(artifacts_dir, monkeypatch):
         assert wait_for(lambda: recorder.still_for(1.5), 60, spin=recorder.spin), \
             'the actor kept moving after the pad was released'
 
+        # Restart: the planner starts the course over, the actor back at its start.
+        page.click('restart course')
+        assert wait_for(lambda: recorder.latest()[1] < start_x + 0.05, 120,
+                        spin=recorder.spin), f'restart left the actor at {recorder.latest()}'
+        assert abs(recorder.latest()[2] - start_yaw) < 0.05, 'restart kept the turn'
+
         # The wall course: walking into the wall leaves the actor stuck, and the page says so.
-        page.select('course', 'wall')
+        page.select('course', 'wall (impassable)')
         assert 'course: wall' in page.wait_for_text('course: wall', 300)
         assert 'idle' in page.wait_for_text('idle', 120)
         center = page.pad_center()
         page.press(*center)
         page.move_to(center, (center[0], center[1] - 100))
-        text = page.wait_for_text('stuck', 240)
+        text = page.wait_for_text('turn on the spot', 240)
         page.release()
         assert 'stuck' in text, text
         assert wait_for(lambda: recorder.latest()[1] < 3.0, 5, spin=recorder.spin), \

@@ -1,4 +1,5 @@
-"""Unit tests of the viewer helpers: drag mapping, status line, diagnostics, scenes, port."""
+"""Unit tests of the viewer helpers: drag mapping, status line, diagnostics, courses, follow
+camera, port."""
 import glob
 import math
 import os
@@ -9,9 +10,10 @@ import numpy as np
 import pytest
 
 from digital_actor_planner.nodes.viewer import (
-    config_from_args, build_parser, drag_to_command, normalize_namespace, pad_pose,
-    parse_planner_diagnostics, pick_port, shipped_scenes, status_text, StreamMonitor,
-    triangle_list_mesh, ViewerConfig, validate)
+    along_view_plane, config_from_args, build_parser, course_catalog, drag_to_command,
+    follow_target,
+    normalize_namespace, pad_pose, parse_planner_diagnostics, pick_port, shipped_scenes,
+    smooth_step, status_text, StreamMonitor, triangle_list_mesh, ViewerConfig, validate)
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -48,10 +50,11 @@ def test_drag_bad_input_names_the_value(kwargs, word):
         drag_to_command((0, 0), (0, -10), **args)
 
 
-def _status(state, reason='', planning='2.500', hardware_id='/actor_planner'):
+def _status(state, reason='', planning='2.500', hardware_id='/actor_planner', published='98.00'):
     values = [KeyValue(key='state', value=state), KeyValue(key='reason', value=reason),
               KeyValue(key='planning_time_p99_ms', value='9.000'),
-              KeyValue(key='planning_time_last_ms', value=planning)]
+              KeyValue(key='planning_time_last_ms', value=planning),
+              KeyValue(key='publish_rate_hz', value=published)]
     return DiagnosticStatus(name=f'{hardware_id}: actor planner', hardware_id=hardware_id,
                             message=state, values=values)
 
@@ -74,11 +77,46 @@ def test_status_line_waiting_walking_stuck_and_planner_gone():
         stream.add(10.0 + k * 0.01)
     walking = parse_planner_diagnostics([_status('walking')], '/actor_planner')
     text = status_text(11.0, stream, walking, planner_present=True)
-    assert 'walking' in text and 'planning 2.5 ms' in text and 'stream 100 Hz' in text
-    stuck = parse_planner_diagnostics([_status('stuck', 'wall ahead')], '/actor_planner')
-    assert 'stuck (wall ahead)' in status_text(11.0, stream, stuck, planner_present=True)
+    assert 'walking' in text and 'planning 2.5 ms' in text
+    # What arrives here and what the planner sent, each labelled.
+    assert 'received 100 Hz of 98 Hz published' in text
+    stuck = parse_planner_diagnostics(
+        [_status('stuck', 'no collision-free footstep window')], '/actor_planner')
+    text = status_text(11.0, stream, stuck, planner_present=True)
+    assert text.startswith('stuck: no room for the next steps ahead')
+    assert 'turn on the spot (drag sideways) or step back (drag down)' in text
+    assert 'collision-free' not in text
     gone = status_text(14.0, stream, stuck, planner_present=False)
     assert gone.startswith('planner stopped') and '3.0 s' in gone
+
+
+@pytest.mark.parametrize('reason, words', [
+    ('upper body blocked: waist blocked at t=0.19 s', 'upper body cannot get past'),
+    ('walk generation failed: the other foot could not follow (knee)', 'legs cannot reach'),
+    ('leg collides with the environment (left_shank)', 'would hit the obstacle'),
+    ('something new', 'not possible here'),
+])
+def test_every_stuck_reason_comes_with_what_to_do(reason, words):
+    stream = StreamMonitor(window=1.0)
+    stream.add(0.0)
+    stream.add(0.01)
+    stuck = parse_planner_diagnostics([_status('stuck', reason)], '/actor_planner')
+    text = status_text(0.02, stream, stuck, planner_present=True)
+    assert words in text and 'turn on the spot' in text and 'step back' in text
+
+
+def test_warming_up_is_said_and_what_it_means():
+    stream = StreamMonitor(window=1.0)
+    stream.add(0.0)
+    stream.add(0.01)
+    warming = parse_planner_diagnostics([_status('warming up', published='nan')],
+                                        '/actor_planner')
+    text = status_text(0.02, stream, warming, planner_present=True)
+    assert text.startswith('warming up') and 'compiling' in text
+    assert 'published' not in text, 'an unknown published rate is not shown as a number'
+    silent = StreamMonitor(window=1.0)
+    text = status_text(0.02, silent, warming, planner_present=True)
+    assert text.startswith('warming up') and 'compiling' in text
 
 
 def test_every_shipped_course_is_offered():
@@ -87,6 +125,80 @@ def test_every_shipped_course_is_offered():
     assert sorted(scenes) == sorted(os.path.splitext(os.path.basename(p))[0] for p in on_disk)
     assert all(os.path.isabs(p) and os.path.isfile(p) for p in scenes.values())
     assert 'wall' in scenes
+
+
+def test_courses_show_their_descriptions_and_the_impassable_ones_are_marked():
+    courses = course_catalog()
+    assert sorted(courses) == sorted(shipped_scenes())
+    for course in courses.values():
+        assert course.description, f'{course.name} has no description'
+        assert course.description.split()[0] in course.about()
+    impassable = sorted(name for name, course in courses.items() if course.impassable)
+    assert impassable == ['beam_too_low', 'wall']
+    assert courses['wall'].label != 'wall' and 'impassable' in courses['wall'].label
+    assert 'stop' in courses['wall'].about()
+    assert courses['flat'].label == 'flat'
+
+
+def test_a_course_file_that_cannot_be_read_is_still_offered(tmp_path):
+    (tmp_path / 'broken.yaml').write_text('description: [unclosed\n')
+    (tmp_path / 'plain.yaml').write_text('description: a plain course\nexpect: {stuck: true}\n')
+    courses = course_catalog(str(tmp_path))
+    assert courses['broken'].description == '' and 'No description' in courses['broken'].about()
+    assert courses['plain'].impassable
+
+
+def _screen_u(point, camera, look_at, fov, aspect):
+    forward = np.asarray(look_at) - np.asarray(camera)
+    forward /= np.linalg.norm(forward)
+    right = np.cross(forward, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    offset = np.asarray(point) - np.asarray(camera)
+    return 0.5 + 0.5 * (offset @ right) / (offset @ forward) / (math.tan(fov / 2) * aspect)
+
+
+def test_follow_camera_keeps_the_actor_left_of_the_panel():
+    camera, look_at = np.array([-3.0, 3.0, 2.4]), np.array([0.0, 0.0, 0.9])
+    fov, aspect = math.radians(50.0), 1.5
+    actor = np.array([2.0, 0.3, 0.9])
+    goal = follow_target(actor, camera, look_at, fov, aspect, screen_u=0.36)
+    moved_camera = camera + (goal - look_at)
+    assert _screen_u(actor, moved_camera, goal, fov, aspect) == pytest.approx(0.36, abs=1e-6)
+    centred = follow_target(actor, camera, look_at, fov, aspect, screen_u=0.5)
+    assert centred == pytest.approx(actor)
+
+
+def test_during_a_drag_the_camera_keeps_its_distance_to_the_pad():
+    # The pad (and viser's drag plane) faces the camera half a metre ahead of it.
+    view = np.array([0.7, -0.6, -0.3])
+    move = along_view_plane(np.array([0.4, 0.1, 0.0]), view)
+    assert move @ view == pytest.approx(0.0, abs=1e-12)
+    assert np.linalg.norm(move) > 0.1, 'the sideways part of the move is kept'
+
+
+def test_follow_camera_glides_and_does_not_overshoot():
+    current, target = np.zeros(3), np.array([1.0, 0.0, 0.0])
+    path = []
+    for _ in range(40):
+        current = smooth_step(current, target, dt=0.05, time_constant=0.35)
+        path.append(current[0])
+    assert 0.0 < path[0] < 0.3, 'one render tick moves only part of the way'
+    assert all(b >= a for a, b in zip(path, path[1:])) and path[-1] <= 1.0
+    assert path[-1] > 0.99, 'two seconds later the camera is there'
+
+
+def test_a_port_just_released_is_reused():
+    # The side that closes first keeps the port in TIME_WAIT, as a stopped viewer does.
+    with socket.socket() as server:
+        server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        server.bind(('127.0.0.1', 0))
+        server.listen(1)
+        port = server.getsockname()[1]
+        client = socket.create_connection(('127.0.0.1', port))
+        accepted, _ = server.accept()
+        accepted.close()
+    client.close()
+    assert pick_port('127.0.0.1', port) == port
 
 
 def test_busy_port_moves_to_the_next_free_one():

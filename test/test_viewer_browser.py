@@ -2,14 +2,17 @@
 
 What a user sees: "waiting for joint_states" with no planner, the actor's status once one runs,
 cmd_vel from the drag pad (up = forward, left = turn left, release = zero), and the page telling
-that the planner died while the viewer keeps serving. The real planner is driven in
-test_demo_browser.py.
+that the planner died while the viewer keeps serving; the camera following the actor during a
+drag, the restart button putting the actor back at the start, each course's description when it
+is chosen, the stuck reason with what to do, and no notice left over the page's top left. The real
+planner is driven in test_demo_browser.py.
 """
 import os
 import socket
 import sys
 import time
 
+import numpy as np
 import pytest
 
 from ros_harness import NodeProcess, ros_env, wait_for
@@ -53,12 +56,13 @@ def page(artifacts_dir):
 
 
 class CommandListener:
-    """Subscribes to cmd_vel (TwistStamped) in this test process."""
+    """Subscribes to cmd_vel (TwistStamped) and joint_states in this test process."""
 
     def __init__(self, domain_id):
         import rclpy
         from rclpy.executors import SingleThreadedExecutor
         from geometry_msgs.msg import TwistStamped
+        from sensor_msgs.msg import JointState
         self.rclpy = rclpy
         self.context = rclpy.Context()
         rclpy.init(context=self.context, domain_id=domain_id)
@@ -66,7 +70,13 @@ class CommandListener:
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
         self.commands = []
+        self.actor = None   # (root_x, root_y) m, the latest joint_states
         self.node.create_subscription(TwistStamped, 'cmd_vel', self._on_cmd, 50)
+        self.node.create_subscription(JointState, 'joint_states', self._on_joints, 10)
+
+    def _on_joints(self, msg):
+        index = {name: i for i, name in enumerate(msg.name)}
+        self.actor = (msg.position[index['root_x']], msg.position[index['root_y']])
 
     def _on_cmd(self, msg):
         self.commands.append((time.monotonic(), msg.twist.linear.x, msg.twist.angular.z))
@@ -104,7 +114,7 @@ def test_viewer_page_waits_steers_and_survives_planner_death(
         planner = NodeProcess([sys.executable, os.path.join(HERE, 'browser', 'fake_planner.py')],
                               env, log_path=str(tmp_path / 'fake_planner.log'))
         text = page.wait_for_text('idle', 60)
-        assert 'idle' in text and 'stream' in text, text
+        assert 'idle' in text and 'received' in text and 'published' in text, text
         shot = os.path.join(artifacts_dir, 'viewer_fake_planner.png')
         page.screenshot(shot)
         assert not_blank(shot)
@@ -146,3 +156,117 @@ def test_viewer_page_waits_steers_and_survives_planner_death(
             planner.stop()
         viewer.stop()
         blocker.close()
+
+
+def _latest_camera(page, last):
+    """The camera the page reported last (see ChromiumPage.camera_reports), or ``last``."""
+    reports = page.camera_reports()
+    return reports[-1] if reports else last
+
+
+def _on_screen(camera, point):
+    """Where ``point`` (3,) m is drawn in ``camera``: (u, v), 0..1 from the top left."""
+    from viser import transforms
+    rotation = transforms.SO3(np.asarray(camera['wxyz'])).as_matrix()
+    x, y, z = rotation.T @ (np.asarray(point) - np.asarray(camera['position']))
+    half_height = np.tan(camera['fov'] / 2.0)
+    aspect = camera['image_width'] / camera['image_height']
+    return 0.5 + 0.5 * x / z / (half_height * aspect), 0.5 + 0.5 * y / z / half_height
+
+
+def test_viewer_follows_restarts_and_describes_courses(page, artifacts_dir, tmp_path,
+                                                       monkeypatch):
+    env = ros_env(DOMAIN_ID + 1)
+    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    with socket.socket() as probe:
+        probe.bind(('127.0.0.1', 0))
+        port = probe.getsockname()[1]
+    planner = NodeProcess([sys.executable, os.path.join(HERE, 'browser', 'fake_planner.py')],
+                          env, log_path=str(tmp_path / 'fake_planner.log'))
+    viewer = _viewer(env, port, os.path.join(artifacts_dir, 'viewer_follow_node.log'))
+    listener = None
+    try:
+        url = _wait_for_address(viewer)
+        assert url, viewer.output()
+        listener = CommandListener(DOMAIN_ID + 1)
+        page.open(url)
+        # The planner's course and speed limit from the first load (not the list's first name
+        # or the viewer's own defaults): the fake planner runs flat at 0.90 m/s.
+        text = page.wait_for_text('10 m straight on a flat floor', 90)
+        assert '10 m straight on a flat floor' in text, text
+        assert 'full drag: 0.90 m/s' in page.wait_for_text('full drag: 0.90 m/s', 60)
+        assert 'idle' in page.wait_for_text('idle', 60)
+        assert wait_for(lambda: listener.actor is not None, 30, spin=listener.spin)
+
+        # The software-WebGL notice of a headless page closes by itself.
+        text = page.wait_for_text_gone('Software WebGL', 60)
+        assert 'Software WebGL' not in text, text
+
+        # Drag up and hold: the camera moves with the actor while the hand is down, keeping it
+        # where it was on the screen, left of the control panel.
+        camera = _latest_camera(page, None)
+        center = page.pad_center()
+        page.press(*center)
+        page.move_to(center, (center[0], center[1] - 100))
+        start = listener.actor
+        assert wait_for(lambda: listener.actor[0] > start[0] + 1.0, 90, spin=listener.spin), \
+            listener.actor
+        camera = _latest_camera(page, camera)
+        assert camera is not None, 'the page reported no camera'
+        actor_before = listener.actor + (0.9,)
+        seen_before = _on_screen(camera, actor_before)
+        assert 0.0 < seen_before[0] < 0.6, f'the actor is drawn at {seen_before}, under the panel'
+        assert wait_for(lambda: listener.actor[0] > actor_before[0] + 3.0, 90,
+                        spin=listener.spin), listener.actor
+        later = {}
+
+        def kept_in_place():
+            later['camera'] = _latest_camera(page, later.get('camera', camera))
+            seen = _on_screen(later['camera'], listener.actor + (0.9,))
+            later['seen'] = seen
+            return abs(seen[0] - seen_before[0]) < 0.06 and abs(seen[1] - seen_before[1]) < 0.08
+        assert wait_for(kept_in_place, 30, interval=0.3, spin=listener.spin), \
+            f'the actor went from {seen_before} to {later.get("seen")} on the screen'
+        camera_moved = np.linalg.norm(np.subtract(later['camera']['position'],
+                                                  camera['position']))
+        assert camera_moved > 1.0, f'the camera moved only {camera_moved:.2f} m'
+        text = page.text()
+        assert 'walking' in text, 'the drag still steers after the camera moved'
+        page.move_to((center[0], center[1] - 100), (center[0] - 100, center[1] - 100))
+        assert wait_for(lambda: any(c[2] > 0.3 for c in listener.commands), 60,
+                        spin=listener.spin), 'a sideways drag after the camera moved must turn'
+        page.release()
+        assert wait_for(lambda: any(c[1] == 0.0 for c in listener.commands[-5:]), 30,
+                        spin=listener.spin)
+        far = listener.actor[0]
+        assert far > 3.0, far
+
+        # Restart: the actor is back at the course start, the page still on flat.
+        page.click('restart course')
+        assert wait_for(lambda: listener.actor[0] < 0.1, 60, spin=listener.spin), \
+            f'the actor stayed at x = {listener.actor[0]:.2f} m after restart'
+        assert 'course: flat' in page.wait_for_text('course: flat', 30)
+
+        # Choosing a course shows its description; an impassable one says so.
+        page.select('course', 'stairs_up')
+        text = page.wait_for_text('Five steps up', 60)
+        assert 'Five steps up' in text and 'course: stairs_up' in page.wait_for_text(
+            'course: stairs_up', 30)
+        page.select('course', 'wall (impassable)')
+        text = page.wait_for_text('Built to stop the actor', 60)
+        assert 'Built to stop the actor' in text, text
+
+        # Walk into the fake wall: the status says why in plain words, and what to do.
+        center = page.pad_center()
+        page.press(*center)
+        page.move_to(center, (center[0], center[1] - 100))
+        text = page.wait_for_text('turn on the spot', 90)
+        page.release()
+        assert 'stuck: no room for the next steps ahead' in text, text
+        assert 'step back (drag down)' in text, text
+        page.screenshot(os.path.join(artifacts_dir, 'viewer_stuck.png'))
+    finally:
+        if listener is not None:
+            listener.close()
+        viewer.stop()
+        planner.stop()

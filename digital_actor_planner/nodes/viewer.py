@@ -27,6 +27,8 @@ import numpy as np
 PACKAGE_NAME = 'digital_actor_planner'
 ROOT_JOINTS = ('root_x', 'root_y', 'root_z', 'root_yaw')
 PLANNER_NODE = 'actor_planner'
+#: The course list's entry until the planner has said which course it runs.
+ASKING = '(asking the planner)'
 
 
 # ----------------------------------------------------------------------------------------------
@@ -101,6 +103,8 @@ class PlannerDiagnostics:
     state: str = ''
     reason: str = ''
     planning_time_ms: Optional[float] = None
+    #: joint_states frames per second the planner sent (its ``publish_rate_hz``), None if unsaid.
+    publish_rate_hz: Optional[float] = None
 
 
 def parse_planner_diagnostics(statuses, node_name: str) -> Optional[PlannerDiagnostics]:
@@ -128,8 +132,17 @@ def parse_planner_diagnostics(statuses, node_name: str) -> Optional[PlannerDiagn
                 planning = _to_ms(key, values[key])
                 if planning is not None:
                     break
-        return PlannerDiagnostics(state=state.lower(), reason=reason, planning_time_ms=planning)
+        return PlannerDiagnostics(state=state.lower(), reason=reason, planning_time_ms=planning,
+                                  publish_rate_hz=_finite(values.get('publish_rate_hz')))
     return None
+
+
+def _finite(text: Optional[str]) -> Optional[float]:
+    try:
+        value = float(text)
+    except (TypeError, ValueError):
+        return None
+    return value if math.isfinite(value) else None
 
 
 def _to_ms(key: str, text: str) -> Optional[float]:
@@ -141,28 +154,178 @@ def _to_ms(key: str, text: str) -> Optional[float]:
     return value if in_ms else value * 1000.0
 
 
+#: What to do when stuck: the planner takes a turn on the spot (a sideways drag) and a step back
+#: (a downward drag) wherever a forward step is not possible.
+UNSTUCK_ADVICE = 'turn on the spot (drag sideways) or step back (drag down)'
+WARMING_UP_ADVICE = ('The planner is compiling its kernels (once per installation; '
+                     '`digital-actor warm-up` does it ahead). The actor walks when it is done.')
+
+
+def stuck_in_plain_words(reason: str) -> str:
+    """The planner's stuck ``reason`` as a person would say it (what is in the way)."""
+    reason = reason.strip()
+    if reason.startswith('no collision-free footstep window'):
+        return 'no room for the next steps ahead (an obstacle, an edge or a drop)'
+    if reason.startswith('upper body blocked'):
+        return 'the upper body cannot get past the obstacle ahead'
+    if reason.startswith('walk generation failed'):
+        return 'the legs cannot reach the next footholds'
+    if 'collides' in reason or 'collision' in reason:
+        return 'the next step would hit the obstacle'
+    return 'the next step is not possible here'
+
+
 def status_text(now: float, stream: StreamMonitor, diagnostics: Optional[PlannerDiagnostics],
                 planner_present: bool, silence_limit: float = 1.0) -> str:
-    """The status line shown in the page (plain text; the page renders it as markdown)."""
+    """The status shown in the page (markdown: a status line, then advice when there is some).
+
+    Parameters
+    ----------
+    now : s, the same monotonic clock as the stream's arrivals.
+    stream : the joint_states arrivals at this viewer.
+    diagnostics : what the planner last reported, or None.
+    planner_present : whether a joint_states publisher is known.
+    silence_limit : s without a frame after which the planner counts as silent.
+    """
     silent = stream.silent_for(now)
+    warming = diagnostics is not None and diagnostics.state == 'warming up'
+    if silent is None and warming:
+        return f'warming up, no joint_states yet\n\n{WARMING_UP_ADVICE}'
     if silent is None:
-        note = '' if planner_present else ' (no planner found)'
-        return f'waiting for joint_states{note}'
+        if not planner_present:
+            return 'waiting for joint_states (no planner found yet: the demo starts one)'
+        return 'waiting for joint_states (the planner is loading its course)'
     if silent > silence_limit:
         why = 'planner stopped' if not planner_present else 'planner not publishing'
         return f'{why}: no joint_states for {silent:.1f} s'
     parts = []
+    advice = ''
     if diagnostics is not None and diagnostics.state:
         state = diagnostics.state
-        if diagnostics.reason and state != 'walking':
+        if state == 'stuck':
+            state = f'stuck: {stuck_in_plain_words(diagnostics.reason)}'
+            advice = f'To get going again: {UNSTUCK_ADVICE}.'
+        elif warming:
+            advice = WARMING_UP_ADVICE
+        elif diagnostics.reason and state != 'walking':
             state += f' ({diagnostics.reason})'
         parts.append(state)
-        if diagnostics.planning_time_ms is not None:
+        if diagnostics.planning_time_ms is not None and diagnostics.state != 'warming up':
             parts.append(f'planning {diagnostics.planning_time_ms:.1f} ms')
     else:
         parts.append('no diagnostics yet')
-    parts.append(f'stream {stream.rate(now):.0f} Hz')
-    return ' · '.join(parts)
+    rates = f'received {stream.rate(now):.0f} Hz'
+    if diagnostics is not None and diagnostics.publish_rate_hz is not None:
+        rates += f' of {diagnostics.publish_rate_hz:.0f} Hz published'
+    parts.append(rates)
+    text = ' · '.join(parts)
+    return text + (f'\n\n{advice}' if advice else '')
+
+
+@dataclass(frozen=True)
+class Course:
+    """A shipped course as the page offers it."""
+
+    name: str
+    path: str
+    description: str = ''
+    #: The course is built to stop the actor (its scene's ``expect`` says ``stuck``).
+    impassable: bool = False
+
+    @property
+    def label(self) -> str:
+        """The name in the course list; impassable ones say so."""
+        return f'{self.name} (impassable)' if self.impassable else self.name
+
+    def about(self) -> str:
+        """Markdown for the page: the description, and what to expect when impassable."""
+        text = self.description or 'No description.'
+        if self.impassable:
+            text += ('\n\n*Built to stop the actor: it should halt cleanly before the '
+                     'obstacle and report stuck.*')
+        return text
+
+
+def course_catalog(directory: Optional[str] = None) -> Dict[str, Course]:
+    """Every shipped course with its description: {name: Course}, sorted by name.
+
+    A scene YAML that cannot be read is still offered, without a description: the planner
+    reports what is wrong with it when it is chosen.
+    """
+    import yaml
+    courses = {}
+    for name, path in shipped_scenes(directory).items():
+        try:
+            with open(path) as f:
+                data = yaml.safe_load(f)
+        except (OSError, yaml.YAMLError):
+            data = None
+        data = data if isinstance(data, dict) else {}
+        expect = data.get('expect') if isinstance(data.get('expect'), dict) else {}
+        description = data.get('description')
+        courses[name] = Course(name, path,
+                               ' '.join(str(description).split()) if description else '',
+                               bool(expect.get('stuck', False)))
+    return courses
+
+
+def follow_target(actor_position: Sequence[float], camera_position: Sequence[float],
+                  look_at: Sequence[float], fov: float, aspect: float,
+                  screen_u: float) -> np.ndarray:
+    """Where the camera should look so the actor appears at ``screen_u`` across the view.
+
+    Parameters
+    ----------
+    actor_position : (3,) m, the pelvis.
+    camera_position, look_at : (3,) m, the camera now (z up).
+    fov : vertical field of view, rad. aspect : width / height.
+    screen_u : 0 left edge .. 1 right edge; below 0.5 puts the actor left of the centre, clear
+        of a control panel on the right.
+
+    Returns
+    -------
+    (3,) m, the look-at point: beside the actor, along the view's horizontal right direction.
+    """
+    position = np.asarray(camera_position, dtype=np.float64)
+    target = np.asarray(look_at, dtype=np.float64)
+    forward = target - position
+    distance = float(np.linalg.norm(forward))
+    right = np.array([forward[1], -forward[0], 0.0])
+    norm = float(np.linalg.norm(right))
+    actor = np.asarray(actor_position, dtype=np.float64)
+    if distance < 1e-6 or norm < 1e-6 or not math.isfinite(fov * aspect):
+        return actor.copy()   # looking straight down: no horizontal right to shift along
+    half_width = math.tan(fov / 2.0) * aspect * distance
+    return actor + (0.5 - screen_u) * 2.0 * half_width * right / norm
+
+
+def along_view_plane(move: np.ndarray, view_direction: np.ndarray) -> np.ndarray:
+    """``move`` (3,) m without its part along ``view_direction`` (3,): a camera move that
+    keeps the camera's distance to every plane facing it.
+
+    viser follows a drag's pointer on a plane facing the camera through the grab point, which is
+    the drag pad just in front of the camera: a camera moved forwards through that plane would
+    lose the drag (the pointer's ray no longer meets it), and the steering with it. So during a
+    drag the camera slides sideways and up or down only; it catches up in depth on release.
+    """
+    view = np.asarray(view_direction, dtype=np.float64)
+    norm = float(np.linalg.norm(view))
+    move = np.asarray(move, dtype=np.float64)
+    if norm < 1e-9:
+        return move.copy()
+    view = view / norm
+    return move - float(move @ view) * view
+
+
+def smooth_step(current: np.ndarray, target: np.ndarray, dt: float,
+                time_constant: float) -> np.ndarray:
+    """Move ``current`` towards ``target`` as a first-order lag with ``time_constant`` s over
+    ``dt`` s: a camera that glides after the actor instead of jumping a step at a time."""
+    if not time_constant > 0.0:
+        return np.asarray(target, dtype=np.float64).copy()
+    fraction = 1.0 - math.exp(-max(dt, 0.0) / time_constant)
+    current = np.asarray(current, dtype=np.float64)
+    return current + fraction * (np.asarray(target, dtype=np.float64) - current)
 
 
 def shipped_scenes(directory: Optional[str] = None) -> Dict[str, str]:
@@ -189,11 +352,17 @@ def scenes_directory() -> str:
 
 
 def pick_port(host: str, port: int, attempts: int = 100) -> int:
-    """Return ``port`` if it is free on ``host``, else the next free one (raises if none)."""
+    """Return ``port`` if it is free on ``host``, else the next free one (raises if none).
+
+    A port left in TIME_WAIT by a viewer that just stopped counts as free (the page's server
+    binds with SO_REUSEADDR too), so a restarted demo keeps its address and an open tab
+    reconnects; only a port someone listens on is busy.
+    """
     if not 0 < port < 65536:
         raise ValueError(f'port must be in 1..65535, got {port!r}')
     for candidate in range(port, min(port + attempts, 65536)):
         with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
             try:
                 probe.bind((host, candidate))
             except OSError:
@@ -321,7 +490,15 @@ def _build_node_class():
     class ActorViewer(Node):
         """Serve the actor, its course and a drag pad in a web page; publish cmd_vel."""
 
-        FOLLOW_SLACK = 0.05   # m the actor may move before the follow camera catches up
+        FOLLOW_SLACK = 0.01   # m: closer than this the follow camera stays put
+        FOLLOW_TIME_CONSTANT = 0.35   # s the camera's lag behind the actor settles in
+        FOLLOW_JUMP = 3.0   # m: an actor this far from the view (a new course) is cut to
+        # Across the view (0 left .. 1 right) where the follow camera keeps the actor: left of
+        # the centre, clear of the control panel on the right.
+        FOLLOW_SCREEN_U = 0.36
+        # viser's client shows this notice (never closing) on a software-rendered page; it
+        # covers the status. The page replaces it with one that closes by itself.
+        SOFTWARE_WEBGL_NOTICE = 'webgl-software-rendering'
         # Far enough from the left edge that a full drag to the left stays on the 3D view.
         PAD_UV = (0.3, 0.78)
         PAD_RADIUS = 0.09      # fraction of the view height
@@ -342,6 +519,7 @@ def _build_node_class():
             self._urdf_source: Optional[str] = None
             self._urdf = None
             self._actor_position = np.zeros(3)
+            self._actor_known = False
             self._command = (0.0, 0.0)
             self._dragging = False
             self._drag_start: Dict[int, Tuple[float, float]] = {}
@@ -351,7 +529,13 @@ def _build_node_class():
             self._course_note = ''
             self._max_speeds = (config.max_linear_speed, config.max_angular_speed)
             self._speeds_known = False
-            self._scenes = shipped_scenes()
+            self._planner_asked = False
+            self._courses = course_catalog()
+            self._scenes = {name: course.path for name, course in self._courses.items()}
+            self._by_label = {course.label: name for name, course in self._courses.items()}
+            self._scene_path: Optional[str] = None   # the planner's scene, once asked
+            self._camera_moved: Dict[int, float] = {}
+            self._notice_replaced: set = set()
             self._planner_name = (self.get_namespace().rstrip('/') + '/' + PLANNER_NODE)
 
             self.port = pick_port(config.host, config.port)
@@ -398,18 +582,26 @@ def _build_node_class():
             server.scene.set_up_direction('+z')
             # Shadows cost the most per frame; software-rendered browsers keep up without them.
             server.scene.configure_default_lights(enabled=True, cast_shadow=False)
-            server.initial_camera.position = (-3.0, -3.5, 2.6)
-            server.initial_camera.look_at = (0.0, 0.0, 0.8)
+            # Behind the start and to its left: the courses run along +x, which the page shows
+            # going up and to the left, away from the control panel on the right.
+            server.initial_camera.position = (-3.2, 3.0, 2.4)
+            server.initial_camera.look_at = (0.0, 0.0, 0.9)
             server.scene.add_grid('/ground_grid', width=40.0, height=40.0, cell_size=0.5,
                                   plane='xy', position=(0.0, 0.0, -0.002))
             self._actor_root = server.scene.add_frame('/actor', show_axes=False)
             gui = server.gui
             gui.configure_theme(show_logo=False)
             self._status = gui.add_markdown('**status:** waiting for joint_states')
-            names = list(self._scenes) or ['(no shipped courses)']
-            self._course = gui.add_dropdown('course', options=names, initial_value=names[0])
+            # Until the planner says which course it runs, the list says it is asking (not the
+            # first name in it, which would be wrong).
+            labels = [ASKING] + [course.label for course in self._courses.values()]
+            self._course = gui.add_dropdown('course', options=labels, initial_value=ASKING)
             self._course_shown = None
             self._course.on_update(self._on_course_picked)
+            self._course_about = gui.add_markdown('')
+            self._restart = gui.add_button('restart course',
+                                           hint='Back to the start of the current course')
+            self._restart.on_click(self._on_restart)
             self._follow = gui.add_checkbox('follow actor', initial_value=self.config.follow)
             self._speed_note = gui.add_markdown(self._speed_text())
             gui.add_markdown('Drag the grey disc at the lower left: up walks forward, '
@@ -418,6 +610,8 @@ def _build_node_class():
             server.on_client_disconnect(self._on_client_disconnect)
 
         def _speed_text(self) -> str:
+            if not self._speeds_known:
+                return 'full drag: asking the planner for its speed limits'
             lin, ang = self._max_speeds
             return f'full drag: {lin:.2f} m/s forward, {ang:.2f} rad/s turn'
 
@@ -436,11 +630,33 @@ def _build_node_class():
             @client.camera.on_update
             def _(camera) -> None:
                 self._place_pad(client)
+                self._replace_software_notice(client)
 
             self._place_pad(client)
+            self._replace_software_notice(client)
+
+        def _replace_software_notice(self, client) -> None:
+            """Make the software-WebGL notice close by itself (a no-op where there is none).
+
+            Sent when the page connects and again with its first camera report, whichever
+            comes after the page showed the notice.
+            """
+            if client.client_id in self._notice_replaced:
+                return
+            if client.camera.update_timestamp:
+                self._notice_replaced.add(client.client_id)
+            from viser._messages import NotificationProps, NotificationUpdateMessage
+            props = NotificationProps(
+                title='Software WebGL', body='This page is drawn without the GPU and may be '
+                'slow; the planner is not affected.', loading=False, with_close_button=True,
+                auto_close_seconds=6.0, color='orange')
+            client._websock_connection.queue_message(
+                NotificationUpdateMessage(self.SOFTWARE_WEBGL_NOTICE, props))
 
         def _on_client_disconnect(self, client) -> None:
             self._pads.pop(client.client_id, None)
+            self._camera_moved.pop(client.client_id, None)
+            self._notice_replaced.discard(client.client_id)
             if self._drag_start.pop(client.client_id, None) is not None:
                 self._release()
 
@@ -509,40 +725,70 @@ def _build_node_class():
             self._cmd_pub.publish(msg)
 
         # -- course picker ----------------------------------------------------------------------
-        def _on_course_picked(self, _event) -> None:
-            name = self._course.value
-            if name == self._course_shown:
-                return   # the page only caught up with the planner's current course
-            path = self._scenes.get(name)
+        def _on_course_picked(self, event) -> None:
+            if event.client is None:
+                return   # set here, to show the planner's course: nothing to load
+            name = self._by_label.get(self._course.value)
+            if name is None or name == self._course_shown:
+                return   # the placeholder, or the course already running (see restart)
+            self._load_course(name, self._scenes[name])
+
+        def _on_restart(self, _event) -> None:
+            # The planner starts a course over whenever its scene is set, to the same file too.
+            path = self._scene_path
             if path is None:
+                self._course_note = 'cannot restart: the planner has not said its course yet'
                 return
+            self._load_course(self._course_shown or os.path.basename(path), path, restart=True)
+
+        def _load_course(self, name: str, path: str, restart: bool = False) -> None:
             if not self._set_params.service_is_ready():
                 self._course_note = f'cannot load {name}: planner parameter service not found'
                 return
             param = self._msg['Parameter'](name='scene', value=self._msg['ParameterValue'](
                 type=self._msg['ParameterType'].PARAMETER_STRING, string_value=path))
             request = self._msg['SetParameters'].Request(parameters=[param])
-            self._course_note = f'loading {name}...'
+            self._course_note = f'{"restarting" if restart else "loading"} {name}...'
             future = self._set_params.call_async(request)
-            future.add_done_callback(lambda f: self._on_course_result(name, f))
+            future.add_done_callback(lambda f: self._on_course_result(name, path, f))
 
-        def _on_course_result(self, name: str, future) -> None:
+        def _on_course_result(self, name: str, path: str, future) -> None:
             try:
                 result = future.result().results[0]
             except Exception as error:  # noqa: B902 - report any service failure in the page
                 self._course_note = f'loading {name} failed: {error}'
                 return
             if result.successful:
-                self._course_shown = name
+                self._show_course(name if name in self._courses else None, path)
                 self._course_note = f'course: {name}'
             else:
                 self._course_note = f'course {name} rejected: {result.reason}'
+                if self._course_shown in self._courses:
+                    self._set_course_value(self._courses[self._course_shown].label)
+
+        def _show_course(self, name: Optional[str], path: str) -> None:
+            """The page shows ``name`` (a shipped course, or None for another scene file) as
+            the planner's course, with its description."""
+            self._scene_path = path
+            self._course_shown = name
+            if name is None:
+                self._course_about.content = f'Scene file: `{path}`'
+                return
+            course = self._courses[name]
+            self._course_about.content = course.about()
+            if ASKING in self._course.options:
+                self._set_course_value(course.label)
+                self._course.options = [c.label for c in self._courses.values()]
+            self._set_course_value(course.label)
+
+        def _set_course_value(self, label: str) -> None:
+            self._course.value = label   # on_update sees event.client None: nothing reloads
 
         def _query_planner(self) -> None:
             """Read the planner's scene and speed limits once its parameter service appears."""
-            if self._speeds_known or not self._get_params.service_is_ready():
+            if self._planner_asked or not self._get_params.service_is_ready():
                 return
-            self._speeds_known = True
+            self._planner_asked = True
             request = self._msg['GetParameters'].Request(
                 names=['scene', 'max_linear_speed', 'max_angular_speed'])
             self._get_params.call_async(request).add_done_callback(self._on_planner_params)
@@ -559,13 +805,14 @@ def _build_node_class():
             if lin.type == ptype.PARAMETER_DOUBLE and ang.type == ptype.PARAMETER_DOUBLE:
                 if lin.double_value > 0 and ang.double_value > 0:
                     self._max_speeds = (lin.double_value, ang.double_value)
-                    self._speed_note.content = self._speed_text()
+            self._speeds_known = True
+            self._speed_note.content = self._speed_text()
             if scene.type == ptype.PARAMETER_STRING and scene.string_value:
                 current = os.path.splitext(os.path.basename(scene.string_value))[0]
                 self._course_note = f'course: {current}'
-                if current in self._scenes:
-                    self._course_shown = current
-                    self._course.value = current
+                shipped = current if self._scenes.get(current) == os.path.abspath(
+                    scene.string_value) or current in self._scenes else None
+                self._show_course(shipped, scene.string_value)
 
         # -- subscriptions ----------------------------------------------------------------------
         def _on_description(self, msg) -> None:
@@ -704,6 +951,11 @@ def _build_node_class():
         def _render(self) -> None:
             self.load_fallback_urdf_if_needed()
             self._query_planner()
+            self._show_pose()
+            if self._follow.value and self._actor_known:
+                self._follow_actor()
+
+        def _show_pose(self) -> None:
             joints = self._latest_joints
             if joints is None or self._urdf is None or joints is self._rendered_stamp:
                 return
@@ -719,30 +971,43 @@ def _build_node_class():
             with self.server.atomic():
                 _update_urdf_pose(urdf, dict(zip(urdf_names, configuration)), self._sent_frames)
             self._actor_position = np.array([by_name.get(n, 0.0) for n in ROOT_JOINTS[:3]])
-            if self._follow.value:
-                self._follow_actor()
+            self._actor_known = True
 
         def _follow_actor(self) -> None:
+            # Also during a drag: the camera glides (a small move each render tick) rather than
+            # jumping, and keeps the actor left of the centre, clear of the control panel.
+            now = time.monotonic()
+            actor = self._actor_position
             with self._lock:
                 dragging = self._dragging
-            if dragging:
-                # Hold the camera still under a dragging hand; it catches up on release. (Each
-                # camera move re-renders the page; a software-rendered page busy re-rendering
-                # has no time left for the pointer events that steer the actor.)
-                return
-            target = self._actor_position
             for client in list(self.server.get_clients().values()):
                 camera = client.camera
                 try:
                     look_at, position = camera.look_at, camera.position
+                    fov, aspect = camera.fov, camera.aspect
                 except AssertionError:
+                    continue   # no camera message from this page yet
+                goal = follow_target(actor, position, look_at, fov, aspect,
+                                     self.FOLLOW_SCREEN_U)
+                error = float(np.linalg.norm(goal - look_at))
+                last = self._camera_moved.get(client.client_id, now)
+                self._camera_moved[client.client_id] = now
+                if error < self.FOLLOW_SLACK:
                     continue
-                if np.linalg.norm(look_at - target) < self.FOLLOW_SLACK:
+                if error > self.FOLLOW_JUMP and not dragging:
+                    new_look_at = goal
+                else:
+                    new_look_at = smooth_step(look_at, goal, min(now - last, 0.5),
+                                              self.FOLLOW_TIME_CONSTANT)
+                move = new_look_at - look_at
+                if dragging:
+                    move = along_view_plane(move, look_at - position)
+                if float(np.linalg.norm(move)) < 1e-3:
                     continue
                 # Setting the position translates the camera and its look-at point together,
                 # so the user's orbit angle and distance are kept.
                 with client.atomic():
-                    camera.position = position + (target - look_at)
+                    camera.position = position + move
                     self._place_pad(client)
 
         def _refresh_status(self) -> None:

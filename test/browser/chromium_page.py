@@ -99,6 +99,35 @@ class ChromiumPage:
     def select(self, label, option):
         self.send(cmd='select', label=label, option=option)
 
+    def click(self, name):
+        """Click the button labelled ``name``."""
+        self.send(cmd='click', name=name)
+
+    def camera_reports(self):
+        """The camera poses the page reported to the viewer since the last call, oldest first:
+        viser's ViewerCameraMessage as a dict (position, look_at in world metres, wxyz from the
+        camera's OpenCV frame to the world, fov (vertical, rad), image_width, image_height)."""
+        import base64
+        import msgspec
+        reports = []
+        for payload in self.send(cmd='sent')['frames']:
+            try:
+                message = msgspec.msgpack.decode(base64.b64decode(payload))
+            except msgspec.DecodeError:
+                continue
+            if isinstance(message, dict) and message.get('type') == 'ViewerCameraMessage':
+                reports.append(message)
+        return reports
+
+    def wait_for_text_gone(self, fragment, timeout):
+        """Poll the page's text until ``fragment`` is not in it; returns the last text seen."""
+        deadline = time.monotonic() + timeout
+        text = self.text()
+        while fragment in text and time.monotonic() < deadline:
+            time.sleep(0.3)
+            text = self.text()
+        return text
+
     def stop(self):
         if self.proc.poll() is None:
             try:

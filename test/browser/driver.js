@@ -2,7 +2,8 @@
 //
 // Every command gets one JSON reply line on stdout: {"ok": true, ...} or {"ok": false, "error"}.
 // Commands: open {url}, canvas, mouse {action: down|up|move, x, y, steps}, text,
-// screenshot {path}, select {label, option}, check {label}, close.
+// screenshot {path}, select {label, option}, check {label}, click {name} (a button),
+// sent (the binary websocket frames the page sent since the last call, base64), close.
 'use strict';
 
 const fs = require('fs');
@@ -25,6 +26,16 @@ async function main() {
     viewport: { width: 960, height: 640 },
   });
   const page = context.pages()[0] || await context.newPage();
+  // What the page tells the viewer (its camera among others), read by the tests in Python.
+  const sentFrames = [];
+  page.on('websocket', (ws) => {
+    ws.on('framesent', (frame) => {
+      if (typeof frame.payload !== 'string') {
+        sentFrames.push(frame.payload.toString('base64'));
+        if (sentFrames.length > 5000) sentFrames.shift();
+      }
+    });
+  });
   const reply = (obj) => process.stdout.write(JSON.stringify(obj) + '\n');
 
   const handlers = {
@@ -83,6 +94,13 @@ async function main() {
       await input.fill(cmd.option);
       await page.getByRole('option', { name: cmd.option, exact: true }).click();
       return {};
+    },
+    async click(cmd) {
+      await page.getByRole('button', { name: cmd.name, exact: true }).first().click();
+      return {};
+    },
+    async sent() {
+      return { frames: sentFrames.splice(0, sentFrames.length) };
     },
     async check(cmd) {
       await page.getByLabel(cmd.label, { exact: true }).first().click();

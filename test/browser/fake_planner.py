@@ -2,7 +2,10 @@
 
 It is not the planner: it integrates root_x/root_y/root_yaw from the last command, publishes a wall
 (TRIANGLE_LIST) when the scene's file name contains 'wall', stops there and reports 'stuck' on
-/diagnostics. Used to test the viewer alone; the end-to-end test runs the real planner.
+/diagnostics. Setting its ``scene`` parameter (to the same file too) puts the actor back at the
+start, as the planner does. Its speed limits differ from the viewer's defaults, so a page that
+shows them shows the planner's. Used to test the viewer alone; the end-to-end test runs the real
+planner.
 """
 import math
 import os
@@ -13,6 +16,7 @@ from geometry_msgs.msg import Point, TwistStamped
 import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
+from rcl_interfaces.msg import SetParametersResult
 from rclpy.qos import DurabilityPolicy, QoSProfile
 from sensor_msgs.msg import JointState
 from visualization_msgs.msg import Marker, MarkerArray
@@ -28,11 +32,11 @@ class FakePlanner(Node):
     def __init__(self):
         super().__init__('actor_planner')
         self.declare_parameter('scene', 'flat.yaml')
-        self.declare_parameter('max_linear_speed', 0.8)
-        self.declare_parameter('max_angular_speed', 1.0)
+        self.declare_parameter('max_linear_speed', 0.9)
+        self.declare_parameter('max_angular_speed', 1.1)
         self.names = list(Skeleton().joint_names)
-        self.q = [0.0] * len(self.names)
-        self.q[self.names.index('root_z')] = 0.9
+        self.start_pose()
+        self.add_on_set_parameters_callback(self.on_parameters)
         self.command = (0.0, 0.0)
         self.state = 'idle'
         self.reason = ''
@@ -43,6 +47,15 @@ class FakePlanner(Node):
         self.markers = self.create_publisher(MarkerArray, '~/environment', latched)
         self.create_timer(0.01, self.step)
         self.create_timer(0.5, self.report)
+
+    def start_pose(self):
+        self.q = [0.0] * len(self.names)
+        self.q[self.names.index('root_z')] = 0.9
+
+    def on_parameters(self, parameters):
+        if any(p.name == 'scene' for p in parameters):
+            self.start_pose()
+        return SetParametersResult(successful=True)
 
     def wall(self):
         return 'wall' in os.path.basename(self.get_parameter('scene').value)
@@ -59,7 +72,7 @@ class FakePlanner(Node):
         if self.wall() and x > WALL_X - 0.3:
             x = min(x, self.q[ix])
             if lin > 0:
-                self.state, self.reason = 'stuck', 'no feasible footstep: wall ahead'
+                self.state, self.reason = 'stuck', 'no collision-free footstep window'
         self.q[ix] = x
         self.q[iy] += lin * 0.01 * math.sin(yaw)
         self.q[iyaw] += ang * 0.01
@@ -73,7 +86,8 @@ class FakePlanner(Node):
                                   message=self.state)
         status.values = [KeyValue(key='state', value=self.state),
                          KeyValue(key='reason', value=self.reason),
-                         KeyValue(key='planning_time_last_ms', value='1.5')]
+                         KeyValue(key='planning_time_last_ms', value='1.5'),
+                         KeyValue(key='publish_rate_hz', value='100.00')]
         self.diagnostics.publish(DiagnosticArray(status=[status]))
         array = MarkerArray()
         if self.wall():
