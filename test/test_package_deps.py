@@ -29,6 +29,7 @@ MODULE_KEYS = {
     'scipy': 'python3-scipy',
     'yaml': 'python3-yaml',
     'trimesh': 'python3-trimesh-pip',
+    'rosbags': 'python3-rosbags-pip',
     'fcl': 'python-fcl-pip',
     'numba': 'python3-numba',
     'matplotlib': 'python3-matplotlib',
@@ -37,6 +38,7 @@ MODULE_KEYS = {
     'yourdfpy': 'python3-yourdfpy-pip',
     'pytest': 'python3-pytest',
     'viser': None,
+    'msgspec': None,
 }
 # What trimesh does for the package only when these are installed (it imports them itself).
 TRIMESH_BACKENDS = {
