@@ -835,6 +835,204 @@ def _expand(deviation, here, has_candidates, candidate_targets, candidate_frames
             failures[:failed].copy(), lasting_only, held, checks)
 
 
+#: The expansions of a state :class:`CTRoadmap` can run (its ``search`` argument).
+ROADMAP_SEARCHES = ('compiled', 'readable')
+
+
+@dataclass(frozen=True)
+class Expansion:
+    """What one expansion of a search state found (:func:`best_first_expansion`).
+
+    Attributes
+    ----------
+    child
+        (deviation (d,) rad, arrival frame, whether it keeps the state's sub-goal) of the
+        legal advance found, or None.
+    left
+        The ranked neighbours not tried yet: (targets (c, d) as deviations, rad, arrivals (c,),
+        the targets rounded to 1e-3 rad (c, d)).
+    failures
+        The first illegal frame of each motion that failed.
+    lasting_only
+        Whether the state now offers lasting neighbours only.
+
+    """
+
+    child: Optional[Tuple[np.ndarray, int, bool]]
+    left: Tuple[np.ndarray, np.ndarray, np.ndarray]
+    failures: List[int]
+    lasting_only: bool
+
+
+def best_first_expansion(roadmap: 'CTRoadmap', space: CTSpace, state: _State,
+                         horizon: _Horizon, speed_fraction: float, visited) -> Expansion:
+    """Expand one state of §5.2's best-first search: the first legal advance to a neighbour.
+
+    The neighbours are ranked once per state (the roadmap's nodes reached at joint speeds,
+    the objective followed, the posture held; closest to the objective first, lasting
+    postures first where the roadmap prefers them); their end points are checked in one
+    batch, and the motions to the untried ones in rank order up to the first legal one. On
+    the objective its best neighbour, following it, is tried at once. The search talks to
+    the space only through its interface (``valid_rows``, ``rows_and_path``,
+    ``first_invalid_motion``, ``first_legal_motion``). The code of record of the compiled
+    ``_expand``, which gives the same answers and the same checks counted.
+
+    Parameters
+    ----------
+    roadmap
+        The branch's roadmap (nodes, weights, candidates per state, lasting preference).
+    space
+        The branch's CT-space for this step.
+    state
+        The state expanded (its ranked neighbours are kept on it by the caller).
+    horizon
+        The search's horizon (where the objective is legal).
+    speed_fraction
+        Fraction of the joint speed limits used when timing motions.
+    visited
+        The search's tried neighbours (``_empty_visited``), added to here.
+
+    Returns
+    -------
+    Expansion
+
+    """
+    here, deviation = state.frame, state.deviation
+    on_objective = not np.any(deviation)
+    start = space.objective[here] + deviation
+    failures: List[int] = []
+    lasting_only = False
+    known_motion = None  # (goal, arrival, first illegal frame) of a motion checked ahead
+    if state.candidates is None:
+        ranking = _rank_neighbours(roadmap, space, state, horizon, speed_fraction, visited)
+        targets, arrivals, keys, lasting_only, known_motion = ranking
+        if len(arrivals) and on_objective and not state.followed:
+            # §5.2 on the objective: its best neighbour is following it (one motion check).
+            first_target, first_arrival = targets[0], int(arrivals[0])
+            targets, arrivals, keys = targets[1:], arrivals[1:], keys[1:]
+            if not state.tried_objective:
+                bad = space.first_invalid_motion(
+                    (start, here), (space.objective[first_arrival] + first_target,
+                                    first_arrival))
+                if bad < 0:
+                    return Expansion((first_target.copy(), first_arrival,
+                                      first_arrival < state.until),
+                                     (targets, arrivals, keys), failures, lasting_only)
+                failures.append(bad)
+                if not np.any(first_target) and bad - 1 > here:
+                    # Following the objective is legal up to the frame before the obstacle.
+                    return Expansion((np.zeros_like(deviation), bad - 1, False),
+                                     (targets, arrivals, keys), failures, lasting_only)
+    else:
+        targets, arrivals, keys = state.candidates
+    nothing = (np.zeros((0, len(deviation))), np.zeros(0, dtype=np.int64),
+               np.zeros((0, len(deviation))))
+
+    # The untried neighbours in rank order; all of them are marked tried.
+    fresh = []
+    for c in range(len(arrivals)):
+        key = _visited_key(int(arrivals[c]), keys, c)
+        if key not in visited:
+            visited[key] = True
+            fresh.append(c)
+    if not fresh:
+        return Expansion(None, nothing, failures, lasting_only)
+    goals = [(space.objective[arrivals[c]] + targets[c], int(arrivals[c])) for c in fresh]
+    first_failure = None
+    if known_motion is not None and known_motion[1] == goals[0][1] \
+            and np.array_equal(known_motion[0], goals[0][0]):
+        first_failure = known_motion[2]
+    chosen, answers = space.first_legal_motion((start, here), goals, first_failure)
+    failures.extend(bad for bad in answers if bad >= 0)
+    if chosen < 0:
+        return Expansion(None, nothing, failures, lasting_only)
+    left = fresh[chosen + 1:]
+    c = fresh[chosen]
+    target, arrival = targets[c].copy(), int(arrivals[c])
+    if np.array_equal(target, deviation):
+        # Holding the posture: a longer hold of it that failed was legal up to the frame
+        # before it failed (and ranked first): hold on to there in this advance.
+        for before, bad in zip(fresh[:chosen], answers[:chosen]):
+            if (np.array_equal(targets[before], target) and arrivals[before] > arrival
+                    and bad - 1 > arrival):
+                arrival = bad - 1
+    return Expansion((target, arrival, arrival < state.until),
+                     (targets[left], arrivals[left], keys[left]), failures, lasting_only)
+
+
+def _rank_neighbours(roadmap: 'CTRoadmap', space: CTSpace, state: _State, horizon: _Horizon,
+                     speed_fraction: float, visited) -> tuple:
+    """The neighbours of a state in rank order whose end points are legal: the closest
+    ``max_candidates``, and holding the current posture whatever its rank (targets (c, d),
+    arrivals (c,), keys (c, d)); whether only lasting ones are offered; and the motion to
+    the best untried one, checked in the same batch as the end points ((goal, arrival,
+    first illegal frame) or None)."""
+    here, deviation = state.frame, state.deviation
+    last, hold_frames = space.frame_count - 1, horizon.hold_frames
+    on_objective = not np.any(deviation)
+    # Backtracking set a sub-goal: stay among the nodes legal at the blocking frame.
+    in_sub_goal = state.allowed is not None and here < state.until
+    approach_first = roadmap.prefer_lasting and not state.relaxed
+    (targets, arrivals, _, approach, holds, ranked_frames, ranked_closeness, rounded,
+     q) = _neighbour_table(
+        state.allowed if in_sub_goal else roadmap.nodes, deviation, here, last, hold_frames,
+        on_objective and not in_sub_goal, on_objective, approach_first, space.times,
+        speed_fraction * space.speed_limit, horizon.next_free[min(here + hold_frames, last)],
+        horizon.free, roadmap.weights, space.objective)
+    m = len(arrivals)
+    lasting = np.ones(m, dtype=bool)
+    if approach_first:
+        lasting = roadmap._lasting(space, horizon, here, targets, arrivals)
+    # Closest first; equally close, sooner first (holds and on the objective: later first);
+    # lasting ones before the others where the roadmap prefers them.
+    keys_in_order = (ranked_frames, ranked_closeness) + ((~lasting,) if approach_first else ())
+    order = [int(i) for i in np.lexsort(keys_in_order)]
+    if approach >= 0 and not lasting[m - 1]:
+        # The posture does not last through the stretch: held hold_frames at a time instead.
+        order.remove(approach)
+    # The motion to the best untried neighbour, usually the next motion checked, goes with
+    # the end points in one batch.
+    motion = None
+    if not on_objective and not state.followed:
+        for i in order:
+            if _visited_key(int(arrivals[i]), rounded, i) not in visited:
+                motion = (space.objective[arrivals[i]] + targets[i], int(arrivals[i]))
+                break
+    known_motion = None
+    if motion is not None and motion[1] > here:
+        before = space.checks
+        rows_legal, bad = space.rows_and_path(q, arrivals, [(space.objective[here] + deviation,
+                                                             here), motion])
+        if space.checks - before > m:  # the motion had rows to check
+            known_motion = (motion[0], motion[1], bad)
+    else:
+        rows_legal = space.valid_rows(q, arrivals)
+    # End points in collision cannot start a legal motion: read in rank order up to the
+    # max_candidates-th legal one (holding the current posture kept whatever its rank).
+    legal = np.zeros(m, dtype=bool)
+    found = 0
+    for i in order:
+        legal[i] = rows_legal[i]
+        found += bool(legal[i])
+        if found == roadmap.max_candidates:
+            break
+    legal[holds] = rows_legal[holds]
+    lasting_only = False
+    if approach_first and horizon.free[here] and (legal & lasting).any() \
+            and (legal & ~lasting).any():
+        # Leaving the objective before a blocked stretch: lasting neighbours only, until
+        # backtracking for them has failed (see CTRoadmap.solve).
+        legal &= lasting
+        lasting_only = True
+    picked = [i for i in order if legal[i]]
+    picked = [i for rank, i in enumerate(picked) if rank < roadmap.max_candidates or holds[i]]
+    if state.followed:
+        # The search already went on from here along the objective.
+        picked = [i for i in picked if np.any(targets[i]) or arrivals[i] > here + hold_frames]
+    picked = np.array(picked, dtype=np.int64)
+    return (targets[picked], arrivals[picked], rounded[picked], lasting_only, known_motion)
+
+
 def objective_grid(last: int, spacing: int) -> np.ndarray:
     """Frames 0, ``spacing``, 2 ``spacing``, ... and ``last``: where a search first checks the
     objective (:meth:`CTRoadmap._objective_free`); made once per (last, spacing) and shared,
@@ -957,12 +1155,19 @@ class CTRoadmap:
     prefer_lasting
         Rank neighbours that stay legal, held, to the end of the blocked stretch ahead before
         the others, and try the others only after backtracking for a lasting one failed.
+    search
+        How a state is expanded: ``'compiled'`` (one kernel, the runtime path) or
+        ``'readable'`` (:func:`best_first_expansion`, the code of record, in plain Python
+        through the space's interface). Both give the same result.
 
     """
 
     def __init__(self, patterns: np.ndarray, weights: np.ndarray, radius: float,
                  max_nodes: int, rng: np.random.Generator, max_candidates: int = 8,
-                 prefer_lasting: bool = False):
+                 prefer_lasting: bool = False, search: str = 'compiled'):
+        if search not in ROADMAP_SEARCHES:
+            raise ValueError(f'search must be one of {ROADMAP_SEARCHES}, got {search!r}')
+        self.search = search
         patterns = np.atleast_2d(np.asarray(patterns, dtype=float))
         weights = np.asarray(weights, dtype=float)
         if patterns.shape[1] != weights.shape[0]:
@@ -1338,6 +1543,19 @@ class CTRoadmap:
                     child = self._try(space, state, np.zeros_like(state.deviation), last)
                     if child is not None:
                         return child
+        if self.search == 'readable':
+            expansion = best_first_expansion(self, space, state, horizon, speed_fraction,
+                                             visited)
+            state.candidates = expansion.left
+            state.lasting_only |= expansion.lasting_only
+            state.failures.extend(expansion.failures)
+            if expansion.child is None:
+                return None
+            deviation, arrival, inherit = expansion.child
+            child = _State(deviation, int(arrival))
+            if inherit:
+                child.until, child.allowed = state.until, state.allowed
+            return child
         # The rest in one kernel: rank the neighbours (once per state), then try the untried
         # ones in order.
         ranked = state.candidates is not None
