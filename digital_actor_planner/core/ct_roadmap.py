@@ -982,7 +982,7 @@ def _rank_neighbours(roadmap: 'CTRoadmap', space: CTSpace, state: _State, horizo
     m = len(arrivals)
     lasting = np.ones(m, dtype=bool)
     if approach_first:
-        lasting = roadmap._lasting(space, horizon, here, targets, arrivals)
+        lasting = _lasting_neighbours(space, horizon, here, targets, arrivals)
     # Closest first; equally close, sooner first (holds and on the objective: later first);
     # lasting ones before the others where the roadmap prefers them.
     keys_in_order = (ranked_frames, ranked_closeness) + ((~lasting,) if approach_first else ())
@@ -1031,6 +1031,84 @@ def _rank_neighbours(roadmap: 'CTRoadmap', space: CTSpace, state: _State, horizo
         picked = [i for i in picked if np.any(targets[i]) or arrivals[i] > here + hold_frames]
     picked = np.array(picked, dtype=np.int64)
     return (targets[picked], arrivals[picked], rounded[picked], lasting_only, known_motion)
+
+
+def _lasting_neighbours(space: CTSpace, horizon: _Horizon, here: int, targets: np.ndarray,
+                        arrivals: np.ndarray) -> np.ndarray:
+    """Whether each neighbour, held from its arrival, lasts through the blocked stretch ahead:
+    the readable ``CTRoadmap._lasting``, through the space's ``valid_rows``.
+
+    The stretch is the first one from ``here`` on where the objective is blocked, to the frame
+    it is legal again. A moved posture must be legal on a grid over it (the stretch's start
+    if it arrives earlier, every ``hold_frames``-th frame after its arrival, the stretch's
+    end), every :data:`COARSE_STRIDE`-th grid frame from the end first; the objective itself
+    lasts where it is legal. What is known of a posture (rounded to 1e-4 rad) at a frame is
+    kept in the horizon for the whole search.
+
+    Parameters
+    ----------
+    space, horizon
+        The branch's CT-space and the search's horizon.
+    here
+        Frame of the state the neighbours leave from.
+    targets, arrivals
+        (m, d) neighbours as deviations from the objective, rad, and (m,) their arrivals.
+
+    Returns
+    -------
+    numpy.ndarray
+        (m,) bool; all True when the objective is legal from ``here`` to the last frame.
+
+    """
+    m, spacing = len(arrivals), horizon.hold_frames
+    blocked = np.flatnonzero(~horizon.free[here:])
+    if not len(blocked):
+        return np.ones(m, dtype=bool)
+    begin = here + int(blocked[0])
+    end = int(horizon.next_free[begin])
+    # Each posture numbered as it first appears: its row of what is known (horizon.held).
+    rounded = np.round(targets, 4)
+    ids = []
+    for i in range(m):
+        key = _padded(rounded, i)
+        if key not in horizon.postures:
+            horizon.postures[key] = len(horizon.postures)
+        ids.append(horizon.postures[key])
+    if len(horizon.postures) > horizon.held.shape[0]:
+        held = np.full((2 * len(horizon.postures), horizon.held.shape[1]), -1, dtype=np.int8)
+        held[:horizon.held.shape[0]] = horizon.held
+        horizon.held = held
+    lasting = np.ones(m, dtype=bool)
+    grids = {}
+    for i in range(m):
+        arrival = int(arrivals[i])
+        if arrival > end:
+            continue
+        if not np.any(targets[i]):
+            lasting[i] = bool(horizon.free[arrival:end + 1].all())
+            continue
+        grids[i] = (([begin] if arrival < begin else [])
+                    + list(range(max(arrival, begin) // spacing * spacing + spacing, end,
+                                 spacing)) + [end])
+    for coarse in (True, False):
+        rows, frames = [], []
+        for i, grid in grids.items():
+            if not lasting[i]:
+                continue
+            for frame in (grid[::-1][::COARSE_STRIDE] if coarse else grid):
+                known = horizon.held[ids[i], frame]
+                if known < 0:
+                    rows.append(i)
+                    frames.append(frame)
+                elif known == 0:
+                    lasting[i] = False
+        if rows:
+            frames = np.array(frames, dtype=np.int64)
+            legal = space.valid_rows(space.objective[frames] + targets[rows], frames)
+            for i, frame, is_legal in zip(rows, frames.tolist(), legal.tolist()):
+                horizon.held[ids[i], frame] = 1 if is_legal else 0
+                lasting[i] = lasting[i] and is_legal
+    return lasting
 
 
 def objective_grid(last: int, spacing: int) -> np.ndarray:
