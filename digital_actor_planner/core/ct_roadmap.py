@@ -968,17 +968,15 @@ def _rank_neighbours(roadmap: 'CTRoadmap', space: CTSpace, state: _State, horizo
     the best untried one, checked in the same batch as the end points ((goal, arrival,
     first illegal frame) or None)."""
     here, deviation = state.frame, state.deviation
-    last, hold_frames = space.frame_count - 1, horizon.hold_frames
+    hold_frames = horizon.hold_frames
     on_objective = not np.any(deviation)
     # Backtracking set a sub-goal: stay among the nodes legal at the blocking frame.
     in_sub_goal = state.allowed is not None and here < state.until
     approach_first = roadmap.prefer_lasting and not state.relaxed
-    (targets, arrivals, _, approach, holds, ranked_frames, ranked_closeness, rounded,
-     q) = _neighbour_table(
-        state.allowed if in_sub_goal else roadmap.nodes, deviation, here, last, hold_frames,
-        on_objective and not in_sub_goal, on_objective, approach_first, space.times,
-        speed_fraction * space.speed_limit, horizon.next_free[min(here + hold_frames, last)],
-        horizon.free, roadmap.weights, space.objective)
+    (targets, arrivals, approach, holds, ranked_frames, ranked_closeness, rounded,
+     q) = _neighbours(state.allowed if in_sub_goal else roadmap.nodes, space, state, horizon,
+                      speed_fraction * space.speed_limit, roadmap.weights, approach_first,
+                      on_objective and not in_sub_goal)
     m = len(arrivals)
     lasting = np.ones(m, dtype=bool)
     if approach_first:
@@ -1109,6 +1107,81 @@ def _lasting_neighbours(space: CTSpace, horizon: _Horizon, here: int, targets: n
                 horizon.held[ids[i], frame] = 1 if is_legal else 0
                 lasting[i] = lasting[i] and is_legal
     return lasting
+
+
+def _neighbours(nodes: np.ndarray, space: CTSpace, state: _State, horizon: _Horizon,
+                rate: np.ndarray, weights: np.ndarray, approach_first: bool,
+                with_objective: bool) -> tuple:
+    """The neighbours of a state before they are ranked: the readable ``_neighbour_table``.
+
+    In order: the objective followed to the final frame (``with_objective``); each of
+    ``nodes`` (n, d) at its arrival at joint speeds ``rate`` (d,) rad/s (one the remaining
+    time does not reach steered as far towards it as it allows; the current posture held
+    ``hold_frames``); the current posture held past the blocked stretch ahead, ending where
+    the way back to the objective would arrive as it becomes legal, or, with
+    ``approach_first``, up to the frame before the objective is next blocked; and the current
+    posture held ``hold_frames``.
+
+    Returns
+    -------
+    tuple
+        (targets (m, d) as deviations, rad; arrivals (m,); the approach hold's row or -1;
+        holds (m,) whether each holds the current posture; the arrival as ranked (m,), later
+        first for holds and on the objective (negated); closeness to the objective rounded to
+        1e-6 (m,); the targets rounded to 1e-3 rad (m, d); the configurations (m, d), rad).
+
+    """
+    here, deviation = state.frame, state.deviation
+    last, hold_frames = space.frame_count - 1, horizon.hold_frames
+    on_objective = not np.any(deviation)
+    times = space.times
+    step = (times[-1] - times[0]) / max(len(times) - 1, 1)
+
+    def travel(change):
+        # Frames to make ``change`` at ``rate``: the slowest joint's time in whole frames.
+        seconds = 0.0
+        for j in range(len(change)):
+            seconds = max(seconds, abs(change[j]) / rate[j])
+        return max(1, int(math.ceil(seconds / step - 1e-9)))
+
+    targets, arrivals = [], []
+    if with_objective:
+        targets.append(np.zeros(len(deviation)))
+        arrivals.append(last)
+    for node in nodes:
+        change = node - deviation
+        arrival = here + (travel(change) if np.any(change != 0.0) else hold_frames)
+        if arrival > last:
+            share = (last - here) / (arrival - here)
+            targets.append(deviation + share * change)
+            arrivals.append(last)
+        else:
+            targets.append(node.copy())
+            arrivals.append(arrival)
+    approach = -1
+    held = min(here + hold_frames, last)
+    hold_end = int(horizon.next_free[held])
+    if hold_end > held and not on_objective:
+        end = hold_end - travel(deviation) if hold_end < last else hold_end
+        if end > here + hold_frames:
+            targets.append(deviation.copy())
+            arrivals.append(end)
+    elif approach_first and not on_objective:
+        blocked = np.flatnonzero(~horizon.free[here:])
+        if len(blocked) and blocked[0] - 1 > hold_frames:
+            approach = len(arrivals)
+            targets.append(deviation.copy())
+            arrivals.append(here + int(blocked[0]) - 1)
+    targets.append(deviation.copy())
+    arrivals.append(held)
+    targets = np.array(targets).reshape(len(arrivals), len(deviation))
+    arrivals = np.array(arrivals, dtype=np.int64)
+    closeness = np.array([math.sqrt(sum(w * (t * t) for w, t in zip(weights, target)))
+                          for target in targets.tolist()])
+    holds = np.all(targets == deviation, axis=1)
+    ranked_frames = np.where(holds | on_objective, -arrivals, arrivals)
+    return (targets, arrivals, approach, holds, ranked_frames, np.round(closeness, 6),
+            np.round(targets, 3), space.objective[arrivals] + targets)
 
 
 def objective_grid(last: int, spacing: int) -> np.ndarray:
