@@ -571,7 +571,8 @@ def _expand(deviation, here, has_candidates, candidate_targets, candidate_frames
     are tried in order (:func:`ct_space.first_legal_goal`, the first goal's answer taken from
     that batch where it checked its motion), a hold chosen made as long as the failed
     longer holds before it allow (:func:`_longest_hold`). One call instead of about five
-    kernels and their Python: on the pillars' slowest step 14.8 -> 11.3 ms.
+    kernels and their Python. The compiled twin of :func:`best_first_expansion`, the code of
+    record (the same answers, the same configurations checked).
 
     Returns (1 and a child's deviation and arrival, whether it keeps the state's sub-goal, or
     0), the neighbours left to try (targets, arrivals, keys), the failures to add to the

@@ -11,8 +11,8 @@ The search sees the ground only through a :class:`FootholdTable` (every foothold
 reach, judged beforehand, and the profile's swing obstacle), as a planner sees only its space.
 :func:`footstep_search.window_search` is its compiled twin, the runtime path
 (``FootstepConfig.window_search``): the same configurations judged in the same order, the same
-sums in the same order, so the same footsteps and efforts to the last bit; the twin is some tens
-of times faster (``bench/bench_footstep_window.py``).
+sums in the same order, so the same footsteps and efforts to the last bit; the twin is about an
+order of magnitude faster (``bench/bench_footstep_window.py``, docs/READABLE_ALGORITHMS.md).
 """
 from __future__ import annotations
 

@@ -74,7 +74,8 @@ class FootstepConfig:
     ``window_search``: which search of a window :meth:`FootstepPlanner.plan` runs:
     ``'compiled'`` (:func:`footstep_search.window_search`, the runtime path) or ``'readable'``
     (:func:`footstep_window.search_footstep_window`, the code of record, in plain Python).
-    Both find the same footsteps; the compiled one is some tens of times faster.
+    Both find the same footsteps; the compiled one is about an order of magnitude faster
+    (``bench/bench_footstep_window.py``, docs/READABLE_ALGORITHMS.md).
     """
 
     window_steps: int = 3
@@ -522,10 +523,10 @@ class FootstepPlanner:
             None when no collision-free configuration exists in the window.
 
         The search runs compiled, its foothold table included
-        (:func:`footstep_search.window_search`), called without numba's dispatcher; it judges
-        the same configurations as the Python search (``test/footstep_reference.py``) and
-        finds the same efforts to the last bit, some 40 times faster
-        (``bench/bench_lower_body.py``).
+        (:func:`footstep_search.window_search`), called without numba's dispatcher, unless
+        ``FootstepConfig.window_search`` asks for the readable search of record
+        (:func:`footstep_window.search_footstep_window`): both judge the same configurations
+        and find the same footsteps and efforts to the last bit.
         """
         n, m = self._window_size
         if start is None:
