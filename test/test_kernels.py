@@ -4,16 +4,18 @@ An installation without numba runs that source: it then plans the same frames, o
 Each kernel is run compiled and as plain Python on the inputs the planners give it, including
 the awkward ones (off the map, NaN, holes, a table over the floor).
 """
-import math
+import importlib
 import os
+import pkgutil
 import subprocess
 import sys
 
 import numpy as np
 import pytest
 
-from digital_actor_planner.core import (collision, convex, ct_roadmap, ct_space, environment,
-                                        footstep_search, gait, path as path_module)
+from digital_actor_planner.core import (collision, ct_space, environment, footstep_search, gait,
+                                        path as path_module)
+from digital_actor_planner import core as core_package
 from digital_actor_planner.core import skeleton as skeleton_module, upper_body
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment, start_configuration
@@ -59,47 +61,30 @@ def world():
                         box((1.0, 0.3, 0.15), (1.1, 0.4, 1.5))])
 
 
+def _kernels():
+    """Every kernel of the core (what ``jit.kernel`` made: it keeps ``py_func``), by name."""
+    found = {}
+    for info in pkgutil.iter_modules(core_package.__path__):
+        module = importlib.import_module(f'{core_package.__name__}.{info.name}')
+        for name, value in vars(module).items():
+            if callable(value) and hasattr(value, 'py_func') and value.__module__ == \
+                    module.__name__:
+                found[f'{info.name}.{name}'] = value
+    return found
+
+
 def test_numba_is_installed_and_the_kernels_are_compiled():
     """requirements.txt pins numba: without it every kernel runs as Python, many times
     slower, and the planning-time numbers in the README would not hold."""
     assert COMPILED
-    for kernel in (footstep_search.judge_footholds, environment._ground_heights,
-                   environment._tops_near, collision._suspects, collision._half_extents,
-                   skeleton_module._shape_transforms,
-                   gait._raise_swing, gait._swing_need, gait._leg_triangle, gait._feet_meet,
-                   gait._leg_violation, gait._sole_points, gait._across_sole,
-                   collision._quaternions,
-                   ct_space._link_poses, ct_space._place_shapes,
-                   ct_space._branch_boxes, ct_space._row_collisions, ct_space._boxes_apart,
-                   ct_space._box_triangle_apart, ct_space._motion_path,
-                   ct_space._first_contacts, ct_space._touches_triangle, ct_space._touches_shape,
-                   ct_space._reachable_pairs, ct_space._motion_paths,
-                   ct_roadmap._stack_path, ct_roadmap._horizon_tables, ct_space._within,
-                   ct_roadmap._neighbour_table, ct_space._illegal_rows, ct_space._check_rows,
-                   ct_space._row_key, ct_space._empty_row_memo,
-                   ct_space._motion_failures, ct_space._sweeps, ct_roadmap._lasting_table,
-                   ct_roadmap._grown_node, ct_roadmap._expand, ct_roadmap._lasting_from,
-                   ct_roadmap._ranking, ct_space.first_legal_goal, ct_roadmap._longest_hold,
-                   ct_roadmap._empty_visited, ct_roadmap._empty_postures,
-                   ct_roadmap._padded, ct_roadmap._visited_key,
-                   ct_roadmap._unsigned_zero,
-                   upper_body._within_limits_kernel, ct_space._box_within,
-                   upper_body._input_sound, ct_space._column_dots, ct_space._triangle_apart_along,
-                   convex._middle, ct_roadmap._travel,
-                   ct_space._candidates_meeting,
-                   ct_space._pose_shapes_into, ct_space._write_columns, gait._sagittal_joints,
-                   gait._pelvis_track, gait._swing_plane, gait._ankle_correction,
-                   gait._wrapped, gait._swing_bounds, gait._swing_pass, gait._stance_leg,
-                   gait._fade_ankle, path_module._arc_offsets, gait._rolled_stance,
-                   upper_body._write_patterns, footstep_search.foothold_tables,
-                   footstep_search._rise_ahead, footstep_search._swing_clear,
-                   footstep_search._effort, footstep_search._judge_sole,
-                   footstep_search._unjudged_tables,
-                   footstep_search._footholds_of, footstep_search.window_search,
-                   footstep_search.exhaustive_search, footstep_search._empty_memos,
-                   footstep_search._digits,
-                   footstep_search._step_cost):
-        assert kernel.py_func is not kernel
+    kernels = _kernels()
+    # The stages that run compiled: the footstep search, the ground map, the gait, the 3D
+    # check, the CT-space and the roadmap's search.
+    stages = {name.split('.')[0] for name in kernels}
+    assert {'footstep_search', 'environment', 'gait', 'collision', 'ct_space',
+            'ct_roadmap'} <= stages
+    for name, kernel in kernels.items():
+        assert kernel.py_func is not kernel, name
 
 
 def test_a_kernel_called_without_numbas_dispatch_answers_alike():
@@ -116,7 +101,9 @@ def test_a_kernel_called_without_numbas_dispatch_answers_alike():
     profile = GroundProfile(s0=-0.3, ds=0.02, height=height, low=height.copy(),
                             headroom=np.full_like(height, np.inf),
                             obstacle=np.full_like(height, np.nan))
-    arguments = (6 * 14 + 6) * 14 + 6, planner._none_banned, planner._none_banned, True, \
+    none_banned = np.zeros(14, dtype=bool)
+    none_banned.setflags(write=False)
+    arguments = (6 * 14 + 6) * 14 + 6, none_banned, none_banned, True, \
         planner.search_profile(profile, 1, 0.0, 0.0, -0.1, 0.0, 0.5, 0.5)
     through, direct_answer = (footstep_search.window_search(*arguments),
                               footsteps.window_search(*arguments))
@@ -209,36 +196,6 @@ def test_the_broad_phase_of_the_3d_check(skeleton, world):
     same(collision._half_extents(body._kind_codes[index], body._halves[index], rotations),
          collision._half_extents.py_func(body._kind_codes[index], body._halves[index],
                                          rotations))
-
-
-def test_a_turn_about_a_coordinate_axis_gives_the_written_out_products_numbers():
-    """_link_poses turns a link about a coordinate axis by mixing two columns; the numbers
-    must be those of the product with the rotation matrix written out (three terms per entry,
-    in order, two of them products with 0 or 1), which the kernel computed before."""
-    rng = np.random.default_rng(12)
-    frames = 200
-    for axis in range(3):
-        for sign in (1.0, -1.0):
-            q = rng.uniform(-3.2, 3.2, (frames, 1))
-            rotations = np.zeros((frames, 2, 3, 3))
-            positions = np.zeros((frames, 2, 3))
-            rotations[:, 0] = [np.linalg.qr(rng.normal(size=(3, 3)))[0] for _ in range(frames)]
-            # One revolute step from link 0 to link 1 about the axis, no origin offset.
-            table = (np.array([0]), np.array([1]), np.eye(3)[None].copy(), np.array([False]),
-                     np.zeros((1, 3)), np.array([-1]), np.zeros(1), np.array([False]),
-                     np.array([0]), np.array([1]), np.array([axis]), np.array([sign]),
-                     np.eye(3)[axis][None].copy())
-            ct_space._link_poses(q, rotations, positions, *table)
-            for f in range(frames):
-                angle = q[f, 0] * sign
-                turn = np.eye(3)
-                b, e = (axis + 1) % 3, (axis + 2) % 3
-                turn[b, b] = turn[e, e] = math.cos(angle)
-                turn[e, b], turn[b, e] = math.sin(angle), -math.sin(angle)
-                base = rotations[f, 0]
-                written_out = [[base[r, 0] * turn[0, c] + base[r, 1] * turn[1, c]
-                                + base[r, 2] * turn[2, c] for c in range(3)] for r in range(3)]
-                assert np.array_equal(rotations[f, 1], written_out), (axis, sign, f)
 
 
 def test_the_upper_body_kinematics_and_boxes(skeleton):

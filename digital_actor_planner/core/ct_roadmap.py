@@ -571,7 +571,8 @@ def _expand(deviation, here, has_candidates, candidate_targets, candidate_frames
     are tried in order (:func:`ct_space.first_legal_goal`, the first goal's answer taken from
     that batch where it checked its motion), a hold chosen made as long as the failed
     longer holds before it allow (:func:`_longest_hold`). One call instead of about five
-    kernels and their Python: on the pillars' slowest step 14.8 -> 11.3 ms.
+    kernels and their Python. The compiled twin of :func:`best_first_expansion`, the code of
+    record (the same answers, the same configurations checked).
 
     Returns (1 and a child's deviation and arrival, whether it keeps the state's sub-goal, or
     0), the neighbours left to try (targets, arrivals, keys), the failures to add to the
@@ -835,6 +836,355 @@ def _expand(deviation, here, has_candidates, candidate_targets, candidate_frames
             failures[:failed].copy(), lasting_only, held, checks)
 
 
+#: The expansions of a state :class:`CTRoadmap` can run (its ``search`` argument).
+ROADMAP_SEARCHES = ('compiled', 'readable')
+
+
+@dataclass(frozen=True)
+class Expansion:
+    """What one expansion of a search state found (:func:`best_first_expansion`).
+
+    Attributes
+    ----------
+    child
+        (deviation (d,) rad, arrival frame, whether it keeps the state's sub-goal) of the
+        legal advance found, or None.
+    left
+        The ranked neighbours not tried yet: (targets (c, d) as deviations, rad, arrivals (c,),
+        the targets rounded to 1e-3 rad (c, d)).
+    failures
+        The first illegal frame of each motion that failed.
+    lasting_only
+        Whether the state now offers lasting neighbours only.
+
+    """
+
+    child: Optional[Tuple[np.ndarray, int, bool]]
+    left: Tuple[np.ndarray, np.ndarray, np.ndarray]
+    failures: List[int]
+    lasting_only: bool
+
+
+def best_first_expansion(roadmap: 'CTRoadmap', space: CTSpace, state: _State,
+                         horizon: _Horizon, speed_fraction: float, visited) -> Expansion:
+    """Expand one state of §5.2's best-first search: the first legal advance to a neighbour.
+
+    The neighbours are ranked once per state (the roadmap's nodes reached at joint speeds,
+    the objective followed, the posture held; closest to the objective first, lasting
+    postures first where the roadmap prefers them); their end points are checked in one
+    batch, and the motions to the untried ones in rank order up to the first legal one. On
+    the objective its best neighbour, following it, is tried at once. The search talks to
+    the space only through its interface (``valid_rows``, ``rows_and_path``,
+    ``first_invalid_motion``, ``first_legal_motion``). The code of record of the compiled
+    ``_expand``, which gives the same answers and the same checks counted.
+
+    Parameters
+    ----------
+    roadmap
+        The branch's roadmap (nodes, weights, candidates per state, lasting preference).
+    space
+        The branch's CT-space for this step.
+    state
+        The state expanded (its ranked neighbours are kept on it by the caller).
+    horizon
+        The search's horizon (where the objective is legal).
+    speed_fraction
+        Fraction of the joint speed limits used when timing motions.
+    visited
+        The search's tried neighbours (``_empty_visited``), added to here.
+
+    Returns
+    -------
+    Expansion
+
+    """
+    here, deviation = state.frame, state.deviation
+    on_objective = not np.any(deviation)
+    start = space.objective[here] + deviation
+    failures: List[int] = []
+    lasting_only = False
+    known_motion = None  # (goal, arrival, first illegal frame) of a motion checked ahead
+    if state.candidates is None:
+        ranking = _rank_neighbours(roadmap, space, state, horizon, speed_fraction, visited)
+        targets, arrivals, keys, lasting_only, known_motion = ranking
+        if len(arrivals) and on_objective and not state.followed:
+            # §5.2 on the objective: its best neighbour is following it (one motion check).
+            first_target, first_arrival = targets[0], int(arrivals[0])
+            targets, arrivals, keys = targets[1:], arrivals[1:], keys[1:]
+            if not state.tried_objective:
+                bad = space.first_invalid_motion(
+                    (start, here), (space.objective[first_arrival] + first_target,
+                                    first_arrival))
+                if bad < 0:
+                    return Expansion((first_target.copy(), first_arrival,
+                                      first_arrival < state.until),
+                                     (targets, arrivals, keys), failures, lasting_only)
+                failures.append(bad)
+                if not np.any(first_target) and bad - 1 > here:
+                    # Following the objective is legal up to the frame before the obstacle.
+                    return Expansion((np.zeros_like(deviation), bad - 1, False),
+                                     (targets, arrivals, keys), failures, lasting_only)
+    else:
+        targets, arrivals, keys = state.candidates
+    nothing = (np.zeros((0, len(deviation))), np.zeros(0, dtype=np.int64),
+               np.zeros((0, len(deviation))))
+
+    # The untried neighbours in rank order; all of them are marked tried.
+    fresh = []
+    for c in range(len(arrivals)):
+        key = _visited_key(int(arrivals[c]), keys, c)
+        if key not in visited:
+            visited[key] = True
+            fresh.append(c)
+    if not fresh:
+        return Expansion(None, nothing, failures, lasting_only)
+    goals = [(space.objective[arrivals[c]] + targets[c], int(arrivals[c])) for c in fresh]
+    first_failure = None
+    if known_motion is not None and known_motion[1] == goals[0][1] \
+            and np.array_equal(known_motion[0], goals[0][0]):
+        first_failure = known_motion[2]
+    chosen, answers = space.first_legal_motion((start, here), goals, first_failure)
+    failures.extend(bad for bad in answers if bad >= 0)
+    if chosen < 0:
+        return Expansion(None, nothing, failures, lasting_only)
+    left = fresh[chosen + 1:]
+    c = fresh[chosen]
+    target, arrival = targets[c].copy(), int(arrivals[c])
+    if np.array_equal(target, deviation):
+        # Holding the posture: a longer hold of it that failed was legal up to the frame
+        # before it failed (and ranked first): hold on to there in this advance.
+        for before, bad in zip(fresh[:chosen], answers[:chosen]):
+            if (np.array_equal(targets[before], target) and arrivals[before] > arrival
+                    and bad - 1 > arrival):
+                arrival = bad - 1
+    return Expansion((target, arrival, arrival < state.until),
+                     (targets[left], arrivals[left], keys[left]), failures, lasting_only)
+
+
+def _rank_neighbours(roadmap: 'CTRoadmap', space: CTSpace, state: _State, horizon: _Horizon,
+                     speed_fraction: float, visited) -> tuple:
+    """The neighbours of a state in rank order whose end points are legal: the closest
+    ``max_candidates``, and holding the current posture whatever its rank (targets (c, d),
+    arrivals (c,), keys (c, d)); whether only lasting ones are offered; and the motion to
+    the best untried one, checked in the same batch as the end points ((goal, arrival,
+    first illegal frame) or None)."""
+    here, deviation = state.frame, state.deviation
+    hold_frames = horizon.hold_frames
+    on_objective = not np.any(deviation)
+    # Backtracking set a sub-goal: stay among the nodes legal at the blocking frame.
+    in_sub_goal = state.allowed is not None and here < state.until
+    approach_first = roadmap.prefer_lasting and not state.relaxed
+    (targets, arrivals, approach, holds, ranked_frames, ranked_closeness, rounded,
+     q) = _neighbours(state.allowed if in_sub_goal else roadmap.nodes, space, state, horizon,
+                      speed_fraction * space.speed_limit, roadmap.weights, approach_first,
+                      on_objective and not in_sub_goal)
+    m = len(arrivals)
+    lasting = np.ones(m, dtype=bool)
+    if approach_first:
+        lasting = _lasting_neighbours(space, horizon, here, targets, arrivals)
+    # Closest first; equally close, sooner first (holds and on the objective: later first);
+    # lasting ones before the others where the roadmap prefers them.
+    keys_in_order = (ranked_frames, ranked_closeness) + ((~lasting,) if approach_first else ())
+    order = [int(i) for i in np.lexsort(keys_in_order)]
+    if approach >= 0 and not lasting[m - 1]:
+        # The posture does not last through the stretch: held hold_frames at a time instead.
+        order.remove(approach)
+    # The motion to the best untried neighbour, usually the next motion checked, goes with
+    # the end points in one batch.
+    motion = None
+    if not on_objective and not state.followed:
+        for i in order:
+            if _visited_key(int(arrivals[i]), rounded, i) not in visited:
+                motion = (space.objective[arrivals[i]] + targets[i], int(arrivals[i]))
+                break
+    known_motion = None
+    if motion is not None and motion[1] > here:
+        before = space.checks
+        rows_legal, bad = space.rows_and_path(q, arrivals, [(space.objective[here] + deviation,
+                                                             here), motion])
+        if space.checks - before > m:  # the motion had rows to check
+            known_motion = (motion[0], motion[1], bad)
+    else:
+        rows_legal = space.valid_rows(q, arrivals)
+    # End points in collision cannot start a legal motion: read in rank order up to the
+    # max_candidates-th legal one (holding the current posture kept whatever its rank).
+    legal = np.zeros(m, dtype=bool)
+    found = 0
+    for i in order:
+        legal[i] = rows_legal[i]
+        found += bool(legal[i])
+        if found == roadmap.max_candidates:
+            break
+    legal[holds] = rows_legal[holds]
+    lasting_only = False
+    if approach_first and horizon.free[here] and (legal & lasting).any() \
+            and (legal & ~lasting).any():
+        # Leaving the objective before a blocked stretch: lasting neighbours only, until
+        # backtracking for them has failed (see CTRoadmap.solve).
+        legal &= lasting
+        lasting_only = True
+    picked = [i for i in order if legal[i]]
+    picked = [i for rank, i in enumerate(picked) if rank < roadmap.max_candidates or holds[i]]
+    if state.followed:
+        # The search already went on from here along the objective.
+        picked = [i for i in picked if np.any(targets[i]) or arrivals[i] > here + hold_frames]
+    picked = np.array(picked, dtype=np.int64)
+    return (targets[picked], arrivals[picked], rounded[picked], lasting_only, known_motion)
+
+
+def _lasting_neighbours(space: CTSpace, horizon: _Horizon, here: int, targets: np.ndarray,
+                        arrivals: np.ndarray) -> np.ndarray:
+    """Whether each neighbour, held from its arrival, lasts through the blocked stretch ahead:
+    the readable ``CTRoadmap._lasting``, through the space's ``valid_rows``.
+
+    The stretch is the first one from ``here`` on where the objective is blocked, to the frame
+    it is legal again. A moved posture must be legal on a grid over it (the stretch's start
+    if it arrives earlier, every ``hold_frames``-th frame after its arrival, the stretch's
+    end), every :data:`COARSE_STRIDE`-th grid frame from the end first; the objective itself
+    lasts where it is legal. What is known of a posture (rounded to 1e-4 rad) at a frame is
+    kept in the horizon for the whole search.
+
+    Parameters
+    ----------
+    space, horizon
+        The branch's CT-space and the search's horizon.
+    here
+        Frame of the state the neighbours leave from.
+    targets, arrivals
+        (m, d) neighbours as deviations from the objective, rad, and (m,) their arrivals.
+
+    Returns
+    -------
+    numpy.ndarray
+        (m,) bool; all True when the objective is legal from ``here`` to the last frame.
+
+    """
+    m, spacing = len(arrivals), horizon.hold_frames
+    blocked = np.flatnonzero(~horizon.free[here:])
+    if not len(blocked):
+        return np.ones(m, dtype=bool)
+    begin = here + int(blocked[0])
+    end = int(horizon.next_free[begin])
+    # Each posture numbered as it first appears: its row of what is known (horizon.held).
+    rounded = np.round(targets, 4)
+    ids = []
+    for i in range(m):
+        key = _padded(rounded, i)
+        if key not in horizon.postures:
+            horizon.postures[key] = len(horizon.postures)
+        ids.append(horizon.postures[key])
+    if len(horizon.postures) > horizon.held.shape[0]:
+        held = np.full((2 * len(horizon.postures), horizon.held.shape[1]), -1, dtype=np.int8)
+        held[:horizon.held.shape[0]] = horizon.held
+        horizon.held = held
+    lasting = np.ones(m, dtype=bool)
+    grids = {}
+    for i in range(m):
+        arrival = int(arrivals[i])
+        if arrival > end:
+            continue
+        if not np.any(targets[i]):
+            lasting[i] = bool(horizon.free[arrival:end + 1].all())
+            continue
+        grids[i] = (([begin] if arrival < begin else [])
+                    + list(range(max(arrival, begin) // spacing * spacing + spacing, end,
+                                 spacing)) + [end])
+    for coarse in (True, False):
+        rows, frames = [], []
+        for i, grid in grids.items():
+            if not lasting[i]:
+                continue
+            for frame in (grid[::-1][::COARSE_STRIDE] if coarse else grid):
+                known = horizon.held[ids[i], frame]
+                if known < 0:
+                    rows.append(i)
+                    frames.append(frame)
+                elif known == 0:
+                    lasting[i] = False
+        if rows:
+            frames = np.array(frames, dtype=np.int64)
+            legal = space.valid_rows(space.objective[frames] + targets[rows], frames)
+            for i, frame, is_legal in zip(rows, frames.tolist(), legal.tolist()):
+                horizon.held[ids[i], frame] = 1 if is_legal else 0
+                lasting[i] = lasting[i] and is_legal
+    return lasting
+
+
+def _neighbours(nodes: np.ndarray, space: CTSpace, state: _State, horizon: _Horizon,
+                rate: np.ndarray, weights: np.ndarray, approach_first: bool,
+                with_objective: bool) -> tuple:
+    """The neighbours of a state before they are ranked: the readable ``_neighbour_table``.
+
+    In order: the objective followed to the final frame (``with_objective``); each of
+    ``nodes`` (n, d) at its arrival at joint speeds ``rate`` (d,) rad/s (one the remaining
+    time does not reach steered as far towards it as it allows; the current posture held
+    ``hold_frames``); the current posture held past the blocked stretch ahead, ending where
+    the way back to the objective would arrive as it becomes legal, or, with
+    ``approach_first``, up to the frame before the objective is next blocked; and the current
+    posture held ``hold_frames``.
+
+    Returns
+    -------
+    tuple
+        (targets (m, d) as deviations, rad; arrivals (m,); the approach hold's row or -1;
+        holds (m,) whether each holds the current posture; the arrival as ranked (m,), later
+        first for holds and on the objective (negated); closeness to the objective rounded to
+        1e-6 (m,); the targets rounded to 1e-3 rad (m, d); the configurations (m, d), rad).
+
+    """
+    here, deviation = state.frame, state.deviation
+    last, hold_frames = space.frame_count - 1, horizon.hold_frames
+    on_objective = not np.any(deviation)
+    times = space.times
+    step = (times[-1] - times[0]) / max(len(times) - 1, 1)
+
+    def travel(change):
+        # Frames to make ``change`` at ``rate``: the slowest joint's time in whole frames.
+        seconds = 0.0
+        for j in range(len(change)):
+            seconds = max(seconds, abs(change[j]) / rate[j])
+        return max(1, int(math.ceil(seconds / step - 1e-9)))
+
+    targets, arrivals = [], []
+    if with_objective:
+        targets.append(np.zeros(len(deviation)))
+        arrivals.append(last)
+    for node in nodes:
+        change = node - deviation
+        arrival = here + (travel(change) if np.any(change != 0.0) else hold_frames)
+        if arrival > last:
+            share = (last - here) / (arrival - here)
+            targets.append(deviation + share * change)
+            arrivals.append(last)
+        else:
+            targets.append(node.copy())
+            arrivals.append(arrival)
+    approach = -1
+    held = min(here + hold_frames, last)
+    hold_end = int(horizon.next_free[held])
+    if hold_end > held and not on_objective:
+        end = hold_end - travel(deviation) if hold_end < last else hold_end
+        if end > here + hold_frames:
+            targets.append(deviation.copy())
+            arrivals.append(end)
+    elif approach_first and not on_objective:
+        blocked = np.flatnonzero(~horizon.free[here:])
+        if len(blocked) and blocked[0] - 1 > hold_frames:
+            approach = len(arrivals)
+            targets.append(deviation.copy())
+            arrivals.append(here + int(blocked[0]) - 1)
+    targets.append(deviation.copy())
+    arrivals.append(held)
+    targets = np.array(targets).reshape(len(arrivals), len(deviation))
+    arrivals = np.array(arrivals, dtype=np.int64)
+    closeness = np.array([math.sqrt(sum(w * (t * t) for w, t in zip(weights, target)))
+                          for target in targets.tolist()])
+    holds = np.all(targets == deviation, axis=1)
+    ranked_frames = np.where(holds | on_objective, -arrivals, arrivals)
+    return (targets, arrivals, approach, holds, ranked_frames, np.round(closeness, 6),
+            np.round(targets, 3), space.objective[arrivals] + targets)
+
+
 def objective_grid(last: int, spacing: int) -> np.ndarray:
     """Frames 0, ``spacing``, 2 ``spacing``, ... and ``last``: where a search first checks the
     objective (:meth:`CTRoadmap._objective_free`); made once per (last, spacing) and shared,
@@ -957,12 +1307,19 @@ class CTRoadmap:
     prefer_lasting
         Rank neighbours that stay legal, held, to the end of the blocked stretch ahead before
         the others, and try the others only after backtracking for a lasting one failed.
+    search
+        How a state is expanded: ``'compiled'`` (one kernel, the runtime path) or
+        ``'readable'`` (:func:`best_first_expansion`, the code of record, in plain Python
+        through the space's interface). Both give the same result.
 
     """
 
     def __init__(self, patterns: np.ndarray, weights: np.ndarray, radius: float,
                  max_nodes: int, rng: np.random.Generator, max_candidates: int = 8,
-                 prefer_lasting: bool = False):
+                 prefer_lasting: bool = False, search: str = 'compiled'):
+        if search not in ROADMAP_SEARCHES:
+            raise ValueError(f'search must be one of {ROADMAP_SEARCHES}, got {search!r}')
+        self.search = search
         patterns = np.atleast_2d(np.asarray(patterns, dtype=float))
         weights = np.asarray(weights, dtype=float)
         if patterns.shape[1] != weights.shape[0]:
@@ -1338,6 +1695,19 @@ class CTRoadmap:
                     child = self._try(space, state, np.zeros_like(state.deviation), last)
                     if child is not None:
                         return child
+        if self.search == 'readable':
+            expansion = best_first_expansion(self, space, state, horizon, speed_fraction,
+                                             visited)
+            state.candidates = expansion.left
+            state.lasting_only |= expansion.lasting_only
+            state.failures.extend(expansion.failures)
+            if expansion.child is None:
+                return None
+            deviation, arrival, inherit = expansion.child
+            child = _State(deviation, int(arrival))
+            if inherit:
+                child.until, child.allowed = state.until, state.allowed
+            return child
         # The rest in one kernel: rank the neighbours (once per state), then try the untried
         # ones in order.
         ranked = state.candidates is not None

@@ -1902,11 +1902,14 @@ class CTSpace:
         return failures[0]
 
     def first_legal_motion(self, a: Tuple[np.ndarray, int],
-                           goals: Sequence[Tuple[np.ndarray, int]]) -> Tuple[int, List[int]]:
+                           goals: Sequence[Tuple[np.ndarray, int]],
+                           first_failure: Optional[int] = None) -> Tuple[int, List[int]]:
         """Check motions from ``a`` to each goal in order; stop at the first legal one.
 
         One kernel (:func:`first_legal_goal`): the first goal (the best one, usually legal)
         checked alone; all the others then in one batch, its answers read goal by goal.
+        ``first_failure``: the first goal's first illegal frame (-1: legal) where it is
+        known already (:meth:`rows_and_path` checked its motion), None where it is not.
 
         Returns
         -------
@@ -1922,7 +1925,8 @@ class CTSpace:
         arrivals = np.array([frame for _, frame in goals], dtype=np.int64)
         chosen, failures, checks = first_legal_goal(
             self.objective, self.times, self.frame_step, self.speed_cap,
-            np.array(qa, dtype=float), int(ia), targets, arrivals, -2, self.check_tables,
+            np.array(qa, dtype=float), int(ia), targets, arrivals,
+            -2 if first_failure is None else int(first_failure), self.check_tables,
             self.row_memo)
         self.checks += checks
         return int(chosen), failures.tolist()

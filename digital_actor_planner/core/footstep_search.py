@@ -35,8 +35,8 @@ footsteps: m + 1, (m + 1) ** 2, ... rows). Three memos live for one search:
 The last two are arrays rather than numba dictionaries, whose lookups hash their keys and whose
 insertions can resize them.
 
-The arithmetic is the plain effort's term by term (the Python search kept as the tests'
-reference, ``test/footstep_reference.py``):
+The arithmetic is the plain effort's term by term (the readable search of record,
+:func:`footstep_window.search_footstep_window`):
 the squares are ``x ** two`` with ``two`` = 2.0 read from ``numbers``, because numba turns a
 constant square into ``x * x``, which differs from the C library's ``pow`` (what Python's
 ``**`` calls) in the last bit for about one value in 1,200. Without numba the same functions run

@@ -21,6 +21,8 @@ from .footstep_search import (DENSE_CONFIGURATIONS, DOWN, HEEL, LIFT_RISE, LIFT_
                               NUMBER_COUNT, PITCH_RANGE, SPAN, TOE, TOLERANCE, TWO, UP, UP_RANGE,
                               W_HEIGHT, W_LENGTH, W_PITCH, W_SMOOTH, exhaustive_search,
                               foothold_tables, judge_footholds, window_search)
+from .footstep_window import (FootholdTable, WindowFeet, WindowLimits,
+                              search_footstep_window)
 from .jit import direct, float_array
 from .skeleton import LegGeometry
 
@@ -37,6 +39,10 @@ window_search = direct(window_search)
 #: The map answers for a point's whole grid cell, so an obstacle up to a cell outside a line
 #: may show; the 3D check of every step (collision.BodyCollision) is exact.
 SOLE_LINES = (-0.4, 0.0, 0.4)
+
+
+#: The searches of a window :attr:`FootstepConfig.window_search` selects.
+WINDOW_SEARCHES = ('compiled', 'readable')
 
 
 @dataclass(frozen=True)
@@ -64,6 +70,12 @@ class FootstepConfig:
     step up from there bent the knee past its limit. With 3 cm of room a foot came to rest
     3.4 cm before a 0.24 m face and could not step up from there (bench_terrain random course
     269). 0 room: no such test.
+
+    ``window_search``: which search of a window :meth:`FootstepPlanner.plan` runs:
+    ``'compiled'`` (:func:`footstep_search.window_search`, the runtime path) or ``'readable'``
+    (:func:`footstep_window.search_footstep_window`, the code of record, in plain Python).
+    Both find the same footsteps; the compiled one is about an order of magnitude faster
+    (``bench/bench_footstep_window.py``, docs/READABLE_ALGORITHMS.md).
     """
 
     window_steps: int = 3
@@ -85,6 +97,7 @@ class FootstepConfig:
     lift_room: float = 0.05
     lift_rise: float = 0.15
     lift_step_up: float = 0.25
+    window_search: str = 'compiled'
 
     @property
     def step_increment(self) -> float:
@@ -104,6 +117,9 @@ def validate_footstep_config(config: FootstepConfig) -> None:
             or not 1 <= config.step_intervals <= 60):
         raise ValueError(f'step_intervals must be an integer in [1, 60], got '
                          f'{config.step_intervals!r}')
+    if config.window_search not in WINDOW_SEARCHES:
+        raise ValueError(f'window_search must be one of {WINDOW_SEARCHES}, got '
+                         f'{config.window_search!r}')
     if not isinstance(config.greedy_restart, (bool, np.bool_)):
         raise ValueError(f'greedy_restart must be true or false, got {config.greedy_restart!r}')
     for name in ('step_length_min', 'step_length_max', 'max_step_up', 'max_step_down',
@@ -366,6 +382,16 @@ class FootstepPlanner:
         self._increment = float(config.step_increment)
         self._greedy_restart = bool(config.greedy_restart)
         self._configurations, self._numbers = _numbering(n, m)
+        self._readable_search = config.window_search == 'readable'
+        self._window_limits = WindowLimits(
+            lengths=tuple(self._lengths.tolist()), window_steps=int(n),
+            max_step_up=float(config.max_step_up), max_step_down=float(config.max_step_down),
+            max_swing_height=float(config.max_swing_height),
+            lift_rise=float(config.lift_rise), lift_step_up=float(config.lift_step_up),
+            weight_length=self._effort_terms[0], weight_height=self._effort_terms[1],
+            weight_pitch=self._effort_terms[2], weight_smooth=self._effort_terms[3],
+            length_span=self._effort_terms[4], rise_range=self._effort_terms[5],
+            pitch_range=self._effort_terms[6], greedy_restart=self._greedy_restart)
 
     # -- the ground under a sole -----------------------------------------------------------
     def foothold(self, profile: GroundProfile, side: int, s: float) -> Foothold:
@@ -497,10 +523,10 @@ class FootstepPlanner:
             None when no collision-free configuration exists in the window.
 
         The search runs compiled, its foothold table included
-        (:func:`footstep_search.window_search`), called without numba's dispatcher; it judges
-        the same configurations as the Python search (``test/footstep_reference.py``) and
-        finds the same efforts to the last bit, some 40 times faster
-        (``bench/bench_lower_body.py``).
+        (:func:`footstep_search.window_search`), called without numba's dispatcher, unless
+        ``FootstepConfig.window_search`` asks for the readable search of record
+        (:func:`footstep_window.search_footstep_window`): both judge the same configurations
+        and find the same footsteps and efforts to the last bit.
         """
         n, m = self._window_size
         if start is None:
@@ -527,10 +553,76 @@ class FootstepPlanner:
         too_long = self._none_banned
         if self._longest > max_length + 1e-9:
             too_long = self._lengths > max_length + 1e-9
+        if self._readable_search:
+            feet = WindowFeet(float(stance_s), float(stance_height), float(swing_s),
+                              float(swing_height), float(s_init), float(previous_length))
+            return self._readable_window(profile, stance_side, feet, tuple(int(j) for j in start),
+                                         frozenset(np.flatnonzero(banned).tolist()),
+                                         frozenset(np.flatnonzero(too_long).tolist()))
         return self._window(window_search(
             number, banned, too_long, self._greedy_restart,
             self.search_profile(profile, stance_side, stance_s, stance_height, swing_s,
                                 swing_height, s_init, previous_length)), stance_side)
+
+    @property
+    def window_limits(self) -> WindowLimits:
+        """The window's rules and effort weights as the readable search reads them."""
+        return self._window_limits
+
+    def foothold_table(self, profile: GroundProfile, stance_side: int,
+                       stance_s: float) -> FootholdTable:
+        """Every foothold a window from the stance foot at ``stance_s`` can reach, judged by
+        :meth:`footholds` and :meth:`rise_ahead`: what the readable search reads
+        (:func:`footstep_window.search_footstep_window`).
+
+        Parameters
+        ----------
+        profile
+            Ground under both foot tracks.
+        stance_side, stance_s
+            The foot that stays down: 0 left, 1 right, and its arc length, m.
+
+        Returns
+        -------
+        FootholdTable
+
+        """
+        step, offsets, bounds = self._table_layout
+        sides, side_list = self._sides[stance_side]
+        s = stance_s + offsets
+        ok, height, pitch = self.footholds(profile, sides[step], s)
+        rise = self.rise_ahead(profile, sides[step], s, height, pitch)
+
+        def rows(values):
+            values = values.tolist()
+            return tuple(tuple(values[a:b]) for a, b in zip(bounds[:-1], bounds[1:]))
+
+        return FootholdTable(ok=rows(ok), height=rows(height), pitch=rows(pitch),
+                             rise_ahead=rows(rise), sides=tuple(side_list),
+                             swing_top=profile.swing_top, toe=float(self.leg.toe),
+                             heel=float(self.leg.heel))
+
+    def _readable_window(self, profile: GroundProfile, stance_side: int, feet: WindowFeet,
+                         start: Tuple[int, ...], banned_first: frozenset,
+                         banned_lengths: frozenset) -> Optional[FootstepWindow]:
+        """:meth:`plan` by the readable search (``FootstepConfig.window_search``)."""
+        table = self.foothold_table(profile, stance_side, feet.stance_s)
+        found = search_footstep_window(table, self._window_limits, feet, start, banned_first,
+                                       banned_lengths)
+        if found is None:
+            return None
+        lengths, arc_lengths, heights, pitches = [], [], [], []
+        cumulative, total = 0, 0.0
+        for i, j in enumerate(found.configuration):
+            cumulative += j
+            lengths.append(self._window_limits.lengths[j])
+            total += lengths[-1]
+            arc_lengths.append(feet.stance_s + total)
+            heights.append(table.height[i][cumulative])
+            pitches.append(table.pitch[i][cumulative])
+        return FootstepWindow(np.array(lengths), found.configuration, np.array(arc_lengths),
+                              np.array(heights), np.array(pitches), self._sides[stance_side][0],
+                              found.effort, found.evaluated)
 
     def search_profile(self, profile: GroundProfile, stance_side: int, stance_s: float,
                        stance_height: float, swing_s: float, swing_height: float,

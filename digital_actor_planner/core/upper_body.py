@@ -15,7 +15,7 @@ from typing import Dict, Optional, Tuple
 
 import numpy as np
 
-from .ct_roadmap import CTRoadmap, direct_return, objective_grid, warm_up
+from .ct_roadmap import CTRoadmap, direct_return, objective_grid, ROADMAP_SEARCHES, warm_up
 from .ct_space import (
     BodyKinematics, BodyShapes, branch_layout, branch_model, CTSpace, EnvironmentIndex,
     TimedBody)
@@ -172,6 +172,10 @@ class UpperBodyConfig:
         closest legal arm posture is often one that fails half-way along it. Not the waist:
         with it the low beam course leaned the waist back instead of bending, and one step took
         0.58 s to plan (measured).
+    roadmap_search
+        How the roadmaps expand a search state (:class:`CTRoadmap`, ``search``):
+        ``'compiled'``, the runtime path, or ``'readable'``, the code of record; the same
+        plans.
 
     """
 
@@ -189,6 +193,7 @@ class UpperBodyConfig:
     arm_weights: Tuple[float, float, float, float] = (1.0, 1.0, 1.0, 0.5)
     time_weight: float = 1.0
     lasting_branches: Tuple[str, ...] = ('left_arm', 'right_arm')
+    roadmap_search: str = 'compiled'
 
 
 def validate_upper_body_config(config: UpperBodyConfig) -> UpperBodyConfig:
@@ -228,6 +233,9 @@ def validate_upper_body_config(config: UpperBodyConfig) -> UpperBodyConfig:
                                                       for name in branches):
         raise ValueError(f'lasting_branches must name branches of {BRANCH_ORDER}, got '
                          f'{config.lasting_branches!r}')
+    if config.roadmap_search not in ROADMAP_SEARCHES:
+        raise ValueError(f'roadmap_search must be one of {ROADMAP_SEARCHES}, got '
+                         f'{config.roadmap_search!r}')
     if config.max_roadmap_nodes < len(_waist_patterns()) + 1:
         raise ValueError(f'max_roadmap_nodes must hold the {len(_waist_patterns()) + 1} initial '
                          f'patterns, got {config.max_roadmap_nodes}')
@@ -323,12 +331,14 @@ class UpperBodyPlanner:
         self.roadmaps = {
             'waist': CTRoadmap(_waist_patterns(), np.array(config.waist_weights),
                                config.roadmap_radius, config.max_roadmap_nodes, self.rng,
-                               prefer_lasting='waist' in config.lasting_branches)}
+                               prefer_lasting='waist' in config.lasting_branches,
+                               search=config.roadmap_search)}
         for side in ('left', 'right'):
             self.roadmaps[f'{side}_arm'] = CTRoadmap(
                 _arm_patterns(), np.array(config.arm_weights), config.roadmap_radius,
                 config.max_roadmap_nodes, self.rng,
-                prefer_lasting=f'{side}_arm' in config.lasting_branches)
+                prefer_lasting=f'{side}_arm' in config.lasting_branches,
+                search=config.roadmap_search)
         self.indices = {name: skeleton.branch(name) for name in BRANCH_ORDER}
         self.upper_indices = np.concatenate([self.indices[name] for name in BRANCH_ORDER])
         # The same columns as slices where they are contiguous (views, not copies, on the

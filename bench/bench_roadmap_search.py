@@ -1,0 +1,95 @@
+"""The CT-roadmap's two expansions side by side: the readable one and its compiled twin.
+
+Run: .venv/bin/python bench/bench_roadmap_search.py [--courses low_beam table ...] [--rounds 3]
+
+Walks each course (upper body on) with ``UpperBodyConfig.roadmap_search`` set to
+``'compiled'`` and to ``'readable'``, in alternating order, checks that both walks have the same
+frames, and reports the CPU time of one branch search (every ``CTRoadmap.solve`` call of the
+walks, timed; the median and the slowest) and the wall time of a whole step
+(``StepBlock.planning_time``, median).
+"""
+import argparse
+import os
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from bench_common import machine  # noqa: E402
+from course_runs import scene, SCENES, skeleton  # noqa: E402
+from digital_actor_planner.cli import read_commands  # noqa: E402
+from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
+from digital_actor_planner.core.collision import BodyCollision  # noqa: E402
+from digital_actor_planner.core.ct_roadmap import CTRoadmap  # noqa: E402
+from digital_actor_planner.core.upper_body import (UpperBodyConfig,  # noqa: E402
+                                                   UpperBodyPlanner)
+
+COURSES = ('low_beam', 'table', 'pillars', 'uneven_beam')
+
+
+def walk(name: str, roadmap_search: str, searches: list):
+    """Walk course ``name``; each branch search's CPU time (s) appended to ``searches``."""
+    sc = scene(name)
+    commands = read_commands(os.path.join(SCENES, name + '.csv'))
+    config = ActorConfig()
+    collision = BodyCollision(skeleton(), sc.environment)
+    upper = UpperBodyPlanner(skeleton(), collision,
+                             UpperBodyConfig(check_budget=int(config.upper_body_check_budget),
+                                             roadmap_search=roadmap_search),
+                             rng=np.random.default_rng(0))
+    actor = Actor(skeleton(), sc.environment, config, start=sc.start, upper_body_planner=upper,
+                  body_collision=collision)
+    solve = CTRoadmap.solve
+
+    def timed(self, *arguments, **keywords):
+        begin = time.process_time()
+        try:
+            return solve(self, *arguments, **keywords)
+        finally:
+            searches.append(time.process_time() - begin)
+
+    CTRoadmap.solve = timed
+    try:
+        return run_commands(actor, [c.time for c in commands], [c.linear_x for c in commands],
+                            [c.angular_z for c in commands])
+    finally:
+        CTRoadmap.solve = solve
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument('--courses', nargs='+', default=list(COURSES))
+    parser.add_argument('--rounds', type=int, default=3)
+    args = parser.parse_args(argv)
+    print(machine())
+    kinds = ('compiled', 'readable')
+    searches = {kind: [] for kind in kinds}
+    steps = {kind: [] for kind in kinds}
+    for name in args.courses:
+        for kind in kinds:  # kernels compiled and course data read, not timed
+            walk(name, kind, [])
+        for round_ in range(args.rounds):
+            frames = {}
+            for kind in (kinds if round_ % 2 == 0 else kinds[::-1]):
+                blocks = walk(name, kind, searches[kind])
+                steps[kind].extend(b.planning_time for b in blocks if b.status == 'walking')
+                frames[kind] = np.vstack([b.frames for b in blocks])
+            if not np.array_equal(frames['compiled'], frames['readable']):
+                print(f'{name}: the two expansions walked different frames')
+                return 1
+    print(f'{"expansion":<10} {"searches":>9} {"search CPU, ms":>15} {"slowest, ms":>12} '
+          f'{"step wall, ms":>14}')
+    for kind in kinds:
+        print(f'{kind:<10} {len(searches[kind]):>9} {1e3 * np.median(searches[kind]):>15.3f} '
+              f'{1e3 * np.max(searches[kind]):>12.1f} {1e3 * np.median(steps[kind]):>14.2f}')
+    ratio = np.max(searches['readable']) / np.max(searches['compiled'])
+    print(f'the readable expansion takes {ratio:.1f} times as long on the slowest search '
+          f'({", ".join(args.courses)}; {args.rounds} rounds; the same frames)')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
