@@ -93,7 +93,7 @@ def _publish(temporary: str, path: str) -> None:
 def simulate(args) -> int:
     """Run ``digital-actor simulate``."""
     from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands, validate
-    from digital_actor_planner.core.environment import load_scene, SceneError
+    from digital_actor_planner.core.scene import load_scene, SceneError
     from digital_actor_planner.core.footsteps import FootstepConfig
     from digital_actor_planner.core.skeleton import Skeleton
 

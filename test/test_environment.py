@@ -7,8 +7,9 @@ import pytest
 import trimesh
 
 from digital_actor_planner.core.collision import BodyCollision
-from digital_actor_planner.core.environment import (check_start, Environment, load_scene,
-                                                    SceneError, start_configuration)
+from digital_actor_planner.core.environment import Environment
+from digital_actor_planner.core.scene import (check_start, load_scene, SceneError,
+                                              start_configuration)
 from digital_actor_planner.core.skeleton import Skeleton
 
 SCENES = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'config',

@@ -213,7 +213,7 @@ class Actor:
                  upper_body_planner=None, body_collision=None):
         validate(config)
         from .collision import BodyCollision
-        from .environment import start_configuration
+        from .scene import start_configuration
         self.skeleton = skeleton
         self.environment = environment
         self.config = config

@@ -1,0 +1,253 @@
+"""Scene files in (a YAML list of meshes or one bare mesh file), the start pose settled and
+checked with the actor.
+
+The top floor of the core: it reads the files with :mod:`environment` and stands the actor of
+:mod:`actor` at the start to check it, so neither of those needs to know about scene files.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+import math
+import os
+from typing import Sequence, Tuple
+
+import numpy as np
+import yaml
+
+from .actor import Actor, ActorConfig
+from .collision import BodyCollision
+from .environment import Environment, load_mesh, SceneError
+
+__all__ = ['check_start', 'load_scene', 'Scene', 'SceneError', 'start_configuration']
+
+SCENE_KEYS = ('meshes', 'start', 'description', 'expect')
+MESH_KEYS = ('file', 'pose')
+YAML_SUFFIXES = ('.yaml', '.yml')
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A loaded scene: the environment, the actor's start pose and the file's annotations.
+
+    ``start`` is (x m, y m, yaw rad); ``source`` the scene file; ``mesh_files`` the mesh files
+    read; ``expect`` the optional ``expect:`` mapping of the YAML (used by tests).
+    """
+
+    environment: 'Environment'
+    start: Tuple[float, float, float]
+    source: str
+    mesh_files: Tuple[str, ...]
+    description: str = ''
+    expect: dict = field(default_factory=dict)
+
+
+def _pose_matrix(pose: Sequence[float]) -> np.ndarray:
+    """(4, 4) transform of [x, y, z, roll, pitch, yaw] (URDF fixed-axis convention)."""
+    x, y, z, roll, pitch, yaw = pose
+    cr, sr, cp, sp, cy, sy = (math.cos(roll), math.sin(roll), math.cos(pitch), math.sin(pitch),
+                              math.cos(yaw), math.sin(yaw))
+    transform = np.eye(4)
+    transform[:3, :3] = [[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                         [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                         [-sp, cp * sr, cp * cr]]
+    transform[:3, 3] = (x, y, z)
+    return transform
+
+
+def _finite_numbers(value, count: int, what: str, source: str) -> Tuple[float, ...]:
+    """Check that ``value`` is a list of ``count`` finite numbers, else raise SceneError."""
+    ok = isinstance(value, (list, tuple)) and len(value) == count and all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+        for v in value)
+    if not ok:
+        raise SceneError(f'{source}: {what} must be a list of {count} finite numbers, '
+                         f'got {value!r}')
+    return tuple(float(v) for v in value)
+
+
+def _read_yaml(path: str) -> dict:
+    try:
+        with open(path, 'r', encoding='utf-8') as stream:
+            text = stream.read()
+    except (OSError, UnicodeDecodeError) as error:
+        raise SceneError(f'{path}: cannot read scene file: {error}') from error
+    if not text.strip():
+        raise SceneError(f'{path}: empty file')
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as error:
+        mark = getattr(error, 'problem_mark', None)
+        where = f' line {mark.line + 1}, column {mark.column + 1}' if mark else ''
+        problem = getattr(error, 'problem', None) or str(error)
+        raise SceneError(f'{path}:{where} YAML syntax error: {problem}') from error
+    if not isinstance(data, dict):
+        raise SceneError(f'{path}: top level must be a mapping with a meshes: list, '
+                         f'got {type(data).__name__}')
+    unknown = sorted(set(map(str, data)) - set(SCENE_KEYS))
+    if unknown:
+        raise SceneError(f'{path}: unknown key(s) {unknown}; allowed: {list(SCENE_KEYS)}')
+    return data
+
+
+def load_scene(path: str, skeleton=None) -> Scene:
+    """Load a scene: a YAML file listing meshes and the start pose, or one bare mesh file.
+
+    YAML form::
+
+        meshes:
+          - {file: ground.stl}                          # relative to the YAML file
+          - {file: box.obj, pose: [x, y, z, roll, pitch, yaw]}   # m, rad; optional
+        start: [x, y, yaw]                              # optional, default [0, 0, 0]
+        description: free text                          # optional
+        expect: {...}                                   # optional, for tests
+
+    Parameters
+    ----------
+    path
+        Scene YAML (``.yaml``/``.yml``) or a mesh file (start at the origin).
+    skeleton
+        If given, :func:`check_start` verifies the actor can stand at the start.
+
+    Returns
+    -------
+    Scene
+
+    Raises
+    ------
+    SceneError
+        Naming the file and the field, line or value at fault.
+
+    """
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        raise SceneError(f'{path}: no such scene file')
+    if os.path.isdir(path):
+        raise SceneError(f'{path}: is a directory, not a scene file')
+    description, expect = '', {}
+    start = (0.0, 0.0, 0.0)
+    if path.lower().endswith(YAML_SUFFIXES):
+        data = _read_yaml(path)
+        entries = data.get('meshes')
+        if not isinstance(entries, list) or not entries:
+            raise SceneError(f'{path}: meshes must be a non-empty list, got {entries!r}')
+        if 'start' in data:
+            start = _finite_numbers(data['start'], 3, 'start', path)
+        if 'description' in data:
+            if not isinstance(data['description'], str):
+                raise SceneError(f'{path}: description must be a string, '
+                                 f'got {data["description"]!r}')
+            description = data['description']
+        if 'expect' in data:
+            if not isinstance(data['expect'], dict):
+                raise SceneError(f'{path}: expect must be a mapping, got {data["expect"]!r}')
+            expect = data['expect']
+        base = os.path.dirname(os.path.abspath(path))
+        meshes, names, files = [], [], []
+        for i, entry in enumerate(entries):
+            where = f'{path}: meshes[{i}]'
+            if not isinstance(entry, dict):
+                raise SceneError(f'{where} must be a mapping with file: (and pose:), '
+                                 f'got {entry!r}')
+            unknown = sorted(set(map(str, entry)) - set(MESH_KEYS))
+            if unknown:
+                raise SceneError(f'{where}: unknown key(s) {unknown}; allowed: {list(MESH_KEYS)}')
+            if not isinstance(entry.get('file'), str) or not entry['file']:
+                raise SceneError(f'{where}.file must be a file name, got {entry.get("file")!r}')
+            mesh_path = os.path.normpath(os.path.join(base, entry['file']))
+            mesh = load_mesh(mesh_path)
+            if 'pose' in entry:
+                pose = _finite_numbers(entry['pose'], 6, f'meshes[{i}].pose', path)
+                mesh = mesh.copy()
+                mesh.apply_transform(_pose_matrix(pose))
+            meshes.append(mesh)
+            names.append(f'{i}:{os.path.basename(mesh_path)}')
+            files.append(mesh_path)
+    else:
+        meshes, names, files = [load_mesh(path)], [os.path.basename(path)], [path]
+    try:
+        environment = Environment(meshes, names)
+    except SceneError:
+        raise
+    except ValueError as error:
+        raise SceneError(f'{path}: {error}') from error
+    scene = Scene(environment=environment, start=start, source=path, mesh_files=tuple(files),
+                  description=description, expect=expect)
+    if skeleton is not None:
+        try:
+            check_start(environment, start, skeleton)
+        except SceneError as error:
+            raise SceneError(f'{path}: {error}') from error
+    return scene
+
+
+def start_configuration(environment: 'Environment', start, skeleton) -> np.ndarray:
+    """Place the actor's neutral standing configuration at a start pose.
+
+    The actor stands on the lowest walkable surface under its soles and pelvis, so a start in
+    a wall, under a table or under a beam puts it at floor level (where it collides) rather
+    than on top: ``root_z`` = that ground + ``skeleton.leg.standing_height`` + 2 mm.
+
+    Parameters
+    ----------
+    environment
+        The world.
+    start
+        (x m, y m, yaw rad).
+    skeleton
+        The actor model.
+
+    Returns
+    -------
+    numpy.ndarray
+        (22,) float64 configuration, rad or m.
+
+    Raises
+    ------
+    SceneError
+        ``start`` is not 3 finite numbers, or there is no ground below it.
+
+    """
+    x, y, yaw = _finite_numbers(list(start) if isinstance(start, (list, tuple, np.ndarray))
+                                else start, 3, 'start', 'start pose')
+    q = skeleton.neutral().copy()
+    q[skeleton.index['root_x']], q[skeleton.index['root_y']] = x, y
+    q[skeleton.index['root_yaw']] = yaw
+    leg = skeleton.leg
+    # Sole corners of both feet and the pelvis, in the pelvis frame (§4: feet under the hips).
+    points = np.array([[0.0, 0.0]] + [[dx, side * leg.hip_half_width + dy]
+                                      for side in (1.0, -1.0)
+                                      for dx in (-leg.heel, leg.toe)
+                                      for dy in (-leg.foot_width / 2, leg.foot_width / 2)])
+    c, s = math.cos(yaw), math.sin(yaw)
+    xy = points @ np.array([[c, s], [-s, c]]) + (x, y)
+    ground = environment.lowest_ground(xy)
+    if np.all(np.isnan(ground)):
+        raise SceneError(f'no ground below the start pose ({x:g}, {y:g}, yaw {yaw:g})')
+    q[skeleton.index['root_z']] = float(np.nanmin(ground)) + leg.standing_height + 0.002
+    return q
+
+
+def check_start(environment: 'Environment', start, skeleton) -> None:
+    """Check the actor can stand at a start pose.
+
+    Places the configuration an :class:`actor.Actor` starts in there (each foot resting on the
+    ground under it where it can, else both level on the lowest ground under them, as
+    :func:`start_configuration`) 2 mm up, so that a foot resting on a surface does not touch
+    it, and tests it against the environment with :class:`collision.BodyCollision`.
+
+    Raises
+    ------
+    SceneError
+        No ground below the start, or the standing actor would be inside an obstacle.
+
+    """
+    body = BodyCollision(skeleton, environment)
+    actor = Actor(skeleton, environment, ActorConfig(plan_upper_body=False), start=start,
+                  body_collision=body)
+    q = actor.configuration
+    q[skeleton.index['root_z']] += 0.002
+    links = body.links_in_collision(q)
+    if links:
+        x, y, yaw = (float(v) for v in start)
+        raise SceneError(f'start pose ({x:g}, {y:g}, yaw {yaw:g}) is inside an obstacle: '
+                         f'links {links} collide')
