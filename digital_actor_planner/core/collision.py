@@ -74,9 +74,10 @@ def _suspects(transforms, kinds, halves, top_bound, pyramid, slot_of, stamp, clo
     ``transforms``: (k, S, 4, 4) shape poses over a motion. A shape is a suspect at a frame
     unless ``top_bound`` and its lowest point lies above the environment's height bound over
     its footprint (:func:`environment._top_near`, the tiled top map's layout in ``pyramid``
-    to ``inverse``; where a tile is not cached yet the shape is a suspect). A suspect that has not moved since the frame before, where it was a
-    suspect too (or, with ``after_free_end``, at the first frame since ``free_end``, the poses
-    the last motion found free) needs no exact test. Returns the (frame, shape column) pairs to
+    to ``inverse``; where a tile is not cached yet the shape is a suspect). A suspect that
+    has not moved since the frame before, where it was a suspect too (or, with
+    ``after_free_end``, at the first frame since ``free_end``, the poses the last motion found
+    free) needs no exact test. Returns the (frame, shape column) pairs to
     test in time order and, for each, which meshes' bounds (``mesh_low``, ``mesh_high``) come
     within its ``reach`` of its centre.
     """
