@@ -45,6 +45,9 @@ _TILE_BYTES = (_PYRAMID_VALUES + 2 * _TILE * _TILE) * 8
 #: Memory the ground map's tiles may take by default, bytes (about 130 tiles, 850 m2 of
 #: single-layer ground: far more than the actor reads around itself in a walk).
 DEFAULT_CACHE_BYTES = 160 * 2 ** 20
+# A scene of at most this many tiles (a course of 200 m2 or so) has them all built at
+# construction, where they cost little and none is built in a walk.
+_EAGER_TILES = 32
 # The fewest tiles a cache may hold (a query's tiles are built in groups of half of it).
 _MIN_CACHE_TILES = 8
 # Tiles of the lattice at most (its table of slots is 8 bytes a tile): about 5 km x 5 km.
@@ -273,7 +276,7 @@ class Environment:
     The ground map is one lattice of ``resolution`` cells over the scene's bounds, cut into
     tiles of ``_TILE`` x ``_TILE`` cells. A tile is rasterised from the triangles over it when
     a query first reads it and kept in a cache of at most ``cache_bytes``, the tiles read
-    longest ago dropped first; a scene whose every tile fits in half the cache has them all
+    longest ago dropped first; a small scene (at most ``_EAGER_TILES`` tiles) has them all
     built at construction. Memory therefore follows the triangles and the ground the actor
     walks on, not the scene's area (docs/environment.md).
 
@@ -324,7 +327,7 @@ class Environment:
         self._prepare_ground_triangles()
         self._prepare_top_triangles()
         self._open_cache()
-        if self._tile_count * _TILE_BYTES * 2 <= self.cache_bytes:
+        if self._tile_count <= min(_EAGER_TILES, self._slot_limit // 2):
             self._build_tiles(np.arange(self._tile_count))
 
     def mesh_of(self, geometry) -> int:

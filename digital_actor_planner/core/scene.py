@@ -143,6 +143,8 @@ def load_scene(path: str, skeleton=None) -> Scene:
             expect = data['expect']
         base = os.path.dirname(os.path.abspath(path))
         meshes, names, files = [], [], []
+        # One read of a file placed many times (a row of shelves).
+        read = {}
         for i, entry in enumerate(entries):
             where = f'{path}: meshes[{i}]'
             if not isinstance(entry, dict):
@@ -154,7 +156,9 @@ def load_scene(path: str, skeleton=None) -> Scene:
             if not isinstance(entry.get('file'), str) or not entry['file']:
                 raise SceneError(f'{where}.file must be a file name, got {entry.get("file")!r}')
             mesh_path = os.path.normpath(os.path.join(base, entry['file']))
-            mesh = load_mesh(mesh_path)
+            if mesh_path not in read:
+                read[mesh_path] = load_mesh(mesh_path)
+            mesh = read[mesh_path]
             if 'pose' in entry:
                 pose = _finite_numbers(entry['pose'], 6, f'meshes[{i}].pose', path)
                 mesh = mesh.copy()
