@@ -198,6 +198,53 @@ class SceneError(ValueError):
     """A scene file cannot be used: names the file and the field, line or value at fault."""
 
 
+# Memory a loaded triangle takes in all (trimesh, FCL's BVH, the triangles as the ground map's
+# tiles and the upper body's broad phase read them), with room for the peaks of construction,
+# bytes; measured on game levels, terrains and warehouses of 0.1 to 0.5 M triangles.
+TRIANGLE_BYTES = 2048
+# Mesh file bytes a triangle takes at the least (binary STL: 50; OBJ and PLY take more).
+_FILE_BYTES_PER_TRIANGLE = 50
+
+
+def available_memory() -> int:
+    """Memory the machine can give this process without swapping, bytes (its
+    ``MemAvailable``; where that is not known, its physical memory)."""
+    try:
+        with open('/proc/meminfo', 'r', encoding='ascii') as meminfo:
+            for line in meminfo:
+                if line.startswith('MemAvailable:'):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return int(os.sysconf('SC_PAGE_SIZE') * os.sysconf('SC_PHYS_PAGES'))
+    except (AttributeError, ValueError, OSError):
+        return 1 << 62
+
+
+def check_memory(triangles: int, what: str) -> None:
+    """Refuse, before allocating, geometry of ``triangles`` triangles that would not fit in
+    the memory the machine has available.
+
+    Parameters
+    ----------
+    triangles
+        Triangles to load (at most, where only a file's size is known).
+    what
+        The start of the message: what holds them (``'scene.obj: a 3 GB file of up to'``).
+
+    Raises
+    ------
+    SceneError
+        Naming ``what``, the memory it needs and the memory available.
+
+    """
+    need, have = int(triangles) * TRIANGLE_BYTES, available_memory()
+    if need > have:
+        raise SceneError(f'{what} {triangles} triangles needs about {need / 2 ** 30:.1f} GB to '
+                         f'load, but this machine has {have / 2 ** 30:.1f} GB available')
+
+
 def load_mesh(path: str) -> trimesh.Trimesh:
     """Read one mesh file (STL, OBJ, PLY, GLB/GLTF, DAE) as world-frame triangles.
 
@@ -206,7 +253,9 @@ def load_mesh(path: str) -> trimesh.Trimesh:
     Raises
     ------
     SceneError
-        Missing, unreadable, empty or non-mesh file; NaN/inf vertices; no triangles.
+        Missing, unreadable, empty or non-mesh file; a file too large for the memory available
+        (judged by its size before it is read); NaN/inf vertices; no triangles, or only
+        degenerate ones.
 
     """
     if not os.path.isfile(path):
@@ -219,9 +268,13 @@ def load_mesh(path: str) -> trimesh.Trimesh:
         raise SceneError(f'{path}: cannot read mesh file: {error}') from error
     if size == 0:
         raise SceneError(f'{path}: empty file')
+    check_memory(size // _FILE_BYTES_PER_TRIANGLE,
+                 f'{path}: a mesh file of {size / 2 ** 20:.0f} MB, up to')
     try:
         loaded = trimesh.load(path, force='scene', process=False)
         geometry = [g for g in loaded.dump(concatenate=False)] if loaded.geometry else []
+    except MemoryError as error:
+        raise SceneError(f'{path}: the machine ran out of memory reading it') from error
     except Exception as error:  # trimesh's loaders raise many exception types
         raise SceneError(f'{path}: not a readable mesh: {error}') from error
     meshes = [g for g in geometry if isinstance(g, trimesh.Trimesh)]
@@ -233,6 +286,8 @@ def load_mesh(path: str) -> trimesh.Trimesh:
 
 
 def _check_mesh(mesh, what: str) -> None:
+    """Raise SceneError for a mesh without triangles, with a non-finite vertex, or whose
+    triangles all have no area (nothing to stand on or to collide with)."""
     if not isinstance(mesh, trimesh.Trimesh):
         raise ValueError(f'{what}: expected a trimesh.Trimesh, got {type(mesh).__name__}')
     if len(mesh.faces) == 0:
@@ -241,6 +296,18 @@ def _check_mesh(mesh, what: str) -> None:
     if not np.all(np.isfinite(vertices)):
         bad = int(np.flatnonzero(~np.all(np.isfinite(vertices), axis=1))[0])
         raise SceneError(f'{what}: vertex {bad} is not finite: {vertices[bad].tolist()}')
+    faces = np.asarray(mesh.faces)
+    if faces.min() < 0 or faces.max() >= len(vertices):
+        raise SceneError(f'{what}: a triangle refers to a vertex that does not exist '
+                         f'(indices {int(faces.min())} to {int(faces.max())} of '
+                         f'{len(vertices)} vertices)')
+    triangles = vertices[faces]
+    doubled_area = np.linalg.norm(np.cross(triangles[:, 1] - triangles[:, 0],
+                                           triangles[:, 2] - triangles[:, 0]), axis=1)
+    extent = float(np.ptp(vertices, axis=0).max())
+    if not np.any(doubled_area > 1e-12 * max(extent, 1e-300) ** 2):
+        raise SceneError(f'{what}: degenerate mesh: none of its {len(faces)} triangle(s) has '
+                         f'an area')
 
 
 class Environment:
@@ -294,6 +361,7 @@ class Environment:
             raise ValueError(f'{len(names)} names given for {len(meshes)} meshes')
         for i, (mesh, name) in enumerate(zip(meshes, names)):
             _check_mesh(mesh, f'mesh {i} ({name})')
+        check_memory(sum(len(m.faces) for m in meshes), 'the scene, of')
         if not (isinstance(resolution, (int, float)) and math.isfinite(resolution)
                 and resolution > 0):
             raise ValueError(f'resolution must be a positive number of metres, got {resolution!r}')

@@ -170,10 +170,11 @@ def load_scene(path: str, skeleton=None) -> Scene:
         meshes, names, files = [load_mesh(path)], [os.path.basename(path)], [path]
     try:
         environment = Environment(meshes, names)
-    except SceneError:
-        raise
-    except ValueError as error:
+    except ValueError as error:  # SceneError too: a message about the whole scene
         raise SceneError(f'{path}: {error}') from error
+    except MemoryError as error:
+        raise SceneError(f'{path}: the machine ran out of memory building its ground map '
+                         f'and collision models') from error
     scene = Scene(environment=environment, start=start, source=path, mesh_files=tuple(files),
                   description=description, expect=expect)
     if skeleton is not None:
