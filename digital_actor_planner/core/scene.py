@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 import math
 import os
-from typing import Sequence, Tuple
+from typing import Optional, Sequence, Tuple
 
 import numpy as np
 import yaml
@@ -232,27 +232,104 @@ def start_configuration(environment: 'Environment', start, skeleton) -> np.ndarr
     return q
 
 
-def check_start(environment: 'Environment', start, skeleton) -> None:
+def check_start(environment: Environment, start, skeleton) -> None:
     """Check the actor can stand at a start pose.
 
     Places the configuration an :class:`actor.Actor` starts in there (each foot resting on the
-    ground under it where it can, else both level on the lowest ground under them, as
-    :func:`start_configuration`) 2 mm up, so that a foot resting on a surface does not touch
-    it, and tests it against the environment with :class:`collision.BodyCollision`.
+    ground under it, at its own height and pitch, where it can; else both level on the lowest
+    ground under them, as :func:`start_configuration`) 2 mm up, so that a foot resting on a
+    surface does not touch it, and tests it against the environment with
+    :class:`collision.BodyCollision`. Where it cannot stand, the message says why and names
+    the nearest start, within ``_SEARCH_RADII[-1]`` m and at the same heading, where it can.
 
     Raises
     ------
     SceneError
-        No ground below the start, or the standing actor would be inside an obstacle.
+        No ground below the start, the ground under a foot too uneven or steep to rest on, or
+        the standing actor inside an obstacle.
 
     """
+    x, y, yaw = _finite_numbers(list(start) if isinstance(start, (list, tuple, np.ndarray))
+                                else start, 3, 'start', 'start pose')
     body = BodyCollision(skeleton, environment)
-    actor = Actor(skeleton, environment, ActorConfig(plan_upper_body=False), start=start,
-                  body_collision=body)
+    problem = _start_problem(environment, (x, y, yaw), skeleton, body)
+    if problem is None:
+        return
+    hint = _nearest_standable(environment, (x, y, yaw), skeleton, body)
+    raise SceneError(f'start pose ({x:g}, {y:g}, yaw {yaw:g}) {problem}; {hint}')
+
+
+# Rings searched for a standable start near one that is not, m, and starts tried per ring
+# at the smallest radius (more on the wider rings, about one every 0.3 m of circumference).
+_SEARCH_RADII = (0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0)
+_SEARCH_SPACING = 0.3
+
+
+def _start_problem(environment: Environment, start: Tuple[float, float, float], skeleton,
+                   body: BodyCollision) -> Optional[str]:
+    """Why the actor cannot stand at ``start`` (a phrase after "start pose (x, y, yaw)"), or
+    None where it can."""
+    x, y, yaw = start
+    try:
+        actor = Actor(skeleton, environment, ActorConfig(plan_upper_body=False), start=start,
+                      body_collision=body)
+    except SceneError:
+        return 'has no ground below it'
     q = actor.configuration
     q[skeleton.index['root_z']] += 0.002
     links = body.links_in_collision(q)
-    if links:
-        x, y, yaw = (float(v) for v in start)
-        raise SceneError(f'start pose ({x:g}, {y:g}, yaw {yaw:g}) is inside an obstacle: '
-                         f'links {links} collide')
+    if not links:
+        return None
+    uneven = _uneven_feet(environment, start, skeleton)
+    if uneven and set(links) <= {'left_foot', 'right_foot'}:
+        return f'is not standable: {uneven}'
+    return f'is inside an obstacle: links {links} collide'
+
+
+def _uneven_feet(environment: Environment, start: Tuple[float, float, float],
+                 skeleton) -> str:
+    """What makes the ground under a foot at ``start`` unfit to rest a sole on (too uneven
+    across the sole, or too steep along it, by the footstep planner's limits), or ''."""
+    x, y, yaw = start
+    leg = skeleton.leg
+    limits = ActorConfig().footstep_config()
+    c, s = math.cos(yaw), math.sin(yaw)
+    lengths = np.array([-leg.heel, 0.5 * (leg.toe - leg.heel), leg.toe])
+    for name, side in (('left', 1.0), ('right', -1.0)):
+        across = np.array([-0.5, 0.0, 0.5]) * leg.foot_width + side * leg.hip_half_width
+        local = np.stack(np.broadcast_arrays(lengths[:, None], across[None, :]), axis=-1)
+        xy = local @ np.array([[c, s], [-s, c]]) + (x, y)
+        ground = environment.lowest_ground(xy.reshape(-1, 2)).reshape(3, 3)
+        if np.isnan(ground).any():
+            return f'the {name} foot is partly over no ground'
+        rise = float((ground.max(axis=1) - ground.min(axis=1)).max())
+        if rise > limits.flatness_tolerance:
+            return (f'the ground under the {name} foot rises {rise * 100:.1f} cm across the '
+                    f'sole (a sole rests on ground level across within '
+                    f'{limits.flatness_tolerance * 100:.1f} cm)')
+        top = ground.max(axis=1)
+        centred = lengths - lengths.mean()
+        pitch = abs(math.atan(float(centred @ top / (centred @ centred))))
+        if pitch > limits.max_foot_pitch:
+            return (f'the ground under the {name} foot slopes {math.degrees(pitch):.0f} '
+                    f'degrees along the sole (a sole rests on at most '
+                    f'{math.degrees(limits.max_foot_pitch):.0f} degrees)')
+    return ''
+
+
+def _nearest_standable(environment: Environment, start: Tuple[float, float, float], skeleton,
+                       body: BodyCollision) -> str:
+    """"the nearest standable start is [x, y, yaw]" for the nearest start on rings around
+    ``start`` (same heading) where the actor can stand, or that there is none near."""
+    x, y, yaw = start
+    for radius in _SEARCH_RADII:
+        count = max(8, int(math.ceil(2 * math.pi * radius / _SEARCH_SPACING)))
+        for angle in np.arange(count) * (2 * math.pi / count):
+            candidate = (x + radius * math.cos(angle), y + radius * math.sin(angle), yaw)
+            ground = environment.lowest_ground(np.array([candidate[:2]]))
+            if np.isnan(ground[0]):
+                continue
+            if _start_problem(environment, candidate, skeleton, body) is None:
+                return (f'the nearest standable start is [{candidate[0]:.2f}, '
+                        f'{candidate[1]:.2f}, {yaw:g}]')
+    return f'no standable start within {_SEARCH_RADII[-1]:g} m at this heading'
