@@ -263,6 +263,7 @@ def check_start(environment: Environment, start, skeleton) -> None:
 # at the smallest radius (more on the wider rings, about one every 0.3 m of circumference).
 _SEARCH_RADII = (0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0)
 _SEARCH_SPACING = 0.3
+_LEG_LINKS = {f'{side}_{part}' for side in ('left', 'right') for part in ('thigh', 'shank', 'foot')}
 
 
 def _start_problem(environment: Environment, start: Tuple[float, float, float], skeleton,
@@ -281,7 +282,9 @@ def _start_problem(environment: Environment, start: Tuple[float, float, float], 
     if not links:
         return None
     uneven = _uneven_feet(environment, start, skeleton)
-    if uneven and set(links) <= {'left_foot', 'right_foot'}:
+    # Feet that cannot rest are put level at the lowest ground: on a bank the uphill leg
+    # is then in the ground.
+    if uneven and set(links) <= _LEG_LINKS:
         return f'is not standable: {uneven}'
     return f'is inside an obstacle: links {links} collide'
 
