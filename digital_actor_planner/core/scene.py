@@ -263,7 +263,8 @@ def check_start(environment: Environment, start, skeleton) -> None:
 # at the smallest radius (more on the wider rings, about one every 0.3 m of circumference).
 _SEARCH_RADII = (0.25, 0.5, 0.75, 1.0, 1.5, 2.0, 3.0)
 _SEARCH_SPACING = 0.3
-_LEG_LINKS = {f'{side}_{part}' for side in ('left', 'right') for part in ('thigh', 'shank', 'foot')}
+_LEG_LINKS = {f'{side}_{part}' for side in ('left', 'right')
+              for part in ('thigh', 'shank', 'foot')}
 
 
 def _start_problem(environment: Environment, start: Tuple[float, float, float], skeleton,
