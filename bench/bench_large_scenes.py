@@ -71,7 +71,7 @@ def measure(spec: str, walk_seconds: float) -> dict:
     skeleton = Skeleton()
     kind, _, argument = spec.partition(':')
     baseline = peak_rss_mb()
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     if kind == 'scene':
         scene = load_scene(third_party_meshes.scene_path(argument))
         environment, start_pose = scene.environment, scene.start
@@ -79,21 +79,24 @@ def measure(spec: str, walk_seconds: float) -> dict:
         mesh = plane(float(argument)) if kind == 'plane' else terrain(
             TERRAIN_SIZE, float(argument))
         environment, start_pose = Environment([mesh]), (0.0, 0.0, 0.0)
-    load = time.perf_counter() - start
+    load, load_cpu = time.perf_counter() - start, time.process_time() - cpu
     extent = environment.bounds[1, :2] - environment.bounds[0, :2]
     out = dict(spec=spec, triangles=int(sum(len(m.faces) for m in environment.meshes)),
-               area_m2=float(extent[0] * extent[1]), load_s=load,
+               area_m2=float(extent[0] * extent[1]), load_s=load, load_cpu_s=load_cpu,
                loaded_rss_mb=peak_rss_mb(), baseline_rss_mb=baseline)
     if walk_seconds > 0:
         actor = Actor(skeleton, environment, ActorConfig(), start=start_pose)
         actor.set_command(0.5, 0.0)
         x0 = actor.configuration[:2].copy()
-        clock = time.perf_counter()
-        steps = 0
+        step_cpu = []
         while actor.time < walk_seconds and actor.status != 'stuck':
-            actor.plan_next()
-            steps += 1
-        out.update(walk_s=time.perf_counter() - clock, steps=steps, status=actor.status,
+            clock = time.process_time()
+            block = actor.plan_next()
+            if block.status == 'walking':
+                step_cpu.append(time.process_time() - clock)
+        out.update(steps=len(step_cpu), status=actor.status,
+                   step_p50_ms=1e3 * float(np.median(step_cpu)) if step_cpu else 0.0,
+                   step_max_ms=1e3 * float(np.max(step_cpu)) if step_cpu else 0.0,
                    walked_m=float(np.linalg.norm(actor.configuration[:2] - x0)))
     out.update(peak_rss_mb=peak_rss_mb(), cache_mb=environment.cached_bytes() / 2 ** 20,
                tiles=environment.cached_tiles())
@@ -114,12 +117,13 @@ def _row(result: dict) -> str:
         return f'{result["spec"]:<22} failed: {result["error"]}'
     walk = ''
     if 'steps' in result:
-        walk = (f'  walked {result["walked_m"]:5.1f} m in {result["steps"]:3d} steps '
-                f'({result["status"]}, {result["walk_s"]:.1f} s)')
+        walk = (f'  walked {result["walked_m"]:4.1f} m, {result["steps"]:2d} steps '
+                f'({result["status"]}), CPU a step p50 {result["step_p50_ms"]:.0f} ms, '
+                f'max {result["step_max_ms"]:.0f} ms')
     return (f'{result["spec"]:<22} {result["triangles"]:>8d} tri {result["area_m2"]:>10.0f} m2  '
-            f'load {result["load_s"]:5.2f} s  RSS loaded {result["loaded_rss_mb"]:4.0f} MB, '
-            f'peak {result["peak_rss_mb"]:4.0f} MB (interpreter and kernels '
-            f'{result["baseline_rss_mb"]:3.0f} MB), tile cache {result["cache_mb"]:4.0f} MB'
+            f'load {result["load_s"]:5.2f} s ({result["load_cpu_s"]:5.2f} s CPU)  RSS loaded '
+            f'{result["loaded_rss_mb"]:4.0f} MB, peak {result["peak_rss_mb"]:4.0f} MB '
+            f'(imports {result["baseline_rss_mb"]:3.0f} MB), tiles {result["cache_mb"]:3.0f} MB'
             f'{walk}')
 
 
@@ -133,6 +137,7 @@ def main() -> int:
         print(json.dumps(measure(args.one, args.walk)))
         return 0
     third_party_meshes.fetch()
+    print(f'load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs')
     print('third-party scenes (from their files; walked at 0.5 m/s):')
     for name in ('monastery', 'warehouse'):
         print(_row(run(f'scene:{name}', args.walk)), flush=True)
