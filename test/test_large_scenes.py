@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from digital_actor_planner.core import environment
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.scene import (check_start, load_scene, SceneError,
                                               start_configuration)
@@ -289,3 +290,33 @@ def test_the_cli_exits_2_with_the_file_and_reason_for_a_mesh_too_large(tmp_path)
     assert done.returncode == 2
     assert 'huge.stl' in done.stderr and 'GB available' in done.stderr
     assert 'Traceback' not in done.stderr
+
+
+def test_the_compiled_corner_intersection_is_the_pairwise_one():
+    """The tiles intersect their cells' corners in one compiled pass; the readable pairwise
+    intersection (``_intersect``, three times) gives the same intervals in the same order."""
+    rng = np.random.default_rng(0)
+
+    def corner(count, layers):
+        ground = np.sort(rng.choice([0.0, 0.1, 0.2, 0.5, 1.0], (count, layers))
+                         + rng.uniform(0, 0.05, (count, layers)), axis=1)
+        ceiling = np.full_like(ground, np.inf)
+        ceiling[:, :-1] = ground[:, 1:] - rng.uniform(0.0, 0.1, (count, layers - 1))
+        empty = ~(ceiling >= ground) | (rng.random(ground.shape) < 0.3)
+        ground[empty], ceiling[empty] = np.inf, np.inf
+        return environment._compact(ground, ceiling)
+
+    for layers in (1, 3, 6):
+        corners = [corner(3000, layers) for _ in range(4)]
+        width = max(g.shape[1] for g, _ in corners)
+        grounds = [np.pad(g, ((0, 0), (0, width - g.shape[1])), constant_values=np.inf)
+                   for g, _ in corners]
+        ceilings = [np.pad(c, ((0, 0), (0, width - c.shape[1])), constant_values=np.inf)
+                    for _, c in corners]
+        ground, ceiling = grounds[0], ceilings[0]
+        for g, c in zip(grounds[1:], ceilings[1:]):
+            ground, ceiling = environment._intersect(ground, ceiling, g, c)
+        compiled = environment._intersect_corners(grounds, ceilings)
+        assert np.isfinite(ground).sum() > 100
+        np.testing.assert_array_equal(compiled[0], ground)
+        np.testing.assert_array_equal(compiled[1], ceiling)

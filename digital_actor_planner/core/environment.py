@@ -173,25 +173,56 @@ def _intersect(ground_a, ceiling_a, ground_b, ceiling_b):
     return _compact(ground, ceiling)
 
 
+@kernel('Tuple((f8[:, ::1], f8[:, ::1]))(f8[:, :, ::1], f8[:, :, ::1])')
+def _intersect_cells(grounds, ceilings):
+    """Intersect the free intervals of each cell's four corners: (4, M, K) grounds and
+    ceilings, each corner's intervals disjoint and sorted by ground (empty ones, +inf, last)
+    -> (M, K') the same of the cells.
+
+    As :func:`_intersect` three times over, without its (M, K x K) arrays: the pairs of one
+    interval of the cell so far and one of the next corner, in that order, meet where their
+    common part is not empty; the parts are kept sorted by ground, equal grounds in pair order.
+    """
+    corners, count, layers = grounds.shape
+    room = 4 * layers * layers + 1
+    current_ground, current_ceiling = np.empty(room), np.empty(room)
+    next_ground, next_ceiling = np.empty(room), np.empty(room)
+    out_ground = np.full((count, 4 * layers + 1), np.inf)
+    out_ceiling = np.full((count, 4 * layers + 1), np.inf)
+    width = 1
+    for m in range(count):
+        n = 0
+        for k in range(layers):
+            if grounds[0, m, k] < np.inf:
+                current_ground[n], current_ceiling[n] = grounds[0, m, k], ceilings[0, m, k]
+                n += 1
+        for corner in range(1, corners):
+            t = 0
+            for a in range(n):
+                for b in range(layers):
+                    ground = max(current_ground[a], grounds[corner, m, b])
+                    ceiling = min(current_ceiling[a], ceilings[corner, m, b])
+                    if not (ground < np.inf and ceiling >= ground):
+                        continue
+                    i = t
+                    while i > 0 and next_ground[i - 1] > ground:
+                        next_ground[i], next_ceiling[i] = next_ground[i - 1], next_ceiling[i - 1]
+                        i -= 1
+                    next_ground[i], next_ceiling[i] = ground, ceiling
+                    t += 1
+            for i in range(t):
+                current_ground[i], current_ceiling[i] = next_ground[i], next_ceiling[i]
+            n = t
+        for i in range(n):
+            out_ground[m, i], out_ceiling[m, i] = current_ground[i], current_ceiling[i]
+        width = max(width, n)
+    return out_ground[:, :width].copy(), out_ceiling[:, :width].copy()
+
+
 def _intersect_corners(grounds, ceilings):
-    """Intersect the free intervals of a cell's four corners, (M, K) each -> (M, K'), in
-    blocks of cells so that the pairs of intervals compared at once stay few."""
-    count, layers = grounds[0].shape
-    block = max(1, _RASTER_CHUNK // max(1, layers ** 2 * layers))
-    parts = []
-    for start in range(0, count, block):
-        part = slice(start, start + block)
-        ground, ceiling = grounds[0][part], ceilings[0][part]
-        for g, c in zip(grounds[1:], ceilings[1:]):
-            ground, ceiling = _intersect(ground, ceiling, g[part], c[part])
-        parts.append((ground, ceiling))
-    width = max([g.shape[1] for g, _ in parts], default=1)
-    ground = np.full((count, width), np.inf)
-    ceiling = np.full((count, width), np.inf)
-    for (g, c), start in zip(parts, range(0, count, block)):
-        ground[start:start + len(g), :g.shape[1]] = g
-        ceiling[start:start + len(g), :g.shape[1]] = c
-    return ground, ceiling
+    """Intersect the free intervals of a cell's four corners, (M, K) each -> (M, K')."""
+    return _intersect_cells(np.ascontiguousarray(np.stack(grounds)),
+                            np.ascontiguousarray(np.stack(ceilings)))
 
 
 class SceneError(ValueError):
