@@ -81,6 +81,12 @@ warm_up() {
     || log "warm-up failed; the planner compiles its kernels on its first start instead"
 }
 
+setup_meshes() {
+  # Third-party scenes (zlib licence, not committed) for the large-scene bench and tests.
+  "$PY" "$HERE/bench/third_party_meshes.py" fetch >/dev/null \
+    || log "third-party meshes not fetched: the tests that walk them are skipped"
+}
+
 ros_env() {
   # Keep DDS discovery on this machine: Kilted ignores ROS_LOCALHOST_ONLY.
   export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
@@ -94,13 +100,13 @@ cmd="${1:-demo}"
 [ $# -gt 0 ] && shift
 case "$cmd" in
   setup)
-    setup_python; setup_test_tools; warm_up ;;
+    setup_python; setup_test_tools; setup_meshes; warm_up ;;
   demo)
     # The demo warms the kernel cache itself when it is not current.
     setup_python; ros_env
     exec "$PY" -m digital_actor_planner.cli demo "$@" ;;
   test)
-    setup_python; setup_test_tools; warm_up; ros_env
+    setup_python; setup_test_tools; setup_meshes; warm_up; ros_env
     cd "$HERE"
     exec "$PY" -m pytest "$@" ;;
   shell)

@@ -12,7 +12,8 @@ import numpy as np
 import trimesh
 
 from digital_actor_planner.core.collision import BodyCollision
-from digital_actor_planner.core.environment import Environment, start_configuration
+from digital_actor_planner.core.environment import Environment
+from digital_actor_planner.core.scene import start_configuration
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.core.trajectory_check import check_trajectory
 

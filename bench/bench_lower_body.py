@@ -205,7 +205,12 @@ def compare(courses, other_root, rounds, upper=False):
     """Paired CPU times per step of this package and the one at ``other_root``."""
     from digital_actor_planner.core import actor as this_actor
     labels = {'this': this_actor, 'other': _load_other(other_root)}
-    setups = [(name, scene(name),
+    # Each package walks the scene as its own loader builds it (their environments' internals
+    # may differ).
+    other_loader = sys.modules.get('other_dap.core.scene') or sys.modules[
+        'other_dap.core.environment']
+    setups = [(name, {'this': scene(name), 'other': other_loader.load_scene(
+                   os.path.join(ROOT, 'config', 'scenes', name + '.yaml'))},
                read_commands(os.path.join(ROOT, 'config', 'scenes', name + '.csv')))
               for name in courses]
     per_round = {label: [] for label in labels}
@@ -218,7 +223,7 @@ def compare(courses, other_root, rounds, upper=False):
             order = list(labels) if (r + i) % 2 == 0 else list(labels)[::-1]
             frames = {}
             for label in order:
-                times, frames[label] = _walk(labels[label], sc, commands, upper)
+                times, frames[label] = _walk(labels[label], sc[label], commands, upper)
                 cpu[label] += times
             if frames['this'] != frames['other']:
                 raise SystemExit(f'{name}: the two packages produce different frames')

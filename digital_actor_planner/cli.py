@@ -216,7 +216,7 @@ def simulate(args) -> int:
 
 def _simulate(args, outputs: '_Outputs') -> int:
     from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands, validate
-    from digital_actor_planner.core.environment import load_scene, SceneError
+    from digital_actor_planner.core.scene import load_scene, SceneError
     from digital_actor_planner.core.footsteps import FootstepConfig
     from digital_actor_planner.core.skeleton import Skeleton
 

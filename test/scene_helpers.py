@@ -7,7 +7,7 @@ import yaml
 
 from digital_actor_planner.core.ct_space import (
     BodyKinematics, BodyShapes, EnvironmentIndex, TimedBody)
-from digital_actor_planner.core.environment import load_scene
+from digital_actor_planner.core.scene import load_scene
 from digital_actor_planner.core.upper_body import motion_patterns
 
 RATE = 100.0

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from digital_actor_planner.core.collision import BodyCollision
-from digital_actor_planner.core.environment import Environment, start_configuration
+from digital_actor_planner.core.environment import Environment
+from digital_actor_planner.core.scene import start_configuration
 from scene_helpers import box
 
 

@@ -7,8 +7,9 @@ import pytest
 import trimesh
 
 from digital_actor_planner.core.collision import BodyCollision
-from digital_actor_planner.core.environment import (check_start, Environment, load_scene,
-                                                    SceneError, start_configuration)
+from digital_actor_planner.core.environment import Environment
+from digital_actor_planner.core.scene import (check_start, load_scene, SceneError,
+                                              start_configuration)
 from digital_actor_planner.core.skeleton import Skeleton
 
 SCENES = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'config',
@@ -361,3 +362,20 @@ def test_top_height_bounds_every_mesh_and_is_exact_over_level_faces(world):
     assert np.all(beside == -np.inf)
     with pytest.raises(ValueError, match='same shape'):
         world.top_height(np.zeros((2, 2)), np.zeros((3, 2)))
+
+
+def test_the_environment_is_a_foundation_and_scenes_the_top_floor_of_core():
+    """environment imports no other planning module (the actor stands on it, not the other
+    way round); scene files and start checks, which need the actor, live in scene."""
+    import ast
+    import digital_actor_planner.core.environment as environment_module
+    import digital_actor_planner.core.scene as scene_module
+
+    def relative_imports(module):
+        with open(module.__file__, encoding='utf-8') as source:
+            tree = ast.parse(source.read())
+        return {node.module for node in ast.walk(tree)
+                if isinstance(node, ast.ImportFrom) and node.level == 1}
+
+    assert relative_imports(environment_module) == {'jit'}
+    assert {'actor', 'environment'} <= relative_imports(scene_module)

@@ -18,7 +18,8 @@ from digital_actor_planner.core import (collision, ct_space, environment, footst
 from digital_actor_planner import core as core_package
 from digital_actor_planner.core import skeleton as skeleton_module, upper_body
 from digital_actor_planner.core.collision import BodyCollision
-from digital_actor_planner.core.environment import Environment, start_configuration
+from digital_actor_planner.core.environment import Environment
+from digital_actor_planner.core.scene import start_configuration
 from digital_actor_planner.core.footsteps import FootstepConfig
 from digital_actor_planner.core.jit import COMPILED, direct, float_array
 from digital_actor_planner.core.skeleton import Skeleton
@@ -155,16 +156,14 @@ def test_ground_heights_and_top_bounds(world):
     xy[:20, 0] = np.nan
     z = rng.uniform(-0.5, 1.2, xy.shape[0])
     z[20:30] = np.inf
-    grid = (float(world._origin[0]), float(world._origin[1]), float(world._inverse_resolution),
-            float(world._grid_last[0]), float(world._grid_last[1]), int(world._shape[1] - 1),
-            world._ground_flat, world._ceiling_flat, int(world._layers))
-    assert world._layers > 1  # the table over the floor
+    grid = world.ground_grid()
+    assert grid[8].max() > 1  # the table over the floor: more than one layer in a tile
     compiled = environment._ground_heights(xy, z, *grid)
     same(compiled, environment._ground_heights.py_func(xy, z, *grid))
     assert np.isfinite(compiled[0]).sum() > 1000 and np.isnan(compiled[0]).sum() > 30
     half = rng.uniform(0.0, 0.8, xy.shape[0])
     half[30:40] = np.nan
-    layout = (world._top_pyramid, *world.top_near_grid(), xy, half)
+    layout = (*world.top_near_grid(), xy, half)
     tops = environment._tops_near(*layout)
     same(tops, environment._tops_near.py_func(*layout))
     assert np.isinf(tops).sum() > 30 and np.isfinite(tops).sum() > 1000
@@ -185,7 +184,7 @@ def test_the_broad_phase_of_the_3d_check(skeleton, world):
     index = np.array(shapes)
     for free_end in (False, True):
         arguments = (transforms, body._kind_codes[index], body._halves[index], True,
-                     world._top_pyramid, *world.top_near_grid(),
+                     *world.top_near_grid(),
                      transforms[5, :, :3, :].copy(), free_end, body._reach_array[index],
                      body._mesh_low, body._mesh_high)
         pairs, near = collision._suspects(*arguments)

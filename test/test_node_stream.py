@@ -124,7 +124,7 @@ def _triangles(environment) -> np.ndarray:
 
 
 def _scene_triangles(path) -> np.ndarray:
-    from digital_actor_planner.core.environment import load_scene
+    from digital_actor_planner.core.scene import load_scene
     meshes = load_scene(path).environment.meshes
     return np.concatenate([np.asarray(m.vertices)[np.asarray(m.faces)] for m in meshes])
 

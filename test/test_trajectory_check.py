@@ -4,7 +4,8 @@ import time
 import numpy as np
 import pytest
 
-from digital_actor_planner.core.environment import Environment, start_configuration
+from digital_actor_planner.core.environment import Environment
+from digital_actor_planner.core.scene import start_configuration
 from digital_actor_planner.core.trajectory_check import check_trajectory
 from scene_helpers import box
 

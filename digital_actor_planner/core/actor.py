@@ -249,7 +249,7 @@ class Actor:
                  upper_body_planner=None, body_collision=None):
         validate(config)
         from .collision import BodyCollision
-        from .environment import start_configuration
+        from .scene import start_configuration
         self.skeleton = skeleton
         self.environment = environment
         self.config = config
@@ -382,7 +382,12 @@ class Actor:
         leg = self.skeleton.leg
         feet = []
         for foot in level.feet:
-            rest = self._sole_rest(foot.xy, foot.yaw, sole)
+            # On a slope the uphill foot stands higher than the lowest ground under both:
+            # each foot rests near the lowest ground under itself.
+            under = self.environment.lowest_ground(self._sole_points(
+                foot.xy, foot.yaw, np.array([-leg.heel, leg.toe])).reshape(-1, 2))
+            near = float(np.nanmin(under)) if np.isfinite(under).any() else sole
+            rest = self._sole_rest(foot.xy, foot.yaw, near)
             if rest is None:
                 return level
             feet.append(foot_pose_on(foot.xy, foot.yaw, rest[0], rest[1], leg))

@@ -64,17 +64,20 @@ def _unmoved(a, b):
 
 
 @kernel('Tuple((i8[:, ::1], b1[:, ::1]))(f8[:, :, :, ::1], i8[::1], f8[:, ::1], b1, '
-        'f8[::1], i8, i8, i8, f8, f8, f8, f8[:, :, ::1], b1, f8[::1], f8[:, ::1], f8[:, ::1])')
-def _suspects(transforms, kinds, halves, top_bound, pyramid, cells, nx, ny, x0, y0, inverse,
-              free_end, after_free_end, reach, mesh_low, mesh_high):
+        'f8[::1], i8[::1], i8[::1], i8, u1[::1], i8[::1], i8, i8, i8, f8, f8, f8, '
+        'f8[:, :, ::1], b1, f8[::1], f8[:, ::1], f8[:, ::1])')
+def _suspects(transforms, kinds, halves, top_bound, pyramid, slot_of, stamp, clock, wanted,
+              missed, tiles_x, nx, ny, x0, y0, inverse, free_end, after_free_end, reach,
+              mesh_low, mesh_high):
     """The broad phase of :meth:`BodyCollision.first_collision` in one pass.
 
     ``transforms``: (k, S, 4, 4) shape poses over a motion. A shape is a suspect at a frame
     unless ``top_bound`` and its lowest point lies above the environment's height bound over
-    its footprint (:func:`environment._top_near`, the top map pyramid's layout in ``pyramid``
-    to ``inverse``). A suspect that has not moved since the frame before, where it was a
-    suspect too (or, with ``after_free_end``, at the first frame since ``free_end``, the poses
-    the last motion found free) needs no exact test. Returns the (frame, shape column) pairs to
+    its footprint (:func:`environment._top_near`, the tiled top map's layout in ``pyramid``
+    to ``inverse``; where a tile is not cached yet the shape is a suspect). A suspect that
+    has not moved since the frame before, where it was a suspect too (or, with
+    ``after_free_end``, at the first frame since ``free_end``, the poses the last motion found
+    free) needs no exact test. Returns the (frame, shape column) pairs to
     test in time order and, for each, which meshes' bounds (``mesh_low``, ``mesh_high``) come
     within its ``reach`` of its centre.
     """
@@ -87,8 +90,8 @@ def _suspects(transforms, kinds, halves, top_bound, pyramid, cells, nx, ny, x0, 
                 width = max(_extent(kinds[c], halves[c], pose, 0),
                             _extent(kinds[c], halves[c], pose, 1))
                 bottom = pose[2, 3] - _extent(kinds[c], halves[c], pose, 2)
-                top = _top_near(pyramid, cells, nx, ny, x0, y0, inverse, pose[0, 3],
-                                pose[1, 3], width)
+                top = _top_near(pyramid, slot_of, stamp, clock, wanted, missed, tiles_x, nx,
+                                ny, x0, y0, inverse, pose[0, 3], pose[1, 3], width)
                 suspect[f, c] = not bottom > top
     pairs = np.empty((k * count, 2), dtype=np.int64)
     found = 0
@@ -490,8 +493,7 @@ class BodyCollision:
         after_free_end = (self.top_bound and self._free_end is not None
                           and self._free_end[0] == chosen)
         pairs, near = _suspects(
-            transforms, kinds, halves, self.top_bound, self.environment._top_pyramid,
-            *self.environment.top_near_grid(),
+            transforms, kinds, halves, self.top_bound, *self.environment.top_near_grid(),
             self._free_end[1] if after_free_end else _NO_POSES, after_free_end, reach,
             self._mesh_low, self._mesh_high)
         hit_frame, hits = -1, []

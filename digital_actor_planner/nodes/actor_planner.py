@@ -55,7 +55,7 @@ from std_msgs.msg import ColorRGBA, String
 from visualization_msgs.msg import Marker, MarkerArray
 
 from digital_actor_planner.core.actor import Actor, ActorConfig, validate
-from digital_actor_planner.core.environment import check_start, load_scene
+from digital_actor_planner.core.scene import check_start, load_scene
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.nodes.planner_params import ConfigurationError, \
     parameter_declarations, PlannerNodeConfig, read_node_config, RUNTIME_PARAMETERS, \
