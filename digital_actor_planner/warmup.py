@@ -113,7 +113,7 @@ def _write_stamp() -> None:
 def _plan_one_step() -> None:
     """Plan a few steps on the flat course, as the node's first walk does."""
     from digital_actor_planner.core.actor import Actor, ActorConfig
-    from digital_actor_planner.core.environment import load_scene
+    from digital_actor_planner.core.scene import load_scene
     from digital_actor_planner.core.skeleton import Skeleton
     from digital_actor_planner.nodes.viewer import shipped_scenes
 

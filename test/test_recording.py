@@ -7,7 +7,7 @@ import yaml
 
 from digital_actor_planner import cli
 from digital_actor_planner.cli import read_trajectory
-from digital_actor_planner.core.environment import load_scene
+from digital_actor_planner.core.scene import load_scene
 
 rosbags = pytest.importorskip('rosbags')
 from rosbags.rosbag2 import Reader  # noqa: E402 (after the skip)
