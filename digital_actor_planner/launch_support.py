@@ -12,7 +12,7 @@ RViz's fixed frame and robot-model TF prefix all follow from :func:`frame_prefix
 from __future__ import annotations
 
 import os
-from typing import Callable, Dict, Iterable, List, Sequence
+from typing import Callable, Dict, Iterable, List, Optional, Sequence
 
 import yaml
 
@@ -95,7 +95,21 @@ def required_packages(arguments: Dict[str, str]) -> List[str]:
         Package names, in the order the launch starts them.
     """
     return [package for package, switch in LAUNCHED_PACKAGES
-            if switch is None or is_true(arguments.get(switch, 'true'))]
+            if switch is None or switched_on(arguments, switch)]
+
+
+def switched_on(arguments: Dict[str, str], name: str) -> bool:
+    """Launch argument ``name`` (true when absent) as a boolean.
+
+    Raises
+    ------
+    ValueError
+        Naming the argument, when its value is not true or false.
+    """
+    try:
+        return is_true(arguments.get(name, 'true'))
+    except ValueError as error:
+        raise ValueError(f'launch argument {name}: {error}') from None
 
 
 def install_hint(package: str, distribution: str = '') -> str:
@@ -105,7 +119,7 @@ def install_hint(package: str, distribution: str = '') -> str:
 
 
 def check_packages(packages: Iterable[str], find: Callable[[str], str],
-                   switches: Dict[str, str] = None) -> None:
+                   switches: Optional[Dict[str, str]] = None) -> None:
     """Raise :class:`MissingPackageError` naming every package ``find`` cannot locate.
 
     Parameters

@@ -19,8 +19,8 @@ import tempfile
 
 from ament_index_python.packages import get_package_share_directory
 from digital_actor_planner.launch_support import (
-    check_packages, frame_prefix, is_true, launched_package_switches, required_packages,
-    rviz_config, TELEOP_FREQUENCY, world_frame)
+    check_packages, frame_prefix, launched_package_switches, required_packages, rviz_config,
+    switched_on, TELEOP_FREQUENCY, world_frame)
 from launch import LaunchDescription
 from launch.actions import (
     DeclareLaunchArgument, GroupAction, IncludeLaunchDescription, OpaqueFunction)
@@ -85,15 +85,15 @@ def _actor(context, share):
              parameters=[{'robot_description': _text(robot_description),
                           'frame_prefix': _text(prefix)}]),
     ]
-    if is_true(values['use_rviz']):
+    if switched_on(values, 'use_rviz'):
         actions.append(Node(package='rviz2', executable='rviz2', name='rviz2',
                             arguments=['-d', _rviz_config_file(share, namespace)]))
-    if is_true(values['use_teleop']):
+    if switched_on(values, 'use_teleop'):
         actions.append(Node(package='mouse_teleop', executable='mouse_teleop',
                             name='mouse_teleop',
                             parameters=[{'frequency': teleop_frequency}],
                             remappings=[('mouse_vel', 'cmd_vel')]))
-    if is_true(values['use_dynamixel']):
+    if switched_on(values, 'use_dynamixel'):
         actions.append(IncludeLaunchDescription(
             PythonLaunchDescriptionSource(os.path.join(share, 'launch', 'bridge.launch.py'))))
     return [GroupAction(actions)]

@@ -152,6 +152,13 @@ def test_a_bad_teleop_frequency_is_named(launch):
         launch(teleop_frequency='fast')
 
 
+def test_a_switch_that_is_neither_true_nor_false_is_named(launch):
+    with pytest.raises(ValueError, match='use_rviz'):
+        launch(use_rviz='maybe')
+    with pytest.raises(ValueError, match='use_dynamixel'):
+        launch(use_dynamixel='yes please')
+
+
 def test_root_namespace_frames_are_the_urdf_names(launch):
     actions = launch()
     started = nodes(actions)

@@ -287,8 +287,11 @@ def _neighbour_table(nodes, deviation, here, last, hold_frames, with_objective, 
             q[i, j] = objective[frames[i], j] + targets[i, j]
         closeness[i] = math.sqrt(total)
         ranked_frames[i] = -frames[i] if holds[i] or on_objective else frames[i]
-    return (targets, frames, closeness, approach, holds, ranked_frames, np.round(closeness, 6),
-            np.round(targets, 3), q)
+    # np.round with ``out``: the form every numba release compiles (before 0.57, the only one
+    # for arrays).
+    return (targets, frames, closeness, approach, holds, ranked_frames,
+            np.round(closeness, 6, np.empty_like(closeness)),
+            np.round(targets, 3, np.empty_like(targets)), q)
 
 
 @kernel('Tuple((b1[::1], i8))(f8[:, ::1], i8[::1], i8[::1], i8, i8, i8, i8, b1[::1], '
@@ -477,7 +480,7 @@ def _lasting_from(targets, arrivals, here, hold_frames, free, next_free, held, p
             break
     if begin < 0:
         return np.ones(m, dtype=np.bool_), 0, held
-    rounded = np.round(targets, 4)
+    rounded = np.round(targets, 4, np.empty_like(targets))  # ``out``: as in _neighbour_table
     ids = np.empty(m, dtype=np.int64)
     for i in range(m):
         key = _padded(rounded, i)

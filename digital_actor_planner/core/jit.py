@@ -4,10 +4,17 @@ A kernel is written as plain loops over NumPy arrays, with an explicit signature
 compiles it once when its module is imported (cached on disk next to the module, or in the
 user's cache when that is read-only) and never while the actor is walking. Without numba the
 same function runs as Python: the same results, many times slower. ``COMPILED`` says which.
+
+A numba that is installed but cannot compile a kernel (a distribution's older release that
+lacks a NumPy feature the kernel uses) must not stop the planner: that kernel, and any that
+calls it (numba cannot call Python from compiled code, so they fail likewise), runs as Python
+instead, and the first such failure is reported once as a :class:`KernelCompileWarning`.
+:func:`compile_failures` names them.
 """
 from __future__ import annotations
 
-from typing import Callable
+from typing import Callable, List, Tuple
+import warnings
 
 import numpy as np
 
@@ -16,8 +23,22 @@ try:  # pragma: no cover - which branch runs depends on the installation
 except ImportError:  # pragma: no cover
     numba = None
 
-#: Whether kernels are compiled (numba is installed).
+#: Whether numba is installed (a kernel it failed to compile still runs as Python: see
+#: :func:`compile_failures`).
 COMPILED = numba is not None
+
+# Kernels numba failed to compile, (qualified name, numba's first line), in import order: one
+# record for the process, since the warning is given once for all of them.
+_FAILURES: List[Tuple[str, str]] = []
+
+
+class KernelCompileWarning(RuntimeWarning):
+    """numba is installed but could not compile a kernel: it runs as plain Python."""
+
+
+def compile_failures() -> Tuple[Tuple[str, str], ...]:
+    """The kernels numba could not compile in this process, as (name, reason) pairs."""
+    return tuple(_FAILURES)
 
 
 def kernel(signature: str, inline: bool = False) -> Callable:
@@ -35,14 +56,43 @@ def kernel(signature: str, inline: bool = False) -> Callable:
         if numba is None:
             function.py_func = function
             return function
-        options = dict(nogil=True, inline='always' if inline else 'never')
         try:
-            return numba.njit(_parse(signature), cache=True, **options)(function)
-        except RuntimeError:
-            # numba found nowhere writable to cache it (a read-only install and home):
-            # compiled for this process alone.
-            return numba.njit(_parse(signature), **options)(function)
+            return _compile(function, signature, inline)
+        except Exception as error:  # noqa: B902 - any failure of numba's leaves Python
+            return _as_python(function, error)
     return wrap
+
+
+def _compile(function: Callable, signature: str, inline: bool) -> Callable:
+    """``function`` compiled by numba for ``signature`` (raises what numba raises)."""
+    options = dict(nogil=True, inline='always' if inline else 'never')
+    try:
+        return numba.njit(_parse(signature), cache=True, **options)(function)
+    except RuntimeError as error:
+        if 'cache' not in str(error):
+            raise
+        # numba found nowhere writable to cache it (a read-only install and home):
+        # compiled for this process alone.
+        return numba.njit(_parse(signature), **options)(function)
+
+
+def _as_python(function: Callable, error: Exception) -> Callable:
+    """``function`` as the plain-Python kernel, the failure recorded (and warned of once)."""
+    name = f'{function.__module__}.{function.__qualname__}'
+    # numba's first line names only the pipeline stage; the cause and place come after it.
+    lines = [line.strip() for line in str(error).splitlines() if line.strip()]
+    causes = [line for line in lines if not line.startswith('Failed in')] or lines or ['']
+    places = [line for line in lines if line.startswith('File "')]
+    reason = f'{type(error).__name__}: {causes[0]}' + (f' at {places[-1]}' if places else '')
+    _FAILURES.append((name, reason))
+    if len(_FAILURES) == 1:
+        warnings.warn(
+            f'numba {numba.__version__} could not compile {name} ({reason}); it and any '
+            'kernel that fails likewise run as plain Python: the same motion, planned more '
+            'slowly. A numba release that compiles them: see requirements.txt.',
+            KernelCompileWarning, stacklevel=3)
+    function.py_func = function
+    return function
 
 
 def direct(function: Callable) -> Callable:
