@@ -24,8 +24,10 @@ from digital_actor_planner.core.skeleton import Skeleton
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 THIRD_PARTY = os.path.join(ROOT, '.cache', 'third_party')
 FETCHED = os.path.isfile(os.path.join(THIRD_PARTY, 'pybullet==3.2.7.done'))
+# Away from CI a machine without the registry may skip them; CI must walk them.
 needs_third_party = pytest.mark.skipif(
-    not FETCHED, reason='third-party meshes not fetched (./quickstart.sh setup fetches them)')
+    not FETCHED and not os.environ.get('CI'),
+    reason='third-party meshes not fetched (./quickstart.sh setup fetches them)')
 # A whole process that loads and walks a scene stays under this, MB (the target: 1 GB).
 PEAK_MB = 1024
 
