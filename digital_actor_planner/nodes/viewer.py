@@ -588,7 +588,9 @@ def _build_node_class():
             server.initial_camera.look_at = (0.0, 0.0, 0.9)
             server.scene.add_grid('/ground_grid', width=40.0, height=40.0, cell_size=0.5,
                                   plane='xy', position=(0.0, 0.0, -0.002))
-            self._actor_root = server.scene.add_frame('/actor', show_axes=False)
+            # Hidden until the planner's first frame: the model at its zero pose would stand
+            # half sunk in the ground.
+            self._actor_root = server.scene.add_frame('/actor', show_axes=False, visible=False)
             gui = server.gui
             gui.configure_theme(show_logo=False)
             self._status = gui.add_markdown('**status:** waiting for joint_states')
@@ -971,6 +973,8 @@ def _build_node_class():
             with self.server.atomic():
                 _update_urdf_pose(urdf, dict(zip(urdf_names, configuration)), self._sent_frames)
             self._actor_position = np.array([by_name.get(n, 0.0) for n in ROOT_JOINTS[:3]])
+            if not self._actor_known:
+                self._actor_root.visible = True
             self._actor_known = True
 
         def _follow_actor(self) -> None:
