@@ -773,14 +773,18 @@ def _build_node_class():
             the planner's course, with its description."""
             self._scene_path = path
             self._course_shown = name
+            labels = [c.label for c in self._courses.values()]
             if name is None:
+                # A scene file of the user's: listed first, under its file name.
+                own = os.path.basename(path)
+                self._course.options = [own] + [label for label in labels if label != own]
+                self._set_course_value(own)
                 self._course_about.content = f'Scene file: `{path}`'
                 return
             course = self._courses[name]
             self._course_about.content = course.about()
-            if ASKING in self._course.options:
-                self._set_course_value(course.label)
-                self._course.options = [c.label for c in self._courses.values()]
+            if tuple(self._course.options) != tuple(labels):
+                self._course.options = labels
             self._set_course_value(course.label)
 
         def _set_course_value(self, label: str) -> None:
@@ -812,9 +816,8 @@ def _build_node_class():
             if scene.type == ptype.PARAMETER_STRING and scene.string_value:
                 current = os.path.splitext(os.path.basename(scene.string_value))[0]
                 self._course_note = f'course: {current}'
-                shipped = current if self._scenes.get(current) == os.path.abspath(
-                    scene.string_value) or current in self._scenes else None
-                self._show_course(shipped, scene.string_value)
+                self._show_course(current if current in self._scenes else None,
+                                  scene.string_value)
 
         # -- subscriptions ----------------------------------------------------------------------
         def _on_description(self, msg) -> None:
