@@ -3,8 +3,9 @@
 Like RViz, it is only a ROS 2 client: it subscribes to ``robot_description``, ``joint_states``,
 the planner's markers and path and ``/diagnostics``, and publishes ``cmd_vel`` from the drag pad
 (paper §3: the vertical part of a dragged vector is the forward speed, the horizontal part the turn
-rate). The pure helpers at the top (drag mapping, status text, marker conversion, scene list, port
-choice) hold the logic; the node only wires them to topics and to the page.
+rate). The pure helpers at the top (drag mapping, status text with what to do when stuck, marker
+conversion, the course list with descriptions, the follow camera, port choice) hold the logic; the
+node only wires them to topics and to the page.
 """
 from __future__ import annotations
 
@@ -606,8 +607,8 @@ def _build_node_class():
             self._restart.on_click(self._on_restart)
             self._follow = gui.add_checkbox('follow actor', initial_value=self.config.follow)
             self._speed_note = gui.add_markdown(self._speed_text())
-            gui.add_markdown('Drag the grey disc at the lower left: up walks forward, '
-                             'left/right turns. Release to stop.')
+            gui.add_markdown('Drag the grey disc at the lower left: up walks forward, down '
+                             'steps back, left/right turns. Release to stop.')
             server.on_client_connect(self._on_client_connect)
             server.on_client_disconnect(self._on_client_disconnect)
 
