@@ -10,6 +10,7 @@ and the numba it was made for; while it matches, a warm-up returns at once.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import hashlib
 import importlib
 import importlib.metadata
@@ -146,6 +147,43 @@ def warm_up(report: Callable[[str], None] = print, force: bool = False) -> float
     if not force and is_warm():
         report('warm-up: the planner\'s kernels are already compiled for this installation')
         return 0.0
+    with _exclusive(report):
+        # Another warm-up may have finished while this one waited: nothing left to do.
+        if not force and is_warm():
+            report('warm-up: the planner\'s kernels are already compiled for this installation')
+            return 0.0
+        return _compile_all(report)
+
+
+@contextlib.contextmanager
+def _exclusive(report: Callable[[str], None]):
+    """Hold the warm-up lock: two warm-ups at once (set-up and a demo) would both compile,
+    each at half the speed; the second waits and then finds the cache current."""
+    path = stamp_path() + '.lock'
+    try:
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        handle = open(path, 'a')
+    except OSError:
+        yield   # nowhere to lock: compile anyway
+        return
+    with handle:
+        try:
+            import fcntl
+        except ImportError:  # pragma: no cover - not POSIX
+            yield
+            return
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            report('warm-up: another warm-up is compiling the kernels; waiting for it')
+            fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def _compile_all(report: Callable[[str], None]) -> float:
     started = time.perf_counter()
     if _numba_version() is None:
         report('warm-up: numba is not installed, so the kernels run as plain Python (slowly); '

@@ -2,6 +2,7 @@
 returns at once while the sources are unchanged."""
 import subprocess
 import sys
+import time
 
 from digital_actor_planner import warmup
 
@@ -39,3 +40,25 @@ def test_the_command_line_says_whether_the_cache_is_current():
     bad = subprocess.run([sys.executable, '-m', 'digital_actor_planner.cli', 'warm-up',
                           '--no-such-option'], capture_output=True, text=True, timeout=120)
     assert bad.returncode == 2 and 'no-such-option' in bad.stderr
+
+
+def test_a_second_warm_up_waits_for_the_first_instead_of_compiling_too(tmp_path, monkeypatch):
+    import fcntl
+    import threading
+    stamp = tmp_path / 'stamp'
+    monkeypatch.setattr(warmup, 'stamp_path', lambda: str(stamp))
+    lines = []
+    result = {}
+    with open(str(stamp) + '.lock', 'a') as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)   # the first warm-up, compiling
+        second = threading.Thread(target=lambda: result.update(
+            took=warmup.warm_up(lines.append)))
+        second.start()
+        deadline = time.monotonic() + 60.0
+        while not any('waiting' in line for line in lines) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert any('waiting' in line for line in lines), lines
+        stamp.write_text(warmup.cache_key() + '\n')   # the first one is done
+        fcntl.flock(lock, fcntl.LOCK_UN)
+    second.join(timeout=60.0)
+    assert result.get('took') == 0.0 and 'already compiled' in lines[-1], lines

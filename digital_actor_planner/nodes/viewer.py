@@ -3,8 +3,9 @@
 Like RViz, it is only a ROS 2 client: it subscribes to ``robot_description``, ``joint_states``,
 the planner's markers and path and ``/diagnostics``, and publishes ``cmd_vel`` from the drag pad
 (paper §3: the vertical part of a dragged vector is the forward speed, the horizontal part the turn
-rate). The pure helpers at the top (drag mapping, status text, marker conversion, scene list, port
-choice) hold the logic; the node only wires them to topics and to the page.
+rate). The pure helpers at the top (drag mapping, status text with what to do when stuck, marker
+conversion, the course list with descriptions, the follow camera, port choice) hold the logic; the
+node only wires them to topics and to the page.
 """
 from __future__ import annotations
 
@@ -588,7 +589,9 @@ def _build_node_class():
             server.initial_camera.look_at = (0.0, 0.0, 0.9)
             server.scene.add_grid('/ground_grid', width=40.0, height=40.0, cell_size=0.5,
                                   plane='xy', position=(0.0, 0.0, -0.002))
-            self._actor_root = server.scene.add_frame('/actor', show_axes=False)
+            # Hidden until the planner's first frame: the model at its zero pose would stand
+            # half sunk in the ground.
+            self._actor_root = server.scene.add_frame('/actor', show_axes=False, visible=False)
             gui = server.gui
             gui.configure_theme(show_logo=False)
             self._status = gui.add_markdown('**status:** waiting for joint_states')
@@ -604,8 +607,8 @@ def _build_node_class():
             self._restart.on_click(self._on_restart)
             self._follow = gui.add_checkbox('follow actor', initial_value=self.config.follow)
             self._speed_note = gui.add_markdown(self._speed_text())
-            gui.add_markdown('Drag the grey disc at the lower left: up walks forward, '
-                             'left/right turns. Release to stop.')
+            gui.add_markdown('Drag the grey disc at the lower left: up walks forward, down '
+                             'steps back, left/right turns. Release to stop.')
             server.on_client_connect(self._on_client_connect)
             server.on_client_disconnect(self._on_client_disconnect)
 
@@ -771,14 +774,18 @@ def _build_node_class():
             the planner's course, with its description."""
             self._scene_path = path
             self._course_shown = name
+            labels = [c.label for c in self._courses.values()]
             if name is None:
+                # A scene file of the user's: listed first, under its file name.
+                own = os.path.basename(path)
+                self._course.options = [own] + [label for label in labels if label != own]
+                self._set_course_value(own)
                 self._course_about.content = f'Scene file: `{path}`'
                 return
             course = self._courses[name]
             self._course_about.content = course.about()
-            if ASKING in self._course.options:
-                self._set_course_value(course.label)
-                self._course.options = [c.label for c in self._courses.values()]
+            if tuple(self._course.options) != tuple(labels):
+                self._course.options = labels
             self._set_course_value(course.label)
 
         def _set_course_value(self, label: str) -> None:
@@ -810,9 +817,8 @@ def _build_node_class():
             if scene.type == ptype.PARAMETER_STRING and scene.string_value:
                 current = os.path.splitext(os.path.basename(scene.string_value))[0]
                 self._course_note = f'course: {current}'
-                shipped = current if self._scenes.get(current) == os.path.abspath(
-                    scene.string_value) or current in self._scenes else None
-                self._show_course(shipped, scene.string_value)
+                self._show_course(current if current in self._scenes else None,
+                                  scene.string_value)
 
         # -- subscriptions ----------------------------------------------------------------------
         def _on_description(self, msg) -> None:
@@ -971,6 +977,8 @@ def _build_node_class():
             with self.server.atomic():
                 _update_urdf_pose(urdf, dict(zip(urdf_names, configuration)), self._sent_frames)
             self._actor_position = np.array([by_name.get(n, 0.0) for n in ROOT_JOINTS[:3]])
+            if not self._actor_known:
+                self._actor_root.visible = True
             self._actor_known = True
 
         def _follow_actor(self) -> None:
