@@ -159,6 +159,26 @@ def test_backward_into_the_wall_stops_cleanly_and_a_forward_drag_frees_it():
     assert frames[-1, 0] > stuck_x + 0.5
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize('name, branch', [('low_beam', 'waist'), ('table', 'left_arm')])
+def test_backward_past_an_obstacle_the_upper_body_clears(name, branch):
+    """The CT-roadmap plans the upper body walking backward too: under the low beam the waist
+    bends, beside the table the left arm keeps clear of its top."""
+    sc = scene(name)
+    _, blocks, frames, report = walk(sc.environment, (5.0, 0.0, 0.0),
+                                     [(0.0, -0.4, 0.0), (13.0, 0.0, 0.0)], ActorConfig())
+    assert_judged_ok(report)
+    assert not any(b.status == 'stuck' for b in blocks)
+    assert frames[-1, 0] < 1.0, 'it went past the obstacle'
+    # Off the motion pattern near the obstacle (the pattern keeps the waist erect and the
+    # elbows within 0.3 rad).
+    index = skeleton().index
+    if branch == 'waist':
+        assert frames[:, index['waist_pitch']].max() > 0.2
+    else:
+        assert frames[:, index['left_elbow']].max() > 0.6
+
+
 def step_scene(height):
     """Flat ground with a step ``height`` m up at x = 1 m, its top running on to x = 4 m."""
     return Environment([box((-2, -2, -0.2), (4, 2, 0.0)), box((1.0, -2, -0.2), (4, 2, height))])
