@@ -179,6 +179,25 @@ def test_backward_past_an_obstacle_the_upper_body_clears(name, branch):
         assert frames[:, index['left_elbow']].max() > 0.6
 
 
+@pytest.mark.slow
+def test_backward_up_and_down_the_ramps_and_over_the_bumps():
+    """Feet land pitched with the ground behind the actor: up the 12 degree ramp to the
+    plateau and down the other one, and back over the rough course's bumps."""
+    sc = scene('slope')
+    plateau = skeleton().leg.standing_height + 0.6
+    _, blocks, frames, report = walk(sc.environment, (0.5, 0.0, np.pi),
+                                     [(0.0, -0.4, 0.0), (20.0, 0.0, 0.0), (21.0, 0.0, 0.0)])
+    assert_judged_ok(report)
+    assert not any(b.status == 'stuck' for b in blocks)
+    assert frames[:, 2].max() > plateau - 0.05 and frames[-1, 2] < plateau - 0.2
+    sc = scene('rough')
+    _, blocks, frames, report = walk(sc.environment, (9.0, 0.0, 0.0),
+                                     [(0.0, -0.4, 0.0), (16.0, -0.4, 0.3), (20.0, 0.0, 0.0)])
+    assert_judged_ok(report)
+    assert not any(b.status == 'stuck' for b in blocks)
+    assert frames[-1, 0] < 2.0
+
+
 def step_scene(height):
     """Flat ground with a step ``height`` m up at x = 1 m, its top running on to x = 4 m."""
     return Environment([box((-2, -2, -0.2), (4, 2, 0.0)), box((1.0, -2, -0.2), (4, 2, height))])
