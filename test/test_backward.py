@@ -159,6 +159,45 @@ def test_backward_into_the_wall_stops_cleanly_and_a_forward_drag_frees_it():
     assert frames[-1, 0] > stuck_x + 0.5
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize('name, branch', [('low_beam', 'waist'), ('table', 'left_arm')])
+def test_backward_past_an_obstacle_the_upper_body_clears(name, branch):
+    """The CT-roadmap plans the upper body walking backward too: under the low beam the waist
+    bends, beside the table the left arm keeps clear of its top."""
+    sc = scene(name)
+    _, blocks, frames, report = walk(sc.environment, (5.0, 0.0, 0.0),
+                                     [(0.0, -0.4, 0.0), (13.0, 0.0, 0.0)], ActorConfig())
+    assert_judged_ok(report)
+    assert not any(b.status == 'stuck' for b in blocks)
+    assert frames[-1, 0] < 1.0, 'it went past the obstacle'
+    # Off the motion pattern near the obstacle (the pattern keeps the waist erect and the
+    # elbows within 0.3 rad).
+    index = skeleton().index
+    if branch == 'waist':
+        assert frames[:, index['waist_pitch']].max() > 0.2
+    else:
+        assert frames[:, index['left_elbow']].max() > 0.6
+
+
+@pytest.mark.slow
+def test_backward_up_and_down_the_ramps_and_over_the_bumps():
+    """Feet land pitched with the ground behind the actor: up the 12 degree ramp to the
+    plateau and down the other one, and back over the rough course's bumps."""
+    sc = scene('slope')
+    plateau = skeleton().leg.standing_height + 0.6
+    _, blocks, frames, report = walk(sc.environment, (0.5, 0.0, np.pi),
+                                     [(0.0, -0.4, 0.0), (20.0, 0.0, 0.0), (21.0, 0.0, 0.0)])
+    assert_judged_ok(report)
+    assert not any(b.status == 'stuck' for b in blocks)
+    assert frames[:, 2].max() > plateau - 0.05 and frames[-1, 2] < plateau - 0.2
+    sc = scene('rough')
+    _, blocks, frames, report = walk(sc.environment, (9.0, 0.0, 0.0),
+                                     [(0.0, -0.4, 0.0), (16.0, -0.4, 0.3), (20.0, 0.0, 0.0)])
+    assert_judged_ok(report)
+    assert not any(b.status == 'stuck' for b in blocks)
+    assert frames[-1, 0] < 2.0
+
+
 def step_scene(height):
     """Flat ground with a step ``height`` m up at x = 1 m, its top running on to x = 4 m."""
     return Environment([box((-2, -2, -0.2), (4, 2, 0.0)), box((1.0, -2, -0.2), (4, 2, height))])

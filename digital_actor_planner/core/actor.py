@@ -914,9 +914,10 @@ class Actor:
         middle[2] = stance_yaw + 0.5 * turn
         rise = float(window.heights[0]) - stance.feet[stance.stance_side].sole
         duration = self._walk.step_duration(float(window.lengths[0]), abs(v), rise)
+        # The window's pitch rises along the path: towards the heel on a backward one.
+        pitch = -float(window.pitches[0]) if path.backward else float(window.pitches[0])
         return self._timed_step(stance, landing_xy, landing_yaw, float(window.heights[0]),
-                                float(window.pitches[0]), middle, duration,
-                                configuration=configuration)
+                                pitch, middle, duration, configuration=configuration)
 
     def _timed_step(self, stance, landing_xy, landing_yaw, sole, pitch, target, duration,
                     to_rest=False, configuration=None):
