@@ -31,6 +31,24 @@ def test_drag_up_walks_forward_and_left_turns_left():
     assert lin == pytest.approx(-0.6 * 0.8) and ang == pytest.approx(-0.8)
 
 
+def test_drag_down_walks_backward_at_the_planners_backward_limit():
+    # The whole lower half of the pad is used: a full downward drag is the backward limit, not
+    # the forward one (which the planner would clamp).
+    lin, _ = drag_to_command((100, 300), (100, 400), span=100, max_linear_speed=1.2,
+                             max_angular_speed=1.0, max_backward_speed=0.5)
+    assert lin == pytest.approx(-0.5)
+    lin, _ = drag_to_command((100, 300), (100, 350), span=100, max_linear_speed=1.2,
+                             max_angular_speed=1.0, max_backward_speed=0.5)
+    assert lin == pytest.approx(-0.25)
+    lin, _ = drag_to_command((100, 300), (100, 200), span=100, max_linear_speed=1.2,
+                             max_angular_speed=1.0, max_backward_speed=0.5)
+    assert lin == pytest.approx(1.2)
+    # A forward-only planner (backward limit 0): a downward drag stands still.
+    lin, _ = drag_to_command((100, 300), (100, 400), span=100, max_linear_speed=1.2,
+                             max_angular_speed=1.0, max_backward_speed=0.0)
+    assert lin == 0.0
+
+
 def test_drag_is_clamped_to_the_maximum_speeds():
     lin, ang = drag_to_command((0, 0), (-1000, -1000), span=100, max_linear_speed=0.8,
                                max_angular_speed=1.2)
@@ -42,6 +60,7 @@ def test_drag_is_clamped_to_the_maximum_speeds():
     ({'span': float('nan')}, 'span'),
     ({'max_linear_speed': -1.0}, 'max_linear_speed'),
     ({'max_angular_speed': float('inf')}, 'max_angular_speed'),
+    ({'max_backward_speed': -0.5}, 'max_backward_speed'),
 ])
 def test_drag_bad_input_names_the_value(kwargs, word):
     args = {'span': 100.0, 'max_linear_speed': 0.8, 'max_angular_speed': 1.0}

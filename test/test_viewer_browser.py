@@ -195,6 +195,7 @@ def test_viewer_follows_restarts_and_describes_courses(page, artifacts_dir, tmp_
         text = page.wait_for_text('10 m straight on a flat floor', 90)
         assert '10 m straight on a flat floor' in text, text
         assert 'full drag: 0.90 m/s' in page.wait_for_text('full drag: 0.90 m/s', 60)
+        assert '0.45 m/s back' in page.wait_for_text('0.45 m/s back', 60)
         assert 'idle' in page.wait_for_text('idle', 60)
         assert wait_for(lambda: listener.actor is not None, 30, spin=listener.spin)
 

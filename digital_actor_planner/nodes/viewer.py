@@ -37,7 +37,8 @@ ASKING = '(asking the planner)'
 # ----------------------------------------------------------------------------------------------
 
 def drag_to_command(start: Sequence[float], end: Sequence[float], span: float,
-                    max_linear_speed: float, max_angular_speed: float) -> Tuple[float, float]:
+                    max_linear_speed: float, max_angular_speed: float,
+                    max_backward_speed: Optional[float] = None) -> Tuple[float, float]:
     """Map a drag on the pad to a velocity command (paper §3, teleop_tools mouse_teleop signs).
 
     Parameters
@@ -46,6 +47,8 @@ def drag_to_command(start: Sequence[float], end: Sequence[float], span: float,
         right and y down.
     span : drag length in pixels that gives full speed; longer drags are clamped.
     max_linear_speed, max_angular_speed : m/s and rad/s at full deflection.
+    max_backward_speed : m/s at full downward deflection (the planner's own backward limit, so
+        the whole lower half of the pad is used); None: ``max_linear_speed``.
 
     Returns
     -------
@@ -53,8 +56,11 @@ def drag_to_command(start: Sequence[float], end: Sequence[float], span: float,
     """
     if not (span > 0.0 and math.isfinite(span)):
         raise ValueError(f'drag span must be a positive number of pixels, got {span!r}')
+    if max_backward_speed is None:
+        max_backward_speed = max_linear_speed
     for name, value in (('max_linear_speed', max_linear_speed),
-                        ('max_angular_speed', max_angular_speed)):
+                        ('max_angular_speed', max_angular_speed),
+                        ('max_backward_speed', max_backward_speed)):
         if not (value >= 0.0 and math.isfinite(value)):
             raise ValueError(f'{name} must be a finite speed >= 0, got {value!r}')
     dx = float(end[0]) - float(start[0])
@@ -63,7 +69,8 @@ def drag_to_command(start: Sequence[float], end: Sequence[float], span: float,
         raise ValueError(f'drag positions must be finite, got {start!r} -> {end!r}')
     forward = min(1.0, max(-1.0, -dy / span))
     turn_left = min(1.0, max(-1.0, -dx / span))
-    return forward * max_linear_speed, turn_left * max_angular_speed
+    speed = max_linear_speed if forward >= 0.0 else max_backward_speed
+    return forward * speed, turn_left * max_angular_speed
 
 
 class StreamMonitor:
@@ -447,6 +454,7 @@ class ViewerConfig:
     port: int = 8080
     max_linear_speed: float = 0.8
     max_angular_speed: float = 1.0
+    max_backward_speed: float = 0.5
     cmd_vel_stamped: bool = True
     cmd_rate: float = 20.0
     render_rate: float = 20.0
@@ -459,7 +467,7 @@ def validate(config: ViewerConfig) -> None:
     """Raise ValueError naming the first bad field of ``config``."""
     if not 0 < config.port < 65536:
         raise ValueError(f'port must be in 1..65535, got {config.port!r}')
-    for name in ('max_linear_speed', 'max_angular_speed'):
+    for name in ('max_linear_speed', 'max_angular_speed', 'max_backward_speed'):
         value = getattr(config, name)
         if not (value > 0.0 and math.isfinite(value)):
             raise ValueError(f'{name} must be > 0, got {value!r}')
@@ -529,6 +537,7 @@ def _build_node_class():
             self._planner_present = False
             self._course_note = ''
             self._max_speeds = (config.max_linear_speed, config.max_angular_speed)
+            self._max_backward_speed = config.max_backward_speed
             self._speeds_known = False
             self._planner_asked = False
             self._courses = course_catalog()
@@ -616,7 +625,8 @@ def _build_node_class():
             if not self._speeds_known:
                 return 'full drag: asking the planner for its speed limits'
             lin, ang = self._max_speeds
-            return f'full drag: {lin:.2f} m/s forward, {ang:.2f} rad/s turn'
+            return (f'full drag: {lin:.2f} m/s forward, {self._max_backward_speed:.2f} m/s '
+                    f'back, {ang:.2f} rad/s turn')
 
         def _on_client_connect(self, client) -> None:
             vertices, faces = disc_mesh(1.0)
@@ -697,7 +707,8 @@ def _build_node_class():
             start_px = (start[0] * width, start[1] * height)
             end_px = (event.end_screen_pos[0] * width, event.end_screen_pos[1] * height)
             lin, ang = self._max_speeds
-            command = drag_to_command(start_px, end_px, self.config.drag_span * height, lin, ang)
+            command = drag_to_command(start_px, end_px, self.config.drag_span * height, lin, ang,
+                                      self._max_backward_speed)
             with self._lock:
                 self._command = command
                 self._dragging = True
@@ -797,7 +808,7 @@ def _build_node_class():
                 return
             self._planner_asked = True
             request = self._msg['GetParameters'].Request(
-                names=['scene', 'max_linear_speed', 'max_angular_speed'])
+                names=['scene', 'max_linear_speed', 'max_angular_speed', 'max_backward_speed'])
             self._get_params.call_async(request).add_done_callback(self._on_planner_params)
 
         def _on_planner_params(self, future) -> None:
@@ -805,13 +816,18 @@ def _build_node_class():
                 values = future.result().values
             except Exception:  # noqa: B902 - keep the viewer's own defaults
                 return
-            if len(values) != 3:
+            if len(values) != 4:
                 return
-            scene, lin, ang = values
+            scene, lin, ang, back = values
             ptype = self._msg['ParameterType']
             if lin.type == ptype.PARAMETER_DOUBLE and ang.type == ptype.PARAMETER_DOUBLE:
                 if lin.double_value > 0 and ang.double_value > 0:
                     self._max_speeds = (lin.double_value, ang.double_value)
+            # A planner without the parameter walks forward only: the pad's lower half stops.
+            if back.type == ptype.PARAMETER_DOUBLE and back.double_value > 0:
+                self._max_backward_speed = back.double_value
+            else:
+                self._max_backward_speed = 0.0
             self._speeds_known = True
             self._speed_note.content = self._speed_text()
             if scene.type == ptype.PARAMETER_STRING and scene.string_value:

@@ -34,6 +34,7 @@ class FakePlanner(Node):
         self.declare_parameter('scene', 'flat.yaml')
         self.declare_parameter('max_linear_speed', 0.9)
         self.declare_parameter('max_angular_speed', 1.1)
+        self.declare_parameter('max_backward_speed', 0.45)
         self.names = list(Skeleton().joint_names)
         self.start_pose()
         self.add_on_set_parameters_callback(self.on_parameters)
