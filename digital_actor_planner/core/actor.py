@@ -32,7 +32,11 @@ class ActorConfig:
     step_intervals: int = 13
     step_length_min: float = 0.15
     step_length_max: float = 0.80
-    max_linear_speed: float = 1.2
+    # The fastest the gait walks: steps of GaitConfig.fast_step_length at about its quickest
+    # cadence the joints' speed limits allow (0.52 s); a faster command could only lengthen
+    # the steps, and longer steps are slowed down further than they gain (see
+    # bench/bench_walk_speeds.py --flat).
+    max_linear_speed: float = 1.0
     max_angular_speed: float = 1.0
     frame_rate: float = 100.0
     hold_time: float = 0.1
@@ -514,8 +518,8 @@ class Actor:
                                         leg.hip_half_width, leg.foot_width, stance_foot.sole,
                                         fcfg.max_step_up, fcfg.window_steps)
         path_points = self._path_points(path, s_end)
-        s_init = float(min(max(v * cfg.nominal_step_time, fcfg.step_length_min),
-                           fcfg.step_length_max))
+        s_init = float(min(max(self._walk.preferred_step_length(v, cfg.nominal_step_time),
+                               fcfg.step_length_min), fcfg.step_length_max))
         init_index = int(min(max(round((s_init - fcfg.step_length_min) / fcfg.step_increment),
                                  0), fcfg.step_intervals))
         start = None

@@ -65,6 +65,12 @@ class GaitConfig:
     max_heading_change: float = 0.5
     turn_ease_heading: float = 0.5
     swing_toe_in: float = 0.15
+    # The longest step a walk prefers once its speed would ask more at nominal cadence, m:
+    # faster, the steps come quicker instead (down to min_step_time), as people's do. Longer
+    # steps swing the leg faster than its joints allow in that time, and the step is slowed
+    # down: a 0.6 m step needs 0.67 s, a 0.8 m one 2 s, so striding out walked slower
+    # (ActorConfig.max_linear_speed is the speed these steps walk at their quickest).
+    fast_step_length: float = 0.55
 
 
 def validate_gait_config(config: GaitConfig) -> None:
@@ -965,6 +971,12 @@ class WalkGenerator:
         if full <= 0.0:
             return 0.0
         return min(abs(_wrap(heading_difference)) / full, 1.0)
+
+    def preferred_step_length(self, speed: float, nominal_step_time: float) -> float:
+        """The step length a walk at ``speed`` m/s aims for, m: ``speed`` x
+        ``nominal_step_time`` s, at most ``fast_step_length`` (a faster walk quickens its
+        cadence instead, :meth:`step_duration`)."""
+        return float(min(speed * nominal_step_time, self.config.fast_step_length))
 
     def step_duration(self, length: float, speed: float, rise: float) -> float:
         """Duration of a step of ``length`` m at ``speed`` m/s changing height by ``rise`` m."""
