@@ -13,8 +13,8 @@ from typing import Optional, Tuple
 
 import numpy as np
 
-from .footsteps import (FootstepConfig, FootstepPlanner, FootstepWindow, LEFT, RIGHT,
-                        sample_ground_profile, validate_footstep_config)
+from .footsteps import (describe_ground_ahead, FootstepConfig, FootstepPlanner, FootstepWindow,
+                        LEFT, RIGHT, sample_ground_profile, validate_footstep_config)
 from .gait import (foot_pose_on, GaitConfig, GaitError, hold_frames, Stance, standing_stance,
                    StepMotion, validate_gait_config, WalkGenerator, with_at_rest)
 from .path import predict_path
@@ -588,6 +588,11 @@ class Actor:
                                      started)
         if block is not None:
             return block
+        if reason == 'no collision-free footstep window':
+            why = describe_ground_ahead(self.environment, path, profile, stance_s + leg.toe,
+                                        s_end, stance_foot.sole, fcfg, leg.hip_half_width,
+                                        leg.foot_width)
+            reason += f': {why}' if why else ''
         self._failure = ((self._steps, v, w), reason)
         return self._stuck(reason, started, np.zeros((0, 4)), path_points)
 

@@ -1054,8 +1054,10 @@ class CTRoadmap:
         node_budget, max_backtracks
             Search limits; exceeding either fails the search.
         deadline
-            ``time.perf_counter()`` value after which the search gives up (None: no limit).
-            A wall-clock limit makes the result depend on the load of the machine.
+            ``time.process_time()`` value (this process's CPU time, s) after which the search
+            gives up (None: no limit). CPU time, not wall time: other programs taking the
+            processor delay the search but do not spend its budget, so a loaded machine plans
+            later, not differently. A budget far above need leaves the result unchanged.
         check_budget
             Configurations the search may check in ``space`` (None: no limit). A work budget:
             the same inputs give the same result however loaded the machine is.
@@ -1129,7 +1131,7 @@ class CTRoadmap:
             nodes += 1
             if nodes > node_budget or backtracks > max_backtracks or (
                     checks_limit is not None and space.checks > checks_limit) or (
-                    deadline is not None and time.perf_counter() > deadline):
+                    deadline is not None and time.process_time() > deadline):
                 # Out of budget: the search got no further than the latest state it reached.
                 deepest_blocked = max(deepest_blocked, max(s.frame for s in stack))
                 break

@@ -42,6 +42,11 @@ END_KNEE_MARGIN = 0.1
 _TOE_SAMPLES = np.linspace(1.0 / 18.0, 1.0, 18)
 _TOE_ACROSS = np.array([0.0, -0.5, 0.5])
 _TOE_SUPPORT_TOLERANCE = 0.015
+#: How far a landing sole may be moved up or down from its planned foothold onto the ground
+#: under it, m, and how much that ground may vary under the sole from the sole's plane (see
+#: WalkGenerator._seated_sole): a landing 14 cm downhill of it on a 10-degree slope, a foot
+#: pointing across it (1.8 cm from edge to edge) turned from the path.
+SEAT_SHIFT = 0.03
 
 
 class GaitError(Exception):
@@ -960,6 +965,10 @@ class WalkGenerator:
         # a bump 5 mm beside its toe), m.
         self._sole_along = np.linspace(-self.leg.heel, self.leg.toe, 9)
         self._sole_across = np.array([SOLE_LINES[0], SOLE_LINES[-1]]) * self.leg.foot_width
+        # Where a landing sole is seated on the ground (_seated_sole): 5 points heel..toe on its
+        # middle line and its two edges, m.
+        self._seat_along = np.linspace(-self.leg.heel, self.leg.toe, 5)
+        self._seat_across = np.array([-0.5, 0.0, 0.5]) * self.leg.foot_width
 
     def _timing(self, k: int) -> _StepTiming:
         """The time shapes of a k-frame step (:func:`_step_timing`)."""
@@ -1060,6 +1069,8 @@ class WalkGenerator:
         d_l = np.array([np.cos(landing_yaw), np.sin(landing_yaw)])
         forward_end = float(np.dot(np.asarray(landing_xy) - swing_hip_xy[-1], d_l))
         land_xy = swing_hip_xy[-1] + forward_end * d_l
+        landing_sole = self._seated_sole(land_xy, landing_yaw, float(landing_sole),
+                                         float(landing_pitch), swing_profile)
         landing = foot_pose_on(land_xy, landing_yaw, landing_sole, landing_pitch, leg)
         # A diagnostic (not in the frames): math on two floats, not np.linalg.norm.
         error_x, error_y = (land_xy - np.asarray(landing_xy)).tolist()
@@ -1195,6 +1206,46 @@ class WalkGenerator:
                      (feet[0], feet[1]), swing_side, to_rest)
         return StepMotion(times=tau * duration, frames=frames, stance=end, category=category,
                           swing_lift=lift, lateral_error=lateral_error)
+
+    def _seated_sole(self, xy: np.ndarray, yaw: float, sole: float, pitch: float,
+                     ground) -> float:
+        """The landing sole's height: ``sole`` (m) moved onto the ground where the foot lands,
+        by at most ``SEAT_SHIFT`` up or down, where that ground is smooth (it varies under the
+        sole by at most ``SEAT_SHIFT`` from the sole's plane).
+
+        The foothold was judged at the planned point and heading; the foot lands in its hip's
+        plane, centimetres away, and turned up to ``max_toe_in`` from the path. On a slope
+        the ground there stands millimetres higher under part of the sole (under its uphill
+        edge when the foot points across the slope), or lower under all of it (downhill of the
+        foothold): on a 6-degree hill the 3D check refused the first kind of landing (the sole
+        1-3 mm in the ground) at every reversal of a weave, a long step's landing 2 cm in the
+        ground left the swing nothing to clear, and a landing 10-14 cm downhill floated
+        8-34 mm and was refused as unsupported. The sole rests on the highest ground under
+        it, its pitch kept. Other ground (an edge under the sole) is left to the 3D and landing
+        checks, as planned.
+        """
+        leg = self.leg
+        along = self._seat_along
+        across = self._seat_across
+        cos_pitch, sin_pitch = math.cos(pitch), math.sin(pitch)
+        cos_yaw, sin_yaw = math.cos(yaw), math.sin(yaw)
+        forward = along * cos_pitch
+        x = xy[0] + forward[None, :] * cos_yaw - across[:, None] * sin_yaw
+        y = xy[1] + forward[None, :] * sin_yaw + across[:, None] * cos_yaw
+        plane = sole + along * sin_pitch
+        under = ground(np.column_stack([x.ravel(), y.ravel()]), sole + leg.ankle_height)
+        excess = under.reshape(x.shape) - plane[None, :]
+        if np.isnan(excess).any():
+            # Part of the sole over no ground: the landing check judges its support.
+            return sole
+        # Ground that varies under the sole by more than a slope's tilt is an edge or a bump:
+        # not seated here.
+        if float(np.ptp(excess)) > SEAT_SHIFT:
+            return sole
+        excess = float(excess.max())
+        if -SEAT_SHIFT <= excess <= SEAT_SHIFT:
+            return sole + excess
+        return sole
 
     def _check_feet_apart(self, stance_foot: FootPose, swing_xy: np.ndarray,
                           direction: np.ndarray, swing_z: np.ndarray) -> None:

@@ -141,8 +141,9 @@ class UpperBodyConfig:
         Configurations a branch search may check per plan: a work budget, so the same step
         gives the same plan however loaded the machine is.
     time_budget
-        Wall time a branch search may take per plan, s, or None (no wall-clock limit; a limit
-        makes plans depend on the machine's load).
+        CPU time a branch search may take per plan, s, or None (no limit, the default: the
+        work budgets above bound it). This process's CPU time, never wall time: on a loaded
+        machine a plan takes longer, it does not come out differently.
     max_backtracks
         Backtracking steps a branch search may take per plan. 20: a failing search costs
         half of what 40 did (beside 200 random tables the slowest step fell from 1.1-1.2 to
@@ -517,7 +518,7 @@ class UpperBodyPlanner:
                     preview_backtracks=config.preview_backtracks,
                     seed=seeds.get(name),
                     deadline=None if config.time_budget is None
-                    else time.perf_counter() + config.time_budget)
+                    else time.process_time() + config.time_budget)
                 record.update(nodes=result.nodes, backtracks=result.backtracks,
                               grown=result.grown, ok=result.ok,
                               preview_backtracks=result.preview_backtracks,
@@ -526,8 +527,9 @@ class UpperBodyPlanner:
                 steps, checks = space.steps, space.checks
                 if not result.ok:
                     ok, blocked_frame = False, result.blocked_frame
-                    reason = f'{name} blocked at t={times[blocked_frame]:.2f} s' + (
-                        ' (in the preview)' if result.gave_up_in_preview else '')
+                    reason = (f'{name} blocked at t={times[blocked_frame]:.2f} s'
+                              + self._blocking(out, objective, columns, blocked_frame, name)
+                              + (' (in the preview)' if result.gave_up_in_preview else ''))
             if path is not None and record['ok']:
                 path[0] = start
                 out[:, columns] = path
@@ -726,6 +728,23 @@ class UpperBodyPlanner:
             else:
                 out[name] = (bad != 0, bad < 0)
         return out
+
+    def _blocking(self, frames: np.ndarray, objective: np.ndarray, columns, frame: int,
+                  branch: str) -> str:
+        """What blocks a branch, for its reason: ': the head would be 85 mm into an obstacle'
+        (the deepest of its links in its motion pattern at the blocked ``frame``, the branches
+        planned before it where they were planned), or '' when none would touch there (the
+        joints could not move it clear in time)."""
+        q = frames[frame].copy()
+        q[columns] = objective[frame]
+        try:
+            depths = self.body_collision.penetration(q, self._checked[branch])
+        except (AttributeError, ValueError):
+            return ''
+        link, depth = max(depths.items(), key=lambda item: item[1], default=('', 0.0))
+        if depth <= 0.0:
+            return ''
+        return f': the {link.replace("_", " ")} would be {1e3 * depth:.0f} mm into an obstacle'
 
     def _links_in_collision(self, q: np.ndarray, branch: str) -> list:
         """Names of the branch's links touching the environment at ``q`` (for the reason)."""
