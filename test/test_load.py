@@ -59,3 +59,18 @@ def test_a_cpu_budget_far_above_need_leaves_the_plan_unchanged(monkeypatch):
     blocks = run_commands(actor, [c.time for c in commands], [c.linear_x for c in commands],
                           [c.angular_z for c in commands])
     assert np.array_equal(np.vstack([b.frames for b in blocks]), frames)
+
+
+@pytest.mark.parametrize('pause_at', [2.45, 2.9])
+def test_a_stop_before_the_low_beam_does_not_change_where_the_walk_ends(pause_at):
+    """On a loaded machine the node's commands arrive late and it stops the actor (its
+    command timeout), which then walks on: the walk must get under the beam as it does
+    without the stop. Stopped 0.6 m before the beam, the waist's search leaned back to its
+    limit, and under the beam every step from there was blocked."""
+    sc, _, frames, _ = simulate('low_beam')
+    actor = Actor(skeleton(), sc.environment, ActorConfig(), start=sc.start)
+    run_commands(actor, [0.0, pause_at], [0.8, 0.0], [0.0, 0.0])
+    run_commands(actor, [actor.time, actor.time + 1.0], [0.0, 0.0], [0.0, 0.0])
+    blocks = run_commands(actor, [actor.time, actor.time + 6.0], [0.8, 0.0], [0.0, 0.0])
+    assert not [b.reason for b in blocks if b.status == 'stuck']
+    assert blocks[-1].frames[-1, 0] >= sc.expect['reach_x']

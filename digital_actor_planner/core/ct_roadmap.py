@@ -1036,7 +1036,8 @@ class CTRoadmap:
               check_budget: Optional[int] = None,
               preview_from: Optional[int] = None,
               preview_backtracks: int = 2,
-              seed: Optional[np.ndarray] = None) -> SearchResult:
+              seed: Optional[np.ndarray] = None,
+              growth_lower: Optional[np.ndarray] = None) -> SearchResult:
         """Search forward in time from ``start`` at frame 0 to any legal state at frame k-1.
 
         Parameters
@@ -1073,6 +1074,9 @@ class CTRoadmap:
             ``hold_frames`` apart, as far as it is legal and at most to the end of the last
             stretch within it where the objective is blocked, and searches on from there; it
             can backtrack into it like into any of its states.
+        growth_lower
+            (d,) lowest joint values the nodes grown at distance r may take, rad (None: the
+            space's lower limits; a value below them is the limit).
 
         Returns
         -------
@@ -1139,7 +1143,8 @@ class CTRoadmap:
             if child is None and not state.grew and not state.lasting_only:
                 # §5.2: every advance failed; grow a node at distance r.
                 state.grew = True
-                child = self._grow(space, state, speed_fraction, growth_attempts)
+                child = self._grow(space, state, speed_fraction, growth_attempts,
+                                   growth_lower)
                 grown += child is not None
             if child is not None:
                 self._push(space, stack, child, hold_frames)
@@ -1413,13 +1418,15 @@ class CTRoadmap:
         return None
 
     def _grow(self, space: CTSpace, state: _State, speed_fraction: float,
-              attempts: int) -> Optional[_State]:
-        """Grow a roadmap node at distance r from the current state (§5.2)."""
+              attempts: int, lower: Optional[np.ndarray] = None) -> Optional[_State]:
+        """Grow a roadmap node at distance r from the current state (§5.2), its joints no
+        lower than ``lower`` (rad; None: the space's limits)."""
         rate = speed_fraction * space.speed_limit
+        lower = space.lower if lower is None else np.maximum(space.lower, lower)
         for _ in range(attempts):
             deviation, arrival = _grown_node(
                 self.rng.normal(size=state.deviation.shape), state.deviation, state.frame,
-                self.radius, self.weights, space.times, rate, space.objective, space.lower,
+                self.radius, self.weights, space.times, rate, space.objective, lower,
                 space.upper)
             child = self._try(space, state, deviation, arrival)
             if child is not None:
