@@ -1472,7 +1472,13 @@ class WalkGenerator:
         h2 = np.maximum(h2.max(axis=1), least[1])
         feasible = (h2 <= cap) & (w1[alone] * h1 >= required[alone]).all(axis=1)
         if not feasible.any():
-            raise GaitError('swing foot cannot clear the terrain')
+            # In words a user reads: how far above the higher foothold the foot would have to
+            # lift, against the most it lifts; or that it would have to rise at once.
+            rise = max(float(np.max(need)) - max(z0, z1), 0.0)
+            raise GaitError(f'swing foot cannot clear the terrain: it would have to lift '
+                            f'{rise:.2f} m'
+                            + (f', at most {cap:.2f} m' if rise > cap else
+                               ' right after lift-off or just before touchdown'))
         best = int(np.where(feasible, np.maximum(h1[:, 0], h2), np.inf).argmin())
         h1, h2 = float(h1[best, 0]), float(h2[best])
         w0, w1, w2, w3 = weights(tau)
