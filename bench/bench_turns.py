@@ -1,6 +1,6 @@
-"""Turning walks on flat ground: how far a stance foot slides (the bound: 1 cm).
+"""Turning walks on flat ground: how far a stance foot slides (at most 1 cm).
 
-Run: .venv/bin/python bench/bench_turns.py [--speeds 0.5 0.8 1.1]
+Run: .venv/bin/python bench/bench_turns.py [--speeds 0.5 0.8 1.0]
      [--turn-rates 0.3 0.5 0.7 1.0 -0.7] [--list]
 
 On the flat course (lower body only) the actor walks straight for 1.5 s at each speed, then
@@ -25,7 +25,7 @@ from digital_actor_planner.core.trajectory_check import check_trajectory  # noqa
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument('--speeds', type=float, nargs='+', default=[0.5, 0.8, 1.1])
+    parser.add_argument('--speeds', type=float, nargs='+', default=[0.5, 0.8, 1.0])
     parser.add_argument('--turn-rates', type=float, nargs='+',
                         default=[0.3, 0.5, 0.7, 1.0, -0.7])
     parser.add_argument('--list', action='store_true', help='print every walk')

@@ -15,7 +15,9 @@ from digital_actor_planner.cli import read_commands
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.trajectory_check import check_trajectory
-from digital_actor_planner.core.upper_body import motion_patterns
+from digital_actor_planner.core.collision import BodyCollision
+from digital_actor_planner.core.upper_body import (motion_patterns, UpperBodyConfig,
+                                                   UpperBodyPlanner)
 from scene_helpers import furniture_scene, pillars_moved_sideways
 
 COURSES = ['low_beam', 'table', 'pillars', 'uneven_beam']
@@ -204,7 +206,16 @@ def test_what_the_preview_margin_and_the_pause_change_at_the_pillars(
     sk = skeleton()
     sc = pillars_moved_sideways(SCENES, tmp_path, 0.37, 0.03, sk)
     config = ActorConfig(upper_body_preview_margin=margin, upper_body_pause=pause)
-    actor = Actor(sk, sc.environment, config, start=sc.start)
+    # The waist's search as it was when these walks were found (it could lean back to its
+    # joint's limit): searching forward of upright only, the actor gets through without the
+    # pause too.
+    collision = BodyCollision(sk, sc.environment)
+    upper = UpperBodyPlanner(sk, collision,
+                             UpperBodyConfig(check_budget=config.upper_body_check_budget,
+                                             waist_back_lean=0.3),
+                             rng=np.random.default_rng(0))
+    actor = Actor(sk, sc.environment, config, start=sc.start, upper_body_planner=upper,
+                  body_collision=collision)
     blocks = run_commands(actor, [0.0, 9.0], [0.8, 0.0], [0.0, 0.0])
     x = blocks[-1].frames[-1, 0]
     stuck = blocks[-1].status == 'stuck'

@@ -13,8 +13,8 @@ from typing import Optional, Tuple
 
 import numpy as np
 
-from .footsteps import (FootstepConfig, FootstepPlanner, FootstepWindow, LEFT, RIGHT,
-                        sample_ground_profile, validate_footstep_config)
+from .footsteps import (describe_ground_ahead, FootstepConfig, FootstepPlanner, FootstepWindow,
+                        LEFT, RIGHT, sample_ground_profile, validate_footstep_config)
 from .gait import (foot_pose_on, GaitConfig, GaitError, hold_frames, Stance, standing_stance,
                    StepMotion, validate_gait_config, WalkGenerator, with_at_rest)
 from .path import predict_path
@@ -35,7 +35,11 @@ class ActorConfig:
     step_intervals: int = 13
     step_length_min: float = 0.15
     step_length_max: float = 0.80
-    max_linear_speed: float = 1.2
+    # The fastest the gait walks: steps of GaitConfig.fast_step_length at about its quickest
+    # cadence the joints' speed limits allow (0.52 s); a faster command could only lengthen
+    # the steps, and longer steps are slowed down further than they gain (see
+    # bench/bench_walk_speeds.py --flat).
+    max_linear_speed: float = 1.0
     max_angular_speed: float = 1.0
     frame_rate: float = 100.0
     hold_time: float = 0.1
@@ -592,8 +596,8 @@ class Actor:
                                         path.track_sign * leg.hip_half_width, leg.foot_width,
                                         stance_foot.sole, fcfg.max_step_up, fcfg.window_steps)
         path_points = self._path_points(path, s_end)
-        s_init = float(min(max(abs(v) * cfg.nominal_step_time, fcfg.step_length_min),
-                           fcfg.step_length_max))
+        s_init = float(min(max(self._walk.preferred_step_length(abs(v), cfg.nominal_step_time),
+                               fcfg.step_length_min), fcfg.step_length_max))
         init_index = int(min(max(round((s_init - fcfg.step_length_min) / fcfg.step_increment),
                                  0), fcfg.step_intervals))
         start = None
@@ -665,6 +669,11 @@ class Actor:
                                      started)
         if block is not None:
             return block
+        if reason == 'no collision-free footstep window':
+            why = describe_ground_ahead(self.environment, path, profile, stance_s + leg.toe,
+                                        s_end, stance_foot.sole, fcfg, leg.hip_half_width,
+                                        leg.foot_width)
+            reason += f': {why}' if why else ''
         self._failure = ((self._steps, v, w), reason)
         return self._stuck(reason, started, np.zeros((0, 4)), path_points)
 

@@ -1395,7 +1395,8 @@ class CTRoadmap:
               check_budget: Optional[int] = None,
               preview_from: Optional[int] = None,
               preview_backtracks: int = 2,
-              seed: Optional[np.ndarray] = None) -> SearchResult:
+              seed: Optional[np.ndarray] = None,
+              growth_lower: Optional[np.ndarray] = None) -> SearchResult:
         """Search forward in time from ``start`` at frame 0 to any legal state at frame k-1.
 
         Parameters
@@ -1413,8 +1414,10 @@ class CTRoadmap:
         node_budget, max_backtracks
             Search limits; exceeding either fails the search.
         deadline
-            ``time.perf_counter()`` value after which the search gives up (None: no limit).
-            A wall-clock limit makes the result depend on the load of the machine.
+            ``time.process_time()`` value (this process's CPU time, s) after which the search
+            gives up (None: no limit). CPU time, not wall time: other programs taking the
+            processor delay the search but do not spend its budget, so a loaded machine plans
+            later, not differently. A budget far above need leaves the result unchanged.
         check_budget
             Configurations the search may check in ``space`` (None: no limit). A work budget:
             the same inputs give the same result however loaded the machine is.
@@ -1430,6 +1433,9 @@ class CTRoadmap:
             ``hold_frames`` apart, as far as it is legal and at most to the end of the last
             stretch within it where the objective is blocked, and searches on from there; it
             can backtrack into it like into any of its states.
+        growth_lower
+            (d,) lowest joint values the nodes grown at distance r may take, rad (None: the
+            space's lower limits; a value below them is the limit).
 
         Returns
         -------
@@ -1488,7 +1494,7 @@ class CTRoadmap:
             nodes += 1
             if nodes > node_budget or backtracks > max_backtracks or (
                     checks_limit is not None and space.checks > checks_limit) or (
-                    deadline is not None and time.perf_counter() > deadline):
+                    deadline is not None and time.process_time() > deadline):
                 # Out of budget: the search got no further than the latest state it reached.
                 deepest_blocked = max(deepest_blocked, max(s.frame for s in stack))
                 break
@@ -1496,7 +1502,8 @@ class CTRoadmap:
             if child is None and not state.grew and not state.lasting_only:
                 # §5.2: every advance failed; grow a node at distance r.
                 state.grew = True
-                child = self._grow(space, state, speed_fraction, growth_attempts)
+                child = self._grow(space, state, speed_fraction, growth_attempts,
+                                   growth_lower)
                 grown += child is not None
             if child is not None:
                 self._push(space, stack, child, hold_frames)
@@ -1783,13 +1790,15 @@ class CTRoadmap:
         return None
 
     def _grow(self, space: CTSpace, state: _State, speed_fraction: float,
-              attempts: int) -> Optional[_State]:
-        """Grow a roadmap node at distance r from the current state (§5.2)."""
+              attempts: int, lower: Optional[np.ndarray] = None) -> Optional[_State]:
+        """Grow a roadmap node at distance r from the current state (§5.2), its joints no
+        lower than ``lower`` (rad; None: the space's limits)."""
         rate = speed_fraction * space.speed_limit
+        lower = space.lower if lower is None else np.maximum(space.lower, lower)
         for _ in range(attempts):
             deviation, arrival = _grown_node(
                 self.rng.normal(size=state.deviation.shape), state.deviation, state.frame,
-                self.radius, self.weights, space.times, rate, space.objective, space.lower,
+                self.radius, self.weights, space.times, rate, space.objective, lower,
                 space.upper)
             child = self._try(space, state, deviation, arrival)
             if child is not None:

@@ -745,3 +745,63 @@ def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: f
     tops[tops == -np.inf] = np.nan
     return GroundProfile(s0=float(s_start), ds=float(ds), height=stacked[0], low=stacked[1],
                          headroom=stacked[2], obstacle=tops, stacked=stacked)
+
+
+def describe_ground_ahead(environment, path, profile: GroundProfile, s_from: float,
+                          s_to: float, sole: float, config: FootstepConfig,
+                          hip_half_width: float, foot_width: float) -> str:
+    """Why no footstep can be placed ahead, in a user's words with the number, or ''.
+
+    The first sample of either foot's track between arc lengths ``s_from`` and ``s_to`` (m)
+    where a foot cannot stand relative to the stance sole height ``sole`` (m): ground that
+    rises more than ``max_step_up`` (a wall reads as its top), falls more than
+    ``max_step_down``, ends, or has less than ``min_headroom`` above it. ``path`` is the one
+    the profile was sampled along (tracks ``hip_half_width`` m either side, read on
+    ``SOLE_LINES`` across a sole ``foot_width`` m wide); distances are from its start (the
+    pelvis), m.
+
+    Returns
+    -------
+    str
+        e.g. 'the next rise is 0.35 m, 0.52 m ahead; the legs climb at most 0.30 m', or ''
+        when every foothold ahead has ground a foot could stand on (the window is refused
+        for its steps together: flatness, slope, swing height).
+
+    """
+    s = profile.arc_lengths()
+    ahead = np.flatnonzero((s >= s_from) & (s <= s_to))
+    if ahead.size == 0:
+        return ''
+    height, headroom = profile.height[:, ahead], profile.headroom[:, ahead]
+    with np.errstate(invalid='ignore'):
+        drop = height < sole - config.max_step_down
+        blocked = np.isnan(height) | drop | (headroom < config.min_headroom)
+    columns = np.flatnonzero(blocked.any(axis=0))
+    if columns.size == 0:
+        return ''
+    column = int(columns[0])
+    side = int(np.flatnonzero(blocked[:, column])[0])
+    distance = float(s[ahead[column]])
+    offset = (hip_half_width if side == 0 else -hip_half_width) + foot_width * np.array(
+        SOLE_LINES)
+    xy = path.offset_poses(np.full(offset.size, distance), offset)[:, :2]
+    where = f'{distance:.2f} m ahead'
+    if drop[side, column]:
+        return (f'the next drop is {sole - height[side, column]:.2f} m, {where}; the legs '
+                f'step down at most {config.max_step_down:.2f} m')
+    if not np.isnan(height[side, column]):
+        return (f'an overhang {headroom[side, column]:.2f} m above the ground {where}; the '
+                f'legs need {config.min_headroom:.2f} m')
+    top, _ = environment.ground_height(xy, sole + 10.0)
+    below, _ = environment.ground_height(xy, sole + config.max_step_up)
+    rise = float(np.fmax.reduce(top)) - sole
+    if rise > config.max_step_up:
+        return (f'the next rise is {rise:.2f} m, {where}; the legs climb at most '
+                f'{config.max_step_up:.2f} m')
+    if np.isnan(below).any():
+        return f'the ground ends {where}'
+    fall = sole - float(below.min())
+    if fall > config.max_step_down:
+        return (f'the next drop is {fall:.2f} m, {where}; the legs step down at most '
+                f'{config.max_step_down:.2f} m')
+    return ''

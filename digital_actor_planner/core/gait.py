@@ -42,6 +42,11 @@ END_KNEE_MARGIN = 0.1
 _TOE_SAMPLES = np.linspace(1.0 / 18.0, 1.0, 18)
 _TOE_ACROSS = np.array([0.0, -0.5, 0.5])
 _TOE_SUPPORT_TOLERANCE = 0.015
+#: How far a landing sole may be moved up or down from its planned foothold onto the ground
+#: under it, m, and how much that ground may vary under the sole from the sole's plane (see
+#: WalkGenerator._seated_sole): a landing 14 cm downhill of it on a 10-degree slope, a foot
+#: pointing across it (1.8 cm from edge to edge) turned from the path.
+SEAT_SHIFT = 0.03
 
 
 class GaitError(Exception):
@@ -68,6 +73,12 @@ class GaitConfig:
     max_heading_change: float = 0.5
     turn_ease_heading: float = 0.5
     swing_toe_in: float = 0.15
+    # The longest step a walk prefers once its speed would ask more at nominal cadence, m:
+    # faster, the steps come quicker instead (down to min_step_time), as people's do. Longer
+    # steps swing the leg faster than its joints allow in that time, and the step is slowed
+    # down: a 0.6 m step needs 0.67 s, a 0.8 m one 2 s, so striding out walked slower
+    # (ActorConfig.max_linear_speed is the speed these steps walk at their quickest).
+    fast_step_length: float = 0.55
 
 
 def validate_gait_config(config: GaitConfig) -> None:
@@ -957,6 +968,10 @@ class WalkGenerator:
         # a bump 5 mm beside its toe), m.
         self._sole_along = np.linspace(-self.leg.heel, self.leg.toe, 9)
         self._sole_across = np.array([SOLE_LINES[0], SOLE_LINES[-1]]) * self.leg.foot_width
+        # Where a landing sole is seated on the ground (_seated_sole): 5 points heel..toe on its
+        # middle line and its two edges, m.
+        self._seat_along = np.linspace(-self.leg.heel, self.leg.toe, 5)
+        self._seat_across = np.array([-0.5, 0.0, 0.5]) * self.leg.foot_width
 
     def _timing(self, k: int) -> _StepTiming:
         """The time shapes of a k-frame step (:func:`_step_timing`)."""
@@ -968,6 +983,12 @@ class WalkGenerator:
         if full <= 0.0:
             return 0.0
         return min(abs(_wrap(heading_difference)) / full, 1.0)
+
+    def preferred_step_length(self, speed: float, nominal_step_time: float) -> float:
+        """The step length a walk at ``speed`` m/s aims for, m: ``speed`` x
+        ``nominal_step_time`` s, at most ``fast_step_length`` (a faster walk quickens its
+        cadence instead, :meth:`step_duration`)."""
+        return float(min(speed * nominal_step_time, self.config.fast_step_length))
 
     def step_duration(self, length: float, speed: float, rise: float) -> float:
         """Duration of a step of ``length`` m at ``speed`` m/s changing height by ``rise`` m."""
@@ -1051,6 +1072,8 @@ class WalkGenerator:
         d_l = np.array([np.cos(landing_yaw), np.sin(landing_yaw)])
         forward_end = float(np.dot(np.asarray(landing_xy) - swing_hip_xy[-1], d_l))
         land_xy = swing_hip_xy[-1] + forward_end * d_l
+        landing_sole = self._seated_sole(land_xy, landing_yaw, float(landing_sole),
+                                         float(landing_pitch), swing_profile)
         landing = foot_pose_on(land_xy, landing_yaw, landing_sole, landing_pitch, leg)
         # A diagnostic (not in the frames): math on two floats, not np.linalg.norm.
         error_x, error_y = (land_xy - np.asarray(landing_xy)).tolist()
@@ -1186,6 +1209,46 @@ class WalkGenerator:
                      (feet[0], feet[1]), swing_side, to_rest)
         return StepMotion(times=tau * duration, frames=frames, stance=end, category=category,
                           swing_lift=lift, lateral_error=lateral_error)
+
+    def _seated_sole(self, xy: np.ndarray, yaw: float, sole: float, pitch: float,
+                     ground) -> float:
+        """The landing sole's height: ``sole`` (m) moved onto the ground where the foot lands,
+        by at most ``SEAT_SHIFT`` up or down, where that ground is smooth (it varies under the
+        sole by at most ``SEAT_SHIFT`` from the sole's plane).
+
+        The foothold was judged at the planned point and heading; the foot lands in its hip's
+        plane, centimetres away, and turned up to ``max_toe_in`` from the path. On a slope
+        the ground there stands millimetres higher under part of the sole (under its uphill
+        edge when the foot points across the slope), or lower under all of it (downhill of the
+        foothold): on a 6-degree hill the 3D check refused the first kind of landing (the sole
+        1-3 mm in the ground) at every reversal of a weave, a long step's landing 2 cm in the
+        ground left the swing nothing to clear, and a landing 10-14 cm downhill floated
+        8-34 mm and was refused as unsupported. The sole rests on the highest ground under
+        it, its pitch kept. Other ground (an edge under the sole) is left to the 3D and landing
+        checks, as planned.
+        """
+        leg = self.leg
+        along = self._seat_along
+        across = self._seat_across
+        cos_pitch, sin_pitch = math.cos(pitch), math.sin(pitch)
+        cos_yaw, sin_yaw = math.cos(yaw), math.sin(yaw)
+        forward = along * cos_pitch
+        x = xy[0] + forward[None, :] * cos_yaw - across[:, None] * sin_yaw
+        y = xy[1] + forward[None, :] * sin_yaw + across[:, None] * cos_yaw
+        plane = sole + along * sin_pitch
+        under = ground(np.column_stack([x.ravel(), y.ravel()]), sole + leg.ankle_height)
+        excess = under.reshape(x.shape) - plane[None, :]
+        if np.isnan(excess).any():
+            # Part of the sole over no ground: the landing check judges its support.
+            return sole
+        # Ground that varies under the sole by more than a slope's tilt is an edge or a bump:
+        # not seated here.
+        if float(np.ptp(excess)) > SEAT_SHIFT:
+            return sole
+        excess = float(excess.max())
+        if -SEAT_SHIFT <= excess <= SEAT_SHIFT:
+            return sole + excess
+        return sole
 
     def _check_feet_apart(self, stance_foot: FootPose, swing_xy: np.ndarray,
                           direction: np.ndarray, swing_z: np.ndarray) -> None:
@@ -1412,7 +1475,13 @@ class WalkGenerator:
         h2 = np.maximum(h2.max(axis=1), least[1])
         feasible = (h2 <= cap) & (w1[alone] * h1 >= required[alone]).all(axis=1)
         if not feasible.any():
-            raise GaitError('swing foot cannot clear the terrain')
+            # In words a user reads: how far above the higher foothold the foot would have to
+            # lift, against the most it lifts; or that it would have to rise at once.
+            rise = max(float(np.max(need)) - max(z0, z1), 0.0)
+            raise GaitError(f'swing foot cannot clear the terrain: it would have to lift '
+                            f'{rise:.2f} m'
+                            + (f', at most {cap:.2f} m' if rise > cap else
+                               ' right after lift-off or just before touchdown'))
         best = int(np.where(feasible, np.maximum(h1[:, 0], h2), np.inf).argmin())
         h1, h2 = float(h1[best, 0]), float(h2[best])
         w0, w1, w2, w3 = weights(tau)

@@ -143,8 +143,12 @@ class UpperBodyConfig:
         Configurations a branch search may check per plan: a work budget, so the same step
         gives the same plan however loaded the machine is.
     time_budget
-        Wall time a branch search may take per plan, s, or None (no wall-clock limit; a limit
-        makes plans depend on the machine's load).
+        CPU time a branch search may take per plan, s, or None (no limit, the default: the
+        work budgets above bound it). This process's CPU time, never wall time: on a loaded
+        machine a plan takes longer, it does not come out differently.
+    waist_back_lean
+        How far back of upright the waist's search may pitch it, rad (the joint allows more):
+        leaning back under an overhead obstacle while walking on only puts off meeting it.
     max_backtracks
         Backtracking steps a branch search may take per plan. 20: a failing search costs
         half of what 40 did (beside 200 random tables the slowest step fell from 1.1-1.2 to
@@ -194,6 +198,7 @@ class UpperBodyConfig:
     time_weight: float = 1.0
     lasting_branches: Tuple[str, ...] = ('left_arm', 'right_arm')
     roadmap_search: str = 'compiled'
+    waist_back_lean: float = 0.0
 
 
 def validate_upper_body_config(config: UpperBodyConfig) -> UpperBodyConfig:
@@ -216,6 +221,10 @@ def validate_upper_body_config(config: UpperBodyConfig) -> UpperBodyConfig:
         if not (isinstance(value, (int, np.integer)) and not isinstance(value, bool)
                 and value >= 0):
             raise ValueError(f'{name} must be an integer >= 0, got {value!r}')
+    if not (isinstance(config.waist_back_lean, (int, float))
+            and 0.0 <= config.waist_back_lean <= 1.0):
+        raise ValueError(f'waist_back_lean must be in [0, 1] rad, got '
+                         f'{config.waist_back_lean!r}')
     positive('speed_fraction', config.speed_fraction)
     if config.speed_fraction > 1.0:
         raise ValueError(f'speed_fraction must be <= 1, got {config.speed_fraction!r}')
@@ -356,6 +365,14 @@ class UpperBodyPlanner:
             name: (lower[self.indices[name]], upper_limit[self.indices[name]],
                    speed[self.indices[name]], np.array([0, len(self.indices[name])]))
             for name in BRANCH_ORDER}
+        # The waist searches forward of upright, however far back its joint goes: leaning
+        # back under an overhead obstacle only puts off meeting it, for to bend forward from
+        # there the head passes upright, its highest. After a stop under the low beam the
+        # search leaned back to the limit, walked on, and every step from there was blocked.
+        waist_lower = np.full(len(self.indices['waist']), -np.inf)
+        waist_lower[list(self.indices['waist']).index(skeleton.index['waist_pitch'])] = (
+            -config.waist_back_lean)
+        self._growth_lower = {'waist': waist_lower}
         self._checked = {'waist': _TRUNK_LINKS, 'left_arm': _ARM_LINKS['left'],
                          'right_arm': _ARM_LINKS['right']}
         self._obstacles = {'waist': _LEG_LINKS,
@@ -527,9 +544,9 @@ class UpperBodyPlanner:
                     node_budget=config.node_budget, max_backtracks=config.max_backtracks,
                     check_budget=config.check_budget, preview_from=preview_from,
                     preview_backtracks=config.preview_backtracks,
-                    seed=seeds.get(name),
+                    seed=seeds.get(name), growth_lower=self._growth_lower.get(name),
                     deadline=None if config.time_budget is None
-                    else time.perf_counter() + config.time_budget)
+                    else time.process_time() + config.time_budget)
                 record.update(nodes=result.nodes, backtracks=result.backtracks,
                               grown=result.grown, ok=result.ok,
                               preview_backtracks=result.preview_backtracks,
@@ -538,8 +555,9 @@ class UpperBodyPlanner:
                 steps, checks = space.steps, space.checks
                 if not result.ok:
                     ok, blocked_frame = False, result.blocked_frame
-                    reason = f'{name} blocked at t={times[blocked_frame]:.2f} s' + (
-                        ' (in the preview)' if result.gave_up_in_preview else '')
+                    reason = (f'{name} blocked at t={times[blocked_frame]:.2f} s'
+                              + self._blocking(out, objective, columns, blocked_frame, name)
+                              + (' (in the preview)' if result.gave_up_in_preview else ''))
             if path is not None and record['ok']:
                 path[0] = start
                 out[:, columns] = path
@@ -737,6 +755,23 @@ class UpperBodyPlanner:
             else:
                 out[name] = (bad != 0, bad < 0)
         return out
+
+    def _blocking(self, frames: np.ndarray, objective: np.ndarray, columns, frame: int,
+                  branch: str) -> str:
+        """What blocks a branch, for its reason: ': the head would be 85 mm into an obstacle'
+        (the deepest of its links in its motion pattern at the blocked ``frame``, the branches
+        planned before it where they were planned), or '' when none would touch there (the
+        joints could not move it clear in time)."""
+        q = frames[frame].copy()
+        q[columns] = objective[frame]
+        try:
+            depths = self.body_collision.penetration(q, self._checked[branch])
+        except (AttributeError, ValueError):
+            return ''
+        link, depth = max(depths.items(), key=lambda item: item[1], default=('', 0.0))
+        if depth <= 0.0:
+            return ''
+        return f': the {link.replace("_", " ")} would be {1e3 * depth:.0f} mm into an obstacle'
 
     def _links_in_collision(self, q: np.ndarray, branch: str) -> list:
         """Names of the branch's links touching the environment at ``q`` (for the reason)."""

@@ -117,8 +117,9 @@ def parameter_declarations() -> List[Tuple[str, Any, ParameterDescriptor]]:
         ('step_length_max', 0.8, _descriptor(
             'Longest step s_max (m).', floats=(0.01, 2.0),
             constraints='step_length_min < step_length_max')),
-        ('max_linear_speed', 1.2, _descriptor(
-            'Forward speed limit (m/s); commands beyond it are clamped.', floats=(0.01, 3.0))),
+        ('max_linear_speed', 1.0, _descriptor(
+            'Forward speed limit (m/s); commands beyond it are clamped. The default is the '
+            'fastest the gait walks: above it the steps would slow down.', floats=(0.01, 3.0))),
         ('max_angular_speed', 1.0, _descriptor(
             'Turning speed limit (rad/s); commands beyond it are clamped.',
             floats=(0.01, 3.0))),

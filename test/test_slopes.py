@@ -1,0 +1,36 @@
+"""Weaving on a gentle hill walks on: no stuck event where nothing would touch."""
+import functools
+import os
+import sys
+
+import numpy as np
+import pytest
+
+from course_runs import judged
+from digital_actor_planner.core.environment import Environment
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'bench'))
+
+from bench_slopes import heightmap_hill, hill_starts, slopes, weave  # noqa: E402
+
+
+@functools.lru_cache(maxsize=None)
+def hill():
+    return Environment([heightmap_hill()])
+
+
+def test_the_hill_is_gentle():
+    face_slopes = slopes(heightmap_hill())
+    assert 5.0 < np.median(face_slopes) < 7.0 and face_slopes.max() <= 10.0
+
+
+@pytest.mark.parametrize('start', [hill_starts(8)[i] for i in (0, 1, 3, 6)])
+def test_weaving_on_the_hill_never_stops(start):
+    blocks = weave(hill(), start, 14.0)
+    assert blocks is not None, 'a start the actor can stand on'
+    reasons = sorted({b.reason for b in blocks if b.status == 'stuck'})
+    assert not reasons, reasons
+    _, frames, report = judged(blocks, hill())
+    assert report.ok, report.failures()
+    # It walked on, up and down the slope: about 0.5 m/s for 14 s, less the weave's arcs.
+    assert np.hypot(*(frames[-1, :2] - frames[0, :2])) > 4.0
