@@ -123,15 +123,25 @@ class Probe:
                 return True
         return bool(predicate())
 
-    def wait_for_stream(self, process=None, timeout: float = 30.0) -> bool:
-        """Wait until the actor's joint_states arrive and it sees our cmd_vel publisher.
+    def wait_for_stream(self, process=None, timeout: float = 30.0, ready: bool = True) -> bool:
+        """Wait until the actor's joint_states arrive and it sees our cmd_vel publisher, and
+        (``ready``) until its planner has placed the actor (diagnostics no longer say
+        "warming up").
 
         Gives up early when ``process`` (a NodeProcess) exits.
         """
-        self.spin_until(lambda: (len(self.joint_states) > 5 and
-                                 self.cmd_pub.get_subscription_count() > 0) or
-                        (process is not None and not process.alive()), timeout)
-        return len(self.joint_states) > 5 and self.cmd_pub.get_subscription_count() > 0
+        def done():
+            return len(self.joint_states) > 5 and self.cmd_pub.get_subscription_count() > 0 \
+                and (not ready or self.planner_ready())
+
+        self.spin_until(lambda: done() or (process is not None and not process.alive()),
+                        timeout)
+        return done()
+
+    def planner_ready(self) -> bool:
+        """Whether the latest diagnostics say the planner is past warming up."""
+        state = self.diagnostic_values().get('state')
+        return state is not None and state != 'warming up'
 
     def latest(self) -> np.ndarray:
         """The latest received configuration (22,)."""

@@ -33,7 +33,7 @@ def two_actors(tmp_path_factory):
               'stamped': Probe(DOMAIN_ID, namespace='/stamped_actor', stamped=True)}
     try:
         for name, probe in probes.items():
-            assert probe.wait_for_stream(processes[name], 60.0), processes[name].output()
+            assert probe.wait_for_stream(processes[name], 300.0), processes[name].output()
         yield processes, probes
     finally:
         for probe in probes.values():

@@ -35,7 +35,7 @@ def actor(tmp_path_factory):
                           ros_env(DOMAIN_ID), log_path=str(log))
     probe = Probe(DOMAIN_ID)
     try:
-        assert probe.wait_for_stream(process, 60.0), \
+        assert probe.wait_for_stream(process, 300.0), \
             f'no joint_states from the node:\n{process.output()}'
         yield process, probe
     finally:

@@ -137,6 +137,9 @@ def parameter_declarations() -> List[Tuple[str, Any, ParameterDescriptor]]:
             'Plan the next block when less than this much committed motion (s) is buffered '
             'ahead of playback; larger rides out planning hiccups, smaller reacts sooner.',
             floats=(0.02, 5.0))),
+        ('planning_timeout', 60.0, _descriptor(
+            'A planning process that gives no answer for this long (s) is replaced by a new '
+            'one, and the actor goes on from where it stands.', floats=(0.1, 3600.0))),
         ('stream_priority', 10, _descriptor(
             'SCHED_FIFO priority of the joint_states thread (1-99) for low jitter on a busy '
             'machine; 0 or no permission: normal scheduling.', integers=(0, 99))),
@@ -166,6 +169,7 @@ class PlannerNodeConfig:
     publish_robot_description: bool
     planning_lead: float = 0.3
     stream_priority: int = 0
+    planning_timeout: float = 60.0
 
     def actor_config_fields(self) -> Dict[str, Any]:
         """Return the keyword arguments of the core ``ActorConfig`` these parameters set."""
@@ -221,7 +225,20 @@ def read_node_config(get_value: Callable[[str], Any]) -> PlannerNodeConfig:
         publish_robot_description=bool(get_value('publish_robot_description')),
         planning_lead=float(get_value('planning_lead')),
         stream_priority=int(get_value('stream_priority')),
+        planning_timeout=float(get_value('planning_timeout') or 60.0),
     )
+
+
+def scene_file_error(path: str) -> str:
+    """Why ``path`` cannot be a scene file ('' when it may be one), as at start so at run time.
+    """
+    if not path.strip():
+        return 'must name a scene YAML or mesh file'
+    if os.path.isdir(path):
+        return f'{path}: is a directory, not a scene file'
+    if not os.path.isfile(path):
+        return f'{path}: no such scene file'
+    return ''
 
 
 def validate_node_config(config: PlannerNodeConfig) -> None:
@@ -249,8 +266,9 @@ def validate_node_config(config: PlannerNodeConfig) -> None:
         raise ConfigurationError('frame_id', 'must not be empty')
     if not config.scene.strip():
         raise ConfigurationError('scene', 'must name a scene YAML or mesh file')
-    if not os.path.isfile(config.scene):
-        raise ConfigurationError('scene', f'no such file: {config.scene!r}')
+    problem = scene_file_error(config.scene)
+    if problem:
+        raise ConfigurationError('scene', problem)
     if config.step_length_min >= config.step_length_max:
         raise ConfigurationError(
             'step_length_min', f'{config.step_length_min} must be below step_length_max '
