@@ -193,7 +193,10 @@ def test_while_a_large_scene_loads_the_node_answers_and_streams_and_a_bad_one_is
 def test_a_twist_publisher_on_a_stamped_cmd_vel_is_named_with_the_parameter_to_set(actor):
     from geometry_msgs.msg import Twist
     process, probe = actor
-    other = probe.rclpy.create_node('old_teleop', context=probe.context)
+    # Its own context (a DDS participant): one participant cannot have both types on a topic.
+    context = probe.rclpy.Context()
+    context.init(domain_id=DOMAIN_ID)
+    other = probe.rclpy.create_node('old_teleop', context=context)
     publisher = other.create_publisher(Twist, 'cmd_vel', 10)
     try:
         assert probe.spin_until(lambda: 'cmd_vel_stamped' in
@@ -204,6 +207,7 @@ def test_a_twist_publisher_on_a_stamped_cmd_vel_is_named_with_the_parameter_to_s
     finally:
         other.destroy_publisher(publisher)
         other.destroy_node()
+        context.try_shutdown()
     assert probe.spin_until(lambda: not _values(probe, 'cmd_vel_type_mismatch'), 30.0)
 
 

@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import array
 import collections
+import copy
 import gc
 import hashlib
 from dataclasses import dataclass
@@ -34,32 +35,36 @@ import traceback
 import weakref
 from typing import Optional, Tuple
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import Point, PoseStamped, Quaternion, Twist, TwistStamped
-from nav_msgs.msg import Path
-import numpy as np
-from rcl_interfaces.msg import SetParametersResult
-import rclpy
-from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
-from rclpy.exceptions import InvalidNamespaceException, ParameterException, \
-    ParameterUninitializedException
-from rclpy.callback_groups import ReentrantCallbackGroup
-from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor, \
-    SingleThreadedExecutor
-from rclpy.node import Node
-from rclpy.signals import SignalHandlerOptions
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.serialization import serialize_message
-from rclpy.utilities import remove_ros_args
-from rclpy.validate_namespace import validate_namespace
-from sensor_msgs.msg import JointState
-from std_msgs.msg import ColorRGBA, String
-from visualization_msgs.msg import Marker, MarkerArray
-
-from digital_actor_planner.nodes.planner_params import ConfigurationError, \
-    parameter_declarations, PlannerNodeConfig, read_node_config, RUNTIME_PARAMETERS, \
-    scene_file_error, validate_node_config
-from digital_actor_planner.runtime.standing import stand_in_configuration
+# Ctrl-C while these load (a second or more on a busy machine) ends the node quietly, as
+# it does once it runs.
+try:
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+    from geometry_msgs.msg import Point, PoseStamped, Quaternion, Twist, TwistStamped
+    from nav_msgs.msg import Path
+    import numpy as np
+    from rcl_interfaces.msg import SetParametersResult
+    import rclpy
+    from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
+    from rclpy.exceptions import InvalidNamespaceException, ParameterException, \
+        ParameterUninitializedException
+    from rclpy.callback_groups import ReentrantCallbackGroup
+    from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor, \
+        SingleThreadedExecutor
+    from rclpy.node import Node
+    from rclpy.signals import SignalHandlerOptions
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from rclpy.serialization import serialize_message
+    from rclpy.utilities import remove_ros_args
+    from rclpy.validate_namespace import validate_namespace
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import ColorRGBA, String
+    from visualization_msgs.msg import Marker, MarkerArray
+    from digital_actor_planner.nodes.planner_params import ConfigurationError, \
+        parameter_declarations, PlannerNodeConfig, read_node_config, RUNTIME_PARAMETERS, \
+        scene_file_error, validate_node_config
+    from digital_actor_planner.runtime.standing import stand_in_configuration
+except KeyboardInterrupt:  # pragma: no cover - depends on when the signal lands
+    sys.exit(0)
 
 # Committed frames older than this (s of actor time) are dropped from the buffer.
 BUFFER_HISTORY = 1.0
@@ -88,6 +93,15 @@ ADD_TIMEOUT = 900.0
 # The stream blends from the pose it holds to a newly placed actor's first frame over this
 # long (s): the stand-in pose of the start, or the stance held when a planning process failed.
 BLEND_TIME = 0.5
+# Blocks planned but not yet begun are planned again when the command changes this much
+# (m/s, rad/s) or to a stop, instead of being played out: a released drag stills the actor
+# within the step in progress and the closing step.
+REPLAN_LINEAR = 0.15
+REPLAN_ANGULAR = 0.3
+# A block starting sooner than this (s) after the frame on show is played as planned.
+REPLAN_GUARD = 0.05
+# Planned blocks (per actor) that can be planned again; as many states kept to go back to.
+REPLAN_BLOCKS = 8
 # A planning process that fails this many times in a row while placing its actors is given
 # up on: the node exits non-zero (a supervisor may start it again).
 MAX_REPLACEMENTS = 3
@@ -185,6 +199,13 @@ class FrameBuffer:
             frames.append(configuration[None, :])
             velocities.append(np.zeros_like(configuration)[None, :])
             self._data = (np.concatenate(times), np.vstack(frames), np.vstack(velocities))
+
+    def truncate(self, before: float) -> None:
+        """Drop every frame at or after ``before`` s (the first frame always stays)."""
+        with self._lock:
+            times, frames, velocities = self._data
+            keep = max(1, int(np.searchsorted(times, before, side='left')))
+            self._data = (times[:keep], frames[:keep], velocities[:keep])
 
     def sample(self, t: float) -> Tuple[np.ndarray, np.ndarray]:
         """Return the configuration (22,) and velocity (22,) at time ``t`` s, interpolated.
@@ -481,6 +502,9 @@ def _planning_process(connection) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     from digital_actor_planner.core.skeleton import Skeleton
     skeletons, scenes, actors = {}, _SceneCache(), {}
+    # Per actor: (block number, the actor as it was before planning that block).
+    histories = collections.defaultdict(lambda: collections.deque(maxlen=REPLAN_BLOCKS))
+    numbers = collections.Counter()
     while True:
         try:
             number, kind, *request = connection.recv()
@@ -505,16 +529,22 @@ def _planning_process(connection) -> None:
                 reply('error', 'scene', f'{type(error).__name__}: {error}')
                 continue
             actors[key] = (actor, actor_config, start_pose, scene)
+            histories.pop(key, None)
             reply('ready', actor.configuration, _mesh_arrays(scene))
         elif kind == 'plan':
             if request[0] not in actors:
                 reply('failed', f'no actor {request[0]} in this process')
                 continue
             actor = actors[request[0]][0]
+            numbers[request[0]] += 1
+            # The state before this block, to plan it again if the command changes before
+            # it is played (the core's state is replaced, not changed in place, by a step).
+            histories[request[0]].append((numbers[request[0]], copy.copy(actor)))
             try:
                 warning = actor.set_command(request[1], request[2])
                 block = actor.plan_next()
-                reply('block', warning, block, _ground_profile(actor, block))
+                reply('block', warning, block, _ground_profile(actor, block),
+                      numbers[request[0]])
             except Exception as error:  # noqa: B902 -- reported on diagnostics, stream goes on
                 reply('failed', f'{type(error).__name__}: {error}')
         elif kind == 'scene':
@@ -528,7 +558,15 @@ def _planning_process(connection) -> None:
                 reply('scene', str(error), None, None)
                 continue
             actors[request[0]] = (actor, actor_config, start_pose, scene)
+            histories.pop(request[0], None)
             reply('scene', '', actor.configuration, _mesh_arrays(scene))
+        elif kind == 'rewind':
+            kept = [(n, a) for n, a in histories[request[0]] if n == request[1]]
+            if kept and request[0] in actors:
+                actors[request[0]] = (kept[0][1], *actors[request[0]][1:])
+                while histories[request[0]] and histories[request[0]][-1][0] >= request[1]:
+                    histories[request[0]].pop()
+            reply('rewound', bool(kept))
         elif kind == 'remove':
             actors.pop(request[0], None)
             reply('removed')
@@ -746,8 +784,9 @@ class PlanningProcess:
 
         Returns
         -------
-        (str or None, StepBlock, numpy.ndarray)
-            The clamping warning, the block and the ground profile (p, 3) under its path, m.
+        (str or None, StepBlock, numpy.ndarray, int)
+            The clamping warning, the block, the ground profile (p, 3) under its path (m) and
+            the block's number (for :meth:`replan_from`).
 
         Raises
         ------
@@ -762,7 +801,14 @@ class PlanningProcess:
         reply = self._worker.request(('plan', self._id, linear_x, angular_z), timeout)
         if reply[0] == 'failed':
             raise PlanningFailed(reply[1])
-        return reply[1], reply[2], reply[3]
+        return reply[1], reply[2], reply[3], reply[4]
+
+    def replan_from(self, number: int, timeout: float = 60.0) -> bool:
+        """Take the actor back to its state before block ``number`` (that block and the ones
+        after it are to be planned again); False when that state is no longer kept."""
+        if self._generation != self._worker.generation:
+            raise PlanningLost('planning process was replaced')
+        return bool(self._worker.request(('rewind', self._id, int(number)), timeout)[1])
 
     def load_scene(self, scene_path: str, timeout: float = 300.0):
         """Replace the actor by one on a new scene; return (configuration (22,), meshes).
@@ -1196,6 +1242,9 @@ class ActorPlannerNode(Node):
         # planning thread plus its planning (the planning lead must cover both).
         self._responses = collections.deque(maxlen=RECENT_BLOCKS)
         self._due_since = None
+        # (number, buffer start time s, command) of the blocks committed lately.
+        self._blocks = collections.deque(maxlen=REPLAN_BLOCKS)
+        self.replanned_blocks = 0
 
         threads = threads or SharedThreads()
         self._scheduler = self.planner.scheduler
@@ -1356,6 +1405,8 @@ class ActorPlannerNode(Node):
             if self.command.current(now, self.cmd_timeout) == self._holding_for:
                 return None
             self._holding_for = None
+        if self._replan_target(now) is not None:
+            return -self._lead
         lead = self._lead = self._effective_lead()
         return self.buffer.end_time - self.playback_time - lead
 
@@ -1370,6 +1421,7 @@ class ActorPlannerNode(Node):
                 with self._pending_lock:
                     pending, self._pending_start = self._pending_start, None
                 if pending is not None:
+                    self._blocks.clear()
                     configuration, blend = pending
                     # A new actor: its clock starts at 0 from its start pose, right after
                     # the frame on show (a new scene) or after a blend from the pose held.
@@ -1382,6 +1434,8 @@ class ActorPlannerNode(Node):
                     self._holding_for = None
                     self._restarted = True
                 try:
+                    if pending is None:
+                        self._replan_tail()
                     self._plan_block()
                 except Exception as error:  # noqa: B902 -- the thread serves every actor
                     # A fault in one block must not end the thread that plans for all the
@@ -1393,6 +1447,42 @@ class ActorPlannerNode(Node):
                     self._retry_at = time.monotonic() + RETRY_AFTER
         except Exception as error:  # noqa: B902 -- never a silently frozen actor
             self.fail(1, f'planning thread failed: {error!r}\n{traceback.format_exc()}')
+
+    def _replan_target(self, now: float):
+        """The first committed block not yet begun that was planned for a command unlike the
+        current one (a stop, or a change of REPLAN_LINEAR / REPLAN_ANGULAR); None if none."""
+        linear, angular = self.command.current(now, self.cmd_timeout)
+        stop = abs(linear) < 1e-3 and abs(angular) < 1e-3
+        for block in self._blocks:
+            number, start, (old_linear, old_angular) = block
+            if start <= self.playback_time + REPLAN_GUARD:
+                continue
+            if (stop and (abs(old_linear) >= 1e-3 or abs(old_angular) >= 1e-3)) or \
+                    abs(linear - old_linear) >= REPLAN_LINEAR or \
+                    abs(angular - old_angular) >= REPLAN_ANGULAR:
+                return block
+            return None
+        return None
+
+    def _replan_tail(self) -> None:
+        """Drop the blocks not yet begun that the command has overtaken, and take the actor in
+        its planning process back to the state before them (the next block replaces them)."""
+        target = self._replan_target(time.monotonic())
+        if target is None:
+            return
+        number, start, _ = target
+        # The stream holds the last frame kept (a double-support stance at a step's end) if
+        # it gets there before the new block is planned.
+        self.buffer.truncate(start)
+        if not self.planner.replan_from(number):
+            # That state is no longer kept: the actor goes on from the end of what it
+            # planned, after a hold (its clock and the buffer's stay in step).
+            self.get_logger().warning(f'block {number} could not be planned again')
+            return
+        self.replanned_blocks += sum(1 for block in self._blocks if block[0] >= number)
+        while self._blocks and self._blocks[-1][0] >= number:
+            self._blocks.pop()
+        self._at_rest = False
 
     def _place(self) -> bool:
         """Place the actor in its planning process; True when placed.
@@ -1463,8 +1553,8 @@ class ActorPlannerNode(Node):
         started = time.monotonic()
         command = self.command.current(started, self.cmd_timeout)
         try:
-            warning, block, profile = self.planner.plan(*command,
-                                                        timeout=self.config.planning_timeout)
+            warning, block, profile, number = self.planner.plan(
+                *command, timeout=self.config.planning_timeout)
         except PlanningFailed as error:
             if self._stop.is_set():
                 return  # shutting down: the planning process was told to finish
@@ -1477,8 +1567,10 @@ class ActorPlannerNode(Node):
             return
         if warning:
             self.get_logger().warning(warning, throttle_duration_sec=2.0)
-        self.buffer.append(np.asarray(block.times) + self.actor_offset, block.frames,
-                           block.velocities, self.playback_time)
+        times = np.asarray(block.times) + self.actor_offset
+        self.buffer.append(times, block.frames, block.velocities, self.playback_time)
+        if len(times):
+            self._blocks.append((number, float(times[0]), command))
         if self._restarted:  # the new actor's first block
             self._reloading = self._restarted = False
         self.stats.record(block.status, block.reason, block.planning_time)
@@ -1680,6 +1772,7 @@ class ActorPlannerNode(Node):
             'planning_process_pid': str(self.planner.worker.pid),
             'planning_processes_replaced': str(self.planner.worker.generation),
             'stale_replies_dropped': str(self.planner.worker.stale_replies),
+            'blocks_planned_again': str(self.replanned_blocks),
         }
         status = DiagnosticStatus(
             level=level, name=f'{self.get_fully_qualified_name()}: actor planner',
@@ -1857,6 +1950,12 @@ def _run(args) -> int:
         _close_partial(nodes, commands, planners)
         return 2
     except (KeyboardInterrupt, ExternalShutdownException):
+        _close_partial(nodes, commands, planners)
+        return 0
+    except RuntimeError:
+        # Ctrl-C while a node was being built: rclpy's handler shut the context down under it.
+        if rclpy.ok():
+            raise
         _close_partial(nodes, commands, planners)
         return 0
     priority = nodes[0].config.stream_priority
