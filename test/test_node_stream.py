@@ -22,9 +22,10 @@ DOMAIN_ID = int(os.environ['ACTOR_NODE_TEST_DOMAIN']) if 'ACTOR_NODE_TEST_DOMAIN
     os.environ else fresh_domain_id()
 COURSE = scene('stairs_up') if os.path.exists(scene('stairs_up')) else scene('flat')
 CMD_TIMEOUT = 0.5
-# Generous bound on "stops within one step": the step being played, plus the planning lead,
-# plus the step that brings the feet together, on a loaded 2-core machine.
-STOP_BOUND_S = 3.0
+# Generous bound on "stops within one step": the step being played and the step that brings
+# the feet together (the blocks planned beyond them are planned again), on a loaded 2-core
+# machine; the figure itself is in bench/bench_stream.py.
+STOP_BOUND_S = 2.5
 
 
 @pytest.fixture(scope='module')

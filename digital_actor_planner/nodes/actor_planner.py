@@ -274,9 +274,11 @@ class PlanningStats:
 
     def percentiles(self) -> Tuple[float, float]:
         """Return p50 and p99 planning time (s) of the recent blocks (NaN when none)."""
-        if not self.planning_times:
+        times = np.fromiter(self.planning_times, float)
+        times = times[np.isfinite(times)]  # a failure or a state change plans nothing
+        if not len(times):
             return float('nan'), float('nan')
-        p50, p99 = np.percentile(np.fromiter(self.planning_times, float), [50.0, 99.0])
+        p50, p99 = np.percentile(times, [50.0, 99.0])
         return float(p50), float(p99)
 
 
