@@ -151,7 +151,7 @@ def test_while_a_large_scene_loads_the_node_answers_and_streams_and_a_bad_one_is
         actor, tmp_path):
     from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
     from rcl_interfaces.srv import SetParameters
-    _, probe = actor
+    process, probe = actor
     large = _large_scene(tmp_path)
     client = probe.node.create_client(SetParameters, '/actor_planner/set_parameters')
     try:
@@ -175,7 +175,7 @@ def test_while_a_large_scene_loads_the_node_answers_and_streams_and_a_bad_one_is
         assert len(stamps) > 0.8 * 100 * (stamps[-1] - stamps[0]), \
             'the stream slowed while the scene loaded'
     assert probe.spin_until(lambda: _values(probe, 'scene') == large, 10.0)
-    assert _advance(probe, 5.0) > 0.3, (loading, answers, probe.diagnostic_values())
+    assert _advance(probe, 5.0) > 0.3, (loading, probe.diagnostic_values(), process.output())
 
     # A directory, then a broken file: refused with the reason; the old scene stays, and
     # the parameter keeps naming it.

@@ -196,7 +196,7 @@ class Probe:
                     return values
         return {}
 
-    def set_scene(self, path: str, node: str = '/actor_planner', timeout: float = 30.0):
+    def set_scene(self, path: str, node: str = '/actor_planner', timeout: float = 120.0):
         """Set ``node``'s ``scene`` parameter; return the SetParametersResult.
 
         Raises AssertionError when the service does not appear or answer within ``timeout`` s.

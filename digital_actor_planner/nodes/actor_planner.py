@@ -923,21 +923,31 @@ class PlanningScheduler(NodesThread):
         if priority > 0:
             real_time(priority)
         while not self._stop.is_set():
-            most_urgent, least_slack, sleep = None, math.inf, IDLE_RESCAN
-            for node in self._nodes:
-                slack = node.planning_slack()
-                if slack is None:
-                    continue
-                if slack <= 0.0 and slack < least_slack:
-                    most_urgent, least_slack = node, slack
-                elif slack > 0.0:
-                    sleep = min(sleep, slack)
-            if most_urgent is None:
-                # Woken early by a stream running low, a command or a new scene.
-                self.wake.wait(sleep)
-                self.wake.clear()
+            try:
+                self._plan_most_urgent()
+            except Exception as error:  # noqa: B902 -- never a silently frozen actor
+                for node in self._nodes:
+                    node.fail(1, f'planning thread failed: {error!r}\n'
+                              f'{traceback.format_exc()}')
+                return
+
+    def _plan_most_urgent(self) -> None:
+        """Plan the most urgent due actor's next block, or wait until one may be due."""
+        most_urgent, least_slack, sleep = None, math.inf, IDLE_RESCAN
+        for node in self._nodes:
+            slack = node.planning_slack()
+            if slack is None:
                 continue
-            most_urgent.plan_once()
+            if slack <= 0.0 and slack < least_slack:
+                most_urgent, least_slack = node, slack
+            elif slack > 0.0:
+                sleep = min(sleep, slack)
+        if most_urgent is None:
+            # Woken early by a stream running low, a command or a new scene.
+            self.wake.wait(sleep)
+            self.wake.clear()
+            return
+        most_urgent.plan_once()
 
 
 class Housekeeper(NodesThread):
