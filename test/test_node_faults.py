@@ -30,7 +30,9 @@ def actor(tmp_path_factory):
     process = NodeProcess(node_command('-p', f'scene:={scene("flat")}',
                                        '-p', f'planning_timeout:={PLANNING_TIMEOUT}'),
                           ros_env(DOMAIN_ID), log_path=str(log))
-    probe = Probe(DOMAIN_ID)
+    # Without the RViz topics: the large scene's environment markers would keep the probe
+    # busy for seconds, deaf to joint_states.
+    probe = Probe(DOMAIN_ID, rviz=False)
     try:
         assert probe.wait_for_stream(process, 300.0), \
             f'no joint_states or no ready planner:\n{process.output()}'
@@ -234,3 +236,29 @@ def test_a_directory_as_scene_is_told_as_one_at_start(tmp_path):
                           stderr=subprocess.STDOUT, text=True, timeout=300)
     assert node.returncode == 2, node.stdout
     assert 'is a directory' in node.stdout, node.stdout
+
+
+def test_ctrl_c_while_a_large_scene_loads_exits_cleanly(tmp_path):
+    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+    domain = fresh_domain_id()
+    process = NodeProcess(node_command('-p', f'scene:={scene("flat")}'), ros_env(domain),
+                          log_path=str(tmp_path / 'node.log'))
+    probe = Probe(domain, rviz=False)
+    try:
+        assert probe.wait_for_stream(process, 300.0), process.output()
+        client = probe.node.create_client(SetParameters, '/actor_planner/set_parameters')
+        assert client.wait_for_service(timeout_sec=30.0)
+        future = client.call_async(SetParameters.Request(parameters=[Parameter(
+            name='scene', value=ParameterValue(type=ParameterType.PARAMETER_STRING,
+                                               string_value=_large_scene(tmp_path)))]))
+        probe.spin(1.0)  # the load has begun (it takes seconds)
+        assert not future.done(), 'the large scene loaded too fast to interrupt'
+        os.kill(process.pid, signal.SIGINT)
+        code = process.proc.wait(timeout=60.0)
+    finally:
+        probe.close()
+        process.stop()
+    assert code == 0, process.output()
+    assert 'Traceback' not in process.output() and 'planning failed' not in process.output(), \
+        process.output()
