@@ -75,6 +75,15 @@ def test_each_actor_streams_its_own_joint_states(two_actors):
         assert len(probe.joint_states) - count > 70, name
 
 
+def _core_walks_backward() -> bool:
+    """Whether the core has backward steps (their own speed limit, ``max_backward_speed``)."""
+    import dataclasses
+    from digital_actor_planner.core.actor import ActorConfig
+    return 'max_backward_speed' in {field.name for field in dataclasses.fields(ActorConfig)}
+
+
+@pytest.mark.xfail(not _core_walks_backward(), strict=True,
+                   reason='the core walks forward only: negative linear.x is clamped to 0')
 @pytest.mark.parametrize('name', ['twist', 'stamped'])
 def test_a_negative_linear_x_walks_the_actor_backward(two_actors, name):
     """A mouse teleop's downward drag (negative linear.x) steps back, in both message types.
