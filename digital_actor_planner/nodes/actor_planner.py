@@ -12,7 +12,13 @@ Planning never stalls the stream:
 * a publishing thread ticks on a monotonic schedule at ``publish_rate`` and publishes the frame
   for "now", interpolated from the buffer; if planning is late it holds the last frame; ticks
   it slept over (the machine took its core away) are published late, not dropped;
-* the executor thread handles cmd_vel, parameter changes, markers and diagnostics.
+* the executor's threads handle cmd_vel and parameter changes (a scene reload occupies one of
+  them); a housekeeping thread publishes markers and diagnostics.
+
+The stream starts at once, from a stand-in pose, while the planning process compiles the
+core's kernels ("warming up"); a planning process that dies or stops answering is replaced and
+the actor goes on from where it stands; blocks not yet begun are planned again when the
+command changes (docs/planner_node_runtime.md).
 """
 from __future__ import annotations
 

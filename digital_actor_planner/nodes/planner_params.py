@@ -230,8 +230,8 @@ def read_node_config(get_value: Callable[[str], Any]) -> PlannerNodeConfig:
 
 
 def scene_file_error(path: str) -> str:
-    """Why ``path`` cannot be a scene file ('' when it may be one), as at start so at run time.
-    """
+    """Why ``path`` cannot be a scene file ('' when it may be one): the same words at start
+    and for a change at run time."""
     if not path.strip():
         return 'must name a scene YAML or mesh file'
     if os.path.isdir(path):
