@@ -36,7 +36,7 @@ def crowd(tmp_path_factory):
     probes = [Probe(DOMAIN_ID, namespace='/' + ns) for ns in NAMESPACES]
     try:
         for probe in probes:
-            assert probe.wait_for_stream(process, 120.0), process.output()
+            assert probe.wait_for_stream(process, 600.0), process.output()
         yield process, probes
     finally:
         for probe in probes:

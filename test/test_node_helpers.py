@@ -123,15 +123,25 @@ class Probe:
                 return True
         return bool(predicate())
 
-    def wait_for_stream(self, process=None, timeout: float = 30.0) -> bool:
-        """Wait until the actor's joint_states arrive and it sees our cmd_vel publisher.
+    def wait_for_stream(self, process=None, timeout: float = 30.0, ready: bool = True) -> bool:
+        """Wait until the actor's joint_states arrive and it sees our cmd_vel publisher, and
+        (``ready``) until its planner has placed the actor (diagnostics no longer say
+        "warming up").
 
         Gives up early when ``process`` (a NodeProcess) exits.
         """
-        self.spin_until(lambda: (len(self.joint_states) > 5 and
-                                 self.cmd_pub.get_subscription_count() > 0) or
-                        (process is not None and not process.alive()), timeout)
-        return len(self.joint_states) > 5 and self.cmd_pub.get_subscription_count() > 0
+        def done():
+            return len(self.joint_states) > 5 and self.cmd_pub.get_subscription_count() > 0 \
+                and (not ready or self.planner_ready())
+
+        self.spin_until(lambda: done() or (process is not None and not process.alive()),
+                        timeout)
+        return done()
+
+    def planner_ready(self) -> bool:
+        """Whether the latest diagnostics say the planner is past warming up."""
+        state = self.diagnostic_values().get('state')
+        return state is not None and state != 'warming up'
 
     def latest(self) -> np.ndarray:
         """The latest received configuration (22,)."""
@@ -186,7 +196,7 @@ class Probe:
                     return values
         return {}
 
-    def set_scene(self, path: str, node: str = '/actor_planner', timeout: float = 30.0):
+    def set_scene(self, path: str, node: str = '/actor_planner', timeout: float = 120.0):
         """Set ``node``'s ``scene`` parameter; return the SetParametersResult.
 
         Raises AssertionError when the service does not appear or answer within ``timeout`` s.
@@ -243,6 +253,67 @@ def test_frame_buffer_restart_jumps_to_the_new_configuration():
     assert buffer.end_time == pytest.approx(0.35)
     assert buffer.sample(0.35)[0][ROOT_X] == 7.0
     assert buffer.sample(0.2)[0][ROOT_X] == pytest.approx(1.0)
+
+
+def test_frame_buffer_restart_blends_from_the_pose_held_and_refuses_a_wrong_shape():
+    from digital_actor_planner.nodes.actor_planner import FrameBuffer
+    buffer = FrameBuffer(np.zeros(22))
+    frames = np.zeros((10, 22))
+    frames[:, ROOT_X] = np.arange(10)
+    buffer.append(0.1 * np.arange(1, 11), frames, np.zeros((10, 22)), now=0.0)
+    fresh = np.full(22, 7.0)
+    buffer.restart(fresh, 1.5, blend_from=1.0)
+    assert buffer.sample(0.5)[0][ROOT_X] == pytest.approx(4.0)  # kept as it was
+    assert buffer.sample(1.0)[0][ROOT_X] == pytest.approx(9.0)  # held at the last frame
+    halfway, speed = buffer.sample(1.25)
+    assert halfway[ROOT_X] == pytest.approx(8.0)
+    assert -4.0 <= speed[ROOT_X] < 0.0  # towards the new pose, at most (7 - 9) m over 0.5 s
+    assert np.array_equal(buffer.sample(2.0)[0], fresh)
+    with pytest.raises(ValueError, match=r'\(1, 22\)'):
+        buffer.restart(fresh[None, :], 3.0)
+
+
+def test_frame_buffer_truncate_drops_the_motion_not_yet_begun():
+    from digital_actor_planner.nodes.actor_planner import FrameBuffer
+    buffer = FrameBuffer(np.zeros(22))
+    frames = np.zeros((10, 22))
+    frames[:, ROOT_X] = np.arange(1, 11)
+    buffer.append(0.1 * np.arange(1, 11), frames, np.zeros((10, 22)), now=0.0)
+    buffer.truncate(0.55)
+    assert buffer.end_time == pytest.approx(0.5)
+    assert buffer.sample(2.0)[0][ROOT_X] == pytest.approx(5.0)
+    buffer.truncate(-1.0)
+    assert buffer.end_time == 0.0  # the first frame stays
+
+
+def _binary_stl(path, z: float) -> None:
+    """A 20 m x 20 m square at height ``z`` (m), two triangles, binary STL."""
+    import struct
+    corners = np.array([[[-10, -10, z], [10, -10, z], [10, 10, z]],
+                        [[-10, -10, z], [10, 10, z], [-10, 10, z]]], dtype='<f4')
+    records = b''.join(struct.pack('<3f', 0, 0, 1) + c.tobytes() + b'\0\0' for c in corners)
+    path.write_bytes(b'\0' * 80 + struct.pack('<I', 2) + records)
+
+
+def test_the_stand_in_pose_stands_on_the_scene_start(tmp_path):
+    """The pose streamed while the planner warms up: the scene's start pose, on the lowest
+    surface under it (a platform posed up in the YAML), or on height 0 where the mesh cannot
+    be read without a mesh library."""
+    from digital_actor_planner.runtime.standing import stand_in_configuration
+    skeleton = Skeleton()
+    _binary_stl(tmp_path / 'platform.stl', 0.1)
+    (tmp_path / 'raised.yaml').write_text(
+        'meshes: [{file: platform.stl, pose: [0, 0, 0.4, 0, 0, 0]}]\nstart: [1.5, -2.0, 0.7]\n')
+    q = stand_in_configuration(skeleton, str(tmp_path / 'raised.yaml'), None)
+    index = skeleton.index
+    assert (q[index['root_x']], q[index['root_y']], q[index['root_yaw']]) == (1.5, -2.0, 0.7)
+    assert q[index['root_z']] == pytest.approx(0.5 + skeleton.leg.standing_height + 0.002,
+                                               abs=1e-6)
+    q = stand_in_configuration(skeleton, str(tmp_path / 'raised.yaml'), (30.0, 0.0, 0.0))
+    assert q[index['root_z']] == pytest.approx(skeleton.leg.standing_height + 0.002)
+    assert q[index['root_x']] == 30.0  # off the platform: height 0
+    q = stand_in_configuration(skeleton, scene('stairs_down'), None)  # a .glb ground
+    assert np.all(np.isfinite(q))
 
 
 def test_command_times_out_to_zero():
@@ -588,7 +659,7 @@ def test_a_scene_reload_racing_a_plan_neither_breaks_the_buffer_nor_drops_the_fi
         assert np.all(speed[:, 4:] <= 1.05 * limit[4:]), 'the motion jumps'
 
         # A fault while planning leaves this actor holding; the planning thread goes on.
-        def fault(*args):
+        def fault(*args, **kwargs):
             raise RuntimeError('fault')
 
         real_plan, end = node.planner.plan, node.buffer.end_time

@@ -33,7 +33,7 @@ def two_actors(tmp_path_factory):
               'stamped': Probe(DOMAIN_ID, namespace='/stamped_actor', stamped=True)}
     try:
         for name, probe in probes.items():
-            assert probe.wait_for_stream(processes[name], 60.0), processes[name].output()
+            assert probe.wait_for_stream(processes[name], 300.0), processes[name].output()
         yield processes, probes
     finally:
         for probe in probes.values():
@@ -73,3 +73,35 @@ def test_each_actor_streams_its_own_joint_states(two_actors):
         count = len(probe.joint_states)
         probe.spin(1.0)
         assert len(probe.joint_states) - count > 70, name
+
+
+def _core_walks_backward() -> bool:
+    """Whether the core has backward steps (their own speed limit, ``max_backward_speed``)."""
+    import dataclasses
+    from digital_actor_planner.core.actor import ActorConfig
+    return 'max_backward_speed' in {field.name for field in dataclasses.fields(ActorConfig)}
+
+
+@pytest.mark.xfail(not _core_walks_backward(), strict=True,
+                   reason='the core walks forward only: negative linear.x is clamped to 0')
+@pytest.mark.parametrize('name', ['twist', 'stamped'])
+def test_a_negative_linear_x_walks_the_actor_backward(two_actors, name):
+    """A mouse teleop's downward drag (negative linear.x) steps back, in both message types.
+
+    The backward distance depends on the core walking backward; a core that walks forward
+    only clamps the command to 0 and the actor stays where it is, which fails the last
+    assertion (never forward, whatever the core does, is checked by the second).
+    """
+    processes, probes = two_actors
+    process, probe = processes[name], probes[name]
+    probe.command = (0.0, 0.0)
+    assert probe.wait_until_still(timeout=20.0) < math.inf
+    x0, y0, yaw0 = _root(probe)
+    probe.drive(-0.3, 0.0, 5.0)
+    probe.command = None
+    x1, y1, _ = _root(probe)
+    advance = (x1 - x0) * math.cos(yaw0) + (y1 - y0) * math.sin(yaw0)
+    assert advance < 0.05, f'{name}: a backward command walked forward {advance:.2f} m'
+    # Depends on the core's backward steps.
+    assert advance < -0.2, f'{name}: moved {advance:+.2f} m along the heading for -0.3 m/s'
+    assert process.alive()

@@ -22,9 +22,10 @@ DOMAIN_ID = int(os.environ['ACTOR_NODE_TEST_DOMAIN']) if 'ACTOR_NODE_TEST_DOMAIN
     os.environ else fresh_domain_id()
 COURSE = scene('stairs_up') if os.path.exists(scene('stairs_up')) else scene('flat')
 CMD_TIMEOUT = 0.5
-# Generous bound on "stops within one step": the step being played, plus the planning lead,
-# plus the step that brings the feet together, on a loaded 2-core machine.
-STOP_BOUND_S = 3.0
+# Generous bound on "stops within one step": the step being played and the step that brings
+# the feet together (the blocks planned beyond them are planned again), on a loaded 2-core
+# machine; the figure itself is in bench/bench_stream.py.
+STOP_BOUND_S = 2.5
 
 
 @pytest.fixture(scope='module')
@@ -35,7 +36,7 @@ def actor(tmp_path_factory):
                           ros_env(DOMAIN_ID), log_path=str(log))
     probe = Probe(DOMAIN_ID)
     try:
-        assert probe.wait_for_stream(process, 60.0), \
+        assert probe.wait_for_stream(process, 300.0), \
             f'no joint_states from the node:\n{process.output()}'
         yield process, probe
     finally:
@@ -46,7 +47,7 @@ def actor(tmp_path_factory):
 
 def _stop(probe):
     probe.drive(0.0, 0.0, 0.2)
-    assert probe.wait_until_still(timeout=10.0) < math.inf
+    assert probe.wait_until_still(timeout=30.0) < math.inf
 
 
 def test_joint_states_carry_the_22_urdf_joints_with_position_and_velocity(actor):
@@ -111,7 +112,7 @@ def test_a_frozen_node_still_delivers_every_frame_late_not_lost(actor):
     x = np.array([m.position[ROOT_X] for _, m in frames])
     assert np.abs(np.diff(x)).max() < 0.02, 'the motion jumped across the freeze'
     assert probe.spin_until(
-        lambda: int(probe.diagnostic_values().get('stream_caught_up_ticks', 0)) >= 5, 5.0), \
+        lambda: int(probe.diagnostic_values().get('stream_caught_up_ticks', 0)) >= 5, 15.0), \
         probe.diagnostic_values()
 
 
@@ -137,7 +138,7 @@ def test_rviz_sees_the_scene_the_footstep_window_and_the_path(actor):
     assert {m.header.frame_id for m in environment.markers} == {'world'}
     assert np.allclose(_triangles(environment), _scene_triangles(COURSE))
     probe.drive(0.5, 0.0, 2.0)  # the planner's window and path as it walks
-    assert probe.spin_until(lambda: 'path' in probe.rviz and 'markers' in probe.rviz, 5.0)
+    assert probe.spin_until(lambda: 'path' in probe.rviz and 'markers' in probe.rviz, 15.0)
     window = [m for m in probe.rviz['markers'].markers if m.ns == 'footsteps_window']
     assert len(window) >= 2, [m.ns for m in probe.rviz['markers'].markers]
     assert len(probe.rviz['path'].poses) >= 2
@@ -155,14 +156,14 @@ def test_scene_reload_at_run_time_keeps_the_old_scene_when_broken(actor, tmp_pat
     result = probe.set_scene(large)
     assert result.successful, result.reason
     probe.drive(0.5, 0.0, 3.0)
-    assert probe.spin_until(lambda: probe.diagnostic_values().get('scene') == large, 5.0)
+    assert probe.spin_until(lambda: probe.diagnostic_values().get('scene') == large, 15.0)
     assert probe.latest()[ROOT_X] > 0.5, 'no walk on the reloaded scene'
     assert int(probe.diagnostic_values()['buffer_underruns']) == before, \
         probe.diagnostic_values()
     flat = scene('flat')
     result = probe.set_scene(flat)
     assert result.successful, result.reason
-    assert probe.spin_until(lambda: probe.diagnostic_values().get('scene') == flat, 5.0)
+    assert probe.spin_until(lambda: probe.diagnostic_values().get('scene') == flat, 15.0)
     # RViz is sent the new environment.
     assert probe.spin_until(lambda: len(_triangles(probe.rviz['environment'])) ==
                             len(_scene_triangles(flat)), 10.0)
@@ -177,7 +178,7 @@ def test_scene_reload_at_run_time_keeps_the_old_scene_when_broken(actor, tmp_pat
     result = probe.set_scene(str(broken))
     assert not result.successful
     assert 'missing_mesh.stl' in result.reason or 'broken.yaml' in result.reason, result.reason
-    assert probe.spin_until(lambda: probe.diagnostic_values().get('scene_error'), 5.0)
+    assert probe.spin_until(lambda: probe.diagnostic_values().get('scene_error'), 15.0)
     values = probe.diagnostic_values()
     assert values['scene'] == flat
     assert 'broken.yaml' in values['scene_error']
@@ -189,7 +190,7 @@ def test_zero_command_stops_the_actor_within_one_step(actor):
     _, probe = actor
     probe.drive(0.4, 0.0, 2.0)
     zero = probe.drive(0.0, 0.0, 0.0)
-    still = probe.wait_until_still(timeout=10.0)
+    still = probe.wait_until_still(timeout=30.0)
     assert still - zero < STOP_BOUND_S, f'still only {still - zero:.2f} s after the zero command'
     assert probe.diagnostic_values().get('state') == 'idle' or probe.spin_until(
         lambda: probe.diagnostic_values().get('state') == 'idle', 3.0)
@@ -213,7 +214,7 @@ def test_silence_stops_the_actor_after_cmd_timeout(actor):
     moving = probe.latest()
     probe.command = None  # the teleop goes quiet
     silent = time.monotonic()
-    still = probe.wait_until_still(timeout=10.0)
+    still = probe.wait_until_still(timeout=30.0)
     assert still - silent < CMD_TIMEOUT + STOP_BOUND_S
     assert np.any(np.abs(probe.latest()[:2] - moving[:2]) < 1.0)
 
@@ -299,6 +300,6 @@ def test_an_actor_at_rest_is_not_planned_for_and_its_stream_does_not_run_dry(act
     stamps = [t for t, _ in list(probe.joint_states) if t >= began]
     assert len(stamps) >= 0.9 * 100 * (stamps[-1] - stamps[0]), 'the stream slowed at rest'
     probe.drive(0.5, 0.0, 1.5)
-    assert probe.spin_until(lambda: counts()[0] > rested_blocks + 1, 3.0), \
+    assert probe.spin_until(lambda: counts()[0] > rested_blocks + 1, 10.0), \
         'no planning after a forward command'
     _stop(probe)

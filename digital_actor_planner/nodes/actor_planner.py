@@ -12,13 +12,20 @@ Planning never stalls the stream:
 * a publishing thread ticks on a monotonic schedule at ``publish_rate`` and publishes the frame
   for "now", interpolated from the buffer; if planning is late it holds the last frame; ticks
   it slept over (the machine took its core away) are published late, not dropped;
-* the executor thread handles cmd_vel, parameter changes, markers and diagnostics.
+* the executor's threads handle cmd_vel and parameter changes (a scene reload occupies one of
+  them); a housekeeping thread publishes markers and diagnostics.
+
+The stream starts at once, from a stand-in pose, while the planning process compiles the
+core's kernels ("warming up"); a planning process that dies or stops answering is replaced and
+the actor goes on from where it stands; blocks not yet begun are planned again when the
+command changes (docs/planner_node_runtime.md).
 """
 from __future__ import annotations
 
 import argparse
 import array
 import collections
+import copy
 import gc
 import hashlib
 from dataclasses import dataclass
@@ -34,32 +41,36 @@ import traceback
 import weakref
 from typing import Optional, Tuple
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import Point, PoseStamped, Quaternion, Twist, TwistStamped
-from nav_msgs.msg import Path
-import numpy as np
-from rcl_interfaces.msg import SetParametersResult
-import rclpy
-from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
-from rclpy.exceptions import InvalidNamespaceException, ParameterException, \
-    ParameterUninitializedException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
-from rclpy.node import Node
-from rclpy.signals import SignalHandlerOptions
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-from rclpy.serialization import serialize_message
-from rclpy.utilities import remove_ros_args
-from rclpy.validate_namespace import validate_namespace
-from sensor_msgs.msg import JointState
-from std_msgs.msg import ColorRGBA, String
-from visualization_msgs.msg import Marker, MarkerArray
-
-from digital_actor_planner.core.actor import Actor, ActorConfig, validate
-from digital_actor_planner.core.scene import check_start, load_scene
-from digital_actor_planner.core.skeleton import Skeleton
-from digital_actor_planner.nodes.planner_params import ConfigurationError, \
-    parameter_declarations, PlannerNodeConfig, read_node_config, RUNTIME_PARAMETERS, \
-    validate_node_config
+# Ctrl-C while these load (a second or more on a busy machine) ends the node quietly, as
+# it does once it runs.
+try:
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+    from geometry_msgs.msg import Point, PoseStamped, Quaternion, Twist, TwistStamped
+    from nav_msgs.msg import Path
+    import numpy as np
+    from rcl_interfaces.msg import SetParametersResult
+    import rclpy
+    from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
+    from rclpy.exceptions import InvalidNamespaceException, ParameterException, \
+        ParameterUninitializedException
+    from rclpy.callback_groups import ReentrantCallbackGroup
+    from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor, \
+        SingleThreadedExecutor
+    from rclpy.node import Node
+    from rclpy.signals import SignalHandlerOptions
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+    from rclpy.serialization import serialize_message
+    from rclpy.utilities import remove_ros_args
+    from rclpy.validate_namespace import validate_namespace
+    from sensor_msgs.msg import JointState
+    from std_msgs.msg import ColorRGBA, String
+    from visualization_msgs.msg import Marker, MarkerArray
+    from digital_actor_planner.nodes.planner_params import ConfigurationError, \
+        parameter_declarations, PlannerNodeConfig, read_node_config, RUNTIME_PARAMETERS, \
+        scene_file_error, validate_node_config
+    from digital_actor_planner.runtime.standing import stand_in_configuration
+except KeyboardInterrupt:  # pragma: no cover - depends on when the signal lands
+    sys.exit(0)
 
 # Committed frames older than this (s of actor time) are dropped from the buffer.
 BUFFER_HISTORY = 1.0
@@ -78,8 +89,28 @@ PROFILE_STEP_UP = 0.5
 IDLE_RESCAN = 0.25
 # The executor thread returns to Python at least this often (s), for the SIGTERM handler.
 SIGNAL_CHECK = 0.5
+# Executor threads of the node process (parameters, cmd_vel, scene reloads).
+EXECUTOR_THREADS = 4
 # After a planning failure an actor is asked again after this long (s).
 RETRY_AFTER = 0.1
+# A planning process gets this long (s) to place an actor: from an empty kernel cache it
+# compiles the core's kernels first (minutes on a loaded machine).
+ADD_TIMEOUT = 900.0
+# The stream blends from the pose it holds to a newly placed actor's first frame over this
+# long (s): the stand-in pose of the start, or the stance held when a planning process failed.
+BLEND_TIME = 0.5
+# Blocks planned but not yet begun are planned again when the command changes this much
+# (m/s, rad/s) or to a stop, instead of being played out: a released drag stills the actor
+# within the step in progress and the closing step.
+REPLAN_LINEAR = 0.15
+REPLAN_ANGULAR = 0.3
+# A block starting sooner than this (s) after the frame on show is played as planned.
+REPLAN_GUARD = 0.05
+# Planned blocks (per actor) that can be planned again; as many states kept to go back to.
+REPLAN_BLOCKS = 8
+# A planning process that fails this many times in a row while placing its actors is given
+# up on: the node exits non-zero (a supervisor may start it again).
+MAX_REPLACEMENTS = 3
 
 
 class FrameBuffer:
@@ -134,14 +165,53 @@ class FrameBuffer:
                           np.concatenate([old_frames[keep:], frames]),
                           np.concatenate([old_velocities[keep:], velocities]))
 
-    def restart(self, configuration: np.ndarray, start_time: float) -> None:
-        """Drop every frame after ``start_time`` and continue from ``configuration`` there."""
+    def restart(self, configuration: np.ndarray, start_time: float,
+                blend_from: Optional[float] = None) -> None:
+        """Drop every frame after ``start_time`` and continue from ``configuration`` there.
+
+        Parameters
+        ----------
+        configuration
+            (22,) rad or m.
+        start_time
+            s; the frames before it are kept.
+        blend_from
+            s before ``start_time``: the motion is held there and moves linearly to
+            ``configuration`` by ``start_time`` (None: it jumps at ``start_time``).
+
+        Raises
+        ------
+        ValueError
+            ``configuration`` is not one frame of the buffer's joints.
+
+        """
+        configuration = np.asarray(configuration, dtype=float)
+        if configuration.shape != self._still.shape:
+            raise ValueError(f'restart configuration of shape {configuration.shape}, '
+                             f'expected {self._still.shape}')
+        held = None if blend_from is None else self.sample(blend_from)[0]
         with self._lock:
             old_times, old_frames, old_velocities = self._data
-            keep = int(np.searchsorted(old_times, start_time, side='left'))
-            self._data = (np.append(old_times[:keep], start_time),
-                          np.vstack([old_frames[:keep], configuration]),
-                          np.vstack([old_velocities[:keep], np.zeros_like(configuration)]))
+            cut = start_time if held is None else blend_from
+            keep = int(np.searchsorted(old_times, cut, side='left'))
+            times, frames = [old_times[:keep]], [old_frames[:keep]]
+            velocities = [old_velocities[:keep]]
+            if held is not None:
+                speed = (configuration - held) / max(start_time - blend_from, 1e-9)
+                times.append([blend_from])
+                frames.append(held[None, :])
+                velocities.append(speed[None, :])
+            times.append([start_time])
+            frames.append(configuration[None, :])
+            velocities.append(np.zeros_like(configuration)[None, :])
+            self._data = (np.concatenate(times), np.vstack(frames), np.vstack(velocities))
+
+    def truncate(self, before: float) -> None:
+        """Drop every frame at or after ``before`` s (the first frame always stays)."""
+        with self._lock:
+            times, frames, velocities = self._data
+            keep = max(1, int(np.searchsorted(times, before, side='left')))
+            self._data = (times[:keep], frames[:keep], velocities[:keep])
 
     def sample(self, t: float) -> Tuple[np.ndarray, np.ndarray]:
         """Return the configuration (22,) and velocity (22,) at time ``t`` s, interpolated.
@@ -210,9 +280,11 @@ class PlanningStats:
 
     def percentiles(self) -> Tuple[float, float]:
         """Return p50 and p99 planning time (s) of the recent blocks (NaN when none)."""
-        if not self.planning_times:
+        times = np.fromiter(self.planning_times, float)
+        times = times[np.isfinite(times)]  # a failure or a state change plans nothing
+        if not len(times):
             return float('nan'), float('nan')
-        p50, p99 = np.percentile(np.fromiter(self.planning_times, float), [50.0, 99.0])
+        p50, p99 = np.percentile(times, [50.0, 99.0])
         return float(p50), float(p99)
 
 
@@ -324,7 +396,7 @@ def _meshes_digest(meshes) -> bytes:
     return digest.digest()
 
 
-def build_actor(skeleton: Skeleton, actor_config: ActorConfig, scene_path: str,
+def build_actor(skeleton, actor_config, scene_path: str,
                 start_pose: Optional[Tuple[float, float, float]], scene=None):
     """Load a scene and place a new actor at its start (or at ``start_pose``).
 
@@ -342,6 +414,9 @@ def build_actor(skeleton: Skeleton, actor_config: ActorConfig, scene_path: str,
         ``start_pose`` (no ground or an obstacle there).
 
     """
+    # Imported here: only the planning processes run (and compile) the core's kernels.
+    from digital_actor_planner.core.actor import Actor
+    from digital_actor_planner.core.scene import check_start, load_scene
     try:
         if scene is None:
             scene = load_scene(scene_path)
@@ -368,7 +443,7 @@ def _mesh_arrays(scene) -> list:
             for m in getattr(scene.environment, 'meshes', ())]
 
 
-def _ground_profile(actor: Actor, block) -> np.ndarray:
+def _ground_profile(actor, block) -> np.ndarray:
     """Walkable ground (p, 3) under the block's predicted path, for the RViz markers."""
     path = np.asarray(block.path, dtype=float).reshape(-1, 3)
     if len(path) == 0:
@@ -387,7 +462,7 @@ class _SceneCache:
     def __init__(self):
         self._scenes = weakref.WeakValueDictionary()
 
-    def build(self, skeleton: Skeleton, actor_config: ActorConfig, scene_path: str, start_pose):
+    def build(self, skeleton, actor_config, scene_path: str, start_pose):
         try:
             info = os.stat(scene_path)
             key = (os.path.abspath(scene_path), info.st_mtime_ns, info.st_size)
@@ -400,58 +475,109 @@ class _SceneCache:
         return actor, scene
 
 
+def _actor_config(fields: dict):
+    """The core ``ActorConfig`` of the node's parameters, validated (in the planning process).
+
+    Raises
+    ------
+    ConfigurationError
+        Naming the parameter the core's ``validate`` objects to.
+
+    """
+    from digital_actor_planner.core.actor import ActorConfig, validate
+    config = ActorConfig(**fields)
+    try:
+        validate(config)
+    except ValueError as error:
+        text = str(error)
+        name = next((n for n in sorted(fields, key=len, reverse=True) if n in text),
+                    'window_steps')
+        raise ConfigurationError(name, text) from error
+    return config
+
+
 def _planning_process(connection) -> None:
     """Child process: own the core Actors of one or more nodes and answer their requests.
 
-    Requests are tuples whose second item is the actor's id: ``('add', id, actor_config,
-    urdf_path, scene_path, start_pose)``, ``('plan', id, linear_x, angular_z)``,
-    ``('scene', id, scene_path)``, ``('remove', id)``; ``('stop',)`` ends the process.
+    A request is ``(number, kind, id, ...)`` with the actor's id: ``('add', id,
+    actor_fields, urdf_path, scene_path, start_pose, place_at)`` (``place_at``: where to
+    stand now instead of the start pose, or None), ``('plan', id, linear_x,
+    angular_z)``, ``('scene', id, scene_path)``, ``('remove', id)``; ``(number, 'stop')``
+    ends the process. Each reply starts with its request's number, so that a reply the node
+    stopped waiting for is recognised as stale and dropped.
     """
     # Ctrl-C goes to the whole process group; the node decides when this process ends.
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    from digital_actor_planner.core.skeleton import Skeleton
     skeletons, scenes, actors = {}, _SceneCache(), {}
+    # Per actor: (block number, the actor as it was before planning that block).
+    histories = collections.defaultdict(lambda: collections.deque(maxlen=REPLAN_BLOCKS))
+    numbers = collections.Counter()
     while True:
         try:
-            request = connection.recv()
+            number, kind, *request = connection.recv()
         except (EOFError, OSError):
             return
-        kind = request[0]
+
+        def reply(*message):
+            connection.send((number, *message))
+
         if kind == 'add':
-            _, key, actor_config, urdf_path, scene_path, start_pose = request
-            if urdf_path not in skeletons:
-                skeletons[urdf_path] = Skeleton(urdf_path)
-            skeleton = skeletons[urdf_path]
+            key, fields, urdf_path, scene_path, start_pose, place_at = request
             try:
-                actor, scene = scenes.build(skeleton, actor_config, scene_path, start_pose)
+                if urdf_path not in skeletons:
+                    skeletons[urdf_path] = Skeleton(urdf_path)
+                actor_config = _actor_config(fields)
+                actor, scene = scenes.build(skeletons[urdf_path], actor_config, scene_path,
+                                            start_pose if place_at is None else place_at)
             except ConfigurationError as error:
-                connection.send(('error', error.parameter, str(error)))
+                reply('error', error.parameter, str(error))
+                continue
+            except Exception as error:  # noqa: B902 -- a URDF or kernel fault, told to the node
+                reply('error', 'scene', f'{type(error).__name__}: {error}')
                 continue
             actors[key] = (actor, actor_config, start_pose, scene)
-            connection.send(('ready', actor.configuration, _mesh_arrays(scene)))
+            histories.pop(key, None)
+            reply('ready', actor.configuration, _mesh_arrays(scene))
         elif kind == 'plan':
-            if request[1] not in actors:
-                # Removed while its planning thread was asking: the node is closing.
-                connection.send(('failed', f'no actor {request[1]} in this process'))
+            if request[0] not in actors:
+                reply('failed', f'no actor {request[0]} in this process')
                 continue
-            actor = actors[request[1]][0]
+            actor = actors[request[0]][0]
+            numbers[request[0]] += 1
+            # The state before this block, to plan it again if the command changes before
+            # it is played (the core's state is replaced, not changed in place, by a step).
+            histories[request[0]].append((numbers[request[0]], copy.copy(actor)))
             try:
-                warning = actor.set_command(request[2], request[3])
+                warning = actor.set_command(request[1], request[2])
                 block = actor.plan_next()
-                connection.send(('block', warning, block, _ground_profile(actor, block)))
+                reply('block', warning, block, _ground_profile(actor, block),
+                      numbers[request[0]])
             except Exception as error:  # noqa: B902 -- reported on diagnostics, stream goes on
-                connection.send(('failed', f'{type(error).__name__}: {error}'))
+                reply('failed', f'{type(error).__name__}: {error}')
         elif kind == 'scene':
-            old, actor_config, start_pose, _ = actors[request[1]]
-            try:
-                actor, scene = scenes.build(old.skeleton, actor_config, request[2], start_pose)
-            except ConfigurationError as error:
-                connection.send(('scene', str(error), None, None))
+            if request[0] not in actors:
+                reply('scene', f'no actor {request[0]} in this process', None, None)
                 continue
-            actors[request[1]] = (actor, actor_config, start_pose, scene)
-            connection.send(('scene', '', actor.configuration, _mesh_arrays(scene)))
+            old, actor_config, start_pose, _ = actors[request[0]]
+            try:
+                actor, scene = scenes.build(old.skeleton, actor_config, request[1], start_pose)
+            except ConfigurationError as error:
+                reply('scene', str(error), None, None)
+                continue
+            actors[request[0]] = (actor, actor_config, start_pose, scene)
+            histories.pop(request[0], None)
+            reply('scene', '', actor.configuration, _mesh_arrays(scene))
+        elif kind == 'rewind':
+            kept = [(n, a) for n, a in histories[request[0]] if n == request[1]]
+            if kept and request[0] in actors:
+                actors[request[0]] = (kept[0][1], *actors[request[0]][1:])
+                while histories[request[0]] and histories[request[0]][-1][0] >= request[1]:
+                    histories[request[0]].pop()
+            reply('rewound', bool(kept))
         elif kind == 'remove':
-            actors.pop(request[1], None)
-            connection.send(('removed',))
+            actors.pop(request[0], None)
+            reply('removed')
         else:
             return
 
@@ -460,51 +586,108 @@ class PlanningFailed(RuntimeError):
     """The planning process could not plan (or has gone)."""
 
 
+class PlanningLost(PlanningFailed):
+    """The planning process died or stopped answering and has been replaced by a new one,
+    which knows none of the actors yet."""
+
+
 class PlanningWorker:
     """A child process that plans for one or more actors, one request at a time.
 
     The core's NumPy and FCL calls hold the GIL for milliseconds, so they run outside the
-    node's process. Actors sharing a worker share its scene cache and take turns.
+    node's process. Actors sharing a worker share its scene cache and take turns. A process
+    that dies, or gives no answer within a request's timeout, is killed and replaced by a
+    fresh one (``generation`` counts them); its actors are placed in the new one again.
     """
 
     def __init__(self):
+        self._lock = threading.Lock()
+        self._numbers = itertools.count()
+        self._closed = False
+        self.generation = 0
+        self.stale_replies = 0
+        self._start()
+        self.scheduler = PlanningScheduler()
+
+    def _start(self) -> None:
         context = multiprocessing.get_context('spawn')
         self._connection, child = context.Pipe()
-        self._lock = threading.Lock()
         self._process = context.Process(target=_planning_process, name='actor_planning',
                                         args=(child,), daemon=True)
         self._process.start()
         child.close()
-        self._closed = False
-        self.scheduler = PlanningScheduler()
+
+    @property
+    def pid(self) -> Optional[int]:
+        """Process id of the current planning process."""
+        return self._process.pid
+
+    def alive(self) -> bool:
+        """Whether the current planning process is running."""
+        return self._process.is_alive()
 
     def request(self, message: tuple, timeout: float):
-        """Send one request and wait for its reply (timeout counted from sending), or raise
-        :class:`PlanningFailed`."""
+        """Send one request and wait for its reply (timeout counted from sending).
+
+        Replies to earlier requests (given up on) are dropped.
+
+        Raises
+        ------
+        PlanningLost
+            The process died or gave no answer in time; a new one has been started.
+        PlanningFailed
+            The worker is closed.
+
+        """
         with self._lock:
+            if self._closed:
+                raise PlanningFailed('planning process closed')
+            number = next(self._numbers)
+            deadline = time.monotonic() + timeout
             try:
-                self._connection.send(message)
-                if not self._connection.poll(timeout):
-                    raise PlanningFailed(f'planning process gave no answer in {timeout:g} s')
-                return self._connection.recv()
+                self._connection.send((number, *message))
+                while True:
+                    left = deadline - time.monotonic()
+                    if left <= 0.0 or not self._connection.poll(left):
+                        problem = f'planning process gave no answer in {timeout:g} s'
+                        break
+                    reply = self._connection.recv()
+                    if reply[0] == number:
+                        return reply[1:]
+                    self.stale_replies += 1
             except (EOFError, OSError, ValueError) as error:
-                raise PlanningFailed(f'planning process exited ({error!r})') from error
+                problem = f'planning process exited ({error!r})'
+            if self._closed:
+                raise PlanningFailed(problem)
+            self._replace()
+            raise PlanningLost(problem)
+
+    def _replace(self) -> None:
+        """Kill the planning process (stopped or not) and start a new one (lock held)."""
+        self._process.kill()
+        self._process.join(timeout=5.0)
+        self._connection.close()
+        self.generation += 1
+        self._start()
 
     def close(self) -> None:
-        """Ask the child to finish; terminate it if it does not."""
+        """Ask the child to finish; kill it if it does not (or is busy)."""
         if self._closed:
             return
         self._closed = True
-        with self._lock:
+        # A request in flight (a scene loading) holds the lock: the process is killed
+        # instead, which ends that request at once.
+        if self._lock.acquire(timeout=0.5):
             try:
-                self._connection.send(('stop',))
+                self._connection.send((-1, 'stop'))
             except (OSError, ValueError):
                 pass
-        self._process.join(timeout=5.0)
-        if self._process.is_alive():
-            self._process.terminate()
+            finally:
+                self._lock.release()
             self._process.join(timeout=5.0)
-        self._connection.close()
+        if self._process.is_alive():
+            self._process.kill()
+            self._process.join(timeout=5.0)
 
 
 class PlanningPool:
@@ -539,58 +722,101 @@ class PlanningPool:
 class PlanningProcess:
     """One actor's core Actor in a planning worker, driven by request/reply over its pipe.
 
+    Nothing is asked of the worker until :meth:`place`: the node streams meanwhile.
+
     Parameters
     ----------
-    actor_config, urdf_path, scene_path, start_pose
+    actor_fields
+        Keyword arguments of the core ``ActorConfig``.
+    urdf_path, scene_path, start_pose
         As for :func:`build_actor`.
-    timeout
-        Seconds to wait for the worker to load the scene.
     worker
         A shared :class:`PlanningWorker`; None starts one for this actor alone.
-
-    Raises
-    ------
-    ConfigurationError
-        The scene or start pose cannot be used.
 
     """
 
     _ids = itertools.count()
 
-    def __init__(self, actor_config: ActorConfig, urdf_path: str, scene_path: str,
-                 start_pose, timeout: float = 300.0, worker: Optional[PlanningWorker] = None):
+    def __init__(self, actor_fields: dict, urdf_path: str, scene_path: str, start_pose,
+                 worker: Optional[PlanningWorker] = None):
         self._owned = worker is None
         self._worker = PlanningWorker() if worker is None else worker
         self._id = next(PlanningProcess._ids)
-        try:
-            reply = self._worker.request(('add', self._id, actor_config, urdf_path, scene_path,
-                                          start_pose), timeout)
-        except PlanningFailed as error:
-            self.close()
-            raise ConfigurationError('scene', str(error)) from error
-        if reply[0] == 'error':
-            self.close()
-            raise ConfigurationError(reply[1], reply[2].split(': ', 1)[-1])
-        _, self.configuration, self.meshes = reply
+        self._fields, self._urdf_path = dict(actor_fields), urdf_path
+        self.scene_path, self._start_pose = scene_path, start_pose
+        # The worker generation holding this actor (None: not placed).
+        self._generation = None
 
     @property
     def scheduler(self) -> 'PlanningScheduler':
         """The planning thread of this actor's worker."""
         return self._worker.scheduler
 
+    @property
+    def worker(self) -> PlanningWorker:
+        """The worker this actor plans in."""
+        return self._worker
+
+    @property
+    def placed(self) -> bool:
+        """Whether the current planning process holds this actor."""
+        return self._generation == self._worker.generation and self._worker.alive()
+
+    def place(self, start_pose=None, timeout: float = ADD_TIMEOUT):
+        """Place the actor in the planning process on its scene; return (configuration (22,)
+        rad or m, meshes).
+
+        ``start_pose``: ``(x, y, yaw)`` to stand at instead of the configured start (where a
+        replaced process's actor stood).
+
+        Raises
+        ------
+        ConfigurationError
+            The scene or start pose cannot be used (naming the parameter).
+        PlanningLost
+            The process died or gave no answer meanwhile (a new one is running).
+
+        """
+        generation = self._worker.generation
+        reply = self._worker.request(('add', self._id, self._fields, self._urdf_path,
+                                      self.scene_path, self._start_pose,
+                                      None if start_pose is None else tuple(start_pose)),
+                                     timeout)
+        if reply[0] == 'error':
+            raise ConfigurationError(reply[1], reply[2].split(': ', 1)[-1])
+        self._generation = generation
+        return reply[1], reply[2]
+
     def plan(self, linear_x: float, angular_z: float, timeout: float = 60.0):
         """Set the command and plan the next block.
 
         Returns
         -------
-        (str or None, StepBlock, numpy.ndarray)
-            The clamping warning, the block and the ground profile (p, 3) under its path, m.
+        (str or None, StepBlock, numpy.ndarray, int)
+            The clamping warning, the block, the ground profile (p, 3) under its path (m) and
+            the block's number (for :meth:`replan_from`).
+
+        Raises
+        ------
+        PlanningLost
+            The actor must be placed again (its process was replaced).
+        PlanningFailed
+            The core failed on this block.
 
         """
+        if self._generation != self._worker.generation:
+            raise PlanningLost('planning process was replaced')
         reply = self._worker.request(('plan', self._id, linear_x, angular_z), timeout)
         if reply[0] == 'failed':
             raise PlanningFailed(reply[1])
-        return reply[1], reply[2], reply[3]
+        return reply[1], reply[2], reply[3], reply[4]
+
+    def replan_from(self, number: int, timeout: float = 60.0) -> bool:
+        """Take the actor back to its state before block ``number`` (that block and the ones
+        after it are to be planned again); False when that state is no longer kept."""
+        if self._generation != self._worker.generation:
+            raise PlanningLost('planning process was replaced')
+        return bool(self._worker.request(('rewind', self._id, int(number)), timeout)[1])
 
     def load_scene(self, scene_path: str, timeout: float = 300.0):
         """Replace the actor by one on a new scene; return (configuration (22,), meshes).
@@ -601,6 +827,17 @@ class PlanningProcess:
             The scene cannot be used; the old actor stays.
 
         """
+        if self._generation != self._worker.generation:
+            # The process was replaced: the actor is placed on the new scene at its start.
+            old = self.scene_path
+            self.scene_path = scene_path
+            try:
+                return self.place(timeout=max(timeout, ADD_TIMEOUT))
+            except (ConfigurationError, PlanningFailed) as error:
+                self.scene_path = old
+                if isinstance(error, ConfigurationError):
+                    raise
+                raise ConfigurationError('scene', str(error)) from error
         try:
             _, error, configuration, meshes = self._worker.request(
                 ('scene', self._id, scene_path), timeout)
@@ -608,12 +845,15 @@ class PlanningProcess:
             raise ConfigurationError('scene', str(failure)) from failure
         if error:
             raise ConfigurationError('scene', error.split(': ', 1)[-1])
+        self.scene_path = scene_path
         return configuration, meshes
 
     def close(self) -> None:
         """Forget this actor in its worker; end the worker if it was this actor's own."""
         if self._owned:
             self._worker.close()
+            return
+        if self._generation is None or self._generation != self._worker.generation:
             return
         try:
             self._worker.request(('remove', self._id), 5.0)
@@ -689,21 +929,31 @@ class PlanningScheduler(NodesThread):
         if priority > 0:
             real_time(priority)
         while not self._stop.is_set():
-            most_urgent, least_slack, sleep = None, math.inf, IDLE_RESCAN
-            for node in self._nodes:
-                slack = node.planning_slack()
-                if slack is None:
-                    continue
-                if slack <= 0.0 and slack < least_slack:
-                    most_urgent, least_slack = node, slack
-                elif slack > 0.0:
-                    sleep = min(sleep, slack)
-            if most_urgent is None:
-                # Woken early by a stream running low, a command or a new scene.
-                self.wake.wait(sleep)
-                self.wake.clear()
+            try:
+                self._plan_most_urgent()
+            except Exception as error:  # noqa: B902 -- never a silently frozen actor
+                for node in self._nodes:
+                    node.fail(1, f'planning thread failed: {error!r}\n'
+                              f'{traceback.format_exc()}')
+                return
+
+    def _plan_most_urgent(self) -> None:
+        """Plan the most urgent due actor's next block, or wait until one may be due."""
+        most_urgent, least_slack, sleep = None, math.inf, IDLE_RESCAN
+        for node in self._nodes:
+            slack = node.planning_slack()
+            if slack is None:
                 continue
-            most_urgent.plan_once()
+            if slack <= 0.0 and slack < least_slack:
+                most_urgent, least_slack = node, slack
+            elif slack > 0.0:
+                sleep = min(sleep, slack)
+        if most_urgent is None:
+            # Woken early by a stream running low, a command or a new scene.
+            self.wake.wait(sleep)
+            self.wake.clear()
+            return
+        most_urgent.plan_once()
 
 
 class Housekeeper(NodesThread):
@@ -949,26 +1199,35 @@ class ActorPlannerNode(Node):
         super().__init__(node_name, **kwargs)
         self._commands = commands
         self.config = self._declare_and_read()
+        from digital_actor_planner.core.skeleton import Skeleton
         self.skeleton = Skeleton()
-        self.actor_config = ActorConfig(**self.config.actor_config_fields())
-        try:
-            validate(self.actor_config)
-        except ValueError as error:
-            raise ConfigurationError(_field_named(error, self.config), str(error)) from error
-        self.planner = PlanningProcess(self.actor_config, self.skeleton.urdf_path,
-                                       self.config.scene, self.config.start_pose,
+        # The actor is placed by the planning thread (its process may first compile the
+        # core's kernels): the stream starts at once, from a stand-in pose.
+        self.planner = PlanningProcess(self.config.actor_config_fields(),
+                                       self.skeleton.urdf_path, self.config.scene,
+                                       self.config.start_pose,
                                        worker=planners.worker() if planners else None)
-        self.meshes = self.planner.meshes
+        self.meshes = []
         self.scene_path = self.config.scene
         self.scene_error = ''
         self.cmd_timeout = self.config.cmd_timeout
         self.planning_lead = self.config.planning_lead
         self.period = 1.0 / self.config.publish_rate
 
-        self.buffer = FrameBuffer(self.planner.configuration)
+        self.buffer = FrameBuffer(stand_in_configuration(self.skeleton, self.config.scene,
+                                                         self.config.start_pose))
         self.actor_offset = 0.0  # buffer time of the current actor's clock zero
         self.command = CommandState()
-        self.stats = PlanningStats()
+        self.stats = PlanningStats(state='warming up',
+                                   reason='the planning process is starting')
+        # Exit status asked for by a fault the node cannot recover from (None: running).
+        self.exit_code = None
+        # Failed attempts in a row to place the actor in a (replaced) planning process.
+        self._placement_failures = 0
+        self._placed_once = False
+        # A Twist publisher on cmd_vel while TwistStamped is expected, or the reverse.
+        self.cmd_vel_mismatch = ''
+        self._reload_lock = threading.Lock()
         self.playback_time = 0.0
         self.underruns = 0
         self.missed_frames = 0
@@ -993,7 +1252,7 @@ class ActorPlannerNode(Node):
         self._at_rest = False
         # A scene is loading (or the new actor has not had its first block): the walk on the
         # old scene may run out meanwhile; holding then is not running dry either.
-        self._reloading = False
+        self._reloading = True  # until the planner has placed the actor
         self._restarted = False
         self._retry_at = 0.0
         self._clock_zero = None
@@ -1001,6 +1260,9 @@ class ActorPlannerNode(Node):
         # planning thread plus its planning (the planning lead must cover both).
         self._responses = collections.deque(maxlen=RECENT_BLOCKS)
         self._due_since = None
+        # (number, buffer start time s, command) of the blocks committed lately.
+        self._blocks = collections.deque(maxlen=REPLAN_BLOCKS)
+        self.replanned_blocks = 0
 
         threads = threads or SharedThreads()
         self._scheduler = self.planner.scheduler
@@ -1018,6 +1280,15 @@ class ActorPlannerNode(Node):
         self.get_logger().info(
             f'streaming {len(self.skeleton.joint_names)} joints at {self.config.publish_rate:g} '
             f'Hz, scene {self.scene_path}')
+
+    @property
+    def default_callback_group(self):
+        """Reentrant: the parameter services answer while a scene set loads in another
+        executor thread (rclpy's default group would make them wait for it)."""
+        group = self.__dict__.get('_reentrant_group')
+        if group is None:
+            group = self.__dict__['_reentrant_group'] = ReentrantCallbackGroup()
+        return group
 
     # -- configuration ----------------------------------------------------------------------
     def _declare_and_read(self) -> PlannerNodeConfig:
@@ -1082,7 +1353,7 @@ class ActorPlannerNode(Node):
         # not executor timers: with a dozen actors in one process, rclpy's executor spent most
         # of a core waking up for their timers, at the stream's priority, starving the planning
         # processes.
-        self._environment_due = self.meshes  # published by the Housekeeper
+        self._environment_due = None  # published by the Housekeeper once placed
 
     def _on_set_parameters(self, parameters) -> SetParametersResult:
         for parameter in parameters:
@@ -1092,86 +1363,233 @@ class ActorPlannerNode(Node):
                                                reason=f'cmd_timeout {parameter.value!r}')
                 self.cmd_timeout = float(parameter.value)
             elif parameter.name == 'scene':
-                self._reloading = True
-                with self._scene_lock:
-                    try:
-                        configuration, meshes = self.planner.load_scene(str(parameter.value))
-                    except (ConfigurationError, PlanningFailed) as error:
-                        self._reloading = False
-                        self.scene_error = f'{parameter.value}: {error}'
-                        self.get_logger().error(f'scene not reloaded, keeping '
-                                                f'{self.scene_path}: {error}')
-                        return SetParametersResult(successful=False,
-                                                   reason=f'scene not loaded: {error}')
-                    with self._pending_lock:
-                        self._pending_start = configuration
-                        self._environment_due = meshes
-                self.meshes, self.scene_path, self.scene_error = meshes, str(parameter.value), ''
-                self._scheduler.wake.set()
-                self.get_logger().info(f'scene reloaded: {self.scene_path}')
+                result = self._reload_scene(str(parameter.value))
+                if not result.successful:
+                    return result
         return SetParametersResult(successful=True)
+
+    def _reload_scene(self, path: str) -> SetParametersResult:
+        """Load ``path`` in the planning process and hand its start to the planning thread.
+
+        Runs in one of the executor's threads (the others go on serving parameters and
+        commands) while the stream holds the stance. The parameter takes the new value only
+        once the scene is loaded; a scene that fails keeps the old one, with the reason.
+        """
+        problem = scene_file_error(path)
+        if not problem and not self._placed_once:
+            problem = 'the planner is still warming up (compiling its kernels); set it again ' \
+                'once diagnostics no longer say "warming up"'
+        if problem:
+            return self._scene_refused(path, problem)
+        with self._reload_lock:  # one reload at a time
+            self._reloading = True
+            with self._scene_lock:
+                try:
+                    configuration, meshes = self.planner.load_scene(path)
+                except (ConfigurationError, PlanningFailed) as error:
+                    self._reloading = False
+                    return self._scene_refused(path, str(error))
+                with self._pending_lock:
+                    self._pending_start = (configuration, False)
+                    self._environment_due = meshes
+            self.meshes, self.scene_path, self.scene_error = meshes, path, ''
+        self._scheduler.wake.set()
+        self.get_logger().info(f'scene reloaded: {self.scene_path}')
+        return SetParametersResult(successful=True)
+
+    def _scene_refused(self, path: str, problem: str) -> SetParametersResult:
+        problem = problem.replace("parameter 'scene': ", '')
+        self.scene_error = f'{path}: {problem}' if path not in problem else problem
+        self.get_logger().error(f'scene not reloaded, keeping {self.scene_path}: {problem}')
+        return SetParametersResult(successful=False, reason=f'scene not loaded: {problem}')
 
     # -- planning (called by the worker's PlanningScheduler thread) -------------------------
     def planning_slack(self) -> Optional[float]:
         """Seconds until this actor's next block is due (<= 0: due now); None: nothing to plan.
 
         Nothing is planned while the last block would only repeat: a hold at rest or a stuck
-        hold, with the command unchanged since. A new scene's first block is due at once.
+        hold, with the command unchanged since. A new scene's first block is due at once, as
+        is placing the actor in a planning process that does not hold it (at the start, or
+        after the process was replaced).
         """
-        if self._stop.is_set():
+        if self._stop.is_set() or self.exit_code is not None:
             return None
         now = time.monotonic()
         if now < self._retry_at:
             return self._retry_at - now
-        if self._pending_start is not None:
+        if self._pending_start is not None or not self.planner.placed:
             return -self._lead
         if self._holding_for is not None:
             if self.command.current(now, self.cmd_timeout) == self._holding_for:
                 return None
             self._holding_for = None
+        if self._replan_target(now) is not None:
+            return -self._lead
         lead = self._lead = self._effective_lead()
         return self.buffer.end_time - self.playback_time - lead
 
     def plan_once(self) -> None:
         """Plan this actor's next block and commit it to the buffer (a new scene's first
-        block after the buffer restarts at the new start)."""
-        with self._scene_lock:
-            with self._pending_lock:
-                pending, self._pending_start = self._pending_start, None
-            if pending is not None:
-                # A new scene: the new actor's clock starts at 0 from its start pose.
-                self.actor_offset = self.playback_time + self.period
-                self.buffer.restart(pending, self.actor_offset)
-                self.committed_footsteps.clear()
-                self._holding_for = None
-                self._restarted = True
-            try:
-                self._plan_block()
-            except Exception as error:  # noqa: B902 -- the planning thread serves every actor
-                # A fault here must not end the thread that plans for all the process's
-                # actors: this one holds its last frame and tries again later.
-                self.stats.record('stuck', f'internal error: {error!r}', float('nan'))
-                self.get_logger().error(f'planning failed: {error!r}\n'
-                                        f'{traceback.format_exc()}', throttle_duration_sec=2.0)
-                self._retry_at = time.monotonic() + RETRY_AFTER
+        block after the buffer restarts at the new start; the actor placed first when its
+        planning process does not hold it)."""
+        try:
+            with self._scene_lock:
+                if not self.planner.placed and not self._place():
+                    return
+                with self._pending_lock:
+                    pending, self._pending_start = self._pending_start, None
+                if pending is not None:
+                    self._blocks.clear()
+                    configuration, blend = pending
+                    # A new actor: its clock starts at 0 from its start pose, right after
+                    # the frame on show (a new scene) or after a blend from the pose held.
+                    held = max(self.playback_time, self.buffer.end_time) + self.period
+                    self.actor_offset = held + BLEND_TIME if blend else \
+                        self.playback_time + self.period
+                    self.buffer.restart(configuration, self.actor_offset,
+                                        held if blend else None)
+                    self.committed_footsteps.clear()
+                    self._holding_for = None
+                    self._restarted = True
+                try:
+                    if pending is None:
+                        self._replan_tail()
+                    self._plan_block()
+                except Exception as error:  # noqa: B902 -- the thread serves every actor
+                    # A fault in one block must not end the thread that plans for all the
+                    # process's actors: this one holds its last frame and tries again.
+                    self.stats.record('stuck', f'internal error: {error!r}', float('nan'))
+                    self.get_logger().error(f'planning failed: {error!r}\n'
+                                            f'{traceback.format_exc()}',
+                                            throttle_duration_sec=2.0)
+                    self._retry_at = time.monotonic() + RETRY_AFTER
+        except Exception as error:  # noqa: B902 -- never a silently frozen actor
+            self.fail(1, f'planning thread failed: {error!r}\n{traceback.format_exc()}')
+
+    def _replan_target(self, now: float):
+        """The first committed block not yet begun that was planned for a command unlike the
+        current one (a stop, or a change of REPLAN_LINEAR / REPLAN_ANGULAR); None if none."""
+        linear, angular = self.command.current(now, self.cmd_timeout)
+        stop = abs(linear) < 1e-3 and abs(angular) < 1e-3
+        for block in self._blocks:
+            number, start, (old_linear, old_angular) = block
+            if start <= self.playback_time + REPLAN_GUARD:
+                continue
+            if (stop and (abs(old_linear) >= 1e-3 or abs(old_angular) >= 1e-3)) or \
+                    abs(linear - old_linear) >= REPLAN_LINEAR or \
+                    abs(angular - old_angular) >= REPLAN_ANGULAR:
+                return block
+            return None
+        return None
+
+    def _replan_tail(self) -> None:
+        """Drop the blocks not yet begun that the command has overtaken, and take the actor in
+        its planning process back to the state before them (the next block replaces them)."""
+        target = self._replan_target(time.monotonic())
+        if target is None:
+            return
+        number, start, _ = target
+        # The stream holds the last frame kept (a double-support stance at a step's end) if
+        # it gets there before the new block is planned.
+        self.buffer.truncate(start)
+        if not self.planner.replan_from(number):
+            # That state is no longer kept: the actor goes on from the end of what it
+            # planned, after a hold (its clock and the buffer's stay in step).
+            self.get_logger().warning(f'block {number} could not be planned again')
+            return
+        self.replanned_blocks += sum(1 for block in self._blocks if block[0] >= number)
+        while self._blocks and self._blocks[-1][0] >= number:
+            self._blocks.pop()
+        self._at_rest = False
+
+    def _place(self) -> bool:
+        """Place the actor in its planning process; True when placed.
+
+        The first time on the configured scene and start; after the process was replaced,
+        where the actor stood (the root of the last committed frame), blended over to.
+        A bad scene or start ends the node with status 2 (a configuration error), a process
+        that keeps failing with status 1.
+        """
+        first = not self._placed_once
+        pose = None
+        if not first:
+            q = self.buffer.sample(self.buffer.end_time)[0]
+            index = self.skeleton.index
+            pose = (float(q[index['root_x']]), float(q[index['root_y']]),
+                    float(q[index['root_yaw']]))
+            self.stats.record('recovering', 'the planning process was replaced; placing the '
+                              'actor where it stands', float('nan'))
+            self.get_logger().warning(f'planning process replaced; placing the actor again at '
+                                      f'({pose[0]:.3f}, {pose[1]:.3f}, yaw {pose[2]:.3f})')
+        self._reloading = True
+        try:
+            configuration, meshes = self.planner.place(pose)
+        except ConfigurationError as error:
+            if first:
+                self.fail(2, f'invalid configuration: {error}')
+            else:
+                self.fail(1, f'the actor cannot stand where it stood after the planning '
+                          f'process was replaced: {error}')
+            return False
+        except PlanningFailed as error:
+            if self._stop.is_set():
+                return False
+            self._placement_failures += 1
+            if self._placement_failures >= MAX_REPLACEMENTS:
+                self.fail(1, f'planning process failed {self._placement_failures} times in a '
+                          f'row: {error}')
+            else:
+                self.get_logger().error(f'planning process failed while placing the actor, '
+                                        f'trying a new one: {error}')
+            return False
+        self._placement_failures = 0
+        self._placed_once = True
+        with self._pending_lock:
+            self._pending_start = (configuration, True)
+            self._environment_due = meshes
+        self.meshes = meshes
+        if first:
+            self.stats.record('idle', '', float('nan'))
+            self.get_logger().info('planner ready')
+        return True
+
+    def fail(self, code: int, message: str) -> None:
+        """End the node with exit status ``code``: an ERROR on /diagnostics and the log, then
+        the context is shut down (``main`` returns ``exit_code``)."""
+        if self.exit_code is not None or self._stop.is_set():
+            return
+        self.exit_code = code
+        self.stats.state, self.stats.reason = 'error', message.splitlines()[0]
+        self.get_logger().fatal(message)
+        try:
+            self._publish_diagnostics()
+        except Exception:  # noqa: B902 -- shutting down anyway
+            pass
+        self.context.try_shutdown()
 
     def _plan_block(self) -> None:
         started = time.monotonic()
         command = self.command.current(started, self.cmd_timeout)
         try:
-            warning, block, profile = self.planner.plan(*command)
+            warning, block, profile, number = self.planner.plan(
+                *command, timeout=self.config.planning_timeout)
         except PlanningFailed as error:
             if self._stop.is_set():
                 return  # shutting down: the planning process was told to finish
+            if isinstance(error, PlanningLost):
+                self.get_logger().error(f'planning failed: {error}')
+                return  # placed again in the new process at the next turn
             self.stats.record('stuck', f'planner error: {error}', float('nan'))
             self.get_logger().error(f'planning failed: {error}', throttle_duration_sec=2.0)
             self._retry_at = time.monotonic() + RETRY_AFTER
             return
         if warning:
             self.get_logger().warning(warning, throttle_duration_sec=2.0)
-        self.buffer.append(np.asarray(block.times) + self.actor_offset, block.frames,
-                           block.velocities, self.playback_time)
-        if self._restarted:  # the new scene's first block
+        times = np.asarray(block.times) + self.actor_offset
+        self.buffer.append(times, block.frames, block.velocities, self.playback_time)
+        if len(times):
+            self._blocks.append((number, float(times[0]), command))
+        if self._restarted:  # the new actor's first block
             self._reloading = self._restarted = False
         self.stats.record(block.status, block.reason, block.planning_time)
         due, self._due_since = self._due_since, None
@@ -1256,6 +1674,7 @@ class ActorPlannerNode(Node):
                                                                      self.config.frame_id))
             self._publish_markers()
             if diagnostics:
+                self._check_cmd_vel_type()
                 self._publish_diagnostics()
         except Exception as error:  # noqa: B902 -- the context is shutting down
             if self._stop.is_set() or not rclpy.ok(context=self.context):
@@ -1308,6 +1727,23 @@ class ActorPlannerNode(Node):
             return float('nan')
         return (len(recent) - 1) / (recent[-1] - recent[0])
 
+    def _check_cmd_vel_type(self) -> None:
+        """Warn (log and diagnostics) about cmd_vel publishers of the other Twist type: the
+        subscription never hears them, and nothing else would say so."""
+        topic = self.resolve_topic_name('cmd_vel')
+        expected = 'geometry_msgs/msg/TwistStamped' if self.config.cmd_vel_stamped else \
+            'geometry_msgs/msg/Twist'
+        others = sorted({info.topic_type for info in self.get_publishers_info_by_topic(topic)
+                         if info.topic_type != expected})
+        mismatch = ''
+        if others:
+            mismatch = (f'{topic} has a {", ".join(others)} publisher, ignored: this node '
+                        f'takes {expected}; set cmd_vel_stamped:='
+                        f'{"false" if self.config.cmd_vel_stamped else "true"} to follow it')
+            if mismatch != self.cmd_vel_mismatch:
+                self.get_logger().warning(mismatch)
+        self.cmd_vel_mismatch = mismatch
+
     def _publish_diagnostics(self) -> None:
         stats = self.stats
         p50, p99 = stats.percentiles()
@@ -1317,10 +1753,15 @@ class ActorPlannerNode(Node):
             0.05 * self.config.publish_rate
         level = DiagnosticStatus.OK
         message = stats.state + (f': {stats.reason}' if stats.reason else '')
-        if stats.state == 'stuck' or self.scene_error or not rate_ok:
+        if stats.state in ('stuck', 'recovering') or self.scene_error or not rate_ok or \
+                self.cmd_vel_mismatch:
             level = DiagnosticStatus.WARN
+        if self.exit_code is not None:
+            level = DiagnosticStatus.ERROR
         if self.scene_error:
             message += f'; scene error: {self.scene_error}'
+        if self.cmd_vel_mismatch:
+            message += f'; {self.cmd_vel_mismatch}'
         if not rate_ok:
             message += f'; joint_states at {rate:.1f} Hz'
         values = {
@@ -1345,6 +1786,11 @@ class ActorPlannerNode(Node):
             'planning_lead_s': f'{self._effective_lead():.3f}',
             'scene': self.scene_path,
             'scene_error': self.scene_error,
+            'cmd_vel_type_mismatch': self.cmd_vel_mismatch,
+            'planning_process_pid': str(self.planner.worker.pid),
+            'planning_processes_replaced': str(self.planner.worker.generation),
+            'stale_replies_dropped': str(self.planner.worker.stale_replies),
+            'blocks_planned_again': str(self.replanned_blocks),
         }
         status = DiagnosticStatus(
             level=level, name=f'{self.get_fully_qualified_name()}: actor planner',
@@ -1398,15 +1844,6 @@ class ActorPlannerNode(Node):
             pose.pose.orientation.w = 1.0
             message.poses.append(pose)
         self.path_pub.publish(message)
-
-
-def _field_named(error: Exception, config: PlannerNodeConfig) -> str:
-    """Return the parameter a core ``validate`` error names (the fields share the names)."""
-    text = str(error)
-    for name in sorted(config.actor_config_fields(), key=len, reverse=True):
-        if name in text:
-            return name
-    return 'window_steps'
 
 
 def _usable_cores() -> int:
@@ -1485,16 +1922,36 @@ def _close_partial(nodes, commands, planners) -> None:
     rclpy.try_shutdown()
 
 
+def _without_kernels() -> None:
+    """Load the core in this process as plain Python, not compiled.
+
+    The node process runs no kernel (its planning processes do); compiling them here too
+    took tens of seconds from an empty cache before the first frame.
+    """
+    if 'numba' not in sys.modules and 'digital_actor_planner.core.jit' not in sys.modules:
+        sys.modules['numba'] = None
+
+
 def main(args=None) -> int:
-    """Run the node(s) until interrupted; exit status 2 on a bad configuration."""
+    """Run the node(s) until interrupted; exit status 2 on a bad configuration, 1 on a fault
+    the planner could not recover from."""
+    try:
+        return _run(args)
+    except KeyboardInterrupt:  # Ctrl-C while starting, before rclpy took it over
+        rclpy.try_shutdown()
+        return 0
+
+
+def _run(args) -> int:
+    _without_kernels()
     # The executor and planning threads hold the GIL at times; a short switch interval bounds
     # how long the publishing thread waits for it after waking (the default 5 ms would be the
     # jitter).
     sys.setswitchinterval(0.0005)
     # SIGTERM (docker stop, systemd, ros2 launch after SIGINT) ends the node as Ctrl-C does.
     # rclpy's own SIGTERM handling left a node hosting 20 walking actors running for minutes.
-    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.SIGINT)
     signal.signal(signal.SIGTERM, _terminated)
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.SIGINT)
     logger = rclpy.logging.get_logger('actor_planner')
     nodes, planners, commands = [], None, None
     try:
@@ -1511,8 +1968,12 @@ def main(args=None) -> int:
         _close_partial(nodes, commands, planners)
         return 2
     except (KeyboardInterrupt, ExternalShutdownException):
-        # Stopped while starting (a fresh install's first start compiles the planner's
-        # kernels, tens of seconds): what was built is shut down as on a stop while running.
+        _close_partial(nodes, commands, planners)
+        return 0
+    except RuntimeError:
+        # Ctrl-C while a node was being built: rclpy's handler shut the context down under it.
+        if rclpy.ok():
+            raise
         _close_partial(nodes, commands, planners)
         return 0
     priority = nodes[0].config.stream_priority
@@ -1530,7 +1991,9 @@ def main(args=None) -> int:
                 pass
     if commands is not None:
         commands.start(priority - 1 if priority > 2 else 0)
-    executor = SingleThreadedExecutor()
+    # Several threads: a scene reload (seconds for a large scene) occupies one of them while
+    # the others answer parameter requests and cmd_vel (the node's callbacks are reentrant).
+    executor = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS)
     for node in nodes:
         executor.add_node(node)
     # Everything built so far (scene meshes for the markers, messages, modules) is moved out of
@@ -1538,8 +2001,6 @@ def main(args=None) -> int:
     # allocates and hold the GIL, cannot delay a tick by milliseconds.
     gc.freeze()
     try:
-        # Bounded waits, so that the SIGTERM handler (Python code, run by the main thread)
-        # gets its turn even when no message arrives.
         spin_until_shutdown(executor)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
@@ -1550,10 +2011,13 @@ def main(args=None) -> int:
             commands.stop()
         for node in nodes:
             node.stop()
+        executor.shutdown(timeout_sec=5.0)
+        for node in nodes:
             node.destroy_node()
         planners.close()
         rclpy.try_shutdown()
-    return 0
+    codes = [node.exit_code for node in nodes if node.exit_code is not None]
+    return max(codes, default=0)
 
 
 if __name__ == '__main__':

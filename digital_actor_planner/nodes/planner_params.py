@@ -144,6 +144,9 @@ def parameter_declarations() -> List[Tuple[str, Any, ParameterDescriptor]]:
             'Plan the next block when less than this much committed motion (s) is buffered '
             'ahead of playback; larger rides out planning hiccups, smaller reacts sooner.',
             floats=(0.02, 5.0))),
+        ('planning_timeout', 60.0, _descriptor(
+            'A planning process that gives no answer for this long (s) is replaced by a new '
+            'one, and the actor goes on from where it stands.', floats=(0.1, 3600.0))),
         ('stream_priority', 10, _descriptor(
             'SCHED_FIFO priority of the joint_states thread (1-99) for low jitter on a busy '
             'machine; 0 or no permission: normal scheduling.', integers=(0, 99))),
@@ -175,6 +178,7 @@ class PlannerNodeConfig:
     stream_priority: int = 0
     max_backward_speed: float = 0.5
     allow_backward: bool = True
+    planning_timeout: float = 60.0
 
     def actor_config_fields(self) -> Dict[str, Any]:
         """Return the keyword arguments of the core ``ActorConfig`` these parameters set."""
@@ -239,7 +243,20 @@ def read_node_config(get_value: Callable[[str], Any]) -> PlannerNodeConfig:
         # Unset: the declared defaults.
         max_backward_speed=float(_value_or(get_value('max_backward_speed'), 0.5)),
         allow_backward=bool(_value_or(get_value('allow_backward'), True)),
+        planning_timeout=float(get_value('planning_timeout') or 60.0),
     )
+
+
+def scene_file_error(path: str) -> str:
+    """Why ``path`` cannot be a scene file ('' when it may be one): the same words at start
+    and for a change at run time."""
+    if not path.strip():
+        return 'must name a scene YAML or mesh file'
+    if os.path.isdir(path):
+        return f'{path}: is a directory, not a scene file'
+    if not os.path.isfile(path):
+        return f'{path}: no such scene file'
+    return ''
 
 
 def validate_node_config(config: PlannerNodeConfig) -> None:
@@ -268,8 +285,9 @@ def validate_node_config(config: PlannerNodeConfig) -> None:
         raise ConfigurationError('frame_id', 'must not be empty')
     if not config.scene.strip():
         raise ConfigurationError('scene', 'must name a scene YAML or mesh file')
-    if not os.path.isfile(config.scene):
-        raise ConfigurationError('scene', f'no such file: {config.scene!r}')
+    problem = scene_file_error(config.scene)
+    if problem:
+        raise ConfigurationError('scene', problem)
     if config.max_backward_speed > config.max_linear_speed:
         raise ConfigurationError(
             'max_backward_speed', f'{config.max_backward_speed} must not exceed '
