@@ -606,12 +606,14 @@ def test_no_step_ends_with_a_knee_too_bent_for_the_next_one(monkeypatch):
 
 
 def test_weaving_to_the_floors_edge_ends_where_turning_away_frees_the_actor(monkeypatch):
-    """Seed 33 of bench_steer_away.py's walks (rounded) weaves to the floor's edge. With a step
-    ending only 1 cm short of the legs touching, it stopped 0.37 m from the edge facing it,
-    the feet pigeon-toed 0.35 rad and the left 0.25 m behind the right: the toe-off of any next
-    step flexes the left knee forward into the right thigh, so every step and pivot either way
-    was refused, trapped. Steps now end 2 cm short (``LEGS_LANDING_MARGIN``); the walk stops
-    elsewhere, and turning away on the spot frees it, either way."""
+    """Seed 33 of bench_steer_away.py's walks (rounded) weaves to the floor's edge.
+
+    With a step ending only 1 cm short of the legs touching, it stopped 0.37 m from the edge facing
+    it, the feet pigeon-toed 0.35 rad and the left 0.25 m behind the right: the toe-off of any next
+    step flexes the left knee forward into the right thigh, so every step and pivot either way was
+    refused, trapped. Steps now end 2 cm short (``LEGS_LANDING_MARGIN``); the walk stops elsewhere,
+    and turning away on the spot frees it, either way.
+    """
     sc = scene('flat')
     commands = [(0.0, 0.0, 0.854), (1.054, 0.0, -0.848), (2.321, 0.604, 1.011),
                 (4.164, 0.0, -0.918), (4.897, 0.451, 0.617), (6.198, 0.448, -0.831),

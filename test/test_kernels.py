@@ -253,8 +253,7 @@ def _rotation(rng) -> np.ndarray:
 
 
 def test_the_separating_axis_tests():
-    """Oriented boxes against boxes and triangles, parallel edges included: compiled and as
-    Python."""
+    """Oriented boxes against boxes and triangles, parallel edges included: compiled and as Python."""
     rng = np.random.default_rng(9)
     count = 400
     rotation_a = np.array([_rotation(rng) for _ in range(count)])

@@ -47,8 +47,7 @@ TRIMESH_BACKENDS = {
 }
 OPTIONAL_PIP = ('embreex',)  # faster ray queries than rtree; nothing fails without it
 # Programs the tests run.
-PROGRAMS = {'check_urdf': 'liburdfdom-tools', 'colcon': 'python3-colcon-common-extensions',
-            'flake8': 'python3-flake8'}
+PROGRAMS = {'check_urdf': 'liburdfdom-tools', 'colcon': 'python3-colcon-common-extensions'}
 
 
 @pytest.fixture(scope='module')

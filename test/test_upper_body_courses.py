@@ -54,10 +54,13 @@ def test_upper_body_leaves_its_pattern_only_at_the_obstacle_and_returns(name):
 
 @pytest.mark.slow
 def test_table_is_passed_with_the_left_elbow_flexed_not_the_arm_swung_back():
-    """At the table the arm must flex. Somewhere along the table the left elbow is
-    flexed at least 0.3 rad beyond its pattern, and the shoulder never swings more than 0.5 rad
-    off its own (a flexed elbow at the pattern's swing clears the table and the things on it:
-    test_courses.py::test_table_needs_the_left_elbow_flexed)."""
+    """At the table the arm must flex.
+
+    Somewhere along the table the left elbow is flexed at least 0.3 rad beyond its pattern, and the
+    shoulder never swings more than 0.5 rad off its own (a flexed elbow at the pattern's swing
+    clears the table and the things on it:
+    test_courses.py::test_table_needs_the_left_elbow_flexed).
+    """
     sk = skeleton()
     _, _, frames, _ = simulate('table')
     signed = frames - motion_patterns(sk, frames)
@@ -146,12 +149,14 @@ def test_random_furniture_beside_the_path_is_passed_without_a_touch():
 @pytest.mark.parametrize('centre', [0.35, 0.37])
 def test_pillars_off_the_path_are_passed_or_met_in_front_never_between(tmp_path, centre):
     """Pillars 3 cm to the left of the path (the right arm passes 3 cm closer to its pillar).
-    The actor either gets through or stops in front of the pillars, where steering away
-    frees it; it never takes a step whose upper body is blocked just after it (ActorConfig.
-    upper_body_preview_margin): such a step left the right arm between its pillar and the
-    turned body, blocked 0.02-0.12 s into every next step. A footstep refused for the upper
-    body may be taken after a pause (ActorConfig.upper_body_pause). The walk is judged by the
-    independent checker."""
+
+    The actor either gets through or stops in front of the pillars, where steering away frees it;
+    it never takes a step whose upper body is blocked just after it (ActorConfig.
+    upper_body_preview_margin): such a step left the right arm between its pillar and the turned
+    body, blocked 0.02-0.12 s into every next step. A footstep refused for the upper body may be
+    taken after a pause (ActorConfig.upper_body_pause). The walk is judged by the independent
+    checker.
+    """
     sk = skeleton()
     sc = pillars_moved_sideways(SCENES, tmp_path, centre, 0.03, sk)
     actor = Actor(sk, sc.environment, ActorConfig(), start=sc.start)
@@ -194,12 +199,13 @@ def test_the_moved_pillars_plan_the_same_with_the_expansion_compiled_as_in_pytho
     (0.1, 0.2, 'passed'), (0.1, 0.0, 'stopped in front'), (0.0, 0.0, 'held between')])
 def test_what_the_preview_margin_and_the_pause_change_at_the_pillars(
         tmp_path, margin, pause, outcome):
-    """Pillars 3 cm to the left of the path, 0.50 m apart (the course's gap). Without the
-    preview margin or the pause a step whose preview was blocked 0.03 s after it
-    is taken (the plan without the preview passes) and every next step finds the right arm
-    blocked within 0.12 s: held between the pillars. With the margin that footstep is refused
-    and the actor stops in front. With the pause too (the defaults) the refused footstep is
-    taken after 0.2 s standing, the right arm getting clear first, and the actor gets through.
+    """Pillars 3 cm to the left of the path, 0.50 m apart (the course's gap).
+
+    Without the preview margin or the pause a step whose preview was blocked 0.03 s after it is
+    taken (the plan without the preview passes) and every next step finds the right arm blocked
+    within 0.12 s: held between the pillars. With the margin that footstep is refused and the actor
+    stops in front. With the pause too (the defaults) the refused footstep is taken after 0.2 s
+    standing, the right arm getting clear first, and the actor gets through.
     """
     sk = skeleton()
     sc = pillars_moved_sideways(SCENES, tmp_path, 0.37, 0.03, sk)

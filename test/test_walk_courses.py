@@ -108,9 +108,12 @@ def turning_walk(speed, rate, gait=None):
 @pytest.mark.parametrize('speed, rate', [(1.1, 0.7), (0.8, 0.7), (1.1, 0.5), (0.5, 1.0),
                                          (0.8, 1.0), (1.1, 1.0), (0.8, -0.7)])
 def test_a_sharp_fast_turn_keeps_the_stance_feet_within_1_cm(speed, rate):
-    """The sharpest turns of bench_turns.py. Without the swing plane's turn through the foot
-    the first three slide a foot 12-15 mm; without the pelvis easing towards lift-off in turns
-    (gait: ``turn_ease_heading``) the last four slide one 11-15 mm."""
+    """The sharpest turns of bench_turns.py.
+
+    Without the swing plane's turn through the foot the first three slide a foot 12-15 mm; without
+    the pelvis easing towards lift-off in turns (gait: ``turn_ease_heading``) the last four slide
+    one 11-15 mm.
+    """
     report, heading = turning_walk(speed, rate)
     assert abs(heading) > 1.0, 'it turned'
     assert report.ok and max(report.slip.values()) <= 0.010, report.failures()
@@ -129,9 +132,11 @@ def test_without_the_turn_ease_the_sharpest_turn_slides_a_foot():
 
 def test_after_a_zigzag_to_the_floor_edge_the_actor_turns_away_when_steered():
     """Mouse steering that zigzags left and right leaves the feet pointing up to 0.9 rad apart.
-    Here it walks the actor to the floor's edge, where it stops (stuck); the user then steers
-    it away on the spot and it goes on. Before the swing hip yaw was held in range in
-    mid-swing (gait), every step of that turn was refused at 0.61 rad and it stayed put."""
+
+    Here it walks the actor to the floor's edge, where it stops (stuck); the user then steers it
+    away on the spot and it goes on. Before the swing hip yaw was held in range in mid-swing
+    (gait), every step of that turn was refused at 0.61 rad and it stayed put.
+    """
     from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
     sc = scene('flat')
     zigzag = [(0.0, 0.97, 0.79), (0.45, 0.23, -0.82), (1.15, 0.91, 0.98), (2.81, 0.57, -0.51),
