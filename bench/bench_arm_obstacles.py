@@ -1,4 +1,5 @@
-"""Random furniture beside the path at arm height: the arms with and without lasting postures.
+"""
+Random furniture beside the path at arm height: the arms with and without lasting postures.
 
 Run: .venv/bin/python bench/bench_arm_obstacles.py [--scenes 40] [--seed 0] [--planner-seed 0]
          [--default-only]

@@ -1,4 +1,5 @@
-"""Backward walking: walked speed, the arc of a backward turn, steps up and down, escapes.
+"""
+Backward walking: walked speed, the arc of a backward turn, steps up and down, escapes.
 
 Run: .venv/bin/python bench/bench_backward.py [--speeds 0.1 0.2 0.3 0.4 0.5]
      [--heights 0.05 0.08 0.10 0.12 0.13 0.14 0.16 0.20]

@@ -1,4 +1,5 @@
-"""Measure how often a busy process loses the processor for a moment, and for how long.
+"""
+Measure how often a busy process loses the processor for a moment, and for how long.
 
     .venv/bin/python bench/bench_cpu_stalls.py [--duration 2] [--threshold-us 10]
 

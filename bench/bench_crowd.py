@@ -1,4 +1,5 @@
-"""Actors per core, read from the node's own diagnostics (no joint_states subscriptions).
+"""
+Actors per core, read from the node's own diagnostics (no joint_states subscriptions).
 
 Run: .venv/bin/python bench/bench_crowd.py [--actors 10 20] [--duration 20] [--course stairs_up]
 

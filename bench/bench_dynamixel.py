@@ -1,4 +1,5 @@
-"""Control-cycle time of the Dynamixel bridge against the emulator with 1 Mbps wire time.
+"""
+Control-cycle time of the Dynamixel bridge against the emulator with 1 Mbps wire time.
 
 One control cycle = one sync write of 18 goal positions + one sync read of 18 present
 positions (the node also reads Hardware Error Status every ``health_check_period``). The

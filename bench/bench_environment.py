@@ -1,4 +1,5 @@
-"""Benchmark the environment and collision queries the planners call in their loops.
+"""
+Benchmark the environment and collision queries the planners call in their loops.
 
 Prints: ground-map construction time for a 20 m x 6 m course, the cost of a 1000-point
 ground_height query, BodyCollision.collides() for one leg and for the whole body, and

@@ -1,4 +1,5 @@
-"""The first run as a newcomer meets it: the warm-up, then how soon the demo streams.
+"""
+The first run as a newcomer meets it: the warm-up, then how soon the demo streams.
 
 With ``--cold`` the kernel cache of this checkout is deleted first (numba's files in
 digital_actor_planner/core/__pycache__ and the warm-up stamp), as on a fresh clone, and the

@@ -1,4 +1,5 @@
-"""The footstep window's two searches side by side: the readable one and its compiled twin.
+"""
+The footstep window's two searches side by side: the readable one and its compiled twin.
 
 Run: .venv/bin/python bench/bench_footstep_window.py [--courses flat stairs_up ...] [--rounds 3]
 

@@ -1,4 +1,5 @@
-"""Planning cost per step, and the footstep search against the exhaustive optimum.
+"""
+Planning cost per step, and the footstep search against the exhaustive optimum.
 
 Run: .venv/bin/python bench/bench_lower_body.py [--courses flat stairs_up ...]
      .venv/bin/python bench/bench_lower_body.py --whole-body   (obstacle courses, upper body on)

@@ -1,4 +1,5 @@
-"""The CT-roadmap's two expansions side by side: the readable one and its compiled twin.
+"""
+The CT-roadmap's two expansions side by side: the readable one and its compiled twin.
 
 Run: .venv/bin/python bench/bench_roadmap_search.py [--courses low_beam table ...] [--rounds 3]
 

@@ -1,4 +1,5 @@
-"""Zigzag mouse steering on the courses: every walk judged, every stop steered away from.
+"""
+Zigzag mouse steering on the courses: every walk judged, every stop steered away from.
 
 Run: .venv/bin/python bench/bench_steer_away.py [--courses flat rough ...] [--seeds 8]
          [--first-seed 0] [--list]

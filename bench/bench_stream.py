@@ -1,4 +1,5 @@
-"""Benchmark the actor_planner stream: jitter, missed frames, command latency, actors per core.
+"""
+Benchmark the actor_planner stream: jitter, missed frames, command latency, actors per core.
 
     .venv/bin/python bench/bench_stream.py [--duration 60] [--courses stairs_up,...]
         [--course stairs_up] [--actors 1,5,10,20] [--actors-duration 20] [--skip-latency]
@@ -61,7 +62,8 @@ def stamps_of(messages) -> np.ndarray:
 
 
 def stream_health(*segments: np.ndarray) -> dict:
-    """Jitter (ms) and missed frames of a stream from its header stamps (s).
+    """
+    Jitter (ms) and missed frames of a stream from its header stamps (s).
 
     Each segment is a run of stamps without a deliberate pause between them. Jitter is the
     deviation of each stamp interval from the period. A frame is missed when the stream carried

@@ -1,4 +1,5 @@
-"""Terrain a user expects the actor to walk: single features swept, then random courses.
+"""
+Terrain a user expects the actor to walk: single features swept, then random courses.
 
 Run: .venv/bin/python bench/bench_terrain.py [--features block stairs_up ...] [--random 60]
          [--first-seed 0] [--list] [--no-sweep] [--phases]

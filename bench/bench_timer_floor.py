@@ -1,4 +1,5 @@
-"""Measure the machine's own timing floor: a bare real-time Python thread waking every period.
+"""
+Measure the machine's own timing floor: a bare real-time Python thread waking every period.
 
     .venv/bin/python bench/bench_timer_floor.py [--duration 600] [--period 0.01] [--priority 50]
 

@@ -1,4 +1,5 @@
-"""Turning walks on flat ground: how far a stance foot slides (the bound: 1 cm).
+"""
+Turning walks on flat ground: how far a stance foot slides (the bound: 1 cm).
 
 Run: .venv/bin/python bench/bench_turns.py [--speeds 0.5 0.8 1.1]
      [--turn-rates 0.3 0.5 0.7 1.0 -0.7] [--list]

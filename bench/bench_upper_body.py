@@ -1,4 +1,5 @@
-"""Benchmark the upper-body planner (paper §5) per step, side by side with OMPL.
+"""
+Benchmark the upper-body planner (paper §5) per step, side by side with OMPL.
 
 Courses: open ground, a low beam (underside 1.60 m: the waist must bend), a table beside the
 path (top 0.78 m: the left arm must flex) and two pillars closer than the shoulders (the waist

@@ -1,4 +1,5 @@
-"""Does watching the actor in a browser slow the planner? Stream jitter with and without a page.
+"""
+Does watching the actor in a browser slow the planner? Stream jitter with and without a page.
 
 Starts the real actor_planner on a course with the actor walking in a circle, then measures the
 joint_states stream for ``--seconds`` in three set-ups: the planner alone, the planner with the

@@ -1,4 +1,5 @@
-"""The obstacle courses walked at other speeds than their command files: passed or stopped.
+"""
+The obstacle courses walked at other speeds than their command files: passed or stopped.
 
 Run: .venv/bin/python bench/bench_walk_speeds.py [--speeds 0.3 0.4 0.5 0.6 0.7 0.9 1.1]
      [--distances 0.5 0.0] [--list]

@@ -1,4 +1,5 @@
-"""Profile the planner's compiled kernels with Linux perf, each named.
+"""
+Profile the planner's compiled kernels with Linux perf, each named.
 
     .venv/bin/python bench/perf_kernels.py [--courses stairs_up blocks] [--whole-body]
         [--seconds 20] [--out /tmp/kernels.data] [--top 40]

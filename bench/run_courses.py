@@ -1,4 +1,5 @@
-"""Simulate every shipped course and judge it with the independent checker.
+"""
+Simulate every shipped course and judge it with the independent checker.
 
 Run: .venv/bin/python bench/run_courses.py [course ...] [--no-upper-body]
 Prints one line per course: steps, reach, stuck events, planning p50/p99, real-time factor, and

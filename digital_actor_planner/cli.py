@@ -1,4 +1,5 @@
-"""`digital-actor` command line: offline simulation, the interactive demo and the viewer.
+"""
+`digital-actor` command line: offline simulation, the interactive demo and the viewer.
 
 Argument parsing, files and pictures live here, not in the core. Exit codes: 0 success, 1 a run
 failed (its outputs could not be written), 2 bad input (a message names the file, line, value or
@@ -42,7 +43,8 @@ class CommandRow:
 
 
 def read_commands(path: str) -> List[CommandRow]:
-    """Read a command CSV (header ``time,linear_x,angular_z``); each row holds until the next.
+    """
+    Read a command CSV (header ``time,linear_x,angular_z``); each row holds until the next.
 
     Raises
     ------
@@ -91,7 +93,8 @@ BAG_SUFFIX = '.mcap'
 
 
 class _Outputs:
-    """The output files of one run: checked before planning, put in place together at the end.
+    """
+    The output files of one run: checked before planning, put in place together at the end.
 
     Each output is first a hidden temporary beside its final path, created when it is
     checked, so that a path that cannot be written fails before any planning. Nothing
@@ -106,7 +109,8 @@ class _Outputs:
 
     def add(self, path: str, option: str, bag: bool = False,
             formats: Sequence[str] = ()) -> str:
-        """Check ``path`` and return where to write it instead, until :meth:`publish`.
+        """
+        Check ``path`` and return where to write it instead, until :meth:`publish`.
 
         A file gets a temporary file with the same extension; a bag (a folder that must not
         exist yet) gets a path inside a temporary folder, named like the bag without its

@@ -1,4 +1,5 @@
-"""A simulated run as a rosbag2 bag with MCAP storage, for `ros2 bag play`, RViz and rosbags.
+"""
+A simulated run as a rosbag2 bag with MCAP storage, for `ros2 bag play`, RViz and rosbags.
 
 The bag holds what the live planner node publishes, under the node's topic names: the joint
 stream (``/joint_states``, one sensor_msgs/JointState per frame), the footstep markers
@@ -37,7 +38,8 @@ class RecordingError(ValueError):
 def write_bag(path: str, joint_names: Sequence[str], times: np.ndarray, frames: np.ndarray,
               blocks: Sequence = (), frame_id: str = 'world',
               robot_description: Optional[str] = None, meshes: Sequence = ()) -> None:
-    """Write a run as a rosbag2 bag (a folder: ``metadata.yaml`` and one ``.mcap`` file).
+    """
+    Write a run as a rosbag2 bag (a folder: ``metadata.yaml`` and one ``.mcap`` file).
 
     Parameters
     ----------

@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Write urdf/digital_actor.urdf: the paper's 22-DOF actor (Figure 1) with adult proportions.
+"""
+Write urdf/digital_actor.urdf: the paper's 22-DOF actor (Figure 1) with adult proportions.
 
 The URDF is committed; this script is how its numbers were chosen and how to change them.
 Run: python3 scripts/generate_urdf.py

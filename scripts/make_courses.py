@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Write the shipped courses: config/scenes/<course>.yaml, <course>.csv and meshes/.
+"""
+Write the shipped courses: config/scenes/<course>.yaml, <course>.csv and meshes/.
 
 The courses are committed; this script is how they were made and how to change them. It is
 deterministic (seeded terrain, fixed number formats), so re-running it reproduces the files.
@@ -59,7 +60,8 @@ def merge(*meshes):
 
 
 def profile_solid(points, y0, y1, bottom):
-    """Return a closed solid whose top follows a profile z(x), extruded across y.
+    """
+    Return a closed solid whose top follows a profile z(x), extruded across y.
 
     Parameters
     ----------
@@ -120,7 +122,8 @@ def profile_solid(points, y0, y1, bottom):
 
 
 def heightfield_solid(xs, ys, heights, bottom):
-    """Return a closed solid whose top is the height grid and whose underside is flat.
+    """
+    Return a closed solid whose top is the height grid and whose underside is flat.
 
     Parameters
     ----------
@@ -164,7 +167,8 @@ def smoothstep(edge0, edge1, x):
 
 
 def bumps(xs, ys, amplitude, seed, x_flat_until, x_flat_from):
-    """Smooth random heights: a sum of plane waves of 1.2-3 m wavelength, seeded.
+    """
+    Smooth random heights: a sum of plane waves of 1.2-3 m wavelength, seeded.
 
     Returns
     -------

@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Render the README pictures with `digital-actor simulate --render` (the project draws itself).
+"""
+Render the README pictures with `digital-actor simulate --render` (the project draws itself).
 
 Run: .venv/bin/python scripts/make_pictures.py [PICTURE ...]
      (writes docs/images/*.png and *.gif; with names, e.g. table.gif, only those)

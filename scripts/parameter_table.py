@@ -1,4 +1,5 @@
-"""Write the README's table of the planner node's parameters from their one declaration.
+"""
+Write the README's table of the planner node's parameters from their one declaration.
 
 The table is generated from ``nodes/planner_params.parameter_declarations()`` (name, default,
 descriptor), so the README cannot drift from what the node declares; ``test/test_readme.py``
@@ -59,7 +60,8 @@ def _range(descriptor: Any) -> str:
 
 
 def render_table(declarations: Sequence[Tuple[str, Any, Any]]) -> str:
-    """Return the Markdown table of the given parameter declarations.
+    """
+    Return the Markdown table of the given parameter declarations.
 
     Parameters
     ----------
@@ -84,7 +86,8 @@ def render_table(declarations: Sequence[Tuple[str, Any, Any]]) -> str:
 
 
 def replace_table(text: str, table: str) -> str:
-    """Return ``text`` with the lines between the table's markers replaced by ``table``.
+    """
+    Return ``text`` with the lines between the table's markers replaced by ``table``.
 
     Raises
     ------

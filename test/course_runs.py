@@ -38,7 +38,8 @@ def judged(blocks, environment):
 @functools.lru_cache(maxsize=None)
 def simulate(name, window_steps=3, upper_body=True, greedy_restart=True, lasting_branches=None,
              upper_body_seed=True):
-    """Plan course ``name``: (scene, times (k,), frames (k, 22), blocks).
+    """
+    Plan course ``name``: (scene, times (k,), frames (k, 22), blocks).
 
     ``lasting_branches``: a tuple overrides the upper-body planner's ``lasting_branches``.
     ``upper_body_seed``: ``ActorConfig.upper_body_seed``.

@@ -1,4 +1,5 @@
-"""A Dynamixel X-series bus emulator written from the ROBOTIS Protocol 2.0 packet specification.
+"""
+A Dynamixel X-series bus emulator written from the ROBOTIS Protocol 2.0 packet specification.
 
 It serves a pseudo-terminal (``os.openpty``) so that a program under test opens it exactly as it
 would open a USB serial adapter. Packet format (Protocol 2.0): header ``FF FF FD``, reserved
@@ -121,7 +122,8 @@ def build_status(packet_id: int, error: int, params: bytes = b'') -> bytes:
 
 
 def parse_packet(buffer: bytes) -> Tuple[Optional[Tuple[int, int, bytes]], int, bool]:
-    """Find one packet at the start of ``buffer``.
+    """
+    Find one packet at the start of ``buffer``.
 
     Returns
     -------
@@ -257,7 +259,8 @@ class Servo:
 
 
 class DynamixelEmulator:
-    """A bus of emulated X-series servos behind a pseudo-terminal.
+    """
+    A bus of emulated X-series servos behind a pseudo-terminal.
 
     Parameters
     ----------
@@ -542,7 +545,8 @@ class DynamixelEmulator:
         return replies
 
     def _fast_sync_read(self, params: bytes):
-        """One status packet (ID 0xFE) that the servos fill in turn: ERR ID DATA CRC each.
+        """
+        One status packet (ID 0xFE) that the servos fill in turn: ERR ID DATA CRC each.
 
         Each servo's CRC covers the packet up to its own block, so the last one is the CRC of
         the whole packet. Replies are returned per servo so that wire time is modelled.
@@ -604,7 +608,8 @@ def _tight_timer_slack() -> None:
 
 
 def _wait_until(deadline: float) -> None:
-    """Wait until ``deadline`` (monotonic s), to within a few microseconds.
+    """
+    Wait until ``deadline`` (monotonic s), to within a few microseconds.
 
     Sleeps until shortly before the deadline, then spins: a real servo answers on time, and a
     plain sleep overshoots by the kernel's timer slack (50 us by default) plus wake-up latency,

@@ -12,7 +12,8 @@ import numpy as np
 
 @dataclass
 class Tables:
-    """The window's footholds and a memo of swing tests as Python lists, for :func:`effort`.
+    """
+    The window's footholds and a memo of swing tests as Python lists, for :func:`effort`.
 
     ``ok[i][c]``, ``height[i][c]``, ``pitch[i][c]``: the foothold of footstep i when the
     interval indices of footsteps 1..i+1 sum to c (its arc length depends only on that sum).
@@ -56,7 +57,8 @@ def search_tables(planner, profile, sides, stance_s) -> Tables:
 def swing_clear_in(planner, memo: Tables, side: int, s_from: float, h_from: float,
                    s_to: float, h_to: float, lifts_from: Optional[Tuple[int, int]] = None
                    ) -> bool:
-    """Whether a foot can swing from one foothold to the next over the ground profile.
+    """
+    Whether a foot can swing from one foothold to the next over the ground profile.
 
     ``lifts_from``: (row, cumulative index) of the foothold it leaves when the window placed
     it there; that foothold must also let it lift off (see ``FootstepConfig.lift_room``).

@@ -44,23 +44,27 @@ NOT_YET_CLEAN = (
 
 
 def targets() -> list:
-    """Return the linted folders and files that exist, as absolute paths.
+    """
+    Return the linted folders and files that exist, as absolute paths.
 
     Returns
     -------
     list of str
         Absolute paths of the entries of ``TARGETS`` present in this checkout.
+
     """
     return [os.path.join(ROOT, name) for name in TARGETS
             if os.path.exists(os.path.join(ROOT, name))]
 
 
 def excluded() -> list:
-    """Return the absolute paths of ``NOT_YET_CLEAN``.
+    """
+    Return the absolute paths of ``NOT_YET_CLEAN``.
 
     Returns
     -------
     list of str
         One absolute path per file of ``NOT_YET_CLEAN``.
+
     """
     return [os.path.join(ROOT, name) for name in NOT_YET_CLEAN]

@@ -1,4 +1,5 @@
-"""Helpers for tests that start real node processes and talk DDS (no launch_testing here).
+"""
+Helpers for tests that start real node processes and talk DDS (no launch_testing here).
 
 Every process runs with ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST and the test's own
 ROS_DOMAIN_ID; tests wait for a match, never a fixed sleep, and stop what they start by PID.

@@ -22,7 +22,8 @@ def box(lower, upper):
 
 
 def furniture_scene(rng):
-    """Flat ground and a box beside the path at arm height, sometimes with a thing on it.
+    """
+    Flat ground and a box beside the path at arm height, sometimes with a thing on it.
 
     The box is left or right of the x axis, its near side 0.17-0.32 m from it, its top
     0.65-1.05 m high, 0.4-2.0 m long from x = 1.5-2.5 m; in half of the scenes a 0.15 x 0.1 m

@@ -86,7 +86,8 @@ def test_bad_configuration_names_the_field(field, value):
 
 
 class BlockedUpperBody:
-    """An upper-body planner that is always blocked at a chosen frame; it counts its calls.
+    """
+    An upper-body planner that is always blocked at a chosen frame; it counts its calls.
 
     ``blocked_at_end``: blocked at the last frame (in the preview when there is one), else at
     frame 5; ``after_step``: with a preview, blocked this many frames after the step's end.
@@ -606,7 +607,8 @@ def test_no_step_ends_with_a_knee_too_bent_for_the_next_one(monkeypatch):
 
 
 def test_weaving_to_the_floors_edge_ends_where_turning_away_frees_the_actor(monkeypatch):
-    """Seed 33 of bench_steer_away.py's walks (rounded) weaves to the floor's edge.
+    """
+    Seed 33 of bench_steer_away.py's walks (rounded) weaves to the floor's edge.
 
     With a step ending only 1 cm short of the legs touching, it stopped 0.37 m from the edge facing
     it, the feet pigeon-toed 0.35 rad and the left 0.25 m behind the right: the toe-off of any next

@@ -1,4 +1,5 @@
-"""launch_testing for a ROS 2 install: the actor_planner stream, a command, a bad configuration.
+"""
+launch_testing for a ROS 2 install: the actor_planner stream, a command, a bad configuration.
 
 Run with ``launch_test test/test_actor_launch.py`` or ``colcon test`` on Jazzy/Kilted; skipped
 where launch_testing is not installed (the venv's CI covers the same ground with

@@ -1,4 +1,5 @@
-"""launch_testing check of launch/bridge.launch.py on a ROS 2 install (skipped without one).
+"""
+launch_testing check of launch/bridge.launch.py on a ROS 2 install (skipped without one).
 
 Run with ``launch_test test/test_bridge_launch.py`` or ``colcon test``: the bridge starts in
 dry-run mode (no serial port needed), logs the goal ticks for the commanded joints, publishes

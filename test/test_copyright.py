@@ -1,4 +1,5 @@
-"""Copyright and license headers as ament_python packages check them: ament_copyright.
+"""
+Copyright and license headers as ament_python packages check them: ament_copyright.
 
 ament_copyright is not published on PyPI, so the test runs where ROS 2 installs it
 (``rosdep install`` of the test dependencies) and is skipped elsewhere.

@@ -1,4 +1,5 @@
-"""The shipped courses: files well-formed, and the upper-body courses geometrically as designed.
+"""
+The shipped courses: files well-formed, and the upper-body courses geometrically as designed.
 
 The upper-body courses are checked with the URDF's own collision shapes placed by
 forward kinematics and tested against the course meshes with python-fcl, independently of the

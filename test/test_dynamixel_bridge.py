@@ -1,4 +1,5 @@
-"""The real ``dynamixel_bridge`` process against the Protocol 2.0 emulator, checked in registers.
+"""
+The real ``dynamixel_bridge`` process against the Protocol 2.0 emulator, checked in registers.
 
 The emulator runs in a thread of the test process and serves a pseudo-terminal; the bridge
 opens it as its serial port. JointState messages are published from here with rclpy.

@@ -1,4 +1,5 @@
-"""The emulator and dynamixel-sdk against the e-Manual's Protocol 2.0 example packets.
+"""
+The emulator and dynamixel-sdk against the e-Manual's Protocol 2.0 example packets.
 
 The golden packets are the examples of the ROBOTIS e-Manual "DYNAMIXEL Protocol 2.0" page
 (instruction and status packets, CRC bytes included).
@@ -180,7 +181,8 @@ def test_status_reports_access_errors_and_hardware_alert(bus):
 
 
 def test_a_late_reply_is_not_taken_for_the_next_read(bus):
-    """A present position answered after its read gave up is not read as Hardware Error Status.
+    """
+    A present position answered after its read gave up is not read as Hardware Error Status.
 
     Position 2080 is 0x0820: its first byte is the overload bit. The SDK alone would take it
     for servo 1's hardware error (a false fault that switches the servo off).

@@ -1,4 +1,5 @@
-"""The compiled kernels (core/jit.py) give what their own Python source gives, to the last bit.
+"""
+The compiled kernels (core/jit.py) give what their own Python source gives, to the last bit.
 
 An installation without numba runs that source: it then plans the same frames, only slower.
 Each kernel is run compiled and as plain Python on the inputs the planners give it, including
@@ -35,7 +36,8 @@ def same(compiled, plain):
 
 
 def near(compiled, numpy_result):
-    """Assert a kernel result matches NumPy code that calls NumPy's trigonometry, to 1e-12.
+    """
+    Assert a kernel result matches NumPy code that calls NumPy's trigonometry, to 1e-12.
 
     Kernels call the C library's sin, cos, acos and atan2; NumPy calls the same ones on the
     development machine (an AVX2 build dispatch: the same bits, so every course plans the same
@@ -253,7 +255,9 @@ def _rotation(rng) -> np.ndarray:
 
 
 def test_the_separating_axis_tests():
-    """Oriented boxes against boxes and triangles, parallel edges included: compiled and as Python."""
+    """
+    Oriented boxes against boxes and triangles, parallel edges included: compiled and as Python.
+    """
     rng = np.random.default_rng(9)
     count = 400
     rotation_a = np.array([_rotation(rng) for _ in range(count)])

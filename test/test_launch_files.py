@@ -1,4 +1,5 @@
-"""launch/actor.launch.py read without a ROS install: what it would start, and with what.
+"""
+launch/actor.launch.py read without a ROS install: what it would start, and with what.
 
 launch and launch_ros are stood in for by recorders that keep each action's arguments, so the
 launch description is built exactly as ``ros2 launch`` builds it and then inspected: mouse_teleop

@@ -1,4 +1,5 @@
-"""package.xml as rosdep reads it: every key resolves, and every import is declared.
+"""
+package.xml as rosdep reads it: every key resolves, and every import is declared.
 
 One key rosdep cannot resolve and ``rosdep install --from-paths src --ignore-src`` installs
 nothing, so each key must be a ROS package released for Jazzy and Kilted or a rosdep rule with

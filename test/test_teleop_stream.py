@@ -1,4 +1,5 @@
-"""actor_planner as actor.launch.py starts it, steered as mouse_teleop steers it during a held drag.
+"""
+actor_planner as actor.launch.py starts it, steered as mouse_teleop steers it during a held drag.
 
 While the drag is held still, mouse_teleop (at the launch's ``teleop_frequency``, 10 Hz) repeats
 one unchanged TwistStamped; the actor must walk on for the whole hold, not stop after the

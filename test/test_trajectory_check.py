@@ -191,7 +191,8 @@ def test_a_link_wholly_inside_a_solid_is_found(skeleton, standing):
 
 def test_legs_passing_through_each_other_fail_naming_the_links(skeleton, floor_world,
                                                                standing):
-    """Knock-kneed: both thighs turned in and flexed until the knees meet.
+    """
+    Knock-kneed: both thighs turned in and flexed until the knees meet.
 
     The checker judges each leg's thigh, shank and foot against the other leg's (their URDF shapes,
     FCL).

@@ -1,4 +1,5 @@
-"""Upper-body compliant motion on the obstacle courses (paper §5).
+"""
+Upper-body compliant motion on the obstacle courses (paper §5).
 
 Collision-freedom of every link on these courses is judged in test_walk_courses.py; here: the
 upper body keeps its motion pattern on open ground, leaves it where the course demands (bend the
@@ -54,7 +55,8 @@ def test_upper_body_leaves_its_pattern_only_at_the_obstacle_and_returns(name):
 
 @pytest.mark.slow
 def test_table_is_passed_with_the_left_elbow_flexed_not_the_arm_swung_back():
-    """At the table the arm must flex.
+    """
+    At the table the arm must flex.
 
     Somewhere along the table the left elbow is flexed at least 0.3 rad beyond its pattern, and the
     shoulder never swings more than 0.5 rad off its own (a flexed elbow at the pattern's swing
@@ -148,7 +150,8 @@ def test_random_furniture_beside_the_path_is_passed_without_a_touch():
 @pytest.mark.slow
 @pytest.mark.parametrize('centre', [0.35, 0.37])
 def test_pillars_off_the_path_are_passed_or_met_in_front_never_between(tmp_path, centre):
-    """Pillars 3 cm to the left of the path (the right arm passes 3 cm closer to its pillar).
+    """
+    Pillars 3 cm to the left of the path (the right arm passes 3 cm closer to its pillar).
 
     The actor either gets through or stops in front of the pillars, where steering away frees it;
     it never takes a step whose upper body is blocked just after it (ActorConfig.
@@ -199,7 +202,8 @@ def test_the_moved_pillars_plan_the_same_with_the_expansion_compiled_as_in_pytho
     (0.1, 0.2, 'passed'), (0.1, 0.0, 'stopped in front'), (0.0, 0.0, 'held between')])
 def test_what_the_preview_margin_and_the_pause_change_at_the_pillars(
         tmp_path, margin, pause, outcome):
-    """Pillars 3 cm to the left of the path, 0.50 m apart (the course's gap).
+    """
+    Pillars 3 cm to the left of the path, 0.50 m apart (the course's gap).
 
     Without the preview margin or the pause a step whose preview was blocked 0.03 s after it is
     taken (the plan without the preview passes) and every next step finds the right arm blocked

@@ -1,4 +1,5 @@
-"""The actor walks every shipped course, judged by the independent checker.
+"""
+The actor walks every shipped course, judged by the independent checker.
 
 The checker uses the URDF's own collision geometry with FCL at every frame, not the planner's
 ground map: no link penetrates by more than 3 mm (feet resting <= 15 mm), a foot is always down,
@@ -67,7 +68,8 @@ def test_stuck_actor_goes_on_when_steered_away():
 
 @pytest.mark.slow
 def test_figure8_one_step_window_falls_into_the_trap_three_step_window_strides_over():
-    """Paper Figure 8: n = 1 steps into the pit (or is stuck); n = 3, m = 13 strides over.
+    """
+    Paper Figure 8: n = 1 steps into the pit (or is stuck); n = 3, m = 13 strides over.
 
     The paper's search alone (no greedy restart): with one footstep in the window the greedy
     start is the exhaustive choice of that footstep, which is not what the figure is about.
@@ -108,7 +110,8 @@ def turning_walk(speed, rate, gait=None):
 @pytest.mark.parametrize('speed, rate', [(1.1, 0.7), (0.8, 0.7), (1.1, 0.5), (0.5, 1.0),
                                          (0.8, 1.0), (1.1, 1.0), (0.8, -0.7)])
 def test_a_sharp_fast_turn_keeps_the_stance_feet_within_1_cm(speed, rate):
-    """The sharpest turns of bench_turns.py.
+    """
+    The sharpest turns of bench_turns.py.
 
     Without the swing plane's turn through the foot the first three slide a foot 12-15 mm; without
     the pelvis easing towards lift-off in turns (gait: ``turn_ease_heading``) the last four slide
@@ -131,7 +134,8 @@ def test_without_the_turn_ease_the_sharpest_turn_slides_a_foot():
 
 
 def test_after_a_zigzag_to_the_floor_edge_the_actor_turns_away_when_steered():
-    """Mouse steering that zigzags left and right leaves the feet pointing up to 0.9 rad apart.
+    """
+    Mouse steering that zigzags left and right leaves the feet pointing up to 0.9 rad apart.
 
     Here it walks the actor to the floor's edge, where it stops (stuck); the user then steers it
     away on the spot and it goes on. Before the swing hip yaw was held in range in mid-swing

@@ -1,4 +1,5 @@
-"""Exact contact tests of convex shapes, compiled: whether two shapes touch.
+"""
+Exact contact tests of convex shapes, compiled: whether two shapes touch.
 
 The upper-body planner's narrow phase (see :mod:`.ct_space`). The shapes are those of the
 actor's collision model, a box, a cylinder (its axis the shape's z axis, as in FCL and URDF) or
@@ -32,7 +33,8 @@ _TINY = 1e-24
 
 @kernel('UniTuple(f8, 3)(i8, f8[:], f8[:, :], f8[:], f8[:, :], f8, f8, f8)')
 def support(kind, half, rotation, centre, corners, dx, dy, dz):
-    """The shape's farthest point along the direction (dx, dy, dz), world frame, m.
+    """
+    The shape's farthest point along the direction (dx, dy, dz), world frame, m.
 
     ``kind`` is :data:`BOX` (``half``: half extents), :data:`CYLINDER` (radius, half length),
     :data:`SPHERE` (radius) posed at ``rotation`` (3, 3) and ``centre`` (3,), or
@@ -90,7 +92,8 @@ def _middle(kind, centre, corners):
 @kernel('b1(i8, f8[:], f8[:, :], f8[:], f8[:, :], i8, f8[:], f8[:, :], f8[:], f8[:, :])')
 def touching(kind_a, half_a, rotation_a, centre_a, corners_a, kind_b, half_b, rotation_b,
              centre_b, corners_b):
-    """Whether two convex shapes share a point (each as in :func:`support`).
+    """
+    Whether two convex shapes share a point (each as in :func:`support`).
 
     GJK on the Minkowski difference A - B: the simplex (newest point last) is reduced to the
     feature nearest the origin at each iteration, and the next direction points from it to

@@ -1,4 +1,5 @@
-"""§4.2's search of one footstep window, written out as the code of record.
+"""
+§4.2's search of one footstep window, written out as the code of record.
 
 A footstep configuration q_f = (j_1, ..., j_n) holds the interval index of each of the next n
 footsteps: footstep i is ``lengths[j_i]`` long, one of the m + 1 lengths in [s_min, s_max].
@@ -30,7 +31,8 @@ IMPROVEMENT = 1e-12
 
 @dataclass(frozen=True)
 class WindowLimits:
-    """What a window's footsteps must respect and how their effort is weighed.
+    """
+    What a window's footsteps must respect and how their effort is weighed.
 
     Attributes
     ----------
@@ -82,7 +84,8 @@ class WindowLimits:
 
 @dataclass(frozen=True)
 class WindowFeet:
-    """Where the window starts: the feet and the commanded stride, lengths in m.
+    """
+    Where the window starts: the feet and the commanded stride, lengths in m.
 
     Attributes
     ----------
@@ -107,7 +110,8 @@ class WindowFeet:
 
 @dataclass(frozen=True)
 class FootholdTable:
-    """Every foothold a window can reach, judged beforehand.
+    """
+    Every foothold a window can reach, judged beforehand.
 
     Footstep i's foothold depends only on the sum c of the interval indices of footsteps
     1..i + 1 (its arc length is the stance foot's + (i + 1) s_min + c increments): entry
@@ -144,7 +148,8 @@ class FootholdTable:
 
 @dataclass(frozen=True)
 class WindowSearchResult:
-    """The configuration a window's search settled on.
+    """
+    The configuration a window's search settled on.
 
     Attributes
     ----------
@@ -166,7 +171,8 @@ def search_footstep_window(table: FootholdTable, limits: WindowLimits, feet: Win
                            start: Configuration, banned_first: FrozenSet[int] = frozenset(),
                            banned_lengths: FrozenSet[int] = frozenset()
                            ) -> Optional[WindowSearchResult]:
-    """Search one footstep window (§4.2): breadth-first to feasible, then hill-climbing.
+    """
+    Search one footstep window (§4.2): breadth-first to feasible, then hill-climbing.
 
     Parameters
     ----------
@@ -276,7 +282,8 @@ def configuration_effort(configuration: Configuration, table: FootholdTable,
                          limits: WindowLimits, feet: WindowFeet,
                          banned_first: FrozenSet[int] = frozenset(),
                          banned_lengths: FrozenSet[int] = frozenset()) -> Optional[float]:
-    """The effort criterion of a configuration, None where it is not collision-free.
+    """
+    The effort criterion of a configuration, None where it is not collision-free.
 
     Each footstep from the stance foot on must land on a foothold, rise or drop no more than
     allowed, and its foot must swing there from where it was two footsteps before (the swing
@@ -327,7 +334,8 @@ def configuration_effort(configuration: Configuration, table: FootholdTable,
 def swing_clear(table: FootholdTable, limits: WindowLimits, side: int,
                 lift: Tuple[float, float], land: Tuple[float, float],
                 placed: Optional[Tuple[int, int]] = None) -> bool:
-    """Whether a foot can swing from one foothold to the next.
+    """
+    Whether a foot can swing from one foothold to the next.
 
     Parameters
     ----------

@@ -1,4 +1,5 @@
-"""The 22-DOF actor model read from the URDF: joint order, limits, segment lengths, kinematics.
+"""
+The 22-DOF actor model read from the URDF: joint order, limits, segment lengths, kinematics.
 
 This is the one place the joint names come from (paper §3.1, Figure 1). Forward kinematics is
 one compiled kernel (:func:`_compose`, see ``jit``), batched over configurations, because it sits
@@ -26,7 +27,8 @@ class UrdfError(ValueError):
 
 
 def default_urdf_path() -> str:
-    """Return the path of the package's actor URDF, in a source tree or an install.
+    """
+    Return the path of the package's actor URDF, in a source tree or an install.
 
     The environment variable ``DIGITAL_ACTOR_URDF`` overrides the search.
     """
@@ -84,7 +86,8 @@ class Joint:
 
 @dataclass(frozen=True)
 class CollisionShape:
-    """A collision primitive of a link.
+    """
+    A collision primitive of a link.
 
     ``kind`` is 'box' (size = (3,) edge lengths), 'cylinder' (size = (radius, length), axis z)
     or 'sphere' (size = (radius,)); ``origin`` is (4, 4) link->shape frame. Metres.
@@ -147,7 +150,8 @@ def _origin_matrix(element) -> np.ndarray:
 
 
 def _compile_plan(plan) -> tuple:
-    """Constant matrices of a kinematic chain plan for :meth:`Skeleton.forward_kinematics`.
+    """
+    Constant matrices of a kinematic chain plan for :meth:`Skeleton.forward_kinematics`.
 
     ``plan``: (parent, child, origin (4, 4), q index or -1, kind, axis (3,)) per joint, parents
     first. Every joint's local transform origin @ motion(q) is A + w1 B + w2 C with (w1, w2) =
@@ -245,7 +249,8 @@ def _shape_transforms(qs, parents, children, basis, motion, joint_q, rows, origi
 
 
 class Skeleton:
-    """The actor's kinematic tree, joint order and limits, read from a URDF.
+    """
+    The actor's kinematic tree, joint order and limits, read from a URDF.
 
     Parameters
     ----------
@@ -405,7 +410,8 @@ class Skeleton:
             raise ValueError(f'unknown joint name {error.args[0]!r}') from None
 
     def branch(self, name: str) -> np.ndarray:
-        """Indices of a branch of Figure 2.
+        """
+        Indices of a branch of Figure 2.
 
         ``name`` is 'root', 'waist', 'left_arm', 'right_arm', 'left_leg' or 'right_leg'.
         """
@@ -462,7 +468,8 @@ class Skeleton:
         return compiled
 
     def forward_kinematics(self, q: np.ndarray, links=None) -> np.ndarray:
-        """World transforms of every link.
+        """
+        World transforms of every link.
 
         Parameters
         ----------
@@ -491,7 +498,8 @@ class Skeleton:
         return out[0] if single else out
 
     def shape_transforms_at(self, q: np.ndarray, shapes) -> np.ndarray:
-        """World transforms of some collision shapes straight from configurations.
+        """
+        World transforms of some collision shapes straight from configurations.
 
         The same as ``shape_transforms(forward_kinematics(q, links), shapes)`` for the shapes'
         links, but only the links the shapes hang from (and their ancestors) are composed,
@@ -538,7 +546,8 @@ class Skeleton:
         return self.forward_kinematics(q)[..., self.link_index[link], :, :]
 
     def shape_transforms(self, link_transforms: np.ndarray, shapes=None) -> np.ndarray:
-        """World transforms of every collision shape, in ``collision_shapes`` order.
+        """
+        World transforms of every collision shape, in ``collision_shapes`` order.
 
         Parameters
         ----------

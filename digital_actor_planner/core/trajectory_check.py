@@ -1,4 +1,5 @@
-"""The independent judge of a timed 22-DOF trajectory against an environment.
+"""
+The independent judge of a timed 22-DOF trajectory against an environment.
 
 The courses' tests use this to decide whether a walk "works": no link deeper
 in the environment than a few millimetres, a foot always down, joint limits, no NaN, no jumps,
@@ -32,7 +33,8 @@ _SOLE_THICKNESS = 0.002
 
 @dataclass(frozen=True)
 class CheckReport:
-    """What :func:`check_trajectory` found; ``ok`` when nothing exceeds a tolerance.
+    """
+    What :func:`check_trajectory` found; ``ok`` when nothing exceeds a tolerance.
 
     Times are trajectory times (s). ``penetration`` maps each checked link to its largest
     penetration depth (m) and ``penetration_time`` to when it happened. ``foot_down_gap`` is the
@@ -235,7 +237,8 @@ def _leg_contacts(skeleton, transforms: np.ndarray, times: np.ndarray,
 
 
 def _buried_depths(skeleton, environment, transforms: np.ndarray) -> np.ndarray:
-    """How deep each shape's centre is buried inside a solid: (k, S) m, 0 where it is not.
+    """
+    How deep each shape's centre is buried inside a solid: (k, S) m, 0 where it is not.
 
     FCL tests surfaces, so a shape wholly inside a solid touches no triangle. A centre is inside
     when the first surface straight above it faces up (a solid's top, or a height-field terrain
@@ -280,7 +283,8 @@ def check_trajectory(skeleton, environment, times, frames, *, penetration_tol: f
                      slip_tol: float = 0.01, leg_contact_tol: float = 0.003,
                      stride: int = 1,
                      links: Optional[Iterable[str]] = None) -> CheckReport:
-    """Judge a timed trajectory: collisions, a foot down, limits, NaN, jumps, stance slip.
+    """
+    Judge a timed trajectory: collisions, a foot down, limits, NaN, jumps, stance slip.
 
     Parameters
     ----------
@@ -424,7 +428,8 @@ def check_trajectory(skeleton, environment, times, frames, *, penetration_tol: f
 def _track_slip(foot: str, soles: _Soles, transform: np.ndarray, stance: bool, time: float,
                 corner_runs: Dict[str, list], slip: Dict[str, float],
                 slip_time: Dict[str, float]) -> None:
-    """Follow each sole corner through its runs of contact; record its horizontal drift.
+    """
+    Follow each sole corner through its runs of contact; record its horizontal drift.
 
     A foot rolling over its heel or toe keeps those corners fixed while the others lift, so
     tracking corners (not the sole's centre) tells rolling from sliding.

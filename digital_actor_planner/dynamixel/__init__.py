@@ -1,4 +1,5 @@
-"""ROS-free parts of the Dynamixel bridge: configuration, tick conversion, safety, bus driving.
+"""
+ROS-free parts of the Dynamixel bridge: configuration, tick conversion, safety, bus driving.
 
 Only :mod:`digital_actor_planner.dynamixel.bus` imports ``dynamixel_sdk``.
 """

@@ -31,7 +31,8 @@ _STUFFED_PATTERN = bytes((0xFF, 0xFF, 0xFD, 0xFD))
 
 
 class PacketHandler(sdk.Protocol2PacketHandler):
-    """The SDK's Protocol 2.0 handler with its two per-byte hot spots made cheap.
+    """
+    The SDK's Protocol 2.0 handler with its two per-byte hot spots made cheap.
 
     Every control cycle builds a sync write and checks the CRC of every status packet. The
     SDK's ``updateCRC`` rebuilds its 256-entry table on each call, ``addStuffing`` copies the
@@ -61,7 +62,8 @@ class PacketHandler(sdk.Protocol2PacketHandler):
         return super().removeStuffing(packet)
 
     def readRx(self, port, dxl_id, length):  # noqa: N802 (SDK's name)
-        """One servo's reply to a sync read: skip status packets that are not that reply.
+        """
+        One servo's reply to a sync read: skip status packets that are not that reply.
 
         The SDK skips packets of other IDs but takes any packet of the right ID. On a busy
         machine a reply can come after its read timed out and the next read was sent; the
@@ -85,7 +87,8 @@ class BusError(RuntimeError):
 
 
 class ServoBus:
-    """One serial port with X-series servos on it.
+    """
+    One serial port with X-series servos on it.
 
     Parameters
     ----------

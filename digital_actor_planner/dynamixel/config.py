@@ -26,7 +26,8 @@ class ConfigError(ValueError):
 
 @dataclass(frozen=True)
 class ServoConfig:
-    """One joint driven by one servo.
+    """
+    One joint driven by one servo.
 
     ``offset`` is the servo angle (rad, from the 2048-tick centre) at joint angle zero;
     ``direction`` is +1 or -1; the safe range is in joint radians; ``max_speed`` in rad/s.
@@ -44,7 +45,8 @@ class ServoConfig:
         return CENTRE_TICKS + (self.direction * angle + self.offset) / RADIANS_PER_TICK
 
     def to_ticks(self, angle: float) -> int:
-        """Joint angle (rad) -> goal position ticks, kept within 0..4095.
+        """
+        Joint angle (rad) -> goal position ticks, kept within 0..4095.
 
         An angle inside the safe range gets the nearest tick that is also inside it: the ends
         of the range rarely fall on a tick, and rounding to the nearest one would put the
@@ -169,7 +171,8 @@ _SCALARS = {'port': str, 'baud_rate': int, 'control_rate': float, 'joint_state_t
 
 
 def config_from_parameters(parameters: Mapping[str, object], skeleton: Skeleton) -> BridgeConfig:
-    """Build and validate a config from flat parameter names.
+    """
+    Build and validate a config from flat parameter names.
 
     Parameters
     ----------

@@ -1,4 +1,5 @@
-"""The bridge's control cycle without ROS: safety envelope in, one sync write/read per cycle out.
+"""
+The bridge's control cycle without ROS: safety envelope in, one sync write/read per cycle out.
 
 The node feeds it joint states and a clock; it drives a :class:`~.bus.ServoBus` (or nothing in
 dry-run mode) and reports health as plain values that the node turns into diagnostics.
@@ -51,7 +52,8 @@ class Feedback:
 
 
 class BridgeController:
-    """Safety envelope + bus driving + reconnection, one :meth:`cycle` per control period.
+    """
+    Safety envelope + bus driving + reconnection, one :meth:`cycle` per control period.
 
     Parameters
     ----------
@@ -188,7 +190,8 @@ class BridgeController:
         return self.envelope.command(names, positions, now)
 
     def cycle(self, now: float) -> Optional[Feedback]:
-        """Run one control cycle at time ``now`` (s); return the measured positions, if any.
+        """
+        Run one control cycle at time ``now`` (s); return the measured positions, if any.
 
         Order on the bus: sync read request, then (while the replies cross the wire) the
         safety envelope computes this cycle's goals, then the replies are taken and the goals
@@ -294,13 +297,15 @@ class BridgeController:
         self.bus.set_torque(ids, True)
 
     def shutdown(self) -> bool:
-        """Switch torque off (unless configured otherwise) and close the port.
+        """
+        Switch torque off (unless configured otherwise) and close the port.
 
         Returns
         -------
         bool
             False when servos may still hold torque that should have been switched off: the
             port is gone or they did not acknowledge. The log names them.
+
         """
         if self.bus is None:
             return True

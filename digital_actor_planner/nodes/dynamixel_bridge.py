@@ -1,4 +1,5 @@
-"""ROS 2 node ``dynamixel_bridge``: drive Dynamixel X-series servos from a JointState stream.
+"""
+ROS 2 node ``dynamixel_bridge``: drive Dynamixel X-series servos from a JointState stream.
 
 A thin adapter: parameters -> :class:`BridgeConfig`, messages -> :class:`BridgeController`,
 feedback -> ``~/joint_states``, health -> ``/diagnostics``. Exit codes: 0 after a clean
