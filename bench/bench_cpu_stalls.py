@@ -18,8 +18,12 @@ import numpy as np
 
 
 def gaps(clock, duration: float, threshold_ns: int) -> np.ndarray:
-    """The gaps (ns) longer than ``threshold_ns`` between back-to-back readings of ``clock``
-    over ``duration`` s of the wall clock."""
+    """
+    Return the gaps between back-to-back readings of a clock longer than a threshold.
+
+    The gaps (ns) longer than ``threshold_ns`` between back-to-back readings of ``clock`` over
+    ``duration`` s of the wall clock.
+    """
     found = []
     end = time.perf_counter_ns() + int(duration * 1e9)
     last = clock()

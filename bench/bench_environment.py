@@ -26,7 +26,7 @@ def _box(low, high):
 
 
 def course_meshes(rng):
-    """A 20 m x 6 m course: floor, stairs, blocks, a table, a beam and a rough terrain patch."""
+    """Build a 20 m x 6 m course: floor, stairs, blocks, a table, a beam and a rough patch."""
     meshes = [_box((0, -3, -0.1), (20, 3, 0.0))]
     meshes += [_box((3 + 0.3 * i, -3, 0), (3.3 + 0.3 * i, 3, 0.15 * (i + 1))) for i in range(4)]
     meshes += [_box((x, y, 0), (x + 0.4, y + 0.4, h)) for x, y, h in
@@ -46,8 +46,12 @@ def course_meshes(rng):
 
 
 def _per_call(function, repeats):
-    """Wall-clock and process CPU seconds per call (CPU time is what a busy machine distorts
-    least: the 2 cores are shared with other jobs)."""
+    """
+    Time a call: wall-clock and process CPU seconds per call.
+
+    Wall-clock and process CPU seconds per call (CPU time is what a busy machine distorts least:
+    the 2 cores are shared with other jobs).
+    """
     function()
     wall, cpu = time.perf_counter(), time.process_time()
     for _ in range(repeats):

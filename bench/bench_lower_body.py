@@ -96,8 +96,12 @@ class ComparingPlanner(FootstepPlanner):
 
 
 class TimingPlanner(FootstepPlanner):
-    """Footstep planner that records the CPU time of each window's search (a call not banning
-    a first footstep) and its configuration, and runs nothing else."""
+    """
+    Footstep planner that records the CPU time of each window's search.
+
+    Footstep planner that records the CPU time of each window's search (a call not banning a first
+    footstep) and its configuration, and runs nothing else.
+    """
 
     def __init__(self, inner):
         super().__init__(inner.config, inner.leg)
@@ -113,10 +117,14 @@ class TimingPlanner(FootstepPlanner):
 
 
 def _alone_ratios(sc, commands, compared, walks):
-    """The default search timed alone in ``walks`` more walks of a course, nothing but the
-    actor running between its calls: each window's median time over the walks divided by the
-    exhaustive search's first time in the compared walk (``compared.windows``), and whether
-    the window is the walk's first."""
+    """
+    Time the default search alone over more walks of a course.
+
+    The default search timed alone in ``walks`` more walks of a course, nothing but the actor
+    running between its calls: each window's median time over the walks divided by the exhaustive
+    search's first time in the compared walk (``compared.windows``), and whether the window is the
+    walk's first.
+    """
     times = []
     for _ in range(walks):
         actor = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False),
@@ -137,7 +145,7 @@ def _alone_ratios(sc, commands, compared, walks):
 
 
 def _load_other(root):
-    """The actor module of the package in another checkout, imported as ``other_dap``."""
+    """Import the actor module of the package in another checkout as ``other_dap``."""
     package = os.path.join(os.path.abspath(root), 'digital_actor_planner')
     # A module that imports its siblings by absolute name would get this package's instead.
     absolute = re.compile(r'^\s*(from|import)\s+digital_actor_planner\b', re.MULTILINE)

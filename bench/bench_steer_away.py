@@ -48,7 +48,7 @@ EDGE = 0.8
 
 
 def zigzag(seed: int, duration: float = 12.0):
-    """(times, linear, angular) of one seeded weaving walk, ending with a stop."""
+    """Return (times, linear, angular) of one seeded weaving walk, ending with a stop."""
     rng = np.random.default_rng(seed)
     times = [0.0]
     while times[-1] < duration:
@@ -157,7 +157,7 @@ def main(argv=None):
 
 
 def edge_turns(sk, pivot):
-    """(turned (N,) bool, checker failures) of the turns on the spot at the floor's edge."""
+    """Turn on the spot at the floor's edge: (turned (N,) bool, checker failures)."""
     turned, failures = [], 0
     for name in ('flat', 'gap', 'blocks'):
         sc = scene(name)
@@ -174,8 +174,12 @@ def edge_turns(sk, pivot):
 
 
 def bump_turns(sk):
-    """(turned (N,) bool, checker failures, pitched (N,) bool) of turns on the spot started on
-    the rough course's bumps (x 2-8 m, y -0.6 / 0 / 0.6 m, facing 0 or 1.5 rad)."""
+    """
+    Turn on the spot from the rough course's bumps and judge each turn.
+
+    (turned (N,) bool, checker failures, pitched (N,) bool) of turns on the spot started on the
+    rough course's bumps (x 2-8 m, y -0.6 / 0 / 0.6 m, facing 0 or 1.5 rad).
+    """
     sc = scene('rough')
     turned, pitched, failures = [], [], 0
     for x in np.arange(2.0, 8.01, 0.5):

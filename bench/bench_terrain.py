@@ -71,7 +71,7 @@ SETTINGS = {
 
 
 def ramp(x0, x1, z0, z1, half):
-    """A solid wedge from x0 (top z0) to x1 (top z1), bottom at -0.1 m."""
+    """Make a solid wedge from x0 (top z0) to x1 (top z1), bottom at -0.1 m."""
     corners = [[x, y, z] for x, top in ((x0, z0), (x1, z1)) for y in (-half, half)
                for z in (-0.1, top)]
     return trimesh.convex.convex_hull(np.array(corners))
@@ -200,7 +200,7 @@ def first_stop(blocks):
 
 def sweep(kinds, listing, upper_body=False, features=FEATURES, starts=STARTS,
           settings=SETTINGS):
-    """The single-feature table; returns the number of checker failures."""
+    """Print the single-feature table; return the number of checker failures."""
     sk = skeleton()
     config = ActorConfig(plan_upper_body=upper_body)
     failures, why = 0, collections.Counter()
@@ -237,7 +237,7 @@ def sweep(kinds, listing, upper_body=False, features=FEATURES, starts=STARTS,
 
 
 def random_courses(count, first_seed, listing, upper_body=False):
-    """The random-course table; returns the number of checker failures."""
+    """Print the random-course table; return the number of checker failures."""
     sk = skeleton()
     config = ActorConfig(plan_upper_body=upper_body)
     passed = failures = 0

@@ -42,9 +42,13 @@ LAST_SIZE = 1 << 14
 
 
 def readable(symbol: str) -> str:
-    """A numba function's mangled name (``_ZN<length><name>...``, maybe behind numba's
-    ``cpython.`` or ``cfunc.`` wrapper prefix) as its module and function (``gait._swing_pass``,
-    ``cfunc.gait._swing_pass``); any other name unchanged."""
+    """
+    Return a numba function's mangled name as its module and function.
+
+    A numba function's mangled name (``_ZN<length><name>...``, maybe behind numba's ``cpython.`` or
+    ``cfunc.`` wrapper prefix) as its module and function (``gait._swing_pass``,
+    ``cfunc.gait._swing_pass``); any other name unchanged.
+    """
     prefix = ''
     for wrapper in ('cpython.', 'cfunc.'):
         if symbol.startswith(wrapper + '_ZN'):
@@ -63,9 +67,13 @@ def readable(symbol: str) -> str:
 
 
 def kernel_symbols() -> dict:
-    """Address -> name (:func:`readable`) of every function compiled into the kernels of the
-    core's modules loaded in this process (compiled here; a helper linked into several kernels
-    is one function, named once)."""
+    """
+    Map the address of every compiled kernel function to its readable name.
+
+    Address -> name (:func:`readable`) of every function compiled into the kernels of the core's
+    modules loaded in this process (compiled here; a helper linked into several kernels is one
+    function, named once).
+    """
     import numba
     symbols = {}
     modules = [module for name, module in list(sys.modules.items())

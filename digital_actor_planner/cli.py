@@ -33,8 +33,12 @@ class InputError(ValueError):
 
 @dataclass(frozen=True)
 class CommandRow:
-    """One row of a command file: from ``time`` on (s), walk at ``linear_x`` m/s and turn at
-    ``angular_z`` rad/s; ``line`` is the row's line number in the file."""
+    """
+    One row of a command file: a command from a time on.
+
+    One row of a command file: from ``time`` on (s), walk at ``linear_x`` m/s and turn at
+    ``angular_z`` rad/s; ``line`` is the row's line number in the file.
+    """
 
     time: float
     linear_x: float

@@ -40,7 +40,7 @@ class MissingPackageError(RuntimeError):
 
 def frame_prefix(namespace: str) -> str:
     """
-    The TF frame prefix for an actor in ``namespace``: ``'actor1/'``, or ``''`` at the root.
+    Return the TF frame prefix for an actor in ``namespace``: ``'actor1/'``, or ``''`` at the root.
 
     Parameters
     ----------
@@ -63,13 +63,15 @@ def frame_prefix(namespace: str) -> str:
 
 
 def world_frame(namespace: str) -> str:
-    """The fixed frame of the actor in ``namespace`` (``'actor1/world'``, or ``'world'``)."""
+    """
+    Return the fixed frame of the actor in ``namespace`` (``'actor1/world'``, or ``'world'``).
+    """
     return frame_prefix(namespace) + WORLD_FRAME
 
 
 def is_true(value: str) -> bool:
     """
-    A launch argument's text as a boolean, as launch's ``IfCondition`` reads it.
+    Read a launch argument's text as a boolean, as launch's ``IfCondition`` reads it.
 
     Raises
     ------
@@ -87,7 +89,7 @@ def is_true(value: str) -> bool:
 
 def required_packages(arguments: Dict[str, str]) -> List[str]:
     """
-    The ROS packages the launch starts executables from, given its arguments.
+    Return the ROS packages the launch starts executables from, given its arguments.
 
     Parameters
     ----------
@@ -160,7 +162,7 @@ def launched_package_switches() -> Dict[str, str]:
 
 def rviz_config(text: str, namespace: str) -> str:
     """
-    The RViz config ``text`` made to show the actor in ``namespace``.
+    Make the RViz config ``text`` show the actor in ``namespace``.
 
     The shipped config's topics are relative, so RViz started in the namespace subscribes to
     that actor's; what a namespace changes is the TF frames: the fixed frame becomes the

@@ -78,7 +78,7 @@ def inertial(mass, centre):
 
 
 def link(name, shapes, material, mass):
-    """A body link: every shape is both visual and collision geometry."""
+    """Make a body link: every shape is both visual and collision geometry."""
     lines = [f'  <link name="{name}">']
     for geometry, xyz, rpy in shapes:
         lines.append(f'    <visual>{origin(xyz, rpy)}<geometry>{geometry}</geometry>'

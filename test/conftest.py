@@ -16,13 +16,13 @@ def pytest_configure(config):
 
 @pytest.fixture(scope='session')
 def skeleton():
-    """The actor model read from the package URDF (shared by the planner tests)."""
+    """Read the actor model from the package URDF (shared by the planner tests)."""
     from digital_actor_planner.core.skeleton import Skeleton
     return Skeleton()
 
 
 @pytest.fixture
 def artifacts_dir():
-    """A folder for files a person may want to look at after the run (screenshots, logs)."""
+    """Return a folder for files a person may want to look at after the run (screenshots, logs)."""
     os.makedirs(ARTIFACTS, exist_ok=True)
     return ARTIFACTS

@@ -28,8 +28,12 @@ def scene(name):
 
 
 def judged(blocks, environment):
-    """(times, frames, report): a walk's blocks stacked and judged by the independent
-    checker against ``environment``."""
+    """
+    Stack a walk's blocks and judge them with the independent checker.
+
+    (times, frames, report): a walk's blocks stacked and judged by the independent checker against
+    ``environment``.
+    """
     times = np.concatenate([b.times for b in blocks])
     frames = np.vstack([b.frames for b in blocks])
     return times, frames, check_trajectory(skeleton(), environment, times, frames)
@@ -62,9 +66,13 @@ def simulate(name, window_steps=3, upper_body=True, greedy_restart=True, lasting
 
 def actor_with_lasting_branches(environment, start, lasting_branches, config=ActorConfig(),
                                 planner_seed=0):
-    """An Actor built as its constructor builds one, but with the upper-body planner's
-    ``lasting_branches`` set (``()``: no branch prefers lasting postures) and its random
-    generator seeded with ``planner_seed`` (the constructor's: 0)."""
+    """
+    Build an Actor with the upper-body planner's lasting branches and seed set.
+
+    An Actor built as its constructor builds one, but with the upper-body planner's
+    ``lasting_branches`` set (``()``: no branch prefers lasting postures) and its random generator
+    seeded with ``planner_seed`` (the constructor's: 0).
+    """
     collision = BodyCollision(skeleton(), environment)
     upper = UpperBodyPlanner(skeleton(), collision,
                              UpperBodyConfig(check_budget=int(config.upper_body_check_budget),

@@ -359,8 +359,11 @@ class DynamixelEmulator:
             self.servos[servo_id]._set(address, value)
 
     def inject_hardware_error(self, servo_id: int, bits: int, shutdown: bool = False) -> None:
-        """Raise Hardware Error Status bits (bit 0 voltage, 2 overheating, 3 encoder,
-        4 electrical shock, 5 overload).
+        """
+        Raise Hardware Error Status bits.
+
+        Raise Hardware Error Status bits (bit 0 voltage, 2 overheating, 3 encoder, 4 electrical
+        shock, 5 overload).
 
         With ``shutdown`` the servo also drops torque and refuses to re-enable it, as a real
         X-series servo does for the bits selected in its Shutdown register.

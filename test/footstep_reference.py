@@ -1,5 +1,8 @@
-"""The footstep window's effort written out plainly, in Python on lists: the reference the
-compiled search (``core/footstep_search.py``) is tested against, term by term and bit for bit.
+"""
+The footstep window's effort written out plainly, in Python on lists.
+
+The footstep window's effort written out plainly, in Python on lists: the reference the compiled
+search (``core/footstep_search.py``) is tested against, term by term and bit for bit.
 
 Each function takes the ``FootstepPlanner`` whose settings and table layout it reads.
 """
@@ -79,9 +82,12 @@ def swing_clear_in(planner, memo: Tables, side: int, s_from: float, h_from: floa
 
 
 def rise_ahead_at(planner, memo: Tables, row: int, cumulative: int) -> float:
-    """``FootstepPlanner.rise_ahead`` of one foothold of the table (row ``row``, cumulative
-    interval index ``cumulative``), in plain Python on the lists and remembered. The same
-    arithmetic as ``rise_ahead``, so the same value.
+    """
+    Return ``FootstepPlanner.rise_ahead`` of one foothold, in plain Python.
+
+    ``FootstepPlanner.rise_ahead`` of one foothold of the table (row ``row``, cumulative interval
+    index ``cumulative``), in plain Python on the lists and remembered. The same arithmetic as
+    ``rise_ahead``, so the same value.
     """
     key = (row, cumulative)
     value = memo.rise_ahead.get(key)
@@ -112,9 +118,13 @@ def rise_ahead_at(planner, memo: Tables, row: int, cumulative: int) -> float:
 
 def plain_effort(planner, profile, config, lengths, sides, stance_s, stance_height, swing_s,
                  swing_height, s_init, previous_length, memo, banned) -> Optional[float]:
-    """Effort of a footstep configuration, or None if it is not collision-free: each footstep
-    from the stance foot on, each swing from where that foot was (``memo.swings`` remembers
-    the swing tests)."""
+    """
+    Return the effort of a footstep configuration, or None if it collides.
+
+    Effort of a footstep configuration, or None if it is not collision-free: each footstep from the
+    stance foot on, each swing from where that foot was (``memo.swings`` remembers the swing
+    tests).
+    """
     cfg = planner.config
     if config[0] in banned:
         return None
@@ -155,8 +165,12 @@ def plain_effort(planner, profile, config, lengths, sides, stance_s, stance_heig
 
 
 def step_effort(planner, length, rise, pitch, length_before, s_init) -> float:
-    """One footstep's share of the effort: length off the neutral one, height change, sole
-    pitch and change of length, each normalised by its range."""
+    """
+    Return one footstep's share of the effort.
+
+    One footstep's share of the effort: length off the neutral one, height change, sole pitch and
+    change of length, each normalised by its range.
+    """
     w_length, w_height, w_pitch, w_smooth, span, up, pitch_range = planner._effort_terms
     return (w_length * ((length - s_init) / span) ** 2
             + w_height * (rise / up) ** 2

@@ -15,7 +15,7 @@ _DOMAIN_IDS = itertools.count(start=(os.getpid() % 50) + 110)
 
 
 def fresh_domain_id() -> int:
-    """A ROS_DOMAIN_ID no other test in this run uses (110..232, Fast DDS safe range)."""
+    """Return a ROS_DOMAIN_ID no other test in this run uses (110..232, Fast DDS safe range)."""
     return next(_DOMAIN_IDS) % 120 + 110
 
 

@@ -14,7 +14,7 @@ RATE = 100.0
 
 
 def box(lower, upper):
-    """A closed box mesh spanning ``lower``..``upper`` ((3,) m each corner)."""
+    """Make a closed box mesh spanning ``lower``..``upper`` ((3,) m each corner)."""
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)
     mesh = trimesh.creation.box(extents=upper - lower)
     mesh.apply_translation((lower + upper) / 2)
@@ -46,10 +46,14 @@ def furniture_scene(rng):
 
 
 def pillars_moved_sideways(scenes, directory, centre, shift, skeleton=None):
-    """The pillars course (``scenes``/pillars.yaml) with its two pillars ``centre`` m either
-    side of a line ``shift`` m to the left of the actor's path (the course: 0.37 and 0), as a
-    scene YAML written to ``directory``; returns the loaded Scene. The pillars stand at x = 3 m
-    (radius 0.12 m)."""
+    """
+    Write the pillars course with its pillars moved sideways, and load it.
+
+    The pillars course (``scenes``/pillars.yaml) with its two pillars ``centre`` m either side of a
+    line ``shift`` m to the left of the actor's path (the course: 0.37 and 0), as a scene YAML
+    written to ``directory``; returns the loaded Scene. The pillars stand at x = 3 m (radius 0.12
+    m).
+    """
     centre, shift = float(centre), float(shift)
     source = os.path.join(scenes, 'pillars.yaml')
     with open(source) as stream:
@@ -65,8 +69,12 @@ def pillars_moved_sideways(scenes, directory, centre, shift, skeleton=None):
 
 
 def walk(skeleton, k, x0=-1.0, speed=0.9, swing_legs=True):
-    """Times (k,) s and frames (k, 22) at RATE Hz: the pelvis along +x at ``speed`` m/s from
-    ``x0``, root_z 0.92, the legs swinging (or straight), the upper body in its motion patterns."""
+    """
+    Return the times and frames of a straight walk along +x.
+
+    Times (k,) s and frames (k, 22) at RATE Hz: the pelvis along +x at ``speed`` m/s from ``x0``,
+    root_z 0.92, the legs swinging (or straight), the upper body in its motion patterns.
+    """
     times = np.arange(k) / RATE
     q = np.tile(skeleton.neutral(), (k, 1))
     q[:, skeleton.index['root_x']] = x0 + speed * times
@@ -79,6 +87,8 @@ def walk(skeleton, k, x0=-1.0, speed=0.9, swing_legs=True):
 
 
 def timed_body(skeleton, environment, frames, padding=0.0):
-    """The actor's body over ``frames`` in ``environment`` (an Environment), for CT-spaces."""
+    """
+    Return the actor's body over ``frames`` in ``environment`` (an Environment), for CT-spaces.
+    """
     return TimedBody(BodyKinematics(skeleton), BodyShapes(skeleton, padding),
                      EnvironmentIndex(environment.meshes, environment.objects), frames)

@@ -1,8 +1,11 @@
-"""The lower-body benchmark still runs and says what the README quotes from it: the machine on
-its first line and the footstep targets' verdict on its last, with the default search's
-effort within the target of the exhaustive optimum's. Time ratios depend on the machine:
-only a generous bound is asserted (one that a search judging most configurations would
-break)."""
+"""
+The lower-body benchmark runs and says what the README quotes from it.
+
+The lower-body benchmark still runs and says what the README quotes from it: the machine on its
+first line and the footstep targets' verdict on its last, with the default search's effort within
+the target of the exhaustive optimum's. Time ratios depend on the machine: only a generous bound is
+asserted (one that a search judging most configurations would break).
+"""
 import os
 import re
 import subprocess

@@ -88,8 +88,12 @@ def test_wall_reports_stuck_in_the_summary(tmp_path):
 
 
 def test_paper_search_reproduces_figure_8_with_a_one_step_window(tmp_path):
-    """`--paper-search` runs the paper's footstep search alone (the summary says so): with one
-    footstep in the window the actor steps into the Figure 8 pit and is stuck there."""
+    """
+    ``--paper-search`` runs the paper's footstep search alone.
+
+    `--paper-search` runs the paper's footstep search alone (the summary says so): with one
+    footstep in the window the actor steps into the Figure 8 pit and is stuck there.
+    """
     result = run_cli('simulate', '--scene', os.path.join(SCENES, 'figure8_trap.yaml'),
                      '--commands', os.path.join(SCENES, 'figure8_trap.csv'),
                      '--out', str(tmp_path / 't.csv'), '--summary', str(tmp_path / 's.json'),

@@ -14,7 +14,7 @@ def _rotation(rng) -> np.ndarray:
 
 
 def _shape(rng):
-    """A random box, cylinder or sphere near the origin: (kind, padded half extents, R, c)."""
+    """Make a random box, cylinder or sphere near the origin: (kind, padded half extents, R, c)."""
     kind = int(rng.integers(0, 3))
     if kind == convex.BOX:
         half = rng.uniform(0.02, 0.3, 3)

@@ -47,7 +47,7 @@ def pose_matrix(pose):
 
 
 def load_meshes(name):
-    """The course's meshes in the world frame, read straight from the files with trimesh."""
+    """Read the course's meshes in the world frame straight from the files with trimesh."""
     scene = read_scene(name)
     meshes = []
     for entry in scene['meshes']:
@@ -105,7 +105,7 @@ class World:
 
 
 def posture(skeleton, x, y, ground, yaw=0.0, **joints):
-    """A standing configuration at (x, y) on ground height ``ground``, with joints overridden."""
+    """Return a standing configuration at (x, y) on ground height ``ground``, joints overridden."""
     q = skeleton.neutral()
     q[skeleton.index['root_x']] = x
     q[skeleton.index['root_y']] = y

@@ -307,7 +307,7 @@ def test_bad_seeds_name_the_value(beam_space, seed, match):
 
 
 def with_and_without_going_back_directly(space, start, monkeypatch):
-    """(result, checks) of a search from ``start``, then of one without _return_directly."""
+    """Search from ``start``, then without _return_directly: (result, checks) of each."""
     out = []
     for shortcut in (True, False):
         if not shortcut:
@@ -535,8 +535,12 @@ def test_travel_frames_follow_the_slowest_joint(beam_space):
 
 
 def _neighbours_written_out(road, space, state, horizon, fraction, sub_goal):
-    """The neighbours _candidates ranks, in plain NumPy: (targets, frames, closeness,
-    index of the hold up to the next blocked stretch or None)."""
+    """
+    Rank the neighbours as _candidates does, in plain NumPy.
+
+    The neighbours _candidates ranks, in plain NumPy: (targets, frames, closeness, index of the
+    hold up to the next blocked stretch or None).
+    """
     last, here, hold_frames = space.frame_count - 1, state.frame, horizon.hold_frames
     on_objective = not np.any(state.deviation)
     targets, frames = [], []
@@ -632,9 +636,13 @@ def test_the_neighbour_table_is_the_neighbours_written_out(beam_space, table):
 
 
 def _lasting_written_out(space, horizon, held, here, targets, arrivals):
-    """Whether each target, held from its arrival, lasts through the blocked stretch ahead,
-    in plain Python with a dict cache ``held`` of (frame, rounded posture) -> legal: (lasting,
-    configurations checked)."""
+    """
+    Tell whether each target lasts through the blocked stretch, in plain Python.
+
+    Whether each target, held from its arrival, lasts through the blocked stretch ahead, in plain
+    Python with a dict cache ``held`` of (frame, rounded posture) -> legal: (lasting,
+    configurations checked).
+    """
     lasting = np.ones(len(targets), dtype=bool)
     blocked = np.flatnonzero(~horizon.free[here:])
     if not len(blocked):

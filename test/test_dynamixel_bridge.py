@@ -44,7 +44,9 @@ STARTUP_S = 90.0
 
 
 def expected_ticks(joint: str, angle: float) -> int:
-    """The e-Manual's resolution: 4096 ticks per turn, 2048 at the centre."""
+    """
+    Return the ticks of ``angle`` at the e-Manual's resolution: 4096 a turn, 2048 at the centre.
+    """
     return round(2048 + (DIRECTION[joint] * angle + OFFSET.get(joint, 0.0)) / TICK)
 
 
@@ -398,7 +400,7 @@ def test_invalid_configuration_exits_naming_the_item(tmp_path, override, named):
 
 
 def _eased_in(r, joint, placed, since):
-    """The goals sent to ``joint`` from ``since`` on: start where it was placed, bounded steps."""
+    """Check the goals sent to ``joint`` from ``since`` on: start where placed, bounded steps."""
     ticks = [t for _, t in r.emulator.goal_history(ID[joint])[since:]]
     assert ticks, f'no goals for {joint}\n{r.bridge.output()}'
     assert abs(ticks[0] - placed) <= 1, (joint, ticks[:3], placed)  # torque on moves nothing

@@ -119,12 +119,12 @@ def launch(monkeypatch):
 
 
 def nodes(actions):
-    """The launched nodes by package."""
+    """Return the launched nodes by package."""
     return {a.kwargs['package']: a for a in actions if type(a).__name__ == 'Node'}
 
 
 def parameters(node):
-    """A node's parameters from its dictionaries (ParameterValue unwrapped)."""
+    """Return a node's parameters from its dictionaries (ParameterValue unwrapped)."""
     merged = {}
     for entry in node.kwargs.get('parameters', []):
         if isinstance(entry, dict):

@@ -67,7 +67,7 @@ def declared(manifest, tags=DEPEND_TAGS):
 
 
 def resolve(rule, family, codename):
-    """What rosdep installs for ``rule`` on ``family``/``codename`` (None: nothing)."""
+    """Return what rosdep installs for ``rule`` on ``family``/``codename`` (None: nothing)."""
     entry = rule.get(family, rule.get('*'))
     if isinstance(entry, dict) and not set(entry) & {'pip', 'apt', 'source'}:
         entry = entry.get(codename, entry.get('*'))
@@ -78,8 +78,12 @@ def resolve(rule, family, codename):
 
 
 def third_party_imports(folder):
-    """Top-level modules imported by the sources under ``folder``, outside the standard
-    library and the project itself, with a file that imports each."""
+    """
+    Find the third-party modules imported by the sources under ``folder``.
+
+    Top-level modules imported by the sources under ``folder``, outside the standard library and
+    the project itself, with a file that imports each.
+    """
     found = {}
     local = {'digital_actor_planner'} | {
         os.path.splitext(name)[0] for _, _, names in os.walk(os.path.join(REPO, 'test'))

@@ -19,7 +19,7 @@ SCENES = os.path.join(ROOT, 'config', 'scenes')
 
 @pytest.fixture(scope='module')
 def recorded(tmp_path_factory):
-    """The same run written as CSV and as a bag."""
+    """Write the same run as CSV and as a bag."""
     folder = tmp_path_factory.mktemp('recording')
     run = ['simulate', '--scene', os.path.join(SCENES, 'stairs_up.yaml'),
            '--commands', os.path.join(SCENES, 'stairs_up.csv')]

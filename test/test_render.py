@@ -36,7 +36,7 @@ def course_meshes(name):
 
 
 def standing_run(skeleton, duration, distance, rate=100.0):
-    """A standing actor translated along +x: times (k,), frames (k, 22)."""
+    """Return a standing actor translated along +x: times (k,), frames (k, 22)."""
     times = np.arange(0.0, duration + 1e-9, 1.0 / rate)
     frames = np.tile(skeleton.neutral(), (len(times), 1))
     frames[:, skeleton.index['root_x']] = np.linspace(0.0, distance, len(times))

@@ -79,11 +79,15 @@ def test_table_is_passed_with_the_left_elbow_flexed_not_the_arm_swung_back():
 
 @pytest.mark.slow
 def test_without_lasting_postures_the_arm_swings_back_past_the_table():
-    """What the arms' preference for lasting postures changes (UpperBodyConfig.lasting_branches):
+    """
+    Without lasting postures the arm swings back past the table.
+
+    What the arms' preference for lasting postures changes (UpperBodyConfig.lasting_branches):
     without it, best-first on closeness takes the arm held in (legal for a while), and past the
-    table's near end only swinging the arm far back is left; the course is still passed. The
-    search alone, each step afresh: a step seeded with the last plan (ActorConfig.upper_body_seed)
-    goes on along the posture the first step at the table found, whichever it was."""
+    table's near end only swinging the arm far back is left; the course is still passed. The search
+    alone, each step afresh: a step seeded with the last plan (ActorConfig.upper_body_seed) goes on
+    along the posture the first step at the table found, whichever it was.
+    """
     sk = skeleton()
     _, _, frames, blocks = simulate('table', lasting_branches=(), upper_body_seed=False)
     signed = frames - motion_patterns(sk, frames)
@@ -122,11 +126,15 @@ def test_whole_body_planning_is_deterministic():
 
 @pytest.mark.slow
 def test_random_furniture_beside_the_path_is_passed_without_a_touch():
-    """Sixteen seeded tables and cabinets at arm height beside the path (the first fourteen
-    scenes of bench_arm_obstacles.py --seed 0, and its scenes 67 and 86: tables about 1 m high
-    with a tall thing on the near edge, which the arms passed only once they preferred lasting
-    postures). Every walk is judged by the independent checker with the URDF's collision
-    shapes; each one gets past the furniture, mostly by leaving the arm's swing."""
+    """
+    Random furniture beside the path is passed without a touch.
+
+    Sixteen seeded tables and cabinets at arm height beside the path (the first fourteen scenes of
+    bench_arm_obstacles.py --seed 0, and its scenes 67 and 86: tables about 1 m high with a tall
+    thing on the near edge, which the arms passed only once they preferred lasting postures). Every
+    walk is judged by the independent checker with the URDF's collision shapes; each one gets past
+    the furniture, mostly by leaving the arm's swing.
+    """
     sk = skeleton()
     rng = np.random.default_rng(0)
     scenes = [furniture_scene(rng) for _ in range(87)]
@@ -178,10 +186,14 @@ def test_pillars_off_the_path_are_passed_or_met_in_front_never_between(tmp_path,
 
 def test_the_moved_pillars_plan_the_same_with_the_expansion_compiled_as_in_python(
         tmp_path, monkeypatch):
-    """The search's expansion (ct_roadmap._expand) as a kernel and as plain Python (its
-    tried neighbours in Python's dictionaries) plans this walk alike. Pillars 2 cm to the
-    left, 0.35 m either side: here a neighbour's rounded target was -0.0 where the one tried
-    was 0.0, which numba's dictionaries told apart (bit by bit) and Python's did not."""
+    """
+    The moved pillars plan the same with the expansion compiled as in Python.
+
+    The search's expansion (ct_roadmap._expand) as a kernel and as plain Python (its tried
+    neighbours in Python's dictionaries) plans this walk alike. Pillars 2 cm to the left, 0.35 m
+    either side: here a neighbour's rounded target was -0.0 where the one tried was 0.0, which
+    numba's dictionaries told apart (bit by bit) and Python's did not.
+    """
     from digital_actor_planner.core import ct_roadmap
     sk = skeleton()
     sc = pillars_moved_sideways(SCENES, tmp_path, 0.35, 0.02, sk)
@@ -228,10 +240,14 @@ def test_what_the_preview_margin_and_the_pause_change_at_the_pillars(
 @pytest.mark.slow
 @pytest.mark.parametrize('name', ['low_beam', 'uneven_beam'])
 def test_a_slow_walk_bends_under_the_beam_in_time(name):
-    """At 0.4 m/s the 0.5 s preview sees only 0.2 m ahead: the waist must start bending when
-    the head is farther from the beam than that. The preview covers at least 0.5 m
-    (ActorConfig.upper_body_preview_distance); without that the actor stops in front of both
-    beams. The walk is judged by the independent checker."""
+    """
+    A slow walk bends under the beam in time.
+
+    At 0.4 m/s the 0.5 s preview sees only 0.2 m ahead: the waist must start bending when the head
+    is farther from the beam than that. The preview covers at least 0.5 m
+    (ActorConfig.upper_body_preview_distance); without that the actor stops in front of both beams.
+    The walk is judged by the independent checker.
+    """
     sk = skeleton()
     sc = scene(name)
     for distance, passes in ((0.5, True), (0.0, False)):
@@ -251,10 +267,13 @@ def test_a_slow_walk_bends_under_the_beam_in_time(name):
 
 @pytest.mark.slow
 def test_the_steps_after_the_first_under_the_beam_go_on_along_the_last_plan():
-    """Receding horizon (ActorConfig.upper_body_seed): the first step that meets the beam
-    searches; the next ones start along the rest of its plan and check far fewer
-    configurations, and the walk is the same kind of walk (under the beam, back on the
-    pattern, to the end)."""
+    """
+    The steps after the first under the beam go on along the last plan.
+
+    Receding horizon (ActorConfig.upper_body_seed): the first step that meets the beam searches;
+    the next ones start along the rest of its plan and check far fewer configurations, and the walk
+    is the same kind of walk (under the beam, back on the pattern, to the end).
+    """
     sc = scene('low_beam')
     commands = read_commands(os.path.join(SCENES, 'low_beam.csv'))
     runs = {}
@@ -287,9 +306,13 @@ def test_the_steps_after_the_first_under_the_beam_go_on_along_the_last_plan():
 
 @pytest.mark.slow
 def test_a_step_after_a_stop_is_not_seeded_with_the_plan_from_before_it():
-    """The last plan seeds only the step that directly follows it: after the actor stopped
-    (here under the beam, the waist bent), the pelvis did not go on as that plan's preview
-    had it, and the next step searches afresh."""
+    """
+    A step after a stop is not seeded with the plan from before it.
+
+    The last plan seeds only the step that directly follows it: after the actor stopped (here under
+    the beam, the waist bent), the pelvis did not go on as that plan's preview had it, and the next
+    step searches afresh.
+    """
     sc = scene('low_beam')
     actor = Actor(skeleton(), sc.environment, ActorConfig(), start=sc.start)
     calls = []

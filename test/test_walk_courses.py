@@ -96,8 +96,12 @@ def test_planning_is_deterministic():
 
 
 def turning_walk(speed, rate, gait=None):
-    """Straight for 1.5 s at ``speed``, then turning at ``rate`` until 7 s, on the flat course;
-    returns the checker's report and the final heading."""
+    """
+    Walk straight, then turn, on the flat course.
+
+    Straight for 1.5 s at ``speed``, then turning at ``rate`` until 7 s, on the flat course;
+    returns the checker's report and the final heading.
+    """
     from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
     sc = scene('flat')
     config = ActorConfig(plan_upper_body=False, gait=gait or GaitConfig())
@@ -123,10 +127,14 @@ def test_a_sharp_fast_turn_keeps_the_stance_feet_within_1_cm(speed, rate):
 
 
 def test_without_the_turn_ease_the_sharpest_turn_slides_a_foot():
-    """What keeps the sharpest turn's feet still: with a 2-DOF hip the swing hip drifts across
-    its foot's plane while the pelvis travels, so without the ease the lifting foot slides
-    (11.6 mm here; since the landing toe-in is bounded, ``ActorConfig.max_toe_in``, the feet
-    point less far apart in turns and this right turn is the one that slides most)."""
+    """
+    Without the turn ease the sharpest turn slides a foot.
+
+    What keeps the sharpest turn's feet still: with a 2-DOF hip the swing hip drifts across its
+    foot's plane while the pelvis travels, so without the ease the lifting foot slides (11.6 mm
+    here; since the landing toe-in is bounded, ``ActorConfig.max_toe_in``, the feet point less far
+    apart in turns and this right turn is the one that slides most).
+    """
     eased, _ = turning_walk(0.8, -1.0)
     plain, heading = turning_walk(0.8, -1.0, GaitConfig(turn_ease_heading=0.0))
     assert heading < -1.0, 'it turned'

@@ -34,7 +34,7 @@ _TINY = 1e-24
 @kernel('UniTuple(f8, 3)(i8, f8[:], f8[:, :], f8[:], f8[:, :], f8, f8, f8)')
 def support(kind, half, rotation, centre, corners, dx, dy, dz):
     """
-    The shape's farthest point along the direction (dx, dy, dz), world frame, m.
+    Return the shape's farthest point along the direction (dx, dy, dz), world frame, m.
 
     ``kind`` is :data:`BOX` (``half``: half extents), :data:`CYLINDER` (radius, half length),
     :data:`SPHERE` (radius) posed at ``rotation`` (3, 3) and ``centre`` (3,), or
@@ -81,7 +81,7 @@ def _cross(ax, ay, az, bx, by, bz):
 
 @kernel('UniTuple(f8, 3)(i8, f8[:], f8[:, :])')
 def _middle(kind, centre, corners):
-    """A point inside the shape: its centre, a triangle's centroid."""
+    """Return a point inside the shape: its centre, a triangle's centroid."""
     if kind != TRIANGLE:
         return centre[0], centre[1], centre[2]
     return ((corners[0, 0] + corners[1, 0] + corners[2, 0]) / 3.0,

@@ -240,7 +240,7 @@ def search_footstep_window(table: FootholdTable, limits: WindowLimits, feet: Win
 
 
 def _single_moves(configuration: Configuration, m: int) -> Iterator[Configuration]:
-    """The breadth-first search's moves: one footstep one interval shorter, then longer."""
+    """List the breadth-first search's moves: one footstep one interval shorter, then longer."""
     for i, j in enumerate(configuration):
         for delta in (-1, 1):
             if 0 <= j + delta <= m:
@@ -248,9 +248,13 @@ def _single_moves(configuration: Configuration, m: int) -> Iterator[Configuratio
 
 
 def _climbing_moves(configuration: Configuration, m: int) -> Iterator[Configuration]:
-    """Hill-climbing's neighbours: each single move, followed by that move with the next
-    footstep changed the opposite way, so that the footholds after them stay where they are
-    (without it the climb stalls on ridges of the effort)."""
+    """
+    List hill-climbing's neighbours: single moves and compensated pairs.
+
+    Hill-climbing's neighbours: each single move, followed by that move with the next footstep
+    changed the opposite way, so that the footholds after them stay where they are (without it the
+    climb stalls on ridges of the effort).
+    """
     n = len(configuration)
     for i, j in enumerate(configuration):
         for delta in (-1, 1):
@@ -264,8 +268,12 @@ def _climbing_moves(configuration: Configuration, m: int) -> Iterator[Configurat
 
 def _hill_climb(configuration: Configuration,
                 effort: Callable[[Configuration], Optional[float]], m: int) -> Configuration:
-    """Move to the best collision-free neighbour while it lowers the effort (by more than
-    :data:`IMPROVEMENT` than the best before it); the configuration where that ends."""
+    """
+    Climb to the best collision-free neighbour while the effort falls.
+
+    Move to the best collision-free neighbour while it lowers the effort (by more than
+    :data:`IMPROVEMENT` than the best before it); the configuration where that ends.
+    """
     value = effort(configuration)
     while True:
         best, best_value = None, value
@@ -283,7 +291,7 @@ def configuration_effort(configuration: Configuration, table: FootholdTable,
                          banned_first: FrozenSet[int] = frozenset(),
                          banned_lengths: FrozenSet[int] = frozenset()) -> Optional[float]:
     """
-    The effort criterion of a configuration, None where it is not collision-free.
+    Return the effort criterion of a configuration, None where it is not collision-free.
 
     Each footstep from the stance foot on must land on a foothold, rise or drop no more than
     allowed, and its foot must swing there from where it was two footsteps before (the swing
@@ -368,8 +376,11 @@ def swing_clear(table: FootholdTable, limits: WindowLimits, side: int,
 
 def step_effort(limits: WindowLimits, feet: WindowFeet, length: float, rise: float,
                 pitch: float, length_before: float) -> float:
-    """One footstep's share of the effort: its length off the neutral one, its height change,
-    its sole's pitch and its change of length, each normalised by its range and squared.
+    """
+    Return one footstep's share of the effort.
+
+    One footstep's share of the effort: its length off the neutral one, its height change, its
+    sole's pitch and its change of length, each normalised by its range and squared.
 
     Parameters
     ----------
@@ -394,10 +405,12 @@ def greedy_configuration(table: FootholdTable, limits: WindowLimits, feet: Windo
                          banned_first: FrozenSet[int] = frozenset(),
                          banned_lengths: FrozenSet[int] = frozenset()
                          ) -> Optional[Configuration]:
-    """The configuration built footstep by footstep, each the cheapest by :func:`step_effort`
-    given the ones before (the shortest of equals), among footholds in step reach; not
-    judged for the swings (the search judges it whole). None where some footstep has no
-    candidate.
+    """
+    Build the configuration footstep by footstep, each the cheapest.
+
+    The configuration built footstep by footstep, each the cheapest by :func:`step_effort` given
+    the ones before (the shortest of equals), among footholds in step reach; not judged for the
+    swings (the search judges it whole). None where some footstep has no candidate.
 
     Parameters
     ----------

@@ -189,8 +189,11 @@ def _compile_plan(plan) -> tuple:
 @kernel('void(f8[:, ::1], i8[::1], i8[::1], f8[:, :, ::1], i8[::1], i8[::1], '
         'f8[:, :, :, ::1])')
 def _compose(qs, parents, children, basis, motion, joint_q, out):
-    """Compose a compiled chain (see :func:`_compile_plan`) for configurations ``qs`` (k, 22)
-    into ``out`` (k, L, 4, 4), whose link row 0 is the root (set to the identity here).
+    """
+    Compose a compiled chain for configurations into link transforms.
+
+    Compose a compiled chain (see :func:`_compile_plan`) for configurations ``qs`` (k, 22) into
+    ``out`` (k, L, 4, 4), whose link row 0 is the root (set to the identity here).
 
     Per frame, each joint's local transform A + w1 B + w2 C is composed onto its parent link's;
     ``motion``: 0 fixed, 1 revolute, 2 prismatic, with the joint's index ``joint_q`` into a
@@ -226,9 +229,13 @@ def _compose(qs, parents, children, basis, motion, joint_q, out):
 @kernel('f8[:, :, :, ::1](f8[:, ::1], i8[::1], i8[::1], f8[:, :, ::1], i8[::1], i8[::1], '
         'i8[::1], f8[:, :, ::1])')
 def _shape_transforms(qs, parents, children, basis, motion, joint_q, rows, origins):
-    """Shape->world transforms (k, S, 4, 4) of a compact chain (see
+    """
+    Compute shape->world transforms of a compact chain.
+
+    Shape->world transforms (k, S, 4, 4) of a compact chain (see
     :meth:`Skeleton.shape_transforms_at`): :func:`_compose`, then each shape's origin
-    ``origins[i]`` composed onto its link's row ``rows[i]`` (rigid, top three rows)."""
+    ``origins[i]`` composed onto its link's row ``rows[i]`` (rigid, top three rows).
+    """
     k, count = qs.shape[0], rows.shape[0]
     link = np.empty((k, parents.shape[0] + 1, 4, 4))
     _compose(qs, parents, children, basis, motion, joint_q, link)
@@ -411,7 +418,7 @@ class Skeleton:
 
     def branch(self, name: str) -> np.ndarray:
         """
-        Indices of a branch of Figure 2.
+        Return the indices of a branch of Figure 2.
 
         ``name`` is 'root', 'waist', 'left_arm', 'right_arm', 'left_leg' or 'right_leg'.
         """
@@ -436,7 +443,7 @@ class Skeleton:
         raise ValueError(f'unknown branch {name!r}')
 
     def neutral(self) -> np.ndarray:
-        """A standing configuration at the origin: (22,) float64, rad or m."""
+        """Return a standing configuration at the origin: (22,) float64, rad or m."""
         q = np.zeros(len(self.joint_names))
         q[self.index['root_z']] = self.leg.standing_height
         for side in SIDES:
@@ -450,7 +457,7 @@ class Skeleton:
 
     # -- kinematics ----------------------------------------------------------------------
     def _plan_for(self, links):
-        """The compiled chain needed to place ``links`` (cached per link set)."""
+        """Return the compiled chain needed to place ``links`` (cached per link set)."""
         key = frozenset(links)
         compiled = self._partial_plans.get(key)
         if compiled is None:

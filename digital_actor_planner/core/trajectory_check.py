@@ -205,8 +205,11 @@ class _Soles:
 
 def _leg_contacts(skeleton, transforms: np.ndarray, times: np.ndarray,
                   tol: float) -> Tuple[Tuple[str, str, float, int], ...]:
-    """Pairs of links of the two legs interpenetrating by more than ``tol`` (m): each shape
-    is shrunk by half of it and tested with FCL where the bounding spheres overlap.
+    """
+    Find the pairs of links of the two legs that interpenetrate.
+
+    Pairs of links of the two legs interpenetrating by more than ``tol`` (m): each shape is shrunk
+    by half of it and tested with FCL where the bounding spheres overlap.
 
     ``transforms`` (k, S, 4, 4) places every collision shape at the checked frames, whose
     times are ``times`` (k,).

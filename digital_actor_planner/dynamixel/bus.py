@@ -209,9 +209,13 @@ class ServoBus:
         return self.collect_positions()
 
     def request_positions(self, ids: Iterable[int]) -> bool:
-        """Send the sync read of present positions; the replies are taken by
-        :meth:`collect_positions`. Work done in between overlaps the replies' wire time.
-        Return False if there is nothing to read or the request could not be sent."""
+        """
+        Send the sync read of present positions.
+
+        Send the sync read of present positions; the replies are taken by
+        :meth:`collect_positions`. Work done in between overlaps the replies' wire time. Return
+        False if there is nothing to read or the request could not be sent.
+        """
         port = self._require()
         ids = tuple(ids)
         self._pending = False

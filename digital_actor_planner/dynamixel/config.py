@@ -92,12 +92,14 @@ class BridgeConfig:
 
 
 def servo_joint_names(skeleton: Skeleton) -> Tuple[str, ...]:
-    """The 18 body joints that can be servos (every joint but the root), in skeleton order."""
+    """
+    Return the 18 body joints that can be servos (every joint but the root), in skeleton order.
+    """
     return tuple(n for n in skeleton.joint_names if n not in ROOT_JOINTS)
 
 
 def default_servo(skeleton: Skeleton, joint: str, servo_id: int) -> ServoConfig:
-    """A servo for ``joint`` using the URDF position and velocity limits as its envelope."""
+    """Make a servo for ``joint`` using the URDF position and velocity limits as its envelope."""
     i = skeleton.index[joint]
     return ServoConfig(joint=joint, id=servo_id, min_position=float(skeleton.lower[i]),
                        max_position=float(skeleton.upper[i]),
