@@ -63,9 +63,7 @@ def frame_prefix(namespace: str) -> str:
 
 
 def world_frame(namespace: str) -> str:
-    """
-    Return the fixed frame of the actor in ``namespace`` (``'actor1/world'``, or ``'world'``).
-    """
+    """Return the actor's fixed frame in ``namespace`` (``'actor1/world'``, or ``'world'``)."""
     return frame_prefix(namespace) + WORLD_FRAME
 
 

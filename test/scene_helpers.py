@@ -87,8 +87,6 @@ def walk(skeleton, k, x0=-1.0, speed=0.9, swing_legs=True):
 
 
 def timed_body(skeleton, environment, frames, padding=0.0):
-    """
-    Return the actor's body over ``frames`` in ``environment`` (an Environment), for CT-spaces.
-    """
+    """Return the actor's body over ``frames`` in ``environment``, for CT-spaces."""
     return TimedBody(BodyKinematics(skeleton), BodyShapes(skeleton, padding),
                      EnvironmentIndex(environment.meshes, environment.objects), frames)

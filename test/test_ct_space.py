@@ -597,7 +597,7 @@ def test_fixing_a_branch_moves_the_body_as_if_built_with_it(skeleton):
 
 def test_the_body_poses_every_shape_as_the_shape_model_does(skeleton):
     """
-    TimedBody poses every shape as the shape model does.
+    The timed body poses every shape as the shape model does.
 
     TimedBody's shape poses and boxes, written in place by one kernel, are those of
     BodyShapes.poses and .bounds, and its swept boxes their extremes over the frames.

@@ -44,9 +44,7 @@ STARTUP_S = 90.0
 
 
 def expected_ticks(joint: str, angle: float) -> int:
-    """
-    Return the ticks of ``angle`` at the e-Manual's resolution: 4096 a turn, 2048 at the centre.
-    """
+    """Return the ticks of ``angle``: the e-Manual's 4096 a turn, 2048 at the centre."""
     return round(2048 + (DIRECTION[joint] * angle + OFFSET.get(joint, 0.0)) / TICK)
 
 

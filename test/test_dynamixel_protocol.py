@@ -149,9 +149,13 @@ def test_stuffed_parameters_cross_the_wire_intact(bus):
 
 
 def _answered(call, *args, result_at: int):
-    """``call(*args)`` until the reply arrives in time: the SDK waits about 35 ms for it, and
-    a loaded machine can keep the emulator thread from answering that fast. Only a timed-out
-    exchange is repeated; any answer that came back is returned as it is."""
+    """
+    Repeat ``call(*args)`` until the reply arrives in time.
+
+    The SDK waits about 35 ms for it, and a loaded machine can keep the emulator thread from
+    answering that fast. Only a timed-out exchange is repeated; any answer that came back is
+    returned as it is.
+    """
     deadline = time.monotonic() + 20.0
     while True:
         reply = call(*args)

@@ -77,7 +77,7 @@ def _kernels():
 
 def test_numba_is_installed_and_the_kernels_are_compiled():
     """
-    numba is installed and the kernels are compiled.
+    The kernels are compiled: numba is installed.
 
     requirements.txt pins numba: without it every kernel runs as Python, many times slower, and the
     planning-time numbers in the README would not hold.
@@ -267,9 +267,7 @@ def _rotation(rng) -> np.ndarray:
 
 
 def test_the_separating_axis_tests():
-    """
-    Oriented boxes against boxes and triangles, parallel edges included: compiled and as Python.
-    """
+    """Oriented boxes against boxes and triangles, parallel edges included, compiled and not."""
     rng = np.random.default_rng(9)
     count = 400
     rotation_a = np.array([_rotation(rng) for _ in range(count)])

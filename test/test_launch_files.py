@@ -61,7 +61,7 @@ def _kinds():
 
 @pytest.fixture
 def launch(monkeypatch):
-    """``launch(installed=..., **arguments)``: the actions actor.launch.py returns."""
+    """Return ``launch(installed=..., **arguments)``: the actions actor.launch.py returns."""
     for module, classes in _kinds().items():
         fake = types.ModuleType(module)
         fake.__dict__.update(classes)

@@ -92,9 +92,7 @@ class BridgeConfig:
 
 
 def servo_joint_names(skeleton: Skeleton) -> Tuple[str, ...]:
-    """
-    Return the 18 body joints that can be servos (every joint but the root), in skeleton order.
-    """
+    """Return the 18 body joints that can be servos (all but the root), in skeleton order."""
     return tuple(n for n in skeleton.joint_names if n not in ROOT_JOINTS)
 
 
@@ -178,7 +176,7 @@ def config_from_parameters(parameters: Mapping[str, object], skeleton: Skeleton)
 
     Parameters
     ----------
-    parameters
+    parameters : Mapping[str, object]
         ``port``, ``baud_rate``, ... and ``servo_joints`` (list of joint names) with
         ``servos.<joint>.<field>`` for each joint (fields in :data:`SERVO_FIELDS`); missing
         servo fields default to ID = position in the list + 1, zero offset, direction 1 and
