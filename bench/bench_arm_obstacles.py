@@ -21,14 +21,13 @@ import argparse
 import os
 import sys
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
 from course_runs import actor_with_lasting_branches, skeleton  # noqa: E402
 from digital_actor_planner.core.actor import run_commands  # noqa: E402
 from digital_actor_planner.core.environment import Environment  # noqa: E402
 from digital_actor_planner.core.upper_body import motion_patterns  # noqa: E402
+import numpy as np  # noqa: E402
 from scene_helpers import furniture_scene  # noqa: E402
 
 SETTINGS = (('lasting arm postures (default)', ('left_arm', 'right_arm')),

@@ -25,8 +25,6 @@ import os
 import sys
 import time
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
 from bench_common import machine, print_command  # noqa: E402
@@ -34,6 +32,7 @@ from course_runs import judged, scene, skeleton  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 from digital_actor_planner.core.environment import Environment  # noqa: E402
 from digital_actor_planner.core.footsteps import FootstepConfig  # noqa: E402
+import numpy as np  # noqa: E402
 from scene_helpers import box  # noqa: E402
 
 LEGS = ActorConfig(plan_upper_body=False)

@@ -26,12 +26,11 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, '..', 'test'))
 
-import dynamixel_emulator as emu  # noqa: E402
-
 from digital_actor_planner.core.skeleton import Skeleton  # noqa: E402
 from digital_actor_planner.dynamixel.bus import BusError, ServoBus  # noqa: E402
 from digital_actor_planner.dynamixel.config import load_config  # noqa: E402
 from digital_actor_planner.dynamixel.controller import BridgeController  # noqa: E402
+import dynamixel_emulator as emu  # noqa: E402
 
 BAUD = 1_000_000
 

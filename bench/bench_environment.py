@@ -9,13 +9,12 @@ import argparse
 import os
 import time
 
-import numpy as np
-import trimesh
-
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment, start_configuration
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.core.trajectory_check import check_trajectory
+import numpy as np
+import trimesh
 
 
 def _box(low, high):

@@ -13,8 +13,6 @@ import os
 import sys
 import time
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
@@ -23,6 +21,7 @@ from course_runs import scene, SCENES, skeleton  # noqa: E402
 from digital_actor_planner.cli import read_commands  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 from digital_actor_planner.core.footsteps import FootstepConfig, FootstepPlanner  # noqa: E402
+import numpy as np  # noqa: E402
 
 COURSES = ('flat', 'rough', 'slope', 'stairs_up', 'stairs_down', 'blocks', 'gap', 'turn')
 

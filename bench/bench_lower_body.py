@@ -28,8 +28,6 @@ import sys
 import tempfile
 import time
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
@@ -38,6 +36,7 @@ from course_runs import scene, skeleton  # noqa: E402
 from digital_actor_planner.cli import read_commands  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 from digital_actor_planner.core.footsteps import FootstepPlanner  # noqa: E402
+import numpy as np  # noqa: E402
 
 COURSES = ('flat', 'slope', 'stairs_up', 'stairs_down', 'gap', 'figure8_trap', 'blocks',
            'rough', 'turn')

@@ -14,8 +14,6 @@ import os
 import sys
 import time
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
@@ -26,7 +24,8 @@ from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  #
 from digital_actor_planner.core.collision import BodyCollision  # noqa: E402
 from digital_actor_planner.core.ct_roadmap import CTRoadmap  # noqa: E402
 from digital_actor_planner.core.upper_body import (UpperBodyConfig,  # noqa: E402
-                                                   UpperBodyPlanner)
+                                                   UpperBodyPlanner)  # noqa: E402
+import numpy as np  # noqa: E402
 
 COURSES = ('low_beam', 'table', 'pillars', 'uneven_beam')
 

@@ -31,13 +31,12 @@ import argparse
 import os
 import sys
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
 from bench_common import print_command  # noqa: E402
 from course_runs import judged, scene, skeleton  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
+import numpy as np  # noqa: E402
 
 COURSES = ('flat', 'rough', 'blocks', 'stairs_up', 'gap', 'low_beam', 'table', 'pillars')
 AWAY = ((0.0, 1.0), (0.0, -1.0), (0.3, 0.8), (0.3, -0.8), (0.5, 0.0), (-0.4, 0.0))

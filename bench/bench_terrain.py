@@ -27,16 +27,15 @@ import os
 import sys
 import time
 
-import numpy as np
-import trimesh
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
 from bench_common import print_command  # noqa: E402
 from course_runs import judged, skeleton  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 from digital_actor_planner.core.environment import Environment  # noqa: E402
+import numpy as np  # noqa: E402
 from scene_helpers import box  # noqa: E402
+import trimesh  # noqa: E402
 
 #: Half the width of the swept features' floor and of the random courses, m.
 SWEEP_HALF_WIDTH = 1.0

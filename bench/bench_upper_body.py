@@ -27,15 +27,14 @@ import os
 import sys
 import time
 
-import numpy as np
-import trimesh
-
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.ct_space import CTSpace, TimedBody
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.core.upper_body import (
     BRANCH_ORDER, motion_patterns, UpperBodyConfig, UpperBodyPlanner)
+import numpy as np
+import trimesh
 
 RATE = 100.0
 WINDOW = 61

@@ -17,14 +17,13 @@ import os
 import sys
 import time
 
-import numpy as np
-
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
 sys.path.insert(0, os.path.join(REPO, 'test'))
 sys.path.insert(0, os.path.join(REPO, 'test', 'browser'))
 
 from chromium_page import ChromiumPage, missing_tools  # noqa: E402
+import numpy as np  # noqa: E402
 from ros_harness import NodeProcess, ros_env, wait_for  # noqa: E402
 
 

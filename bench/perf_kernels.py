@@ -33,7 +33,7 @@ atexit.register(shutil.rmtree, os.environ['NUMBA_CACHE_DIR'], ignore_errors=True
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
 from bench_common import print_command  # noqa: E402
-from course_runs import SCENES, course_names, scene, skeleton  # noqa: E402
+from course_runs import course_names, scene, SCENES, skeleton  # noqa: E402
 from digital_actor_planner.cli import read_commands  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 

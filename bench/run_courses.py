@@ -11,13 +11,12 @@ import os
 import sys
 import time
 
-import numpy as np
-
 from digital_actor_planner.cli import read_commands
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
 from digital_actor_planner.core.environment import load_scene
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.core.trajectory_check import check_trajectory
+import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 

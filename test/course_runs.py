@@ -2,8 +2,6 @@
 import functools
 import os
 
-import numpy as np
-
 from digital_actor_planner.cli import read_commands
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
 from digital_actor_planner.core.collision import BodyCollision
@@ -12,6 +10,7 @@ from digital_actor_planner.core.footsteps import FootstepConfig
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.core.trajectory_check import check_trajectory
 from digital_actor_planner.core.upper_body import UpperBodyConfig, UpperBodyPlanner
+import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = os.path.join(ROOT, 'config', 'scenes')

@@ -6,8 +6,8 @@ search (``core/footstep_search.py``) is tested against, term by term and bit for
 
 Each function takes the ``FootstepPlanner`` whose settings and table layout it reads.
 """
-import math
 from dataclasses import dataclass, field
+import math
 from typing import Dict, List, Optional, Tuple
 
 import numpy as np

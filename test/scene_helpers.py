@@ -1,14 +1,13 @@
 """Small builders shared by the planner tests."""
 import os
 
-import numpy as np
-import trimesh
-import yaml
-
 from digital_actor_planner.core.ct_space import (
     BodyKinematics, BodyShapes, EnvironmentIndex, TimedBody)
 from digital_actor_planner.core.environment import load_scene
 from digital_actor_planner.core.upper_body import motion_patterns
+import numpy as np
+import trimesh
+import yaml
 
 RATE = 100.0
 

@@ -1,14 +1,13 @@
 """The actor pipeline: commands in, timed frames out, one block at a time (§3.2)."""
-import numpy as np
-import pytest
-
 from course_runs import judged, scene, skeleton
-from scene_helpers import box
 from digital_actor_planner.core import actor as actor_module
 from digital_actor_planner.core import gait as gait_module
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands, validate
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.upper_body import UpperBodyPlan
+import numpy as np
+import pytest
+from scene_helpers import box
 
 
 @pytest.fixture

@@ -13,7 +13,7 @@ import pytest
 
 launch_testing = pytest.importorskip('launch_testing')
 
-import launch  # noqa: E402
+import launch  # noqa: E402, I100 (pytest first, for the skip)
 import launch_ros.actions  # noqa: E402
 import launch_testing.actions  # noqa: E402
 import launch_testing.asserts  # noqa: E402

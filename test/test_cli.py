@@ -7,12 +7,11 @@ import subprocess
 import sys
 import time
 
+from digital_actor_planner.cli import read_commands, read_trajectory
+from digital_actor_planner.core.skeleton import Skeleton
 import numpy as np
 import pytest
 import trimesh
-
-from digital_actor_planner.cli import read_commands, read_trajectory
-from digital_actor_planner.core.skeleton import Skeleton
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = os.path.join(ROOT, 'config', 'scenes')

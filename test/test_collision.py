@@ -1,11 +1,10 @@
 """BodyCollision: the URDF's collision shapes against meshes and against each other."""
 import time
 
-import numpy as np
-import pytest
-
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment, start_configuration
+import numpy as np
+import pytest
 from scene_helpers import box
 
 

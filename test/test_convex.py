@@ -1,8 +1,7 @@
 """Exact contact tests of convex shapes (GJK) against FCL's collision test."""
+from digital_actor_planner.core import convex
 import fcl
 import numpy as np
-
-from digital_actor_planner.core import convex
 
 NO_CORNERS = np.zeros((3, 3))
 

@@ -4,9 +4,8 @@ Copyright and license headers as ament_python packages check them: ament_copyrig
 ament_copyright is not published on PyPI, so the test runs where ROS 2 installs it
 (``rosdep install`` of the test dependencies) and is skipped elsewhere.
 """
-import pytest
-
 from lint_targets import excluded, ROOT, targets
+import pytest
 
 copyright_main = pytest.importorskip('ament_copyright.main').main
 

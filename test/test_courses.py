@@ -12,13 +12,12 @@ import importlib.util
 import math
 import os
 
+from digital_actor_planner.core.skeleton import Skeleton
 import fcl
 import numpy as np
 import pytest
 import trimesh
 import yaml
-
-from digital_actor_planner.core.skeleton import Skeleton
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = os.path.join(ROOT, 'config', 'scenes')

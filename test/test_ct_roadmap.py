@@ -1,12 +1,11 @@
 """The CT-roadmap best-first planner (paper §5.2, Figure 5)."""
-import numpy as np
-import pytest
-
 from digital_actor_planner.core import ct_roadmap
 from digital_actor_planner.core.ct_roadmap import _Horizon, _neighbour_table, _State, CTRoadmap, \
     direct_return
 from digital_actor_planner.core.ct_space import CTSpace
 from digital_actor_planner.core.environment import Environment
+import numpy as np
+import pytest
 from scene_helpers import box, timed_body, walk
 
 TRUNK = ('waist', 'torso', 'head', 'left_shoulder', 'right_shoulder')

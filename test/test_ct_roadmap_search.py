@@ -1,9 +1,6 @@
 """The readable expansion of §5.2's best-first search and its compiled twin plan alike."""
 import os
 
-import numpy as np
-import pytest
-
 from course_runs import scene, SCENES, simulate
 from digital_actor_planner.cli import read_commands
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
@@ -12,6 +9,8 @@ from digital_actor_planner.core.ct_roadmap import CTRoadmap
 from digital_actor_planner.core.ct_space import CTSpace
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.upper_body import UpperBodyConfig, UpperBodyPlanner
+import numpy as np
+import pytest
 from scene_helpers import box, timed_body, walk
 
 TRUNK = ('waist', 'torso', 'head', 'left_shoulder', 'right_shoulder')

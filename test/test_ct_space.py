@@ -1,15 +1,14 @@
 """Configuration-time space of a branch (paper §5.2): kinematics, validity, forward-only motion."""
-import fcl
-import numpy as np
-import pytest
-import trimesh
-
 from digital_actor_planner.core import ct_space
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.ct_space import (
     BodyKinematics, BodyShapes, CTSpace, EnvironmentIndex, TimedBody)
 from digital_actor_planner.core.environment import Environment
+import fcl
+import numpy as np
+import pytest
 from scene_helpers import box, timed_body, walk
+import trimesh
 
 TRUNK = ('waist', 'torso', 'head', 'left_shoulder', 'right_shoulder')
 LEGS = ('pelvis', 'left_hip', 'right_hip', 'left_thigh', 'right_thigh', 'left_shank',

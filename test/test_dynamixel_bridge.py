@@ -13,14 +13,13 @@ import sys
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+import dynamixel_emulator as emu
 import pytest
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
+from ros_harness import NodeProcess, ros_env, wait_for
 from sensor_msgs.msg import JointState
 import yaml
-
-import dynamixel_emulator as emu
-from ros_harness import NodeProcess, ros_env, wait_for
 
 pytestmark = pytest.mark.ros
 

@@ -1,13 +1,12 @@
 """Bridge configuration, tick conversion and the safety envelope, without ROS or a bus."""
 import math
 
-import numpy as np
-import pytest
-
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.dynamixel.config import (
-    ConfigError, config_from_parameters, load_config, servo_joint_names, ServoConfig)
+    config_from_parameters, ConfigError, load_config, servo_joint_names, ServoConfig)
 from digital_actor_planner.dynamixel.safety import SafetyEnvelope
+import numpy as np
+import pytest
 
 
 @pytest.fixture(scope='module')

@@ -1,9 +1,8 @@
 """The bridge's controller against a scripted bus (no ROS, no serial port): shutdown outcomes."""
-import pytest
-
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.dynamixel.config import config_from_parameters
 from digital_actor_planner.dynamixel.controller import BridgeController
+import pytest
 
 
 class PortGone(RuntimeError):

@@ -8,10 +8,9 @@ import os
 import select
 import time
 
+import dynamixel_emulator as emu
 import dynamixel_sdk as sdk
 import pytest
-
-import dynamixel_emulator as emu
 
 GOLDEN = {
     'ping': bytes.fromhex('FF FF FD 00 01 03 00 01 19 4E'),

@@ -2,9 +2,8 @@
 import os
 
 from ament_flake8.main import main_with_errors
-import pytest
-
 from lint_targets import excluded, ROOT, targets
+import pytest
 
 
 @pytest.mark.flake8

@@ -1,9 +1,6 @@
 """The readable search of a footstep window (§4.2) and its compiled twin: the same footsteps."""
 import os
 
-import numpy as np
-import pytest
-
 from course_runs import course_names, scene, SCENES, simulate, skeleton
 from digital_actor_planner.cli import read_commands
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
@@ -11,6 +8,8 @@ from digital_actor_planner.core.footstep_window import (configuration_effort, IM
                                                         search_footstep_window, WindowFeet)
 from digital_actor_planner.core.footsteps import (FootstepConfig, FootstepPlanner, GroundProfile,
                                                   RIGHT)
+import numpy as np
+import pytest
 
 DS = 0.02
 TERRAIN = {'stairs': lambda s: 0.12 * (np.floor((s - 0.4) / 0.3) + 1) if s > 0.4 else 0.0,

@@ -1,13 +1,11 @@
 """The sliding-window footstep planner (§4.2) on synthetic ground profiles."""
-import numpy as np
-import pytest
-
-import footstep_reference as reference
-
 from digital_actor_planner.core import footstep_search, footsteps
 from digital_actor_planner.core.footsteps import (
     FootstepConfig, FootstepPlanner, GroundProfile, LEFT, RIGHT, validate_footstep_config)
 from digital_actor_planner.core.skeleton import Skeleton
+import footstep_reference as reference
+import numpy as np
+import pytest
 
 DS = 0.02
 #: The compiled search's functions (footstep_search), each calling the ones before.

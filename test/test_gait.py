@@ -1,16 +1,15 @@
 """Walk generation of single steps (§4.1): key frames, IK, Bezier swing, pelvis."""
-import numpy as np
-import pytest
-
+from digital_actor_planner.core import gait as gait_module
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment
-from digital_actor_planner.core import gait as gait_module
 from digital_actor_planner.core.footsteps import LEFT, RIGHT
 from digital_actor_planner.core.gait import (
     GaitConfig, GaitError, leg_inverse_kinematics, standing_stance, validate_gait_config,
     WalkGenerator)
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.core.trajectory_check import check_trajectory
+import numpy as np
+import pytest
 from scene_helpers import box as box_mesh
 
 

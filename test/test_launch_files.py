@@ -11,10 +11,9 @@ import os
 import sys
 import types
 
+from digital_actor_planner.launch_support import MissingPackageError
 import pytest
 import yaml
-
-from digital_actor_planner.launch_support import MissingPackageError
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 LAUNCH_FILE = os.path.join(REPO, 'launch', 'actor.launch.py')
@@ -61,7 +60,11 @@ def _kinds():
 
 @pytest.fixture
 def launch(monkeypatch):
-    """Return ``launch(installed=..., **arguments)``: the actions actor.launch.py returns."""
+    """
+    Return a function that gives the actions actor.launch.py returns.
+
+    Called as ``launch(installed=..., **arguments)``.
+    """
     for module, classes in _kinds().items():
         fake = types.ModuleType(module)
         fake.__dict__.update(classes)

@@ -1,8 +1,7 @@
 """Path prediction from a velocity command (§3.2)."""
+from digital_actor_planner.core.path import predict_path
 import numpy as np
 import pytest
-
-from digital_actor_planner.core.path import predict_path
 
 
 def test_straight_command_predicts_a_straight_line_along_the_heading():

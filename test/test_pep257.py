@@ -1,8 +1,7 @@
 """Docstring conventions as ament_python packages check them: ament_pep257."""
 from ament_pep257.main import main
-import pytest
-
 from lint_targets import excluded, ROOT, targets
+import pytest
 
 
 @pytest.mark.linter

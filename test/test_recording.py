@@ -1,17 +1,16 @@
 """`digital-actor simulate --out run.mcap`: a rosbag2 bag (MCAP storage) that rosbags reads."""
 import os
 
-import numpy as np
-import pytest
-import yaml
-
 from digital_actor_planner import cli
 from digital_actor_planner.cli import read_trajectory
 from digital_actor_planner.core.environment import load_scene
+import numpy as np
+import pytest
 
 rosbags = pytest.importorskip('rosbags')
 from rosbags.rosbag2 import Reader  # noqa: E402 (after the skip)
 from rosbags.typesys import get_typestore, Stores  # noqa: E402
+import yaml  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = os.path.join(ROOT, 'config', 'scenes')

@@ -2,14 +2,13 @@
 import os
 import time
 
+from digital_actor_planner.core.render import render_gif, render_png
+from digital_actor_planner.core.skeleton import Skeleton
 import numpy as np
 from PIL import Image
 import pytest
 import trimesh
 import yaml
-
-from digital_actor_planner.core.render import render_gif, render_png
-from digital_actor_planner.core.skeleton import Skeleton
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = os.path.join(ROOT, 'config', 'scenes')

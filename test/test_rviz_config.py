@@ -3,11 +3,10 @@ import os
 import re
 import xml.etree.ElementTree as ElementTree
 
-import pytest
-import yaml
-
 from digital_actor_planner.launch_support import (
     frame_prefix, rviz_config, rviz_topics, world_frame)
+import pytest
+import yaml
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CONFIG = os.path.join(REPO, 'config', 'actor.rviz')

@@ -2,11 +2,10 @@
 import shutil
 import subprocess
 
-import numpy as np
-import pytest
-
 from digital_actor_planner.core.skeleton import (
     default_urdf_path, EXPECTED_JOINT_NAMES, Skeleton, UrdfError)
+import numpy as np
+import pytest
 
 
 @pytest.fixture(scope='module')

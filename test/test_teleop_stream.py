@@ -9,11 +9,10 @@ CI-proof: rclpy only, localhost discovery, own ROS_DOMAIN_ID.
 import os
 import time
 
+from digital_actor_planner.launch_support import TELEOP_FREQUENCY, world_frame
 import pytest
 from ros_harness import fresh_domain_id, NodeProcess, ros_env
 from test_node_helpers import node_command, Probe, REPO, ROOT_X, scene
-
-from digital_actor_planner.launch_support import TELEOP_FREQUENCY, world_frame
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 

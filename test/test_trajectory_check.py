@@ -1,11 +1,10 @@
 """check_trajectory: the independent judge, on hand-built trajectories."""
 import time
 
-import numpy as np
-import pytest
-
 from digital_actor_planner.core.environment import Environment, start_configuration
 from digital_actor_planner.core.trajectory_check import check_trajectory
+import numpy as np
+import pytest
 from scene_helpers import box
 
 RATE = 100.0

@@ -1,12 +1,11 @@
 """Upper-body compliant motion (paper §5): motion patterns and prioritized CT-roadmap planning."""
-import numpy as np
-import pytest
-
 from digital_actor_planner.core import ct_roadmap
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.upper_body import (
     motion_patterns, UpperBodyConfig, UpperBodyPlanner, validate_upper_body_config)
+import numpy as np
+import pytest
 from scene_helpers import box, walk
 
 UPPER_LINKS = ['waist', 'torso', 'head', 'left_shoulder', 'right_shoulder',

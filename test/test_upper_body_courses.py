@@ -8,15 +8,14 @@ it.
 """
 import os
 
-import numpy as np
-import pytest
-
 from course_runs import scene, SCENES, simulate, skeleton
 from digital_actor_planner.cli import read_commands
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.trajectory_check import check_trajectory
 from digital_actor_planner.core.upper_body import motion_patterns
+import numpy as np
+import pytest
 from scene_helpers import furniture_scene, pillars_moved_sideways
 
 COURSES = ['low_beam', 'table', 'pillars', 'uneven_beam']

@@ -5,12 +5,11 @@ The checker uses the URDF's own collision geometry with FCL at every frame, not 
 ground map: no link penetrates by more than 3 mm (feet resting <= 15 mm), a foot is always down,
 limits hold, no NaN or jumps, a stance foot slides <= 1 cm.
 """
-import numpy as np
-import pytest
-
 from course_runs import course_names, judged, scene, simulate, skeleton
 from digital_actor_planner.core.gait import GaitConfig
 from digital_actor_planner.core.trajectory_check import check_trajectory
+import numpy as np
+import pytest
 
 FEASIBLE = [n for n in course_names() if not scene(n).expect.get('stuck')]
 INFEASIBLE = [n for n in course_names() if scene(n).expect.get('stuck')]

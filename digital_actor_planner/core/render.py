@@ -300,7 +300,7 @@ class _ActorModel:
         self.colours = np.concatenate(colours)           # (T, 3)
 
     def triangles(self, q: np.ndarray) -> np.ndarray:
-        """Return the world triangles (T, 3, 3) of the collision shapes at ``q`` (22,)."""
+        """Return the collision shapes' world triangles at ``q`` (22,): (T, 3, 3), m."""
         shapes = self.skeleton.shape_transforms(self.skeleton.forward_kinematics(q))
         rotation, translation = shapes[self.owner, :3, :3], shapes[self.owner, :3, 3]
         return np.einsum('tij,tvj->tvi', rotation, self.local) + translation[:, None, :]

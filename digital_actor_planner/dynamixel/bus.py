@@ -1,9 +1,8 @@
 """Drive a Protocol 2.0 X-series bus with dynamixel-sdk (the only module that imports it)."""
 from __future__ import annotations
 
-from typing import Dict, Iterable, Mapping, Tuple
-
 import termios
+from typing import Dict, Iterable, Mapping, Tuple
 
 import dynamixel_sdk as sdk
 import serial

@@ -5,9 +5,8 @@ from dataclasses import dataclass
 import math
 from typing import Dict, Mapping, Optional, Sequence, Tuple
 
-import numpy as np
-
 from digital_actor_planner.core.skeleton import ROOT_JOINTS, Skeleton
+import numpy as np
 
 #: X-series resolution: 4096 ticks per revolution, 2048 is the centre of the range.
 TICKS_PER_REVOLUTION = 4096

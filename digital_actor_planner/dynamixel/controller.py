@@ -10,10 +10,9 @@ from dataclasses import dataclass
 import os
 from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple
 
-import numpy as np
-
 from digital_actor_planner.dynamixel.config import BridgeConfig
 from digital_actor_planner.dynamixel.safety import SafetyEnvelope
+import numpy as np
 
 OK, WARN, ERROR = 0, 1, 2
 #: Torque Enable writes per servo at shutdown before it is reported as possibly still on.

@@ -14,6 +14,12 @@ import time
 from typing import Dict, List, Optional
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from digital_actor_planner.core.skeleton import Skeleton
+from digital_actor_planner.dynamixel.config import (BridgeConfig, config_from_parameters,
+                                                    ConfigError, servo_joint_names,
+                                                    SUPPORTED_BAUD_RATES)
+from digital_actor_planner.dynamixel.controller import BridgeController, StartupError
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 import rclpy
 from rclpy.exceptions import (InvalidParameterTypeException, InvalidParameterValueException,
                               ParameterException)
@@ -21,14 +27,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from sensor_msgs.msg import JointState
-
-from digital_actor_planner.core.skeleton import Skeleton
-from digital_actor_planner.dynamixel.config import (BridgeConfig, config_from_parameters,
-                                                    ConfigError, servo_joint_names,
-                                                    SUPPORTED_BAUD_RATES)
-from digital_actor_planner.dynamixel.controller import BridgeController, StartupError
 
 EXIT_BAD_CONFIG = 2
 EXIT_MISSING_SERVOS = 3
