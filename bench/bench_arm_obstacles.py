@@ -66,12 +66,12 @@ def main(argv=None):
             blocks = walk(environment, branches, args.planner_seed)
             frames = np.vstack([b.frames for b in blocks])
             off = frames - motion_patterns(sk, frames)
-            results[name].append(dict(
-                passed=frames[-1, 0] >= 6.0, stuck=blocks[-1].status == 'stuck',
-                shoulder=float(np.abs(off[:, sk.index[f'{arm}_shoulder_pitch']]).max()),
-                elbow=float(off[:, sk.index[f'{arm}_elbow']].max()),
-                slowest=1e3 * max(b.planning_time for b in blocks),
-                x=float(frames[-1, 0]), reason=blocks[-1].reason))
+            results[name].append({
+                'passed': frames[-1, 0] >= 6.0, 'stuck': blocks[-1].status == 'stuck',
+                'shoulder': float(np.abs(off[:, sk.index[f'{arm}_shoulder_pitch']]).max()),
+                'elbow': float(off[:, sk.index[f'{arm}_elbow']].max()),
+                'slowest': 1e3 * max(b.planning_time for b in blocks),
+                'x': float(frames[-1, 0]), 'reason': blocks[-1].reason})
         outcomes = [results[name][-1] for name, _ in settings]
         # With one setting, --list prints the scenes it did not pass.
         differ = (len({(r['passed'], r['stuck']) for r in outcomes}) > 1 if len(outcomes) > 1

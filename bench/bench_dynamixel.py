@@ -37,7 +37,7 @@ BAUD = 1_000_000
 
 def _pin(cpu):
     """Keep one side of the bus on one core, where the machine has two or more."""
-    if hasattr(os, "sched_setaffinity") and (os.cpu_count() or 1) >= 2:
+    if hasattr(os, 'sched_setaffinity') and (os.cpu_count() or 1) >= 2:
         os.sched_setaffinity(0, {cpu})
 
 

@@ -329,7 +329,7 @@ def main(argv=None):
           'table; time ratio in the walk: '
           'the first call of each search, ours right after planning the step before (cold '
           'caches), then the exhaustive one, over every window and over the windows after a '
-          'step (not the first of each walk, which follows the scene\'s loading); warm: each '
+          "step (not the first of each walk, which follows the scene's loading); warm: each "
           'search run again, the best of 3 (ours) and of 2 (exhaustive); judged: '
           'configurations judged, ours / all')
     print('| search | windows | effort ratio mean | median | p95 | max '
@@ -352,8 +352,8 @@ def main(argv=None):
         every = [ratio for ratio, _ in alone]
         stepped = [ratio for ratio, first in alone if not first]
         print(f'the default search timed alone in {args.walks} more walks of each course '
-              f'(nothing but the actor between its calls), each window\'s median time over '
-              f'the walks against the exhaustive search\'s: median {np.median(every):.4f}, '
+              f"(nothing but the actor between its calls), each window's median time over "
+              f"the walks against the exhaustive search's: median {np.median(every):.4f}, "
               f'p95 {np.percentile(every, 95):.4f}, after a step p95 '
               f'{np.percentile(stepped, 95):.4f}')
     # The footstep targets, judged on the default search: the effort ratio on average

@@ -130,7 +130,7 @@ def main(argv=None):
           f'{args.first_seed}, 12 s '
           'each, whole body)\n')
     print(f'| walks | checker failures | walked m | time stopped | of it over {EDGE} m from '
-          'the floor\'s sides | stops | stops left by steering away | trapped |')
+          "the floor's sides | stops | stops left by steering away | trapped |")
     print('|---:|---:|---:|---:|---:|---:|---:|---:|')
     print(f'| {walks} | {failures} | {walked:.0f} | {100 * stuck_time / total_time:.1f} % | '
           f'{100 * inner_stuck_time / total_time:.1f} % | {stops} | {stops - trapped} | '
@@ -147,7 +147,7 @@ def main(argv=None):
             print(f'| {label} | {turned.sum()} of {turned.size} | {(~turned).sum()} | '
                   f'{failures} |')
         turned, failures, pitched = bump_turns(sk)
-        print(f'\nTurns on the spot on the rough course\'s bumps ({turned.size} starts, 3 s at '
+        print(f"\nTurns on the spot on the rough course's bumps ({turned.size} starts, 3 s at "
               f'1 rad/s): {turned.sum()} turned more than 1 rad ({turned[pitched].sum()} of the '
               f'{pitched.sum()} whose feet stand pitched over 0.05 rad); checker failures: '
               f'{failures}.')

@@ -42,7 +42,7 @@ from ros_harness import NodeProcess, ros_env  # noqa: E402
 from test_node_helpers import node_command, Probe, ROOT_X, ROOT_Y, ROOT_YAW, scene  # noqa: E402
 
 PERIOD = 0.01
-ECHO = '''
+ECHO = """
 import sys, rclpy
 from std_msgs.msg import Header
 rclpy.init()
@@ -53,7 +53,7 @@ try:
     rclpy.spin(node)
 except Exception:
     pass
-'''
+"""
 
 
 def stamps_of(messages) -> np.ndarray:

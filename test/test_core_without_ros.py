@@ -7,14 +7,14 @@ import sys
 
 def test_core_modules_import_with_rclpy_blocked():
     code = (
-        "import sys, importlib, pkgutil\n"
+        'import sys, importlib, pkgutil\n'
         "for name in ('rclpy', 'rclpy.node', 'sensor_msgs', 'geometry_msgs', 'std_msgs'):\n"
-        "    sys.modules[name] = None\n"
-        "import digital_actor_planner.core as core\n"
-        "names = [m.name for m in pkgutil.iter_modules(core.__path__)]\n"
-        "for n in names:\n"
+        '    sys.modules[name] = None\n'
+        'import digital_actor_planner.core as core\n'
+        'names = [m.name for m in pkgutil.iter_modules(core.__path__)]\n'
+        'for n in names:\n'
         "    importlib.import_module('digital_actor_planner.core.' + n)\n"
-        "print(len(names))\n")
+        'print(len(names))\n')
     result = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True)
     assert result.returncode == 0, result.stderr
     assert int(result.stdout.strip()) >= 1

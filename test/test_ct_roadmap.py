@@ -185,7 +185,7 @@ def test_a_search_stuck_in_the_preview_gives_up_within_its_small_budget(beam_spa
     # from there has its own small budget.
     space = beam_space
     turns = np.array([(0.4, 0.0), (-0.4, 0.0)])
-    limits = dict(node_budget=600, max_backtracks=200)
+    limits = {'node_budget': 600, 'max_backtracks': 200}
     before = space.checks
     full = roadmap(seed=2, patterns=turns).solve(space, np.zeros(2), **limits)
     full_checks, before = space.checks - before, space.checks

@@ -223,7 +223,7 @@ def test_hostile_stream_is_clamped_and_rate_limited(rig):
     assert r.wait(lambda: (r.stream({'left_knee': 1.2}, 0.05) or True)
                   and r.goal('left_knee') == expected_ticks('left_knee', 1.2), timeout=15.0)
     status = r.status('dynamixel_bridge: bus')
-    ignored = dict((v.key, v.value) for v in status.values)['ignored inputs']
+    ignored = {v.key: v.value for v in status.values}['ignored inputs']
     assert 'not finite' in ignored and 'unknown name: 0' not in ignored
 
 
@@ -356,7 +356,7 @@ def test_port_vanishing_and_coming_back_is_survived(rig):
     r.stream({'left_elbow': 0.8}, 0.3)
     assert r.wait(lambda: (r.stream({'left_elbow': 0.8}, 0.05) or True)
                   and r.goal('left_elbow') == expected_ticks('left_elbow', 0.8))
-    reconnects = dict((v.key, v.value) for v in r.status('dynamixel_bridge: bus').values)
+    reconnects = {v.key: v.value for v in r.status('dynamixel_bridge: bus').values}
     assert int(reconnects['reconnects']) >= 1
 
 

@@ -82,8 +82,8 @@ def test_a_profile_keeps_its_samples_stacked_for_the_search_and_refuses_mismatch
                       headroom=np.zeros(200), obstacle=np.zeros(200))
     # Samples handed over already stacked are read by the search without numba's checks of
     # its arguments: one of another layout or type is refused, not read as if it were right.
-    views = dict(height=stacked[0], low=stacked[1], headroom=stacked[2],
-                 obstacle=profile.obstacle)
+    views = {'height': stacked[0], 'low': stacked[1], 'headroom': stacked[2],
+             'obstacle': profile.obstacle}
     for bad, named in ((stacked[:, :, ::2], r'\(4, 2, 100\)'),
                        (stacked.astype(np.float32), 'float32'),
                        (stacked[:3], r'\(3, 2, 200\)'), (stacked.tolist(), 'list')):

@@ -127,18 +127,18 @@ def test_gif_with_a_fixed_camera_shows_the_actor_moving(skeleton, tmp_path):
 
 
 @pytest.mark.parametrize('bad', [
-    dict(frames=np.zeros((10, 21))),
-    dict(frames=np.zeros(22)),
-    dict(times=np.arange(9) * 0.01),
-    dict(frames=np.full((10, 22), np.nan)),
-    dict(footsteps=np.zeros((3, 3))),
-    dict(meshes=['not a mesh']),
-    dict(n_poses=0),
-    dict(size=(10, 10)),
+    {'frames': np.zeros((10, 21))},
+    {'frames': np.zeros(22)},
+    {'times': np.arange(9) * 0.01},
+    {'frames': np.full((10, 22), np.nan)},
+    {'footsteps': np.zeros((3, 3))},
+    {'meshes': ['not a mesh']},
+    {'n_poses': 0},
+    {'size': (10, 10)},
 ])
 def test_bad_input_raises_and_writes_nothing(skeleton, tmp_path, bad):
     times, frames = standing_run(skeleton, 0.09, 0.1)
-    arguments = dict(meshes=course_meshes('flat'), times=times, frames=frames)
+    arguments = {'meshes': course_meshes('flat'), 'times': times, 'frames': frames}
     options = {}
     for key, value in bad.items():
         (arguments if key in arguments else options)[key] = value

@@ -392,7 +392,7 @@ def check_trajectory(skeleton, environment, times, frames, *, penetration_tol: f
                           if shape.link == link] for link in penetration}
     foot_down_gap, foot_down_time = 0.0, float(times[0])
     corner_runs = {foot: [None] * 4 for foot in FEET}
-    slip = {foot: 0.0 for foot in FEET}
+    slip = dict.fromkeys(FEET, 0.0)
     slip_time = {foot: float(times[0]) for foot in FEET}
     for row, i in enumerate(checked):
         q = clean[i]

@@ -124,7 +124,7 @@ class ServoBus:
             # termios.error: flushing a hung-up tty; TypeError: pyserial on a closed descriptor
             raise BusError(f'{self.port_name}: {error}') from None
 
-    def open(self) -> None:
+    def open(self) -> None:  # noqa: A003 (a port is opened and closed)
         """Open the port at the baud rate; raise :class:`BusError` if it cannot be opened."""
         self.close()
         port = sdk.PortHandler(self.port_name)

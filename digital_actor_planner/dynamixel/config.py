@@ -33,7 +33,7 @@ class ServoConfig:
     """
 
     joint: str
-    id: int
+    id: int  # noqa: A003 (the servo's Dynamixel ID, the name its e-Manual uses)
     offset: float = 0.0
     direction: int = 1
     min_position: float = -math.pi
