@@ -1,3 +1,17 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 Control-cycle time of the Dynamixel bridge against the emulator with 1 Mbps wire time.
 
@@ -90,7 +104,7 @@ def _report(label, times, bytes_on_wire, cpu, cycles, delays_per_cycle, return_d
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--cycles', type=int, default=1000)
     parser.add_argument('--return-delay-us', type=int, default=0,
                         help='Return Delay Time of every servo (X-series default: 500 us)')

@@ -1,3 +1,17 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 `digital-actor` command line: offline simulation, the interactive demo and the viewer.
 
@@ -372,7 +386,8 @@ def _share_dir() -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog='digital-actor', description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog='digital-actor',
+                                     description=__doc__.strip().splitlines()[0])
     sub = parser.add_subparsers(dest='command', required=True)
     sim = sub.add_parser('simulate', help='plan a whole course offline and write the trajectory')
     sim.add_argument('--scene', required=True, help='scene YAML or a bare mesh file')
