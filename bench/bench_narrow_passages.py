@@ -15,8 +15,7 @@
 """
 Two pillars narrower than the shoulders, moved off the path.
 
-Two pillars narrower than the shoulders, moved off the path: passed, met in front, or held between
-them.
+Passed, met in front, or held between them.
 
 Run: .venv/bin/python bench/bench_narrow_passages.py [--centres 0.35 0.36 0.37]
      [--shifts -0.04 -0.03 ... 0.04] [--list]

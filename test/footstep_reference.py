@@ -15,8 +15,8 @@
 """
 The footstep window's effort written out plainly, in Python on lists.
 
-The footstep window's effort written out plainly, in Python on lists: the reference the compiled
-search (``core/footstep_search.py``) is tested against, term by term and bit for bit.
+The reference the compiled search (``core/footstep_search.py``) is tested against, term by term and
+bit for bit.
 
 Each function takes the ``FootstepPlanner`` whose settings and table layout it reads.
 """

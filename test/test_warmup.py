@@ -15,8 +15,8 @@
 """
 The warm-up that set-up ends with.
 
-The warm-up that set-up ends with: it says what it does, stage by stage, and a second one returns
-at once while the sources are unchanged.
+It says what it does, stage by stage, and a second one returns at once while the sources are
+unchanged.
 """
 import subprocess
 import sys

@@ -225,9 +225,9 @@ class ServoBus:
         """
         Send the sync read of present positions.
 
-        Send the sync read of present positions; the replies are taken by
-        :meth:`collect_positions`. Work done in between overlaps the replies' wire time. Return
-        False if there is nothing to read or the request could not be sent.
+        The replies are taken by :meth:`collect_positions`. Work done in between overlaps the
+        replies' wire time. Return False if there is nothing to read or the request could not be
+        sent.
         """
         port = self._require()
         ids = tuple(ids)
