@@ -1,4 +1,19 @@
-"""Random furniture beside the path at arm height: the arms with and without lasting postures.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Random furniture beside the path at arm height: the arms with and without lasting postures.
 
 Run: .venv/bin/python bench/bench_arm_obstacles.py [--scenes 40] [--seed 0] [--planner-seed 0]
          [--default-only]
@@ -20,14 +35,13 @@ import argparse
 import os
 import sys
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
 from course_runs import actor_with_lasting_branches, skeleton  # noqa: E402
 from digital_actor_planner.core.actor import run_commands  # noqa: E402
 from digital_actor_planner.core.environment import Environment  # noqa: E402
 from digital_actor_planner.core.upper_body import motion_patterns  # noqa: E402
+import numpy as np  # noqa: E402
 from scene_helpers import furniture_scene  # noqa: E402
 
 SETTINGS = (('lasting arm postures (default)', ('left_arm', 'right_arm')),
@@ -42,7 +56,7 @@ def walk(environment, lasting_branches, planner_seed=0):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--scenes', type=int, default=40)
     parser.add_argument('--seed', type=int, default=0)
     parser.add_argument('--planner-seed', type=int, default=0,
@@ -66,12 +80,12 @@ def main(argv=None):
             blocks = walk(environment, branches, args.planner_seed)
             frames = np.vstack([b.frames for b in blocks])
             off = frames - motion_patterns(sk, frames)
-            results[name].append(dict(
-                passed=frames[-1, 0] >= 6.0, stuck=blocks[-1].status == 'stuck',
-                shoulder=float(np.abs(off[:, sk.index[f'{arm}_shoulder_pitch']]).max()),
-                elbow=float(off[:, sk.index[f'{arm}_elbow']].max()),
-                slowest=1e3 * max(b.planning_time for b in blocks),
-                x=float(frames[-1, 0]), reason=blocks[-1].reason))
+            results[name].append({
+                'passed': frames[-1, 0] >= 6.0, 'stuck': blocks[-1].status == 'stuck',
+                'shoulder': float(np.abs(off[:, sk.index[f'{arm}_shoulder_pitch']]).max()),
+                'elbow': float(off[:, sk.index[f'{arm}_elbow']].max()),
+                'slowest': 1e3 * max(b.planning_time for b in blocks),
+                'x': float(frames[-1, 0]), 'reason': blocks[-1].reason})
         outcomes = [results[name][-1] for name, _ in settings]
         # With one setting, --list prints the scenes it did not pass.
         differ = (len({(r['passed'], r['stuck']) for r in outcomes}) > 1 if len(outcomes) > 1

@@ -1,4 +1,19 @@
-"""Backward walking: walked speed, the arc of a backward turn, steps up and down, escapes.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Backward walking: walked speed, the arc of a backward turn, steps up and down, escapes.
 
 Run: .venv/bin/python bench/bench_backward.py [--speeds 0.1 0.2 0.3 0.4 0.5]
      [--heights 0.05 0.08 0.10 0.12 0.13 0.14 0.16 0.20]
@@ -24,8 +39,6 @@ import os
 import sys
 import time
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
 from bench_common import machine, print_command  # noqa: E402
@@ -33,6 +46,7 @@ from course_runs import judged, scene, skeleton  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 from digital_actor_planner.core.environment import Environment  # noqa: E402
 from digital_actor_planner.core.footsteps import FootstepConfig  # noqa: E402
+import numpy as np  # noqa: E402
 from scene_helpers import box  # noqa: E402
 
 LEGS = ActorConfig(plan_upper_body=False)
@@ -122,7 +136,7 @@ def escapes():
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--speeds', type=float, nargs='+', default=[0.1, 0.2, 0.3, 0.4, 0.5])
     parser.add_argument('--heights', type=float, nargs='+',
                         default=[0.05, 0.08, 0.10, 0.12, 0.13, 0.14, 0.16, 0.20])

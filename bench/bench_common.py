@@ -1,11 +1,29 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Shared by the benchmark scripts: the line that says how a table was made."""
 import os
 import sys
 
 
 def print_command(script: str, argv=None) -> None:
-    """Print the command line of ``script`` (a path) with ``argv`` (default: the process's own
-    arguments) and the load average, so a table pasted into the README carries both."""
+    """
+    Print the command line and the load average of a benchmark run.
+
+    Print the command line of ``script`` (a path) with ``argv`` (default: the process's own
+    arguments) and the load average, so a table pasted into the README carries both.
+    """
     load = os.getloadavg()[0] if hasattr(os, 'getloadavg') else float('nan')
     arguments = ' '.join(sys.argv[1:] if argv is None else argv)
     print(f'\n(command: python bench/{os.path.basename(script)} {arguments}; '
@@ -21,9 +39,13 @@ def spread(values) -> str:
 
 
 def machine() -> str:
-    """The processor's model, the CPU count and CPU 0's caches (Linux's sysfs), for the top of
-    a table: some ratios, the footstep search's against the exhaustive one for instance,
-    differ from machine to machine (docs/BENCHMARKS.md)."""
+    """
+    Describe the machine: processor model, CPU count and CPU 0's caches.
+
+    The processor's model, the CPU count and CPU 0's caches (Linux's sysfs), for the top of a
+    table: some ratios, the footstep search's against the exhaustive one for instance, differ from
+    machine to machine (docs/BENCHMARKS.md).
+    """
     import platform
     model = platform.processor() or platform.machine()
     try:

@@ -1,4 +1,19 @@
-"""Measure how often a busy process loses the processor for a moment, and for how long.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Measure how often a busy process loses the processor for a moment, and for how long.
 
     .venv/bin/python bench/bench_cpu_stalls.py [--duration 2] [--threshold-us 10]
 
@@ -17,8 +32,12 @@ import numpy as np
 
 
 def gaps(clock, duration: float, threshold_ns: int) -> np.ndarray:
-    """The gaps (ns) longer than ``threshold_ns`` between back-to-back readings of ``clock``
-    over ``duration`` s of the wall clock."""
+    """
+    Return the gaps between back-to-back readings of a clock longer than a threshold.
+
+    The gaps (ns) longer than ``threshold_ns`` between back-to-back readings of ``clock`` over
+    ``duration`` s of the wall clock.
+    """
     found = []
     end = time.perf_counter_ns() + int(duration * 1e9)
     last = clock()
@@ -31,7 +50,7 @@ def gaps(clock, duration: float, threshold_ns: int) -> np.ndarray:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().split('\n')[0])
     parser.add_argument('--duration', type=float, default=2.0, help='seconds per clock')
     parser.add_argument('--threshold-us', type=float, default=10.0,
                         help='shortest gap counted, us')

@@ -1,4 +1,19 @@
-"""Actors per core, read from the node's own diagnostics (no joint_states subscriptions).
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Actors per core, read from the node's own diagnostics (no joint_states subscriptions).
 
 Run: .venv/bin/python bench/bench_crowd.py [--actors 10 20] [--duration 20] [--course stairs_up]
 
@@ -141,7 +156,7 @@ def run(count: int, duration: float, course: str, domain: int, log: str) -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--actors', type=int, nargs='+', default=[10, 20])
     parser.add_argument('--duration', type=float, default=20.0)
     parser.add_argument('--course', default='stairs_up')

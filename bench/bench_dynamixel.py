@@ -1,4 +1,19 @@
-"""Control-cycle time of the Dynamixel bridge against the emulator with 1 Mbps wire time.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Control-cycle time of the Dynamixel bridge against the emulator with 1 Mbps wire time.
 
 One control cycle = one sync write of 18 goal positions + one sync read of 18 present
 positions (the node also reads Hardware Error Status every ``health_check_period``). The
@@ -25,19 +40,18 @@ import time
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, '..', 'test'))
 
-import dynamixel_emulator as emu  # noqa: E402
-
 from digital_actor_planner.core.skeleton import Skeleton  # noqa: E402
 from digital_actor_planner.dynamixel.bus import BusError, ServoBus  # noqa: E402
 from digital_actor_planner.dynamixel.config import load_config  # noqa: E402
 from digital_actor_planner.dynamixel.controller import BridgeController  # noqa: E402
+import dynamixel_emulator as emu  # noqa: E402
 
 BAUD = 1_000_000
 
 
 def _pin(cpu):
     """Keep one side of the bus on one core, where the machine has two or more."""
-    if hasattr(os, "sched_setaffinity") and (os.cpu_count() or 1) >= 2:
+    if hasattr(os, 'sched_setaffinity') and (os.cpu_count() or 1) >= 2:
         os.sched_setaffinity(0, {cpu})
 
 
@@ -90,7 +104,7 @@ def _report(label, times, bytes_on_wire, cpu, cycles, delays_per_cycle, return_d
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--cycles', type=int, default=1000)
     parser.add_argument('--return-delay-us', type=int, default=0,
                         help='Return Delay Time of every servo (X-series default: 500 us)')

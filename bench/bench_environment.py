@@ -1,4 +1,19 @@
-"""Benchmark the environment and collision queries the planners call in their loops.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Benchmark the environment and collision queries the planners call in their loops.
 
 Prints: ground-map construction time for a 20 m x 6 m course, the cost of a 1000-point
 ground_height query, BodyCollision.collides() for one leg and for the whole body, and
@@ -8,14 +23,13 @@ import argparse
 import os
 import time
 
-import numpy as np
-import trimesh
-
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.scene import start_configuration
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.core.trajectory_check import check_trajectory
+import numpy as np
+import trimesh
 
 
 def _box(low, high):
@@ -26,7 +40,7 @@ def _box(low, high):
 
 
 def course_meshes(rng):
-    """A 20 m x 6 m course: floor, stairs, blocks, a table, a beam and a rough terrain patch."""
+    """Build a 20 m x 6 m course: floor, stairs, blocks, a table, a beam and a rough patch."""
     meshes = [_box((0, -3, -0.1), (20, 3, 0.0))]
     meshes += [_box((3 + 0.3 * i, -3, 0), (3.3 + 0.3 * i, 3, 0.15 * (i + 1))) for i in range(4)]
     meshes += [_box((x, y, 0), (x + 0.4, y + 0.4, h)) for x, y, h in
@@ -46,8 +60,12 @@ def course_meshes(rng):
 
 
 def _per_call(function, repeats):
-    """Wall-clock and process CPU seconds per call (CPU time is what a busy machine distorts
-    least: the 2 cores are shared with other jobs)."""
+    """
+    Time a call: wall-clock and process CPU seconds per call.
+
+    Wall-clock and process CPU seconds per call (CPU time is what a busy machine distorts least:
+    the 2 cores are shared with other jobs).
+    """
     function()
     wall, cpu = time.perf_counter(), time.process_time()
     for _ in range(repeats):
@@ -60,7 +78,7 @@ def _us(cost):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--repeats', type=int, default=500)
     args = parser.parse_args()
     rng = np.random.default_rng(0)

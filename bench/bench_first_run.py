@@ -1,4 +1,19 @@
-"""The first run as a newcomer meets it: the warm-up, then how soon the demo streams.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The first run as a newcomer meets it: the warm-up, then how soon the demo streams.
 
 With ``--cold`` the kernel cache of this checkout is deleted first (numba's files in
 digital_actor_planner/core/__pycache__ and the warm-up stamp), as on a fresh clone, and the
@@ -111,7 +126,7 @@ def one_start(probe, port, timeout):
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--cold', action='store_true',
                         help='delete the kernel cache first and time the warm-up (fresh clone)')
     parser.add_argument('--starts', type=int, default=2, help='demo starts, one after another')

@@ -1,4 +1,19 @@
-"""The footstep window's two searches side by side: the readable one and its compiled twin.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The footstep window's two searches side by side: the readable one and its compiled twin.
 
 Run: .venv/bin/python bench/bench_footstep_window.py [--courses flat stairs_up ...] [--rounds 3]
 
@@ -12,8 +27,6 @@ import os
 import sys
 import time
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
@@ -22,6 +35,7 @@ from course_runs import scene, SCENES, skeleton  # noqa: E402
 from digital_actor_planner.cli import read_commands  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 from digital_actor_planner.core.footsteps import FootstepConfig, FootstepPlanner  # noqa: E402
+import numpy as np  # noqa: E402
 
 COURSES = ('flat', 'rough', 'slope', 'stairs_up', 'stairs_down', 'blocks', 'gap', 'turn')
 
@@ -52,7 +66,7 @@ def walk(name: str, window_search: str, searches: list):
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--courses', nargs='+', default=list(COURSES))
     parser.add_argument('--rounds', type=int, default=3)
     args = parser.parse_args(argv)

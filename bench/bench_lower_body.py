@@ -1,4 +1,19 @@
-"""Planning cost per step, and the footstep search against the exhaustive optimum.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Planning cost per step, and the footstep search against the exhaustive optimum.
 
 Run: .venv/bin/python bench/bench_lower_body.py [--courses flat stairs_up ...]
      .venv/bin/python bench/bench_lower_body.py --whole-body   (obstacle courses, upper body on)
@@ -27,8 +42,6 @@ import sys
 import tempfile
 import time
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
@@ -37,6 +50,7 @@ from course_runs import scene, skeleton  # noqa: E402
 from digital_actor_planner.cli import read_commands  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 from digital_actor_planner.core.footsteps import FootstepPlanner  # noqa: E402
+import numpy as np  # noqa: E402
 
 COURSES = ('flat', 'slope', 'stairs_up', 'stairs_down', 'gap', 'figure8_trap', 'blocks',
            'rough', 'turn')
@@ -95,8 +109,12 @@ class ComparingPlanner(FootstepPlanner):
 
 
 class TimingPlanner(FootstepPlanner):
-    """Footstep planner that records the CPU time of each window's search (a call not banning
-    a first footstep) and its configuration, and runs nothing else."""
+    """
+    Footstep planner that records the CPU time of each window's search.
+
+    Footstep planner that records the CPU time of each window's search (a call not banning a first
+    footstep) and its configuration, and runs nothing else.
+    """
 
     def __init__(self, inner):
         super().__init__(inner.config, inner.leg)
@@ -112,10 +130,14 @@ class TimingPlanner(FootstepPlanner):
 
 
 def _alone_ratios(sc, commands, compared, walks):
-    """The default search timed alone in ``walks`` more walks of a course, nothing but the
-    actor running between its calls: each window's median time over the walks divided by the
-    exhaustive search's first time in the compared walk (``compared.windows``), and whether
-    the window is the walk's first."""
+    """
+    Time the default search alone over more walks of a course.
+
+    The default search timed alone in ``walks`` more walks of a course, nothing but the actor
+    running between its calls: each window's median time over the walks divided by the exhaustive
+    search's first time in the compared walk (``compared.windows``), and whether the window is the
+    walk's first.
+    """
     times = []
     for _ in range(walks):
         actor = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False),
@@ -136,7 +158,7 @@ def _alone_ratios(sc, commands, compared, walks):
 
 
 def _load_other(root):
-    """The actor module of the package in another checkout, imported as ``other_dap``."""
+    """Import the actor module of the package in another checkout as ``other_dap``."""
     package = os.path.join(os.path.abspath(root), 'digital_actor_planner')
     # A module that imports its siblings by absolute name would get this package's instead.
     absolute = re.compile(r'^\s*(from|import)\s+digital_actor_planner\b', re.MULTILINE)
@@ -250,7 +272,7 @@ def compare(courses, other_root, rounds, upper=False):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--courses', nargs='*')
     parser.add_argument('--whole-body', action='store_true',
                         help='plan the upper body too (default courses: the obstacle courses)')
@@ -326,7 +348,7 @@ def main(argv=None):
           'table; time ratio in the walk: '
           'the first call of each search, ours right after planning the step before (cold '
           'caches), then the exhaustive one, over every window and over the windows after a '
-          'step (not the first of each walk, which follows the scene\'s loading); warm: each '
+          "step (not the first of each walk, which follows the scene's loading); warm: each "
           'search run again, the best of 3 (ours) and of 2 (exhaustive); judged: '
           'configurations judged, ours / all')
     print('| search | windows | effort ratio mean | median | p95 | max '
@@ -349,8 +371,8 @@ def main(argv=None):
         every = [ratio for ratio, _ in alone]
         stepped = [ratio for ratio, first in alone if not first]
         print(f'the default search timed alone in {args.walks} more walks of each course '
-              f'(nothing but the actor between its calls), each window\'s median time over '
-              f'the walks against the exhaustive search\'s: median {np.median(every):.4f}, '
+              f"(nothing but the actor between its calls), each window's median time over "
+              f"the walks against the exhaustive search's: median {np.median(every):.4f}, "
               f'p95 {np.percentile(every, 95):.4f}, after a step p95 '
               f'{np.percentile(stepped, 95):.4f}')
     # The footstep targets, judged on the default search: the effort ratio on average

@@ -1,5 +1,21 @@
-"""Two pillars narrower than the shoulders, moved off the path: passed, met in front, or held
-between them.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Two pillars narrower than the shoulders, moved off the path.
+
+Passed, met in front, or held between them.
 
 Run: .venv/bin/python bench/bench_narrow_passages.py [--centres 0.35 0.36 0.37]
      [--shifts -0.04 -0.03 ... 0.04] [--list]
@@ -48,7 +64,7 @@ def outcome(blocks) -> str:
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--centres', type=float, nargs='+', default=[0.35, 0.36, 0.37])
     parser.add_argument('--shifts', type=float, nargs='+',
                         default=[round(0.01 * i, 2) for i in range(-4, 5)])

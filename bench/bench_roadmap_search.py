@@ -1,4 +1,19 @@
-"""The CT-roadmap's two expansions side by side: the readable one and its compiled twin.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The CT-roadmap's two expansions side by side: the readable one and its compiled twin.
 
 Run: .venv/bin/python bench/bench_roadmap_search.py [--courses low_beam table ...] [--rounds 3]
 
@@ -13,8 +28,6 @@ import os
 import sys
 import time
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
@@ -25,7 +38,8 @@ from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  #
 from digital_actor_planner.core.collision import BodyCollision  # noqa: E402
 from digital_actor_planner.core.ct_roadmap import CTRoadmap  # noqa: E402
 from digital_actor_planner.core.upper_body import (UpperBodyConfig,  # noqa: E402
-                                                   UpperBodyPlanner)
+                                                   UpperBodyPlanner)  # noqa: E402
+import numpy as np  # noqa: E402
 
 COURSES = ('low_beam', 'table', 'pillars', 'uneven_beam')
 
@@ -60,7 +74,7 @@ def walk(name: str, roadmap_search: str, searches: list):
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--courses', nargs='+', default=list(COURSES))
     parser.add_argument('--rounds', type=int, default=3)
     args = parser.parse_args(argv)

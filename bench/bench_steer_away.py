@@ -1,4 +1,19 @@
-"""Zigzag mouse steering on the courses: every walk judged, every stop steered away from.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Zigzag mouse steering on the courses: every walk judged, every stop steered away from.
 
 Run: .venv/bin/python bench/bench_steer_away.py [--courses flat rough ...] [--seeds 8]
          [--first-seed 0] [--list]
@@ -30,13 +45,12 @@ import argparse
 import os
 import sys
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
 from bench_common import print_command  # noqa: E402
 from course_runs import judged, scene, skeleton  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
+import numpy as np  # noqa: E402
 
 COURSES = ('flat', 'rough', 'blocks', 'stairs_up', 'gap', 'low_beam', 'table', 'pillars')
 AWAY = ((0.0, 1.0), (0.0, -1.0), (0.3, 0.8), (0.3, -0.8), (0.5, 0.0), (-0.4, 0.0))
@@ -47,7 +61,7 @@ EDGE = 0.8
 
 
 def zigzag(seed: int, duration: float = 12.0):
-    """(times, linear, angular) of one seeded weaving walk, ending with a stop."""
+    """Return (times, linear, angular) of one seeded weaving walk, ending with a stop."""
     rng = np.random.default_rng(seed)
     times = [0.0]
     while times[-1] < duration:
@@ -65,7 +79,7 @@ def walk(sk, sc, times, linear, angular, config=None):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--courses', nargs='+', default=list(COURSES))
     parser.add_argument('--seeds', type=int, default=8)
     parser.add_argument('--first-seed', type=int, default=0,
@@ -130,7 +144,7 @@ def main(argv=None):
           f'{args.first_seed}, 12 s '
           'each, whole body)\n')
     print(f'| walks | checker failures | walked m | time stopped | of it over {EDGE} m from '
-          'the floor\'s sides | stops | stops left by steering away | trapped |')
+          "the floor's sides | stops | stops left by steering away | trapped |")
     print('|---:|---:|---:|---:|---:|---:|---:|---:|')
     print(f'| {walks} | {failures} | {walked:.0f} | {100 * stuck_time / total_time:.1f} % | '
           f'{100 * inner_stuck_time / total_time:.1f} % | {stops} | {stops - trapped} | '
@@ -147,7 +161,7 @@ def main(argv=None):
             print(f'| {label} | {turned.sum()} of {turned.size} | {(~turned).sum()} | '
                   f'{failures} |')
         turned, failures, pitched = bump_turns(sk)
-        print(f'\nTurns on the spot on the rough course\'s bumps ({turned.size} starts, 3 s at '
+        print(f"\nTurns on the spot on the rough course's bumps ({turned.size} starts, 3 s at "
               f'1 rad/s): {turned.sum()} turned more than 1 rad ({turned[pitched].sum()} of the '
               f'{pitched.sum()} whose feet stand pitched over 0.05 rad); checker failures: '
               f'{failures}.')
@@ -156,7 +170,7 @@ def main(argv=None):
 
 
 def edge_turns(sk, pivot):
-    """(turned (N,) bool, checker failures) of the turns on the spot at the floor's edge."""
+    """Turn on the spot at the floor's edge: (turned (N,) bool, checker failures)."""
     turned, failures = [], 0
     for name in ('flat', 'gap', 'blocks'):
         sc = scene(name)
@@ -173,8 +187,12 @@ def edge_turns(sk, pivot):
 
 
 def bump_turns(sk):
-    """(turned (N,) bool, checker failures, pitched (N,) bool) of turns on the spot started on
-    the rough course's bumps (x 2-8 m, y -0.6 / 0 / 0.6 m, facing 0 or 1.5 rad)."""
+    """
+    Turn on the spot from the rough course's bumps and judge each turn.
+
+    (turned (N,) bool, checker failures, pitched (N,) bool) of turns on the spot started on the
+    rough course's bumps (x 2-8 m, y -0.6 / 0 / 0.6 m, facing 0 or 1.5 rad).
+    """
     sc = scene('rough')
     turned, pitched, failures = [], [], 0
     for x in np.arange(2.0, 8.01, 0.5):

@@ -1,4 +1,19 @@
-"""Benchmark the actor_planner stream: jitter, missed frames, command latency, actors per core.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Benchmark the actor_planner stream: jitter, missed frames, command latency, actors per core.
 
     .venv/bin/python bench/bench_stream.py [--duration 60] [--courses stairs_up,...]
         [--course stairs_up] [--actors 1,5,10,20] [--actors-duration 20] [--skip-latency]
@@ -41,7 +56,7 @@ from ros_harness import NodeProcess, ros_env  # noqa: E402
 from test_node_helpers import node_command, Probe, ROOT_X, ROOT_Y, ROOT_YAW, scene  # noqa: E402
 
 PERIOD = 0.01
-ECHO = '''
+ECHO = """
 import sys, rclpy
 from std_msgs.msg import Header
 rclpy.init()
@@ -52,7 +67,7 @@ try:
     rclpy.spin(node)
 except Exception:
     pass
-'''
+"""
 
 
 def stamps_of(messages) -> np.ndarray:
@@ -61,7 +76,8 @@ def stamps_of(messages) -> np.ndarray:
 
 
 def stream_health(*segments: np.ndarray) -> dict:
-    """Jitter (ms) and missed frames of a stream from its header stamps (s).
+    """
+    Jitter (ms) and missed frames of a stream from its header stamps (s).
 
     Each segment is a run of stamps without a deliberate pause between them. Jitter is the
     deviation of each stamp interval from the period. A frame is missed when the stream carried
@@ -332,7 +348,7 @@ def bench_actors(domain: int, counts, duration: float, course: str, folder: str,
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().split('\n')[0])
     parser.add_argument('--duration', type=float, default=60.0,
                         help='seconds of walking for the stream health run')
     parser.add_argument('--course', default='stairs_up',

@@ -1,4 +1,19 @@
-"""Terrain a user expects the actor to walk: single features swept, then random courses.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Terrain a user expects the actor to walk: single features swept, then random courses.
 
 Run: .venv/bin/python bench/bench_terrain.py [--features block stairs_up ...] [--random 60]
          [--first-seed 0] [--list] [--no-sweep] [--phases]
@@ -26,16 +41,15 @@ import os
 import sys
 import time
 
-import numpy as np
-import trimesh
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
 from bench_common import print_command  # noqa: E402
 from course_runs import judged, skeleton  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 from digital_actor_planner.core.environment import Environment  # noqa: E402
+import numpy as np  # noqa: E402
 from scene_helpers import box  # noqa: E402
+import trimesh  # noqa: E402
 
 #: Half the width of the swept features' floor and of the random courses, m.
 SWEEP_HALF_WIDTH = 1.0
@@ -70,7 +84,7 @@ SETTINGS = {
 
 
 def ramp(x0, x1, z0, z1, half):
-    """A solid wedge from x0 (top z0) to x1 (top z1), bottom at -0.1 m."""
+    """Make a solid wedge from x0 (top z0) to x1 (top z1), bottom at -0.1 m."""
     corners = [[x, y, z] for x, top in ((x0, z0), (x1, z1)) for y in (-half, half)
                for z in (-0.1, top)]
     return trimesh.convex.convex_hull(np.array(corners))
@@ -199,7 +213,7 @@ def first_stop(blocks):
 
 def sweep(kinds, listing, upper_body=False, features=FEATURES, starts=STARTS,
           settings=SETTINGS):
-    """The single-feature table; returns the number of checker failures."""
+    """Print the single-feature table; return the number of checker failures."""
     sk = skeleton()
     config = ActorConfig(plan_upper_body=upper_body)
     failures, why = 0, collections.Counter()
@@ -236,7 +250,7 @@ def sweep(kinds, listing, upper_body=False, features=FEATURES, starts=STARTS,
 
 
 def random_courses(count, first_seed, listing, upper_body=False):
-    """The random-course table; returns the number of checker failures."""
+    """Print the random-course table; return the number of checker failures."""
     sk = skeleton()
     config = ActorConfig(plan_upper_body=upper_body)
     passed = failures = 0
@@ -268,7 +282,7 @@ def random_courses(count, first_seed, listing, upper_body=False):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--features', nargs='+', default=list(FEATURES),
                         choices=list(FEATURES))
     parser.add_argument('--random', type=int, default=60, help='random courses (0: none)')

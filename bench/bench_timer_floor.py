@@ -1,4 +1,19 @@
-"""Measure the machine's own timing floor: a bare real-time Python thread waking every period.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Measure the machine's own timing floor: a bare real-time Python thread waking every period.
 
     .venv/bin/python bench/bench_timer_floor.py [--duration 600] [--period 0.01] [--priority 50]
 
@@ -42,7 +57,7 @@ def lateness(duration: float, period: float, priority: int) -> np.ndarray:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().split('\n')[0])
     parser.add_argument('--duration', type=float, default=600.0, help='seconds')
     parser.add_argument('--period', type=float, default=0.01, help='seconds between ticks')
     parser.add_argument('--priority', type=int, default=50, help='SCHED_FIFO priority, 0: none')

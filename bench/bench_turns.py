@@ -1,4 +1,19 @@
-"""Turning walks on flat ground: how far a stance foot slides (at most 1 cm).
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Turning walks on flat ground: how far a stance foot slides (at most 1 cm).
 
 Run: .venv/bin/python bench/bench_turns.py [--speeds 0.5 0.8 1.0]
      [--turn-rates 0.3 0.5 0.7 1.0 -0.7] [--list]
@@ -13,18 +28,17 @@ import argparse
 import os
 import sys
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
 from bench_common import print_command  # noqa: E402
 from course_runs import scene, skeleton  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 from digital_actor_planner.core.trajectory_check import check_trajectory  # noqa: E402
+import numpy as np  # noqa: E402
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--speeds', type=float, nargs='+', default=[0.5, 0.8, 1.0])
     parser.add_argument('--turn-rates', type=float, nargs='+',
                         default=[0.3, 0.5, 0.7, 1.0, -0.7])

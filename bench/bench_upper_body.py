@@ -1,4 +1,19 @@
-"""Benchmark the upper-body planner (paper §5) per step, side by side with OMPL.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Benchmark the upper-body planner (paper §5) per step, side by side with OMPL.
 
 Courses: open ground, a low beam (underside 1.60 m: the waist must bend), a table beside the
 path (top 0.78 m: the left arm must flex) and two pillars closer than the shoulders (the waist
@@ -26,15 +41,14 @@ import os
 import sys
 import time
 
-import numpy as np
-import trimesh
-
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.ct_space import CTSpace, TimedBody
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.core.upper_body import (
     BRANCH_ORDER, motion_patterns, UpperBodyConfig, UpperBodyPlanner)
+import numpy as np
+import trimesh
 
 RATE = 100.0
 WINDOW = 61
@@ -192,7 +206,7 @@ class OmplBranchPlanner:
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().split('\n')[0])
     parser.add_argument('--repeat', type=int, default=3, help='CT-roadmap runs per window')
     parser.add_argument('--stride', type=int, default=10, help='frames between windows')
     parser.add_argument('--ompl-time', type=float, default=0.5,

@@ -1,4 +1,19 @@
-"""Does watching the actor in a browser slow the planner? Stream jitter with and without a page.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Does watching the actor in a browser slow the planner? Stream jitter with and without a page.
 
 Starts the real actor_planner on a course with the actor walking in a circle, then measures the
 joint_states stream for ``--seconds`` in three set-ups: the planner alone, the planner with the
@@ -16,14 +31,13 @@ import os
 import sys
 import time
 
-import numpy as np
-
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
 sys.path.insert(0, os.path.join(REPO, 'test'))
 sys.path.insert(0, os.path.join(REPO, 'test', 'browser'))
 
 from chromium_page import ChromiumPage, missing_tools  # noqa: E402
+import numpy as np  # noqa: E402
 from ros_harness import NodeProcess, ros_env, wait_for  # noqa: E402
 
 
@@ -97,7 +111,7 @@ def jitter_stats(times, rate):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().split('\n')[0])
     parser.add_argument('--seconds', type=float, default=30.0, help='measurement per phase')
     parser.add_argument('--scene', default=os.path.join(REPO, 'config', 'scenes', 'flat.yaml'))
     parser.add_argument('--domain-id', type=int, default=93)

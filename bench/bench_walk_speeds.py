@@ -1,4 +1,19 @@
-"""The obstacle courses walked at other speeds than their command files: passed or stopped.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The obstacle courses walked at other speeds than their command files: passed or stopped.
 
 Run: .venv/bin/python bench/bench_walk_speeds.py [--speeds 0.3 0.4 0.5 0.6 0.7 0.9 1.0]
      [--distances 0.5 0.0] [--list]
@@ -23,8 +38,6 @@ import argparse
 import os
 import sys
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
 from bench_common import print_command, spread  # noqa: E402
@@ -33,6 +46,7 @@ from scene_helpers import box  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 from digital_actor_planner.core.environment import Environment  # noqa: E402
 from digital_actor_planner.core.trajectory_check import check_trajectory  # noqa: E402
+import numpy as np  # noqa: E402
 
 COURSES = ('low_beam', 'table', 'pillars', 'uneven_beam')
 
@@ -60,7 +74,7 @@ def walked_speeds(speeds, argv) -> int:
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--speeds', type=float, nargs='+',
                         default=None, help='m/s (default: the courses 0.3-1.0, --flat '
                         '0.3-1.2)')

@@ -1,4 +1,19 @@
-"""Profile the planner's compiled kernels with Linux perf, each named.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Profile the planner's compiled kernels with Linux perf, each named.
 
     .venv/bin/python bench/perf_kernels.py [--courses stairs_up blocks] [--whole-body]
         [--seconds 20] [--out /tmp/kernels.data] [--top 40]
@@ -32,7 +47,7 @@ atexit.register(shutil.rmtree, os.environ['NUMBA_CACHE_DIR'], ignore_errors=True
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
 from bench_common import print_command  # noqa: E402
-from course_runs import SCENES, course_names, scene, skeleton  # noqa: E402
+from course_runs import course_names, scene, SCENES, skeleton  # noqa: E402
 from digital_actor_planner.cli import read_commands  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 
@@ -41,9 +56,13 @@ LAST_SIZE = 1 << 14
 
 
 def readable(symbol: str) -> str:
-    """A numba function's mangled name (``_ZN<length><name>...``, maybe behind numba's
-    ``cpython.`` or ``cfunc.`` wrapper prefix) as its module and function (``gait._swing_pass``,
-    ``cfunc.gait._swing_pass``); any other name unchanged."""
+    """
+    Return a numba function's mangled name as its module and function.
+
+    A numba function's mangled name (``_ZN<length><name>...``, maybe behind numba's ``cpython.`` or
+    ``cfunc.`` wrapper prefix) as its module and function (``gait._swing_pass``,
+    ``cfunc.gait._swing_pass``); any other name unchanged.
+    """
     prefix = ''
     for wrapper in ('cpython.', 'cfunc.'):
         if symbol.startswith(wrapper + '_ZN'):
@@ -62,9 +81,13 @@ def readable(symbol: str) -> str:
 
 
 def kernel_symbols() -> dict:
-    """Address -> name (:func:`readable`) of every function compiled into the kernels of the
-    core's modules loaded in this process (compiled here; a helper linked into several kernels
-    is one function, named once)."""
+    """
+    Map the address of every compiled kernel function to its readable name.
+
+    Address -> name (:func:`readable`) of every function compiled into the kernels of the core's
+    modules loaded in this process (compiled here; a helper linked into several kernels is one
+    function, named once).
+    """
     import numba
     symbols = {}
     modules = [module for name, module in list(sys.modules.items())
@@ -115,7 +138,7 @@ def walk(walks, whole_body: bool) -> int:
 
 
 def main(argv=None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().split('\n\n')[0])
     parser.add_argument('--courses', nargs='*', default=['stairs_up', 'blocks'])
     parser.add_argument('--whole-body', action='store_true', help='plan the upper body too')
     parser.add_argument('--seconds', type=float, default=20.0, help='seconds of walking profiled')

@@ -1,4 +1,19 @@
-"""Simulate every shipped course and judge it with the independent checker.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Simulate every shipped course and judge it with the independent checker.
 
 Run: .venv/bin/python bench/run_courses.py [course ...] [--no-upper-body]
 Prints one line per course: steps, reach, stuck events, planning p50/p99, real-time factor, and
@@ -10,13 +25,12 @@ import os
 import sys
 import time
 
-import numpy as np
-
 from digital_actor_planner.cli import read_commands
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
 from digital_actor_planner.core.scene import load_scene
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.core.trajectory_check import check_trajectory
+import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 

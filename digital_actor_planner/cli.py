@@ -1,4 +1,19 @@
-"""`digital-actor` command line: offline simulation, the interactive demo and the viewer.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+`digital-actor` command line: offline simulation, the interactive demo and the viewer.
 
 Argument parsing, files and pictures live here, not in the core. Exit codes: 0 success, 1 a run
 failed (its outputs could not be written), 2 bad input (a message names the file, line, value or
@@ -32,8 +47,12 @@ class InputError(ValueError):
 
 @dataclass(frozen=True)
 class CommandRow:
-    """One row of a command file: from ``time`` on (s), walk at ``linear_x`` m/s and turn at
-    ``angular_z`` rad/s; ``line`` is the row's line number in the file."""
+    """
+    One row of a command file: a command from a time on.
+
+    One row of a command file: from ``time`` on (s), walk at ``linear_x`` m/s and turn at
+    ``angular_z`` rad/s; ``line`` is the row's line number in the file.
+    """
 
     time: float
     linear_x: float
@@ -42,7 +61,8 @@ class CommandRow:
 
 
 def read_commands(path: str) -> List[CommandRow]:
-    """Read a command CSV (header ``time,linear_x,angular_z``); each row holds until the next.
+    """
+    Read a command CSV (header ``time,linear_x,angular_z``); each row holds until the next.
 
     Raises
     ------
@@ -91,7 +111,8 @@ BAG_SUFFIX = '.mcap'
 
 
 class _Outputs:
-    """The output files of one run: checked before planning, put in place together at the end.
+    """
+    The output files of one run: checked before planning, put in place together at the end.
 
     Each output is first a hidden temporary beside its final path, created when it is
     checked, so that a path that cannot be written fails before any planning. Nothing
@@ -106,7 +127,8 @@ class _Outputs:
 
     def add(self, path: str, option: str, bag: bool = False,
             formats: Sequence[str] = ()) -> str:
-        """Check ``path`` and return where to write it instead, until :meth:`publish`.
+        """
+        Check ``path`` and return where to write it instead, until :meth:`publish`.
 
         A file gets a temporary file with the same extension; a bag (a folder that must not
         exist yet) gets a path inside a temporary folder, named like the bag without its
@@ -364,7 +386,8 @@ def _share_dir() -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog='digital-actor', description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog='digital-actor',
+                                     description=__doc__.strip().splitlines()[0])
     sub = parser.add_subparsers(dest='command', required=True)
     sim = sub.add_parser('simulate', help='plan a whole course offline and write the trajectory')
     sim.add_argument('--scene', required=True, help='scene YAML or a bare mesh file')

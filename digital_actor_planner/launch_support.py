@@ -1,4 +1,19 @@
-"""ROS-free helpers of launch/actor.launch.py: frame names, required packages, the RViz config.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+ROS-free helpers of launch/actor.launch.py: frame names, required packages, the RViz config.
 
 The launch file only adapts: it reads its arguments, asks these functions what to start and
 with which names, and builds the actions. Kept here, in the package, so the rules are tested
@@ -38,7 +53,8 @@ class MissingPackageError(RuntimeError):
 
 
 def frame_prefix(namespace: str) -> str:
-    """The TF frame prefix for an actor in ``namespace``: ``'actor1/'``, or ``''`` at the root.
+    """
+    Return the TF frame prefix for an actor in ``namespace``: ``'actor1/'``, or ``''`` at the root.
 
     Parameters
     ----------
@@ -50,6 +66,7 @@ def frame_prefix(namespace: str) -> str:
     str
         The namespace without its leading and trailing slashes, plus one ``/``; empty for the
         root namespace.
+
     """
     if not isinstance(namespace, str):
         raise ValueError(f'namespace must be a string, got {namespace!r}')
@@ -60,17 +77,19 @@ def frame_prefix(namespace: str) -> str:
 
 
 def world_frame(namespace: str) -> str:
-    """The fixed frame of the actor in ``namespace`` (``'actor1/world'``, or ``'world'``)."""
+    """Return the actor's fixed frame in ``namespace`` (``'actor1/world'``, or ``'world'``)."""
     return frame_prefix(namespace) + WORLD_FRAME
 
 
 def is_true(value: str) -> bool:
-    """A launch argument's text as a boolean, as launch's ``IfCondition`` reads it.
+    """
+    Read a launch argument's text as a boolean, as launch's ``IfCondition`` reads it.
 
     Raises
     ------
     ValueError
         ``value`` is not one of ``true``, ``false``, ``1``, ``0`` (any case).
+
     """
     text = str(value).strip().lower()
     if text in ('true', '1'):
@@ -81,7 +100,8 @@ def is_true(value: str) -> bool:
 
 
 def required_packages(arguments: Dict[str, str]) -> List[str]:
-    """The ROS packages the launch starts executables from, given its arguments.
+    """
+    Return the ROS packages the launch starts executables from, given its arguments.
 
     Parameters
     ----------
@@ -93,6 +113,7 @@ def required_packages(arguments: Dict[str, str]) -> List[str]:
     -------
     list of str
         Package names, in the order the launch starts them.
+
     """
     return [package for package, switch in LAUNCHED_PACKAGES
             if switch is None or switched_on(arguments, switch)]
@@ -120,7 +141,8 @@ def install_hint(package: str, distribution: str = '') -> str:
 
 def check_packages(packages: Iterable[str], find: Callable[[str], str],
                    switches: Optional[Dict[str, str]] = None) -> None:
-    """Raise :class:`MissingPackageError` naming every package ``find`` cannot locate.
+    """
+    Raise :class:`MissingPackageError` naming every package ``find`` cannot locate.
 
     Parameters
     ----------
@@ -136,6 +158,7 @@ def check_packages(packages: Iterable[str], find: Callable[[str], str],
     ------
     MissingPackageError
         Listing each missing package with the command that installs it.
+
     """
     switches = dict(switches or {})
     missing = []
@@ -164,7 +187,8 @@ def launched_package_switches() -> Dict[str, str]:
 
 
 def rviz_config(text: str, namespace: str) -> str:
-    """The RViz config ``text`` made to show the actor in ``namespace``.
+    """
+    Make the RViz config ``text`` show the actor in ``namespace``.
 
     The shipped config's topics are relative, so RViz started in the namespace subscribes to
     that actor's; what a namespace changes is the TF frames: the fixed frame becomes the
@@ -187,6 +211,7 @@ def rviz_config(text: str, namespace: str) -> str:
     ValueError
         ``text`` is not an RViz config (no ``Visualization Manager``), or a display's topic is
         absolute (it would show another actor's data).
+
     """
     config = yaml.safe_load(text)
     if not isinstance(config, dict) or 'Visualization Manager' not in config:
@@ -208,7 +233,8 @@ def rviz_config(text: str, namespace: str) -> str:
 
 
 def rviz_topics(config: dict) -> List[str]:
-    """Every topic an RViz config's displays subscribe to (``Topic``/``Description Topic``).
+    """
+    Every topic an RViz config's displays subscribe to (``Topic``/``Description Topic``).
 
     Parameters
     ----------
@@ -219,6 +245,7 @@ def rviz_topics(config: dict) -> List[str]:
     -------
     list of str
         Topic names as written, in display order.
+
     """
     topics = []
     manager = config.get('Visualization Manager') or {}

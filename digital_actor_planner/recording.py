@@ -1,4 +1,19 @@
-"""A simulated run as a rosbag2 bag with MCAP storage, for `ros2 bag play`, RViz and rosbags.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+A simulated run as a rosbag2 bag with MCAP storage, for `ros2 bag play`, RViz and rosbags.
 
 The bag holds what the live planner node publishes, under the node's topic names: the joint
 stream (``/joint_states``, one sensor_msgs/JointState per frame), the footstep markers
@@ -37,7 +52,8 @@ class RecordingError(ValueError):
 def write_bag(path: str, joint_names: Sequence[str], times: np.ndarray, frames: np.ndarray,
               blocks: Sequence = (), frame_id: str = 'world',
               robot_description: Optional[str] = None, meshes: Sequence = ()) -> None:
-    """Write a run as a rosbag2 bag (a folder: ``metadata.yaml`` and one ``.mcap`` file).
+    """
+    Write a run as a rosbag2 bag (a folder: ``metadata.yaml`` and one ``.mcap`` file).
 
     Parameters
     ----------

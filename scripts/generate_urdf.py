@@ -1,5 +1,21 @@
 #!/usr/bin/env python3
-"""Write urdf/digital_actor.urdf: the paper's 22-DOF actor (Figure 1) with adult proportions.
+
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Write urdf/digital_actor.urdf: the paper's 22-DOF actor (Figure 1) with adult proportions.
 
 The URDF is committed; this script is how its numbers were chosen and how to change them.
 Run: python3 scripts/generate_urdf.py
@@ -77,7 +93,7 @@ def inertial(mass, centre):
 
 
 def link(name, shapes, material, mass):
-    """A body link: every shape is both visual and collision geometry."""
+    """Make a body link: every shape is both visual and collision geometry."""
     lines = [f'  <link name="{name}">']
     for geometry, xyz, rpy in shapes:
         lines.append(f'    <visual>{origin(xyz, rpy)}<geometry>{geometry}</geometry>'

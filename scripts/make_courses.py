@@ -1,5 +1,21 @@
 #!/usr/bin/env python3
-"""Write the shipped courses: config/scenes/<course>.yaml, <course>.csv and meshes/.
+
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Write the shipped courses: config/scenes/<course>.yaml, <course>.csv and meshes/.
 
 The courses are committed; this script is how they were made and how to change them. It is
 deterministic (seeded terrain, fixed number formats), so re-running it reproduces the files.
@@ -59,7 +75,8 @@ def merge(*meshes):
 
 
 def profile_solid(points, y0, y1, bottom):
-    """Return a closed solid whose top follows a profile z(x), extruded across y.
+    """
+    Return a closed solid whose top follows a profile z(x), extruded across y.
 
     Parameters
     ----------
@@ -120,7 +137,8 @@ def profile_solid(points, y0, y1, bottom):
 
 
 def heightfield_solid(xs, ys, heights, bottom):
-    """Return a closed solid whose top is the height grid and whose underside is flat.
+    """
+    Return a closed solid whose top is the height grid and whose underside is flat.
 
     Parameters
     ----------
@@ -164,7 +182,8 @@ def smoothstep(edge0, edge1, x):
 
 
 def bumps(xs, ys, amplitude, seed, x_flat_until, x_flat_from):
-    """Smooth random heights: a sum of plane waves of 1.2-3 m wavelength, seeded.
+    """
+    Smooth random heights: a sum of plane waves of 1.2-3 m wavelength, seeded.
 
     Returns
     -------
@@ -207,10 +226,10 @@ def straight(duration, speed=WALK_SPEED):
 
 
 def course_flat():
-    return dict(
-        description='10 m straight on a flat floor.',
-        meshes=[('floor', 'stl', slab(-2.0, 16.0), None)],
-        start=[0.0, 0.0, 0.0], expect={'reach_x': 9.0}, commands=straight(14.0))
+    return {
+        'description': '10 m straight on a flat floor.',
+        'meshes': [('floor', 'stl', slab(-2.0, 16.0), None)],
+        'start': [0.0, 0.0, 0.0], 'expect': {'reach_x': 9.0}, 'commands': straight(14.0)}
 
 
 def course_slope():
@@ -219,12 +238,12 @@ def course_slope():
     x_up, plateau = 1.5, 2.0
     xs = [-2.0, x_up, x_up + run, x_up + run + plateau, x_up + 2 * run + plateau, 16.0]
     points = list(zip(xs, [0.0, 0.0, rise, rise, 0.0, 0.0]))
-    return dict(
-        description=(f'Flat, a 12 degree ramp up ({run:.2f} m long) to a {rise} m plateau '
-                     f'({plateau} m long), a 12 degree ramp down, flat again.'),
-        meshes=[('ground', 'obj', profile_solid(points, -FLOOR_HALF_WIDTH, FLOOR_HALF_WIDTH,
-                                                SLAB_BOTTOM), None)],
-        start=[0.0, 0.0, 0.0], expect={'reach_x': 9.0}, commands=straight(15.0))
+    return {
+        'description': (f'Flat, a 12 degree ramp up ({run:.2f} m long) to a {rise} m plateau '
+                        f'({plateau} m long), a 12 degree ramp down, flat again.'),
+        'meshes': [('ground', 'obj', profile_solid(points, -FLOOR_HALF_WIDTH, FLOOR_HALF_WIDTH,
+                                                   SLAB_BOTTOM), None)],
+        'start': [0.0, 0.0, 0.0], 'expect': {'reach_x': 9.0}, 'commands': straight(15.0)}
 
 
 def stair_profile(x_first, heights, tread, floor_x0, floor_top, end_x, end_top):
@@ -243,11 +262,11 @@ def course_stairs_up():
     ground = profile_solid(stair_profile(1.5, [rise * k for k in range(1, 5)], tread, -2.0, 0.0,
                                          11.0, 5 * rise), -FLOOR_HALF_WIDTH, FLOOR_HALF_WIDTH,
                            SLAB_BOTTOM)
-    return dict(
-        description=(f'Five steps up (rise {rise} m, tread {tread} m) from x = 1.5 m to a '
-                     f'landing {5 * rise:.2f} m high from x = 2.7 m.'),
-        meshes=[('ground', 'ply', ground, None)],
-        start=[0.0, 0.0, 0.0], expect={'reach_x': 4.0}, commands=straight(10.0))
+    return {
+        'description': (f'Five steps up (rise {rise} m, tread {tread} m) from x = 1.5 m to a '
+                        f'landing {5 * rise:.2f} m high from x = 2.7 m.'),
+        'meshes': [('ground', 'ply', ground, None)],
+        'start': [0.0, 0.0, 0.0], 'expect': {'reach_x': 4.0}, 'commands': straight(10.0)}
 
 
 def course_stairs_down():
@@ -255,11 +274,11 @@ def course_stairs_down():
     ground = profile_solid(stair_profile(1.5, [rise * k for k in range(4, 0, -1)], tread, -2.0,
                                          5 * rise, 11.0, 0.0), -FLOOR_HALF_WIDTH,
                            FLOOR_HALF_WIDTH, SLAB_BOTTOM)
-    return dict(
-        description=(f'Start on a landing {5 * rise:.2f} m high; five steps down (rise {rise} m, '
-                     f'tread {tread} m) from x = 1.5 m to the floor from x = 2.7 m.'),
-        meshes=[('ground', 'glb', ground, None)],
-        start=[0.0, 0.0, 0.0], expect={'reach_x': 5.0}, commands=straight(10.0))
+    return {
+        'description': (f'Start on a landing {5 * rise:.2f} m high; five steps down (rise {rise} '
+                        f'm, tread {tread} m) from x = 1.5 m to the floor from x = 2.7 m.'),
+        'meshes': [('ground', 'glb', ground, None)],
+        'start': [0.0, 0.0, 0.0], 'expect': {'reach_x': 5.0}, 'commands': straight(10.0)}
 
 
 def course_gap():
@@ -267,11 +286,11 @@ def course_gap():
     ground = profile_solid([(-2.0, 0.0), (x0, 0.0), (x0, -depth), (x0 + width, -depth),
                             (x0 + width, 0.0), (13.0, 0.0)], -FLOOR_HALF_WIDTH,
                            FLOOR_HALF_WIDTH, -depth - 0.2)
-    return dict(
-        description=(f'A ditch {width} m wide and {depth} m deep across the path at '
-                     f'x = {x0} m; the actor strides over it.'),
-        meshes=[('ground', 'stl', ground, None)],
-        start=[0.0, 0.0, 0.0], expect={'reach_x': 5.5}, commands=straight(10.0))
+    return {
+        'description': (f'A ditch {width} m wide and {depth} m deep across the path at '
+                        f'x = {x0} m; the actor strides over it.'),
+        'meshes': [('ground', 'stl', ground, None)],
+        'start': [0.0, 0.0, 0.0], 'expect': {'reach_x': 5.5}, 'commands': straight(10.0)}
 
 
 def course_figure8_trap():
@@ -282,16 +301,16 @@ def course_figure8_trap():
     half = 0.6
     walkway = merge(box(-2.0, pit_x0, -half, half, -0.1, height),
                     box(pit_x0 + pit_length, 11.0, -half, half, -0.1, height))
-    return dict(
-        description=('Paper Figure 8: a walkway 0.33 m high with a pit 0.5 m long down to the '
-                     'ground at x = 2.0 m. Stepping down into it is allowed (<= 0.35 m), '
-                     'climbing out is not (> 0.30 m): a one-step window gets stuck, n = 3 '
-                     'strides over.'),
-        meshes=[('ground', 'stl', slab(-2.0, 11.0), None),
-                ('walkway', 'obj', walkway, None)],
-        start=[0.0, 0.0, 0.0],
-        expect={'reach_x': 5.0, 'trap_x': [pit_x0, pit_x0 + pit_length]},
-        commands=straight(10.0))
+    return {
+        'description': ('Paper Figure 8: a walkway 0.33 m high with a pit 0.5 m long down to the '
+                        'ground at x = 2.0 m. Stepping down into it is allowed (<= 0.35 m), '
+                        'climbing out is not (> 0.30 m): a one-step window gets stuck, n = 3 '
+                        'strides over.'),
+        'meshes': [('ground', 'stl', slab(-2.0, 11.0), None),
+                   ('walkway', 'obj', walkway, None)],
+        'start': [0.0, 0.0, 0.0],
+        'expect': {'reach_x': 5.0, 'trap_x': [pit_x0, pit_x0 + pit_length]},
+        'commands': straight(10.0)}
 
 
 def course_blocks():
@@ -299,76 +318,76 @@ def course_blocks():
     blocks = merge(box(1.5, 2.3, -half, half, -0.1, 0.10),
                    box(3.3, 4.2, -half, half, -0.1, 0.20),
                    box(5.2, 6.2, -half, half, -0.1, 0.28))
-    return dict(
-        description=('Blocks 0.10 m (x 1.5-2.3), 0.20 m (x 3.3-4.2) and 0.28 m (x 5.2-6.2) '
-                     'high with floor between: step onto and off each.'),
-        meshes=[('floor', 'glb', slab(-2.0, 15.0), None),
-                ('blocks', 'ply', blocks, None)],
-        start=[0.0, 0.0, 0.0], expect={'reach_x': 7.0}, commands=straight(14.0))
+    return {
+        'description': ('Blocks 0.10 m (x 1.5-2.3), 0.20 m (x 3.3-4.2) and 0.28 m (x 5.2-6.2) '
+                        'high with floor between: step onto and off each.'),
+        'meshes': [('floor', 'glb', slab(-2.0, 15.0), None),
+                   ('blocks', 'ply', blocks, None)],
+        'start': [0.0, 0.0, 0.0], 'expect': {'reach_x': 7.0}, 'commands': straight(14.0)}
 
 
 def course_rough():
     xs = np.arange(-2.0, 14.0 + 1e-9, 0.05)
     ys = np.arange(-1.5, 1.5 + 1e-9, 0.05)
     heights = bumps(xs, ys, 0.04, seed=8, x_flat_until=1.0, x_flat_from=9.0)
-    return dict(
-        description=('Seeded random terrain, bumps within +-4 cm and smooth on the scale of a '
-                     'foot (1.2-3 m wavelengths), from x = 1 m to x = 9 m; flat around it.'),
-        meshes=[('terrain', 'ply', heightfield_solid(xs, ys, heights, SLAB_BOTTOM), None)],
-        start=[0.0, 0.0, 0.0], expect={'reach_x': 7.0}, commands=straight(14.0))
+    return {
+        'description': ('Seeded random terrain, bumps within +-4 cm and smooth on the scale of a '
+                        'foot (1.2-3 m wavelengths), from x = 1 m to x = 9 m; flat around it.'),
+        'meshes': [('terrain', 'ply', heightfield_solid(xs, ys, heights, SLAB_BOTTOM), None)],
+        'start': [0.0, 0.0, 0.0], 'expect': {'reach_x': 7.0}, 'commands': straight(14.0)}
 
 
 def course_turn():
     rate = 0.5
     turn_start = 4.0
     turn_end = turn_start + (math.pi / 2) / rate
-    return dict(
-        description=('Walk 4 s straight along +x, turn 90 degrees left on an arc '
-                     f'({rate} rad/s for {turn_end - turn_start:.2f} s), walk on along +y.'),
-        meshes=[('floor', 'glb', slab(-2.0, 9.0, -4.0, 10.0), None)],
-        start=[0.0, 0.0, 0.0],
-        expect={'reach_y': 2.5, 'final_yaw': round(math.pi / 2, 4), 'yaw_tolerance': 0.35},
-        commands=[(0.0, WALK_SPEED, 0.0), (turn_start, WALK_SPEED, rate),
-                  (round(turn_end, 4), WALK_SPEED, 0.0), (11.0, 0.0, 0.0)])
+    return {
+        'description': ('Walk 4 s straight along +x, turn 90 degrees left on an arc '
+                        f'({rate} rad/s for {turn_end - turn_start:.2f} s), walk on along +y.'),
+        'meshes': [('floor', 'glb', slab(-2.0, 9.0, -4.0, 10.0), None)],
+        'start': [0.0, 0.0, 0.0],
+        'expect': {'reach_y': 2.5, 'final_yaw': round(math.pi / 2, 4), 'yaw_tolerance': 0.35},
+        'commands': [(0.0, WALK_SPEED, 0.0), (turn_start, WALK_SPEED, rate),
+                     (round(turn_end, 4), WALK_SPEED, 0.0), (11.0, 0.0, 0.0)]}
 
 
 def course_wall():
     wall_x = 3.0
     # The wall is built along x and turned onto the path by its pose (exercises yaw poses).
     wall = box(-3.0, 3.0, 0.0, 0.2, 0.0, 2.0)
-    return dict(
-        description=f'A 2 m high wall across the path at x = {wall_x} m: infeasible.',
-        meshes=[('floor', 'stl', slab(-2.0, 6.0), None),
-                ('wall', 'obj', wall, [wall_x + 0.2, 0.0, 0.0, 0.0, 0.0, math.pi / 2])],
-        start=[0.0, 0.0, 0.0],
-        expect={'stuck': True, 'stop_before_x': wall_x - 0.1},
-        commands=straight(8.0))
+    return {
+        'description': f'A 2 m high wall across the path at x = {wall_x} m: infeasible.',
+        'meshes': [('floor', 'stl', slab(-2.0, 6.0), None),
+                   ('wall', 'obj', wall, [wall_x + 0.2, 0.0, 0.0, 0.0, 0.0, math.pi / 2])],
+        'start': [0.0, 0.0, 0.0],
+        'expect': {'stuck': True, 'stop_before_x': wall_x - 0.1},
+        'commands': straight(8.0)}
 
 
 def course_low_beam():
     beam_x, underside = 3.0, LOW_BEAM_UNDERSIDE
-    return dict(
-        description=(f'A beam across the path at x = {beam_x} m, underside {underside} m: the '
-                     'standing head hits it; bending the waist forward about 0.6 rad passes '
-                     'under (0.55 rad at least, standing height).'),
-        meshes=[('floor', 'stl', slab(-2.0, 12.0), None),
-                ('beam', 'glb', beam_with_posts(underside), [beam_x, 0.0, 0.0, 0.0, 0.0, 0.0])],
-        start=[0.0, 0.0, 0.0],
-        expect={'reach_x': 5.5, 'obstacle_x': [beam_x - 0.8, beam_x + 0.3],
-                'deviation': 'waist_pitch'},
-        commands=straight(10.0))
+    return {
+        'description': (f'A beam across the path at x = {beam_x} m, underside {underside} m: the '
+                        'standing head hits it; bending the waist forward about 0.6 rad passes '
+                        'under (0.55 rad at least, standing height).'),
+        'meshes': [('floor', 'stl', slab(-2.0, 12.0), None),
+                   ('beam', 'glb', beam_with_posts(underside), [beam_x, 0.0, 0.0, 0.0, 0.0, 0.0])],
+        'start': [0.0, 0.0, 0.0],
+        'expect': {'reach_x': 5.5, 'obstacle_x': [beam_x - 0.8, beam_x + 0.3],
+                   'deviation': 'waist_pitch'},
+        'commands': straight(10.0)}
 
 
 def course_beam_too_low():
     beam_x, underside = 3.0, 1.05
-    return dict(
-        description=(f'A beam across the path at x = {beam_x} m, underside {underside} m: no '
-                     'bend gets under it; the actor stops cleanly before it.'),
-        meshes=[('floor', 'stl', slab(-2.0, 8.0), None),
-                ('beam', 'ply', beam_with_posts(underside), [beam_x, 0.0, 0.0, 0.0, 0.0, 0.0])],
-        start=[0.0, 0.0, 0.0],
-        expect={'stuck': True, 'stop_before_x': beam_x - 0.1},
-        commands=straight(8.0))
+    return {
+        'description': (f'A beam across the path at x = {beam_x} m, underside {underside} m: no '
+                        'bend gets under it; the actor stops cleanly before it.'),
+        'meshes': [('floor', 'stl', slab(-2.0, 8.0), None),
+                   ('beam', 'ply', beam_with_posts(underside), [beam_x, 0.0, 0.0, 0.0, 0.0, 0.0])],
+        'start': [0.0, 0.0, 0.0],
+        'expect': {'stuck': True, 'stop_before_x': beam_x - 0.1},
+        'commands': straight(8.0)}
 
 
 def table_with_objects():
@@ -398,18 +417,18 @@ def course_table():
     table_x0, edge_y = 2.0, 0.20
     table, objects = table_with_objects()
     pose = [table_x0, edge_y, 0.0, 0.0, 0.0, 0.0]
-    return dict(
-        description=(f'A table (top 0.78 m) on the left of the path from x = {table_x0} m, '
-                     f'near edge at y = {edge_y} m, under the hanging left hand; books and a '
-                     'jar at the edge are in the swinging arm\'s way: the left arm must leave '
-                     'its swing (a flexed elbow clears them).'),
-        meshes=[('floor', 'stl', slab(-2.0, 11.0), None),
-                ('table', 'obj', table, pose),
-                ('objects', 'glb', objects, pose)],
-        start=[0.0, 0.0, 0.0],
-        expect={'reach_x': 5.0, 'obstacle_x': [table_x0 - 0.4, table_x0 + 1.6 + 0.4],
-                'deviation': 'left_elbow'},
-        commands=straight(9.0))
+    return {
+        'description': (f'A table (top 0.78 m) on the left of the path from x = {table_x0} m, '
+                        f'near edge at y = {edge_y} m, under the hanging left hand; books and a '
+                        "jar at the edge are in the swinging arm's way: the left arm must leave "
+                        'its swing (a flexed elbow clears them).'),
+        'meshes': [('floor', 'stl', slab(-2.0, 11.0), None),
+                   ('table', 'obj', table, pose),
+                   ('objects', 'glb', objects, pose)],
+        'start': [0.0, 0.0, 0.0],
+        'expect': {'reach_x': 5.0, 'obstacle_x': [table_x0 - 0.4, table_x0 + 1.6 + 0.4],
+                   'deviation': 'left_elbow'},
+        'commands': straight(9.0)}
 
 
 def course_pillars():
@@ -417,16 +436,17 @@ def course_pillars():
     pillar = trimesh.creation.cylinder(radius=radius, height=2.2, sections=32)
     pillar.apply_translation([0.0, 0.0, 1.1])
     centre = half_gap + radius
-    return dict(
-        description=(f'Two round pillars at x = {pillar_x} m leaving a {2 * half_gap:.2f} m gap, '
-                     'narrower than the shoulders (0.52 m): passable by turning the waist.'),
-        meshes=[('floor', 'ply', slab(-2.0, 11.0), None),
-                ('pillar', 'stl', pillar, [pillar_x, centre, 0.0, 0.0, 0.0, 0.0]),
-                ('pillar', 'stl', pillar, [pillar_x, -centre, 0.0, 0.0, 0.0, 0.0])],
-        start=[0.0, 0.0, 0.0],
-        expect={'reach_x': 5.0, 'obstacle_x': [pillar_x - 0.5, pillar_x + 0.5],
-                'deviation': 'waist_yaw'},
-        commands=straight(9.0))
+    return {
+        'description': (f'Two round pillars at x = {pillar_x} m leaving a {2 * half_gap:.2f} m '
+                        'gap, narrower than the shoulders (0.52 m): passable by turning the '
+                        'waist.'),
+        'meshes': [('floor', 'ply', slab(-2.0, 11.0), None),
+                   ('pillar', 'stl', pillar, [pillar_x, centre, 0.0, 0.0, 0.0, 0.0]),
+                   ('pillar', 'stl', pillar, [pillar_x, -centre, 0.0, 0.0, 0.0, 0.0])],
+        'start': [0.0, 0.0, 0.0],
+        'expect': {'reach_x': 5.0, 'obstacle_x': [pillar_x - 0.5, pillar_x + 0.5],
+                   'deviation': 'waist_yaw'},
+        'commands': straight(9.0)}
 
 
 def course_uneven_beam():
@@ -436,18 +456,18 @@ def course_uneven_beam():
     platform_top, beam_x = 0.12, 3.6
     platform = box(2.6, 4.6, -0.8, 0.8, -0.2, platform_top)
     underside = platform_top + LOW_BEAM_UNDERSIDE
-    return dict(
-        description=('Bumpy ground (+-3 cm) with a platform 0.12 m high from x = 2.6 m to '
-                     f'4.6 m and a beam over it at x = {beam_x} m, underside {underside:.2f} m '
-                     f'({LOW_BEAM_UNDERSIDE} m above the platform): step up, bend under, step '
-                     'down.'),
-        meshes=[('terrain', 'ply', heightfield_solid(xs, ys, heights, SLAB_BOTTOM), None),
-                ('platform', 'obj', platform, None),
-                ('beam', 'glb', beam_with_posts(underside), [beam_x, 0.0, 0.0, 0.0, 0.0, 0.0])],
-        start=[0.0, 0.0, 0.0],
-        expect={'reach_x': 6.5, 'obstacle_x': [beam_x - 0.8, beam_x + 0.3],
-                'deviation': 'waist_pitch'},
-        commands=straight(12.0))
+    return {
+        'description': ('Bumpy ground (+-3 cm) with a platform 0.12 m high from x = 2.6 m to '
+                        f'4.6 m and a beam over it at x = {beam_x} m, underside {underside:.2f} m '
+                        f'({LOW_BEAM_UNDERSIDE} m above the platform): step up, bend under, step '
+                        'down.'),
+        'meshes': [('terrain', 'ply', heightfield_solid(xs, ys, heights, SLAB_BOTTOM), None),
+                   ('platform', 'obj', platform, None),
+                   ('beam', 'glb', beam_with_posts(underside), [beam_x, 0.0, 0.0, 0.0, 0.0, 0.0])],
+        'start': [0.0, 0.0, 0.0],
+        'expect': {'reach_x': 6.5, 'obstacle_x': [beam_x - 0.8, beam_x + 0.3],
+                   'deviation': 'waist_pitch'},
+        'commands': straight(12.0)}
 
 
 COURSES = {

@@ -1,5 +1,21 @@
 #!/usr/bin/env python3
-"""Render the README pictures with `digital-actor simulate --render` (the project draws itself).
+
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Render the README pictures with `digital-actor simulate --render` (the project draws itself).
 
 Run: .venv/bin/python scripts/make_pictures.py [PICTURE ...]
      (writes docs/images/*.png and *.gif; with names, e.g. table.gif, only those)

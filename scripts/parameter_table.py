@@ -1,4 +1,19 @@
-"""Write the README's table of the planner node's parameters from their one declaration.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Write the README's table of the planner node's parameters from their one declaration.
 
 The table is generated from ``nodes/planner_params.parameter_declarations()`` (name, default,
 descriptor), so the README cannot drift from what the node declares; ``test/test_readme.py``
@@ -59,7 +74,8 @@ def _range(descriptor: Any) -> str:
 
 
 def render_table(declarations: Sequence[Tuple[str, Any, Any]]) -> str:
-    """Return the Markdown table of the given parameter declarations.
+    """
+    Return the Markdown table of the given parameter declarations.
 
     Parameters
     ----------
@@ -84,7 +100,8 @@ def render_table(declarations: Sequence[Tuple[str, Any, Any]]) -> str:
 
 
 def replace_table(text: str, table: str) -> str:
-    """Return ``text`` with the lines between the table's markers replaced by ``table``.
+    """
+    Return ``text`` with the lines between the table's markers replaced by ``table``.
 
     Raises
     ------

@@ -1,8 +1,20 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Shared, cached course simulations for the tests (each course is planned once per test run)."""
 import functools
 import os
-
-import numpy as np
 
 from digital_actor_planner.cli import read_commands
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
@@ -12,6 +24,7 @@ from digital_actor_planner.core.footsteps import FootstepConfig
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.core.trajectory_check import check_trajectory
 from digital_actor_planner.core.upper_body import UpperBodyConfig, UpperBodyPlanner
+import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = os.path.join(ROOT, 'config', 'scenes')
@@ -28,8 +41,12 @@ def scene(name):
 
 
 def judged(blocks, environment):
-    """(times, frames, report): a walk's blocks stacked and judged by the independent
-    checker against ``environment``."""
+    """
+    Stack a walk's blocks and judge them with the independent checker.
+
+    (times, frames, report): a walk's blocks stacked and judged by the independent checker against
+    ``environment``.
+    """
     times = np.concatenate([b.times for b in blocks])
     frames = np.vstack([b.frames for b in blocks])
     return times, frames, check_trajectory(skeleton(), environment, times, frames)
@@ -38,7 +55,8 @@ def judged(blocks, environment):
 @functools.lru_cache(maxsize=None)
 def simulate(name, window_steps=3, upper_body=True, greedy_restart=True, lasting_branches=None,
              upper_body_seed=True):
-    """Plan course ``name``: (scene, times (k,), frames (k, 22), blocks).
+    """
+    Plan course ``name``: (scene, times (k,), frames (k, 22), blocks).
 
     ``lasting_branches``: a tuple overrides the upper-body planner's ``lasting_branches``.
     ``upper_body_seed``: ``ActorConfig.upper_body_seed``.
@@ -61,9 +79,13 @@ def simulate(name, window_steps=3, upper_body=True, greedy_restart=True, lasting
 
 def actor_with_lasting_branches(environment, start, lasting_branches, config=ActorConfig(),
                                 planner_seed=0):
-    """An Actor built as its constructor builds one, but with the upper-body planner's
-    ``lasting_branches`` set (``()``: no branch prefers lasting postures) and its random
-    generator seeded with ``planner_seed`` (the constructor's: 0)."""
+    """
+    Build an Actor with the upper-body planner's lasting branches and seed set.
+
+    An Actor built as its constructor builds one, but with the upper-body planner's
+    ``lasting_branches`` set (``()``: no branch prefers lasting postures) and its random generator
+    seeded with ``planner_seed`` (the constructor's: 0).
+    """
     collision = BodyCollision(skeleton(), environment)
     upper = UpperBodyPlanner(skeleton(), collision,
                              UpperBodyConfig(check_budget=int(config.upper_body_check_budget),

@@ -1,4 +1,19 @@
-"""A Dynamixel X-series bus emulator written from the ROBOTIS Protocol 2.0 packet specification.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+A Dynamixel X-series bus emulator written from the ROBOTIS Protocol 2.0 packet specification.
 
 It serves a pseudo-terminal (``os.openpty``) so that a program under test opens it exactly as it
 would open a USB serial adapter. Packet format (Protocol 2.0): header ``FF FF FD``, reserved
@@ -121,7 +136,8 @@ def build_status(packet_id: int, error: int, params: bytes = b'') -> bytes:
 
 
 def parse_packet(buffer: bytes) -> Tuple[Optional[Tuple[int, int, bytes]], int, bool]:
-    """Find one packet at the start of ``buffer``.
+    """
+    Find one packet at the start of ``buffer``.
 
     Returns
     -------
@@ -257,7 +273,8 @@ class Servo:
 
 
 class DynamixelEmulator:
-    """A bus of emulated X-series servos behind a pseudo-terminal.
+    """
+    A bus of emulated X-series servos behind a pseudo-terminal.
 
     Parameters
     ----------
@@ -356,8 +373,11 @@ class DynamixelEmulator:
             self.servos[servo_id]._set(address, value)
 
     def inject_hardware_error(self, servo_id: int, bits: int, shutdown: bool = False) -> None:
-        """Raise Hardware Error Status bits (bit 0 voltage, 2 overheating, 3 encoder,
-        4 electrical shock, 5 overload).
+        """
+        Raise Hardware Error Status bits.
+
+        Raise Hardware Error Status bits (bit 0 voltage, 2 overheating, 3 encoder, 4 electrical
+        shock, 5 overload).
 
         With ``shutdown`` the servo also drops torque and refuses to re-enable it, as a real
         X-series servo does for the bits selected in its Shutdown register.
@@ -542,7 +562,8 @@ class DynamixelEmulator:
         return replies
 
     def _fast_sync_read(self, params: bytes):
-        """One status packet (ID 0xFE) that the servos fill in turn: ERR ID DATA CRC each.
+        """
+        One status packet (ID 0xFE) that the servos fill in turn: ERR ID DATA CRC each.
 
         Each servo's CRC covers the packet up to its own block, so the last one is the CRC of
         the whole packet. Replies are returned per servo so that wire time is modelled.
@@ -604,7 +625,8 @@ def _tight_timer_slack() -> None:
 
 
 def _wait_until(deadline: float) -> None:
-    """Wait until ``deadline`` (monotonic s), to within a few microseconds.
+    """
+    Wait until ``deadline`` (monotonic s), to within a few microseconds.
 
     Sleeps until shortly before the deadline, then spins: a real servo answers on time, and a
     plain sleep overshoots by the kernel's timer slack (50 us by default) plus wake-up latency,

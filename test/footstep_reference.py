@@ -1,10 +1,27 @@
-"""The footstep window's effort written out plainly, in Python on lists: the reference the
-compiled search (``core/footstep_search.py``) is tested against, term by term and bit for bit.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The footstep window's effort written out plainly, in Python on lists.
+
+The reference the compiled search (``core/footstep_search.py``) is tested against, term by term and
+bit for bit.
 
 Each function takes the ``FootstepPlanner`` whose settings and table layout it reads.
 """
-import math
 from dataclasses import dataclass, field
+import math
 from typing import Dict, List, Optional, Tuple
 
 import numpy as np
@@ -12,7 +29,8 @@ import numpy as np
 
 @dataclass
 class Tables:
-    """The window's footholds and a memo of swing tests as Python lists, for :func:`effort`.
+    """
+    The window's footholds and a memo of swing tests as Python lists, for :func:`effort`.
 
     ``ok[i][c]``, ``height[i][c]``, ``pitch[i][c]``: the foothold of footstep i when the
     interval indices of footsteps 1..i+1 sum to c (its arc length depends only on that sum).
@@ -56,7 +74,8 @@ def search_tables(planner, profile, sides, stance_s) -> Tables:
 def swing_clear_in(planner, memo: Tables, side: int, s_from: float, h_from: float,
                    s_to: float, h_to: float, lifts_from: Optional[Tuple[int, int]] = None
                    ) -> bool:
-    """Whether a foot can swing from one foothold to the next over the ground profile.
+    """
+    Whether a foot can swing from one foothold to the next over the ground profile.
 
     ``lifts_from``: (row, cumulative index) of the foothold it leaves when the window placed
     it there; that foothold must also let it lift off (see ``FootstepConfig.lift_room``).
@@ -77,9 +96,12 @@ def swing_clear_in(planner, memo: Tables, side: int, s_from: float, h_from: floa
 
 
 def rise_ahead_at(planner, memo: Tables, row: int, cumulative: int) -> float:
-    """``FootstepPlanner.rise_ahead`` of one foothold of the table (row ``row``, cumulative
-    interval index ``cumulative``), in plain Python on the lists and remembered. The same
-    arithmetic as ``rise_ahead``, so the same value.
+    """
+    Return ``FootstepPlanner.rise_ahead`` of one foothold, in plain Python.
+
+    ``FootstepPlanner.rise_ahead`` of one foothold of the table (row ``row``, cumulative interval
+    index ``cumulative``), in plain Python on the lists and remembered. The same arithmetic as
+    ``rise_ahead``, so the same value.
     """
     key = (row, cumulative)
     value = memo.rise_ahead.get(key)
@@ -110,9 +132,13 @@ def rise_ahead_at(planner, memo: Tables, row: int, cumulative: int) -> float:
 
 def plain_effort(planner, profile, config, lengths, sides, stance_s, stance_height, swing_s,
                  swing_height, s_init, previous_length, memo, banned) -> Optional[float]:
-    """Effort of a footstep configuration, or None if it is not collision-free: each footstep
-    from the stance foot on, each swing from where that foot was (``memo.swings`` remembers
-    the swing tests)."""
+    """
+    Return the effort of a footstep configuration, or None if it collides.
+
+    Effort of a footstep configuration, or None if it is not collision-free: each footstep from the
+    stance foot on, each swing from where that foot was (``memo.swings`` remembers the swing
+    tests).
+    """
     cfg = planner.config
     if config[0] in banned:
         return None
@@ -153,8 +179,12 @@ def plain_effort(planner, profile, config, lengths, sides, stance_s, stance_heig
 
 
 def step_effort(planner, length, rise, pitch, length_before, s_init) -> float:
-    """One footstep's share of the effort: length off the neutral one, height change, sole
-    pitch and change of length, each normalised by its range."""
+    """
+    Return one footstep's share of the effort.
+
+    One footstep's share of the effort: length off the neutral one, height change, sole pitch and
+    change of length, each normalised by its range.
+    """
     w_length, w_height, w_pitch, w_smooth, span, up, pitch_range = planner._effort_terms
     return (w_length * ((length - s_init) / span) ** 2
             + w_height * (rise / up) ** 2

@@ -1,4 +1,19 @@
-"""Helpers for tests that start real node processes and talk DDS (no launch_testing here).
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Helpers for tests that start real node processes and talk DDS (no launch_testing here).
 
 Every process runs with ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST and the test's own
 ROS_DOMAIN_ID; tests wait for a match, never a fixed sleep, and stop what they start by PID.
@@ -14,7 +29,7 @@ _DOMAIN_IDS = itertools.count(start=(os.getpid() % 50) + 110)
 
 
 def fresh_domain_id() -> int:
-    """A ROS_DOMAIN_ID no other test in this run uses (110..232, Fast DDS safe range)."""
+    """Return a ROS_DOMAIN_ID no other test in this run uses (110..232, Fast DDS safe range)."""
     return next(_DOMAIN_IDS) % 120 + 110
 
 

@@ -1,20 +1,33 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Small builders shared by the planner tests."""
 import os
-
-import numpy as np
-import trimesh
-import yaml
 
 from digital_actor_planner.core.ct_space import (
     BodyKinematics, BodyShapes, EnvironmentIndex, TimedBody)
 from digital_actor_planner.core.scene import load_scene
 from digital_actor_planner.core.upper_body import motion_patterns
+import numpy as np
+import trimesh
+import yaml
 
 RATE = 100.0
 
 
 def box(lower, upper):
-    """A closed box mesh spanning ``lower``..``upper`` ((3,) m each corner)."""
+    """Make a closed box mesh spanning ``lower``..``upper`` ((3,) m each corner)."""
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)
     mesh = trimesh.creation.box(extents=upper - lower)
     mesh.apply_translation((lower + upper) / 2)
@@ -22,7 +35,8 @@ def box(lower, upper):
 
 
 def furniture_scene(rng):
-    """Flat ground and a box beside the path at arm height, sometimes with a thing on it.
+    """
+    Flat ground and a box beside the path at arm height, sometimes with a thing on it.
 
     The box is left or right of the x axis, its near side 0.17-0.32 m from it, its top
     0.65-1.05 m high, 0.4-2.0 m long from x = 1.5-2.5 m; in half of the scenes a 0.15 x 0.1 m
@@ -45,10 +59,14 @@ def furniture_scene(rng):
 
 
 def pillars_moved_sideways(scenes, directory, centre, shift, skeleton=None):
-    """The pillars course (``scenes``/pillars.yaml) with its two pillars ``centre`` m either
-    side of a line ``shift`` m to the left of the actor's path (the course: 0.37 and 0), as a
-    scene YAML written to ``directory``; returns the loaded Scene. The pillars stand at x = 3 m
-    (radius 0.12 m)."""
+    """
+    Write the pillars course with its pillars moved sideways, and load it.
+
+    The pillars course (``scenes``/pillars.yaml) with its two pillars ``centre`` m either side of a
+    line ``shift`` m to the left of the actor's path (the course: 0.37 and 0), as a scene YAML
+    written to ``directory``; returns the loaded Scene. The pillars stand at x = 3 m (radius 0.12
+    m).
+    """
     centre, shift = float(centre), float(shift)
     source = os.path.join(scenes, 'pillars.yaml')
     with open(source) as stream:
@@ -64,8 +82,12 @@ def pillars_moved_sideways(scenes, directory, centre, shift, skeleton=None):
 
 
 def walk(skeleton, k, x0=-1.0, speed=0.9, swing_legs=True):
-    """Times (k,) s and frames (k, 22) at RATE Hz: the pelvis along +x at ``speed`` m/s from
-    ``x0``, root_z 0.92, the legs swinging (or straight), the upper body in its motion patterns."""
+    """
+    Return the times and frames of a straight walk along +x.
+
+    Times (k,) s and frames (k, 22) at RATE Hz: the pelvis along +x at ``speed`` m/s from ``x0``,
+    root_z 0.92, the legs swinging (or straight), the upper body in its motion patterns.
+    """
     times = np.arange(k) / RATE
     q = np.tile(skeleton.neutral(), (k, 1))
     q[:, skeleton.index['root_x']] = x0 + speed * times
@@ -78,6 +100,6 @@ def walk(skeleton, k, x0=-1.0, speed=0.9, swing_legs=True):
 
 
 def timed_body(skeleton, environment, frames, padding=0.0):
-    """The actor's body over ``frames`` in ``environment`` (an Environment), for CT-spaces."""
+    """Return the actor's body over ``frames`` in ``environment``, for CT-spaces."""
     return TimedBody(BodyKinematics(skeleton), BodyShapes(skeleton, padding),
                      EnvironmentIndex(environment.meshes, environment.objects), frames)

@@ -1,14 +1,27 @@
-"""The actor pipeline: commands in, timed frames out, one block at a time (§3.2)."""
-import numpy as np
-import pytest
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
+"""The actor pipeline: commands in, timed frames out, one block at a time (§3.2)."""
 from course_runs import judged, scene, skeleton
-from scene_helpers import box
 from digital_actor_planner.core import actor as actor_module
 from digital_actor_planner.core import gait as gait_module
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands, validate
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.upper_body import UpperBodyPlan
+import numpy as np
+import pytest
+from scene_helpers import box
 
 #: The settings the steering walks below were recorded with: commands up to 1.2 m/s walked in
 #: strides up to 0.8 m. A stride law that differs walks elsewhere, and the trap each test
@@ -92,7 +105,8 @@ def test_bad_configuration_names_the_field(field, value):
 
 
 class BlockedUpperBody:
-    """An upper-body planner that is always blocked at a chosen frame; it counts its calls.
+    """
+    An upper-body planner that is always blocked at a chosen frame; it counts its calls.
 
     ``blocked_at_end``: blocked at the last frame (in the preview when there is one), else at
     frame 5; ``after_step``: with a preview, blocked this many frames after the step's end.
@@ -167,8 +181,12 @@ def test_bad_preview_margin_names_the_field(value):
 
 
 class NeedsAPause:
-    """An upper-body planner that passes a block only when the pelvis first stands still for
-    ``frames`` frames (an arm that must get clear before the body moves)."""
+    """
+    An upper-body planner that needs the pelvis to stand still first.
+
+    An upper-body planner that passes a block only when the pelvis first stands still for
+    ``frames`` frames (an arm that must get clear before the body moves).
+    """
 
     def __init__(self, frames):
         self.frames = frames
@@ -226,8 +244,12 @@ def test_bad_pivot_turn_names_the_field(value):
 
 
 def turn_on_the_spot(rate, config, start=(1.0, 1.5, np.pi / 3), speed=0.0, seconds=4.0):
-    """The actor 0.5 m from the flat floor's edge (y = 2 m), facing 60 degrees to it, told to
-    turn at ``rate`` (towards the edge first when positive). Returns blocks and report."""
+    """
+    Turn on the spot near the flat floor's edge.
+
+    The actor 0.5 m from the flat floor's edge (y = 2 m), facing 60 degrees to it, told to turn at
+    ``rate`` (towards the edge first when positive). Returns blocks and report.
+    """
     sc = scene('flat')
     actor = Actor(skeleton(), sc.environment, config, start=start)
     blocks = run_commands(actor, [0.0, seconds], [speed, 0.0], [rate, 0.0])
@@ -235,8 +257,12 @@ def turn_on_the_spot(rate, config, start=(1.0, 1.5, np.pi / 3), speed=0.0, secon
 
 
 def test_a_turn_on_the_spot_facing_an_edge_pivots_instead_of_stopping():
-    """The tight arc of a turn on the spot reaches over the floor's edge and is refused; the
-    actor pivots about its stance hip until the arc is clear, then walks its turn."""
+    """
+    A turn on the spot facing the floor's edge pivots instead of stopping.
+
+    The tight arc of a turn on the spot reaches over the floor's edge and is refused; the actor
+    pivots about its stance hip until the arc is clear, then walks its turn.
+    """
     blocks, report = turn_on_the_spot(1.0, ActorConfig(plan_upper_body=False))
     assert report.ok, report.failures()
     assert any(b.category == 'pivot' for b in blocks)
@@ -264,13 +290,17 @@ def test_a_pivot_turns_no_faster_than_asked_and_only_in_tight_turns():
 
 
 def test_a_turn_reversed_at_low_speed_squares_the_feet_instead_of_stopping():
-    """Walking a left arc, then told to turn right slowly (0.31 m/s, -1 rad/s: seed 2 of
+    """
+    A turn reversed at low speed squares the feet instead of stopping.
+
+    Walking a left arc, then told to turn right slowly (0.31 m/s, -1 rad/s: seed 2 of
     bench_steer_away.py's walks, which stopped here on every course): the right foot is down,
-    pointing 0.35 rad further left than the left one, and the left foot must step first. On
-    the arc it would pass into the right foot; a pivot keeping its heading turns the legs in
-    until the thighs meet, and squaring it up to the right foot turns the pelvis back (left).
-    The actor squares the feet, the pelvis turning back a little, rather than stand still
-    until the mouse moves; its next steps turn right."""
+    pointing 0.35 rad further left than the left one, and the left foot must step first. On the arc
+    it would pass into the right foot; a pivot keeping its heading turns the legs in until the
+    thighs meet, and squaring it up to the right foot turns the pelvis back (left). The actor
+    squares the feet, the pelvis turning back a little, rather than stand still until the mouse
+    moves; its next steps turn right.
+    """
     sc = scene('flat')
     actor = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False),
                   start=sc.start)
@@ -288,12 +318,16 @@ def test_a_turn_reversed_at_low_speed_squares_the_feet_instead_of_stopping():
 
 
 def test_a_turn_on_the_spot_with_the_feet_on_two_levels_pivots_on_either_level():
-    """Weaving onto the stairs (seed 9 of bench_steer_away.py's walks, rounded), the last step
-    puts one foot on the first tread's nosing, the other stays on the floor, facing the flight
-    at 0.95 rad. Told to turn on the spot, the floor foot cannot land beside the tread foot on
-    the tread's level (that is across the riser); it lands on the floor, its own level, and
-    so on: each foot pivots on its level. (A pivot had to land within 5 cm of the stance
-    foot's height: the actor stood there, and turning either way left it there, trapped.)"""
+    """
+    A turn on the spot with the feet on two levels pivots on either level.
+
+    Weaving onto the stairs (seed 9 of bench_steer_away.py's walks, rounded), the last step puts
+    one foot on the first tread's nosing, the other stays on the floor, facing the flight at 0.95
+    rad. Told to turn on the spot, the floor foot cannot land beside the tread foot on the tread's
+    level (that is across the riser); it lands on the floor, its own level, and so on: each foot
+    pivots on its level. (A pivot had to land within 5 cm of the stance foot's height: the actor
+    stood there, and turning either way left it there, trapped.)
+    """
     sc = scene('stairs_up')
     commands = [(0.0, 0.0, 0.85), (1.78, 0.5, -0.67), (2.57, 0.94, 1.11), (3.89, 0.0, -0.11),
                 (5.51, 0.0, 0.44), (9.0, 0.0, 0.0)]
@@ -314,11 +348,15 @@ def test_a_turn_on_the_spot_with_the_feet_on_two_levels_pivots_on_either_level()
 
 
 def test_a_pivot_at_a_stair_nosing_lands_on_the_tread_and_never_steps_on_the_spot(monkeypatch):
-    """Standing on the first tread with the heels over its nosing, told to turn on the spot:
-    beside the stance foot the turned foot would land across the riser, so it lands 10 cm
-    ahead or behind (``PIVOT_SHIFTS``), on the tread, and the actor turns. Where no landing
-    turns it any further, it stops rather than step on the spot: two pivots in a row turn the
-    pelvis on by ``PIVOT_MIN_TURN`` at least."""
+    """
+    A pivot at a stair nosing lands on the tread and never steps on the spot.
+
+    Standing on the first tread with the heels over its nosing, told to turn on the spot: beside
+    the stance foot the turned foot would land across the riser, so it lands 10 cm ahead or behind
+    (``PIVOT_SHIFTS``), on the tread, and the actor turns. Where no landing turns it any further,
+    it stops rather than step on the spot: two pivots in a row turn the pelvis on by
+    ``PIVOT_MIN_TURN`` at least.
+    """
     sc = scene('stairs_up')
 
     def turn():
@@ -343,11 +381,15 @@ def test_a_pivot_at_a_stair_nosing_lands_on_the_tread_and_never_steps_on_the_spo
 
 
 def test_beside_the_tables_corner_the_foot_that_landed_last_pivots(monkeypatch):
-    """Weaving beside the table (seed 5 of bench_steer_away.py's walks), the actor stops
-    beside its corner, the left thigh 4 cm from the edge: every step and every pivot of the
-    left foot (the one due to swing) puts that thigh into the edge. Told to turn away on the
-    spot, the right foot, the one that landed last, pivots instead, and the actor walks its
-    turn. (Pivoting the left foot only, the actor would be trapped there.)"""
+    """
+    Beside the table's corner the foot that landed last pivots.
+
+    Weaving beside the table (seed 5 of bench_steer_away.py's walks), the actor stops beside its
+    corner, the left thigh 4 cm from the edge: every step and every pivot of the left foot (the one
+    due to swing) puts that thigh into the edge. Told to turn away on the spot, the right foot, the
+    one that landed last, pivots instead, and the actor walks its turn. (Pivoting the left foot
+    only, the actor would be trapped there.)
+    """
     sc = scene('table')
     commands = [(0.0, 1.07, 0.179), (1.669, 0.427, -0.838), (3.342, 1.095, 0.538),
                 (3.65, 0.0, -1.0), (7.65, 0.0, 0.0)]
@@ -375,11 +417,15 @@ def test_beside_the_tables_corner_the_foot_that_landed_last_pivots(monkeypatch):
 
 
 def test_a_foot_behind_the_other_beside_the_table_turns_where_it_stands(monkeypatch):
-    """Seed 7 of bench_steer_away.py's walks stops beside the table's far end, the left foot
-    0.43 m behind the right: any step of the left leg swings its thigh forward into the
-    table's edge, wherever it lands beside the right foot. Told to turn away on the spot, the
-    left foot turns where it stands (the last of ``PIVOT_SHIFTS``), and the actor walks its
-    turn from there. Without that landing it stayed, trapped."""
+    """
+    A foot behind the other beside the table turns where it stands.
+
+    Seed 7 of bench_steer_away.py's walks stops beside the table's far end, the left foot 0.43 m
+    behind the right: any step of the left leg swings its thigh forward into the table's edge,
+    wherever it lands beside the right foot. Told to turn away on the spot, the left foot turns
+    where it stands (the last of ``PIVOT_SHIFTS``), and the actor walks its turn from there.
+    Without that landing it stayed, trapped.
+    """
     sc = scene('table')
     commands = [(0.0, 0.36, 0.014), (1.363, 0.813, -0.231), (3.188, 0.244, 0.83),
                 (4.807, 0.236, -0.241), (5.489, 0.715, 0.443), (6.3, 0.666, -0.004),
@@ -408,12 +454,16 @@ def test_a_foot_behind_the_other_beside_the_table_turns_where_it_stands(monkeypa
 
 
 def test_a_foot_that_lands_away_from_its_foothold_must_rest_where_it_lands():
-    """Weaving on the blocks course (seed 58 of bench_steer_away.py's walks, rounded): in a
-    tight right turn the left foot's heading is bounded (``max_toe_in``), so its hip's plane
-    puts it 0.19 m from the foothold planned on the 0.2 m block, beside the block, where it
-    came down at the block's height over the floor; the next lift-off then left no foot down
-    (36.9 mm). A landing that far from its foothold must now rest on the ground where it is;
-    this one is refused, the actor does something else, and the checker passes."""
+    """
+    A foot that lands away from its foothold must rest where it lands.
+
+    Weaving on the blocks course (seed 58 of bench_steer_away.py's walks, rounded): in a tight
+    right turn the left foot's heading is bounded (``max_toe_in``), so its hip's plane puts it 0.19
+    m from the foothold planned on the 0.2 m block, beside the block, where it came down at the
+    block's height over the floor; the next lift-off then left no foot down (36.9 mm). A landing
+    that far from its foothold must now rest on the ground where it is; this one is refused, the
+    actor does something else, and the checker passes.
+    """
     sc = scene('blocks')
     commands = [(0.0, 1.043, 0.588), (0.825, 0.354, -0.765), (2.621, 0.663, 0.259),
                 (3.334, 0.236, -0.63), (3.989, 0.591, 0.568), (5.726, 0.566, -1.049),
@@ -428,8 +478,12 @@ def test_a_foot_that_lands_away_from_its_foothold_must_rest_where_it_lands():
 
 
 def walk_straight_past(environment, speed, seconds, x, case):
-    """Walk straight along +x from the origin (lower body) and assert that the pelvis gets past
-    ``x`` and the checker passes the walk; ``case`` labels a failure."""
+    """
+    Walk straight along +x and assert that the pelvis gets past ``x``.
+
+    Walk straight along +x from the origin (lower body) and assert that the pelvis gets past ``x``
+    and the checker passes the walk; ``case`` labels a failure.
+    """
     actor = Actor(skeleton(), environment, ActorConfig(plan_upper_body=False),
                   start=(0.0, 0.0, 0.0))
     blocks = run_commands(actor, [0.0, seconds], [speed, 0.0], [0.0, 0.0])
@@ -440,12 +494,16 @@ def walk_straight_past(environment, speed, seconds, x, case):
 
 
 def test_walking_straight_over_a_block_the_rear_foot_clears_its_near_face():
-    """A block 0.5 m long and 0.18 or 0.21 m high across the path, 1.6-2.0 m ahead, walked
-    straight at 0.8 or 1.0 m/s. The footsteps often put the front foot on the block with the
-    rear toe a few centimetres from its face; a cubic swing curve cannot rise that steeply and
-    stay up over the block, so every step was refused and the actor stopped there for good
-    (16 of these 20 walks). The swing then takes a flat-topped curve (degree 5): every walk
-    crosses, and the checker passes each."""
+    """
+    Walking straight over a block, the rear foot clears its near face.
+
+    A block 0.5 m long and 0.18 or 0.21 m high across the path, 1.6-2.0 m ahead, walked straight at
+    0.8 or 1.0 m/s. The footsteps often put the front foot on the block with the rear toe a few
+    centimetres from its face; a cubic swing curve cannot rise that steeply and stay up over the
+    block, so every step was refused and the actor stopped there for good (16 of these 20 walks).
+    The swing then takes a flat-topped curve (degree 5): every walk crosses, and the checker passes
+    each.
+    """
     for height in (0.18, 0.21):
         for x in (1.6, 1.7, 1.8, 1.9, 2.0):
             environment = Environment([box([-1, -1, -0.1], [5, 1, 0]),
@@ -456,15 +514,18 @@ def test_walking_straight_over_a_block_the_rear_foot_clears_its_near_face():
 
 
 def test_walking_straight_over_high_short_blocks():
-    """Blocks 0.22-0.28 m high (max_step_up is 0.30), 0.3 or 0.6 m long, walked straight:
-    walks bench_terrain.py found stopped for good. Either a foot came to rest with its toe 2 cm
-    from a block's face, where the conservative ground map puts the block under the toe at
-    lift-off and only a swing that steps up at once clears it (FootstepConfig.lift_room), or
-    the front foot strode over a short 0.28 m block and the rear foot could not follow over it
-    (max_swing_height 0.40 allowed the stride; 0.25 has the foot step onto the block), or the
-    rear foot, 2 cm before a 0.28 m block's face, stepped up onto it and its knee passed its
-    limit (lift_step_up). None of these 6 crossed before; now every one does, and the checker
-    passes each."""
+    """
+    High, short blocks walked straight are passed.
+
+    Blocks 0.22-0.28 m high (max_step_up is 0.30), 0.3 or 0.6 m long, walked straight: walks
+    bench_terrain.py found stopped for good. Either a foot came to rest with its toe 2 cm from a
+    block's face, where the conservative ground map puts the block under the toe at lift-off and
+    only a swing that steps up at once clears it (FootstepConfig.lift_room), or the front foot
+    strode over a short 0.28 m block and the rear foot could not follow over it (max_swing_height
+    0.40 allowed the stride; 0.25 has the foot step onto the block), or the rear foot, 2 cm before
+    a 0.28 m block's face, stepped up onto it and its knee passed its limit (lift_step_up). None of
+    these 6 crossed before; now every one does, and the checker passes each.
+    """
     for height, length, x, speed in ((0.22, 0.3, 1.75, 0.8), (0.22, 0.6, 2.05, 1.1),
                                      (0.28, 0.3, 1.6, 0.8), (0.28, 0.3, 1.9, 0.5),
                                      (0.28, 0.6, 1.6, 1.1), (0.28, 1.2, 2.05, 0.8)):
@@ -476,17 +537,20 @@ def test_walking_straight_over_high_short_blocks():
 
 
 def test_the_front_foot_does_not_stride_over_a_block_the_rear_foot_cannot_follow_over():
-    """A block 0.24 m high and 0.31 m long (low enough for a swing to pass over it), met in ten
-    phases at 0.8 and 0.9 m/s. Where the front foot strode over it with the rear foot's toe
-    just before its face, the rear foot could not follow: lifted from behind the hip its knee
-    passed its limit, or its sole, tipped toes-down at the ankle's limit, could not clear the
-    block, and with the front foot beyond it no step was left (9 of these 20 walks stopped so).
-    The window's next footstep is now generated before such a step is taken
-    (ActorConfig.check_follow), and a foot the window places keeps 5 cm ahead of its toe free
-    of a face it cannot lift over (FootstepConfig.lift_room; with 3 cm one walk stopped before
-    the block, every first footstep leaving a rear foot that could not follow). Every walk gets
-    past, and the checker passes each. Without the check the first one still stops, with the
-    rear foot behind the block."""
+    """
+    The front foot does not stride over a block the rear foot cannot follow over.
+
+    A block 0.24 m high and 0.31 m long (low enough for a swing to pass over it), met in ten phases
+    at 0.8 and 0.9 m/s. Where the front foot strode over it with the rear foot's toe just before
+    its face, the rear foot could not follow: lifted from behind the hip its knee passed its limit,
+    or its sole, tipped toes-down at the ankle's limit, could not clear the block, and with the
+    front foot beyond it no step was left (9 of these 20 walks stopped so). The window's next
+    footstep is now generated before such a step is taken (ActorConfig.check_follow), and a foot
+    the window places keeps 5 cm ahead of its toe free of a face it cannot lift over
+    (FootstepConfig.lift_room; with 3 cm one walk stopped before the block, every first footstep
+    leaving a rear foot that could not follow). Every walk gets past, and the checker passes each.
+    Without the check the first one still stops, with the rear foot behind the block.
+    """
     height, length = 0.24, 0.31
 
     def course(x):
@@ -508,14 +572,17 @@ def test_the_front_foot_does_not_stride_over_a_block_the_rear_foot_cannot_follow
 
 
 def test_the_rear_foot_is_not_left_behind_a_bump_before_a_step_down_it_cannot_follow_over():
-    """A bump 3.5 cm high and 0.29 m long across the path on a 0.19 m high platform, its far
-    end 3 cm before the platform's edge and a step down to the floor, met in nine phases at
-    1.08 m/s (as on bench_terrain's random course 38). Where the front foot stepped down past
-    the bump with the rear foot's toe just before it, lifting the rear foot over the bump and
-    down passed its knee's limit (its sole tipped toes-down at the ankle's limit), and no step
-    was left (3 of these 9 walks stopped so). The follow check (ActorConfig.check_follow) now
-    asks for that footstep from a rise of follow_check_rise (3 cm): every walk gets past, and
-    the checker passes each."""
+    """
+    The rear foot is not left behind a bump before a step down.
+
+    A bump 3.5 cm high and 0.29 m long across the path on a 0.19 m high platform, its far end 3 cm
+    before the platform's edge and a step down to the floor, met in nine phases at 1.08 m/s (as on
+    bench_terrain's random course 38). Where the front foot stepped down past the bump with the
+    rear foot's toe just before it, lifting the rear foot over the bump and down passed its knee's
+    limit (its sole tipped toes-down at the ankle's limit), and no step was left (3 of these 9
+    walks stopped so). The follow check (ActorConfig.check_follow) now asks for that footstep from
+    a rise of follow_check_rise (3 cm): every walk gets past, and the checker passes each.
+    """
     top, speed = 0.186, 1.08
     for x in np.arange(1.96, 2.3, 0.04):
         edge = x + 0.32
@@ -527,13 +594,17 @@ def test_the_rear_foot_is_not_left_behind_a_bump_before_a_step_down_it_cannot_fo
 
 
 def test_walking_straight_past_low_bumps_beside_the_feet():
-    """Low bumps (5 and 8 cm high, 0.2 m long) beside both foot tracks, their inner edges 5 mm
-    outside the soles, one every 0.45 or 0.6 m on each side. The ground map answers for a
-    point's whole 2 cm cell: the swing's clearance, read under the sole's edges, saw the bumps,
-    and the footholds, read 1 cm inside them, did not. A landing the footsteps had found fine
-    then could not be reached, every step was refused, and none of these walks got past (as
-    on random course 23 of bench_terrain.py). Both now read the same lines
-    (footsteps.SOLE_LINES): every walk gets past, and the checker passes each."""
+    """
+    Low bumps beside the feet do not stop a straight walk.
+
+    Low bumps (5 and 8 cm high, 0.2 m long) beside both foot tracks, their inner edges 5 mm outside
+    the soles, one every 0.45 or 0.6 m on each side. The ground map answers for a point's whole 2
+    cm cell: the swing's clearance, read under the sole's edges, saw the bumps, and the footholds,
+    read 1 cm inside them, did not. A landing the footsteps had found fine then could not be
+    reached, every step was refused, and none of these walks got past (as on random course 23 of
+    bench_terrain.py). Both now read the same lines (footsteps.SOLE_LINES): every walk gets past,
+    and the checker passes each.
+    """
     leg = skeleton().leg
     inner = leg.hip_half_width + 0.5 * leg.foot_width + 0.005
     for height, spacing, speed in ((0.05, 0.45, 0.6), (0.08, 0.45, 0.9), (0.05, 0.6, 0.9),
@@ -548,9 +619,13 @@ def test_walking_straight_past_low_bumps_beside_the_feet():
 
 
 def test_walking_down_a_corridor_of_low_curbs_beside_the_feet():
-    """Curbs 5 or 10 cm high along both sides of the path, 3-8 mm outside the soles: read at
-    the soles' edges, the swing's clearance saw them under every landing, and the actor could
-    not take a single step. It now walks down the corridor, and the checker passes each walk."""
+    """
+    A corridor of low curbs beside the feet is walked down.
+
+    Curbs 5 or 10 cm high along both sides of the path, 3-8 mm outside the soles: read at the
+    soles' edges, the swing's clearance saw them under every landing, and the actor could not take
+    a single step. It now walks down the corridor, and the checker passes each walk.
+    """
     leg = skeleton().leg
     for gap, height in ((0.003, 0.1), (0.008, 0.05)):
         inner = leg.hip_half_width + 0.5 * leg.foot_width + gap
@@ -562,12 +637,16 @@ def test_walking_down_a_corridor_of_low_curbs_beside_the_feet():
 
 
 def test_walking_straight_up_and_down_a_steep_flight():
-    """Four steps, 0.2 m rise and 0.26 m treads (a sole is 0.25 m), from three distances at
-    two speeds, up and then down. Going up, a heel must overhang the tread's nosing (the plane
-    fitted through the lower tread under it was too steep for an edge placement, and the
-    sample past the toe read the next riser) and the swinging knee would pass its limit over the
-    tread in between; going down, a toe overhangs each nosing. Every one of these 24 walks
-    gets to the top or the bottom, and the checker passes each."""
+    """
+    A steep flight is walked straight up and down.
+
+    Four steps, 0.2 m rise and 0.26 m treads (a sole is 0.25 m), from three distances at two
+    speeds, up and then down. Going up, a heel must overhang the tread's nosing (the plane fitted
+    through the lower tread under it was too steep for an edge placement, and the sample past the
+    toe read the next riser) and the swinging knee would pass its limit over the tread in between;
+    going down, a toe overhangs each nosing. Every one of these 24 walks gets to the top or the
+    bottom, and the checker passes each.
+    """
     rise, tread, steps = 0.2, 0.26, 4
     for going_up in (True, False):
         for x in (1.6, 1.75, 1.9):
@@ -585,12 +664,16 @@ def test_walking_straight_up_and_down_a_steep_flight():
 
 
 def test_no_step_ends_with_a_knee_too_bent_for_the_next_one(monkeypatch):
-    """Weaving on the blocks (seed 32 of bench_steer_away.py's walks, rounded): stepping down off
-    the 0.2 m block's far edge, the right foot left on the block with its heel up and the knee
-    at 2.27 rad, 0.03 from its limit. Every next step, pivot and turn then bent that knee past
-    the limit: the actor stopped there and was trapped. A step may not end with a knee within
-    ``END_KNEE_MARGIN`` of its limit; another footstep is taken, and the walk and both turns
-    on the spot after it go on."""
+    """
+    No step ends with a knee too bent for the next one.
+
+    Weaving on the blocks (seed 32 of bench_steer_away.py's walks, rounded): stepping down off the
+    0.2 m block's far edge, the right foot left on the block with its heel up and the knee at 2.27
+    rad, 0.03 from its limit. Every next step, pivot and turn then bent that knee past the limit:
+    the actor stopped there and was trapped. A step may not end with a knee within
+    ``END_KNEE_MARGIN`` of its limit; another footstep is taken, and the walk and both turns on the
+    spot after it go on.
+    """
     sc = scene('blocks')
     commands = [(0.0, 0.433, 0.392), (0.572, 0.808, -0.439), (1.845, 1.105, 0.71),
                 (2.786, 0.209, -0.056), (3.635, 0.659, 1.109), (5.103, 1.013, -0.797),
@@ -613,12 +696,15 @@ def test_no_step_ends_with_a_knee_too_bent_for_the_next_one(monkeypatch):
 
 
 def test_weaving_to_the_floors_edge_ends_where_turning_away_frees_the_actor(monkeypatch):
-    """Seed 33 of bench_steer_away.py's walks (rounded) weaves to the floor's edge. With a step
-    ending only 1 cm short of the legs touching, it stopped 0.37 m from the edge facing it,
-    the feet pigeon-toed 0.35 rad and the left 0.25 m behind the right: the toe-off of any next
-    step flexes the left knee forward into the right thigh, so every step and pivot either way
-    was refused, trapped. Steps now end 2 cm short (``LEGS_LANDING_MARGIN``); the walk stops
-    elsewhere, and turning away on the spot frees it, either way."""
+    """
+    Seed 33 of bench_steer_away.py's walks (rounded) weaves to the floor's edge.
+
+    With a step ending only 1 cm short of the legs touching, it stopped 0.37 m from the edge facing
+    it, the feet pigeon-toed 0.35 rad and the left 0.25 m behind the right: the toe-off of any next
+    step flexes the left knee forward into the right thigh, so every step and pivot either way was
+    refused, trapped. Steps now end 2 cm short (``LEGS_LANDING_MARGIN``); the walk stops elsewhere,
+    and turning away on the spot frees it, either way.
+    """
     sc = scene('flat')
     commands = [(0.0, 0.0, 0.854), (1.054, 0.0, -0.848), (2.321, 0.604, 1.011),
                 (4.164, 0.0, -0.918), (4.897, 0.451, 0.617), (6.198, 0.448, -0.831),
@@ -661,14 +747,17 @@ def _feet_toe_in(skeleton, frames):
 
 
 def test_weaving_lands_the_feet_toed_in_no_more_than_max_toe_in_and_keeps_walking():
-    """A mouse weaving left and right (seed 25 of bench_steer_away.py's walks) reverses the turn
-    every second or so. Each landing foot may turn in towards the other by at most
-    ``max_toe_in``; the walk's steps end with the feet no more pigeon-toed than that, and the
-    checker (which judges the legs against each other) passes. With the bound as wide as
-    outwards (0.9 rad) the feet land further in. (With a step ending 1 cm short of the legs
-    touching, a next step's thighs then met as the knees passed, and the generator refused 15
-    steps of this walk; ending 2 cm short, ``LEGS_LANDING_MARGIN``, refuses those landings
-    instead and the walk goes on.)"""
+    """
+    Weaving lands the feet toed in no more than ``max_toe_in`` and keeps walking.
+
+    A mouse weaving left and right (seed 25 of bench_steer_away.py's walks) reverses the turn every
+    second or so. Each landing foot may turn in towards the other by at most ``max_toe_in``; the
+    walk's steps end with the feet no more pigeon-toed than that, and the checker (which judges the
+    legs against each other) passes. With the bound as wide as outwards (0.9 rad) the feet land
+    further in. (With a step ending 1 cm short of the legs touching, a next step's thighs then met
+    as the knees passed, and the generator refused 15 steps of this walk; ending 2 cm short,
+    ``LEGS_LANDING_MARGIN``, refuses those landings instead and the walk goes on.)
+    """
     sc = scene('flat')
     commands = [(0.0, 0.27, 0.76), (0.57, 0.0, -0.91), (0.87, 0.6, 0.7), (1.54, 0.39, -0.46),
                 (2.47, 0.92, 1.03), (2.77, 0.87, -0.35), (3.4, 0.97, 0.22), (5.38, 0.22, -0.66),
@@ -695,14 +784,18 @@ def test_weaving_lands_the_feet_toed_in_no_more_than_max_toe_in_and_keeps_walkin
 
 
 def test_on_bumpy_ground_the_actor_stands_on_it_and_turns_on_the_spot(monkeypatch):
-    """Started on the rough course's bumps, each foot rests on the ground under it at its own
-    height and pitch. (Both used to stand level on the lowest ground under them, one 27 mm in
-    a bump at x = 4 m, so every first step collided and the actor could not move.) Told to
-    turn on the spot it turns, its pivots landing on the bumps' slopes too (a pivot needed
-    level ground within 1 cm), also from a stance foot pitched 0.09 rad (a pivot needed it
-    within 0.05 rad of level: standing at x = 8 m it stayed put), and the checker passes.
-    (Landings seated on the ground where they land, ``gait.SEAT_SHIFT``, take most of these
-    turns as steps; without seating they are pivots, which this test looks at.)"""
+    """
+    On bumpy ground the actor stands on it and turns on the spot.
+
+    Started on the rough course's bumps, each foot rests on the ground under it at its own height
+    and pitch (standing both level on the lowest ground under them would put one 27 mm into a
+    bump at x = 4 m, and every first step would collide). Told to turn on the spot it turns, its
+    pivots landing on the bumps' slopes too (pivots that required level ground within 1 cm would
+    be refused), also from a stance foot pitched 0.09 rad (a pivot that required it within
+    0.05 rad of level would leave it standing at x = 8 m), and the checker passes. Landings
+    seated on the ground where they land (``gait.SEAT_SHIFT``) take most of these turns as
+    steps; without seating they are pivots, which this test looks at.
+    """
     sc = scene('rough')
     monkeypatch.setattr(gait_module, 'SEAT_SHIFT', 0.0)
     for x, y, rate, pitched in ((4.0, 0.3, -1.0, 0.01), (5.0, 0.3, 1.0, 0.01),

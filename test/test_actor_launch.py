@@ -1,4 +1,19 @@
-"""launch_testing for a ROS 2 install: the actor_planner stream, a command, a bad configuration.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+launch_testing for a ROS 2 install: the actor_planner stream, a command, a bad configuration.
 
 Run with ``launch_test test/test_actor_launch.py`` or ``colcon test`` on Jazzy/Kilted; skipped
 where launch_testing is not installed (the venv's CI covers the same ground with
@@ -12,7 +27,7 @@ import pytest
 
 launch_testing = pytest.importorskip('launch_testing')
 
-import launch  # noqa: E402
+import launch  # noqa: E402, I100 (pytest first, for the skip)
 import launch_ros.actions  # noqa: E402
 import launch_testing.actions  # noqa: E402
 import launch_testing.asserts  # noqa: E402

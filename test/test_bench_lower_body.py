@@ -1,8 +1,25 @@
-"""The lower-body benchmark still runs and says what the README quotes from it: the machine on
-its first line and the footstep targets' verdict on its last, with the default search's
-effort within the target of the exhaustive optimum's. Time ratios depend on the machine:
-only a generous bound is asserted (one that a search judging most configurations would
-break)."""
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The lower-body benchmark runs and says what the README quotes from it.
+
+The lower-body benchmark still runs and says what the README quotes from it: the machine on its
+first line and the footstep targets' verdict on its last, with the default search's effort within
+the target of the exhaustive optimum's. Time ratios depend on the machine: only a generous bound is
+asserted (one that a search judging most configurations would break).
+"""
 import os
 import re
 import subprocess

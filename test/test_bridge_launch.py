@@ -1,4 +1,19 @@
-"""launch_testing check of launch/bridge.launch.py on a ROS 2 install (skipped without one).
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+launch_testing check of launch/bridge.launch.py on a ROS 2 install (skipped without one).
 
 Run with ``launch_test test/test_bridge_launch.py`` or ``colcon test``: the bridge starts in
 dry-run mode (no serial port needed), logs the goal ticks for the commanded joints, publishes
@@ -11,7 +26,7 @@ import pytest
 
 launch_testing = pytest.importorskip('launch_testing')
 
-from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402
+from diagnostic_msgs.msg import DiagnosticArray  # noqa: E402, I100 (pytest first, for the skip)
 from launch import LaunchDescription  # noqa: E402
 from launch.actions import IncludeLaunchDescription  # noqa: E402
 from launch.launch_description_sources import PythonLaunchDescriptionSource  # noqa: E402

@@ -1,3 +1,17 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """`digital-actor simulate`: files in, trajectory/summary/pictures out, clear errors."""
 import csv
 import json
@@ -7,12 +21,11 @@ import subprocess
 import sys
 import time
 
+from digital_actor_planner.cli import read_commands, read_trajectory
+from digital_actor_planner.core.skeleton import Skeleton
 import numpy as np
 import pytest
 import trimesh
-
-from digital_actor_planner.cli import read_commands, read_trajectory
-from digital_actor_planner.core.skeleton import Skeleton
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = os.path.join(ROOT, 'config', 'scenes')
@@ -88,8 +101,12 @@ def test_wall_reports_stuck_in_the_summary(tmp_path):
 
 
 def test_paper_search_reproduces_figure_8_with_a_one_step_window(tmp_path):
-    """`--paper-search` runs the paper's footstep search alone (the summary says so): with one
-    footstep in the window the actor steps into the Figure 8 pit and is stuck there."""
+    """
+    ``--paper-search`` runs the paper's footstep search alone.
+
+    `--paper-search` runs the paper's footstep search alone (the summary says so): with one
+    footstep in the window the actor steps into the Figure 8 pit and is stuck there.
+    """
     result = run_cli('simulate', '--scene', os.path.join(SCENES, 'figure8_trap.yaml'),
                      '--commands', os.path.join(SCENES, 'figure8_trap.csv'),
                      '--out', str(tmp_path / 't.csv'), '--summary', str(tmp_path / 's.json'),

@@ -1,12 +1,25 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """BodyCollision: the URDF's collision shapes against meshes and against each other."""
 import time
-
-import numpy as np
-import pytest
 
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.scene import start_configuration
+import numpy as np
+import pytest
 from scene_helpers import box
 
 
@@ -154,8 +167,12 @@ def test_batched_half_extents_match_each_shape_alone(skeleton, body):
 
 
 def test_first_collision_is_the_first_frame_any_link_touches(skeleton):
-    """The batched check with its broad phase and height bound answers what testing every
-    frame answers, and what it answers without the height bound."""
+    """
+    The batched check answers what testing every frame answers.
+
+    The batched check with its broad phase and height bound answers what testing every frame
+    answers, and what it answers without the height bound.
+    """
     world = Environment([box((-3, -3, -0.2), (3, 3, 0.0)), box((0.25, -3, 0.0), (3, 3, 0.12)),
                          box((-3, 0.3, 0.0), (3, 3, 0.6))])
     body = BodyCollision(skeleton, world)
@@ -191,11 +208,15 @@ def test_first_collision_is_the_first_frame_any_link_touches(skeleton):
 
 
 def test_a_post_through_a_lifted_foot_is_found(skeleton):
-    """A thin post (2-3 cm square, 1 m tall) through a foot lifted 3-8 cm off the floor, at
-    points of the sole away from its centre and its corners: the batched check finds the foot
-    in collision, with the height bound and without it. Its broad phase used to read the ground
-    map at the centre and the four corners of each footprint only, where the floor is clear,
-    and let the foot go (a swinging foot went 62 mm into a post of the low beam's frame)."""
+    """
+    A thin post through a lifted foot is found.
+
+    A thin post (2-3 cm square, 1 m tall) through a foot lifted 3-8 cm off the floor, at points of
+    the sole away from its centre and its corners: the batched check finds the foot in collision,
+    with the height bound and without it. Its broad phase used to read the ground map at the centre
+    and the four corners of each footprint only, where the floor is clear, and let the foot go (a
+    swinging foot went 62 mm into a post of the low beam's frame).
+    """
     floor = box((-3, -3, -0.2), (3, 3, 0.0))
     start = start_configuration(Environment([floor]), (0.0, 0.0, 0.0), skeleton)
     foot = next(i for i, shape in enumerate(skeleton.collision_shapes)
@@ -222,9 +243,13 @@ def test_a_post_through_a_lifted_foot_is_found(skeleton):
 
 
 def test_motions_that_start_where_a_free_one_ended_are_checked_alike(skeleton):
-    """Chained motions (each starts at the last frame of the one before, as steps do): the
-    shapes not moved since the last free motion's end are not tested again, and the answers
-    stay those of testing every frame."""
+    """
+    Chained motions are checked alike, without testing unmoved shapes again.
+
+    Chained motions (each starts at the last frame of the one before, as steps do): the shapes not
+    moved since the last free motion's end are not tested again, and the answers stay those of
+    testing every frame.
+    """
     world = Environment([box((-3, -3, -0.2), (3, 3, 0.0)), box((0.2, -3, 0.0), (3, 3, 0.1))])
     body = BodyCollision(skeleton, world)
     plain = BodyCollision(skeleton, world, top_bound=False)
@@ -254,8 +279,12 @@ def test_motions_that_start_where_a_free_one_ended_are_checked_alike(skeleton):
 
 
 def test_the_height_bound_never_clears_a_shape_that_touches(skeleton):
-    """Random leg poses over stairs, a slope and a ledge: every shape the height bound calls
-    clear is free by FCL, and the bound does clear a foot resting on level ground."""
+    """
+    The height bound never clears a shape that touches.
+
+    Random leg poses over stairs, a slope and a ledge: every shape the height bound calls clear is
+    free by FCL, and the bound does clear a foot resting on level ground.
+    """
     slope = box((-0.5, -3, -0.6), (0.5, 3, 0.0))
     slope.apply_transform(np.array([[np.cos(0.25), 0, -np.sin(0.25), 1.5],
                                     [0, 1, 0, 0], [np.sin(0.25), 0, np.cos(0.25), 0.0],

@@ -1,8 +1,21 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Exact contact tests of convex shapes (GJK) against FCL's collision test."""
+from digital_actor_planner.core import convex
 import fcl
 import numpy as np
-
-from digital_actor_planner.core import convex
 
 NO_CORNERS = np.zeros((3, 3))
 
@@ -14,7 +27,7 @@ def _rotation(rng) -> np.ndarray:
 
 
 def _shape(rng):
-    """A random box, cylinder or sphere near the origin: (kind, padded half extents, R, c)."""
+    """Make a random box, cylinder or sphere near the origin: (kind, padded half extents, R, c)."""
     kind = int(rng.integers(0, 3))
     if kind == convex.BOX:
         half = rng.uniform(0.02, 0.3, 3)

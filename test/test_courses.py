@@ -1,4 +1,19 @@
-"""The shipped courses: files well-formed, and the upper-body courses geometrically as designed.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The shipped courses: files well-formed, and the upper-body courses geometrically as designed.
 
 The upper-body courses are checked with the URDF's own collision shapes placed by
 forward kinematics and tested against the course meshes with python-fcl, independently of the
@@ -11,13 +26,12 @@ import importlib.util
 import math
 import os
 
+from digital_actor_planner.core.skeleton import Skeleton
 import fcl
 import numpy as np
 import pytest
 import trimesh
 import yaml
-
-from digital_actor_planner.core.skeleton import Skeleton
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = os.path.join(ROOT, 'config', 'scenes')
@@ -46,7 +60,7 @@ def pose_matrix(pose):
 
 
 def load_meshes(name):
-    """The course's meshes in the world frame, read straight from the files with trimesh."""
+    """Read the course's meshes in the world frame straight from the files with trimesh."""
     scene = read_scene(name)
     meshes = []
     for entry in scene['meshes']:
@@ -104,7 +118,7 @@ class World:
 
 
 def posture(skeleton, x, y, ground, yaw=0.0, **joints):
-    """A standing configuration at (x, y) on ground height ``ground``, with joints overridden."""
+    """Return a standing configuration at (x, y) on ground height ``ground``, joints overridden."""
     q = skeleton.neutral()
     q[skeleton.index['root_x']] = x
     q[skeleton.index['root_y']] = y

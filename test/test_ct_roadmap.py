@@ -1,12 +1,25 @@
-"""The CT-roadmap best-first planner (paper §5.2, Figure 5)."""
-import numpy as np
-import pytest
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
+"""The CT-roadmap best-first planner (paper §5.2, Figure 5)."""
 from digital_actor_planner.core import ct_roadmap
 from digital_actor_planner.core.ct_roadmap import _Horizon, _neighbour_table, _State, CTRoadmap, \
     direct_return
 from digital_actor_planner.core.ct_space import CTSpace
 from digital_actor_planner.core.environment import Environment
+import numpy as np
+import pytest
 from scene_helpers import box, timed_body, walk
 
 TRUNK = ('waist', 'torso', 'head', 'left_shoulder', 'right_shoulder')
@@ -186,7 +199,7 @@ def test_a_search_stuck_in_the_preview_gives_up_within_its_small_budget(beam_spa
     # from there has its own small budget.
     space = beam_space
     turns = np.array([(0.4, 0.0), (-0.4, 0.0)])
-    limits = dict(node_budget=600, max_backtracks=200)
+    limits = {'node_budget': 600, 'max_backtracks': 200}
     before = space.checks
     full = roadmap(seed=2, patterns=turns).solve(space, np.zeros(2), **limits)
     full_checks, before = space.checks - before, space.checks
@@ -307,7 +320,7 @@ def test_bad_seeds_name_the_value(beam_space, seed, match):
 
 
 def with_and_without_going_back_directly(space, start, monkeypatch):
-    """(result, checks) of a search from ``start``, then of one without _return_directly."""
+    """Search from ``start``, then without _return_directly: (result, checks) of each."""
     out = []
     for shortcut in (True, False):
         if not shortcut:
@@ -535,8 +548,12 @@ def test_travel_frames_follow_the_slowest_joint(beam_space):
 
 
 def _neighbours_written_out(road, space, state, horizon, fraction, sub_goal):
-    """The neighbours _candidates ranks, in plain NumPy: (targets, frames, closeness,
-    index of the hold up to the next blocked stretch or None)."""
+    """
+    Rank the neighbours as _candidates does, in plain NumPy.
+
+    The neighbours _candidates ranks, in plain NumPy: (targets, frames, closeness, index of the
+    hold up to the next blocked stretch or None).
+    """
     last, here, hold_frames = space.frame_count - 1, state.frame, horizon.hold_frames
     on_objective = not np.any(state.deviation)
     targets, frames = [], []
@@ -632,9 +649,13 @@ def test_the_neighbour_table_is_the_neighbours_written_out(beam_space, table):
 
 
 def _lasting_written_out(space, horizon, held, here, targets, arrivals):
-    """Whether each target, held from its arrival, lasts through the blocked stretch ahead,
-    in plain Python with a dict cache ``held`` of (frame, rounded posture) -> legal: (lasting,
-    configurations checked)."""
+    """
+    Tell whether each target lasts through the blocked stretch, in plain Python.
+
+    Whether each target, held from its arrival, lasts through the blocked stretch ahead, in plain
+    Python with a dict cache ``held`` of (frame, rounded posture) -> legal: (lasting,
+    configurations checked).
+    """
     lasting = np.ones(len(targets), dtype=bool)
     blocked = np.flatnonzero(~horizon.free[here:])
     if not len(blocked):

@@ -1,8 +1,19 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """The readable expansion of §5.2's best-first search and its compiled twin plan alike."""
 import os
-
-import numpy as np
-import pytest
 
 from course_runs import scene, SCENES, simulate
 from digital_actor_planner.cli import read_commands
@@ -12,6 +23,8 @@ from digital_actor_planner.core.ct_roadmap import CTRoadmap
 from digital_actor_planner.core.ct_space import CTSpace
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.upper_body import UpperBodyConfig, UpperBodyPlanner
+import numpy as np
+import pytest
 from scene_helpers import box, timed_body, walk
 
 TRUNK = ('waist', 'torso', 'head', 'left_shoulder', 'right_shoulder')
@@ -23,7 +36,7 @@ UPPER_BODY_COURSES = ['low_beam', 'table', 'pillars', 'uneven_beam']
 
 
 def beam_space(skeleton, beam_bottom):
-    """The waist's CT-space walking under a beam whose underside is ``beam_bottom`` m up."""
+    """Return the waist's CT-space walking under a beam whose underside is ``beam_bottom`` m up."""
     meshes = [box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0]),
               box([0.3, -1.0, beam_bottom], [0.5, 1.0, beam_bottom + 0.2])]
     environment = Environment(meshes, resolution=0.05)
@@ -34,9 +47,13 @@ def beam_space(skeleton, beam_bottom):
 
 @pytest.mark.parametrize('prefer_lasting', [False, True])
 def test_both_expansions_search_the_beam_node_for_node(skeleton, prefer_lasting):
-    """Under beams low enough to bend for, and one too low to pass: the same result, states
-    expanded, backtracks, nodes grown and configurations checked, from starts that bend,
-    backtrack and grow (a start a hair off the pattern too, whose targets round to -0.0)."""
+    """
+    Under beams, both expansions search node for node alike.
+
+    Under beams low enough to bend for, and one too low to pass: the same result, states expanded,
+    backtracks, nodes grown and configurations checked, from starts that bend, backtrack and grow
+    (a start a hair off the pattern too, whose targets round to -0.0).
+    """
     starts = [np.zeros(2), np.array([0.0, 0.9]), np.array([0.3, 0.2]), np.array([-0.4, 0.5]),
               np.array([-2e-4, 0.9]), np.array([-2e-4, 0.3])]
     expanded = backtracked = 0
@@ -88,8 +105,12 @@ def _walk(skeleton, name, roadmap_search):
 @pytest.mark.slow
 @pytest.mark.parametrize('name', UPPER_BODY_COURSES)
 def test_every_upper_body_course_is_walked_alike_with_the_readable_expansion(skeleton, name):
-    """The courses where the upper body must leave its pattern, planned with the readable
-    expansion: the walk of the compiled one, frame for frame."""
+    """
+    The upper-body courses are walked alike with the readable expansion.
+
+    The courses where the upper body must leave its pattern, planned with the readable expansion:
+    the walk of the compiled one, frame for frame.
+    """
     _, times, frames, blocks = simulate(name)
     readable = _walk(skeleton, name, 'readable')
     assert [b.status for b in readable] == [b.status for b in blocks], name

@@ -1,15 +1,28 @@
-"""Configuration-time space of a branch (paper §5.2): kinematics, validity, forward-only motion."""
-import fcl
-import numpy as np
-import pytest
-import trimesh
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
+"""Configuration-time space of a branch (paper §5.2): kinematics, validity, forward-only motion."""
 from digital_actor_planner.core import ct_space
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.ct_space import (
     BodyKinematics, BodyShapes, CTSpace, EnvironmentIndex, TimedBody)
 from digital_actor_planner.core.environment import Environment
+import fcl
+import numpy as np
+import pytest
 from scene_helpers import box, timed_body, walk
+import trimesh
 
 TRUNK = ('waist', 'torso', 'head', 'left_shoulder', 'right_shoulder')
 LEGS = ('pelvis', 'left_hip', 'right_hip', 'left_thigh', 'right_thigh', 'left_shank',
@@ -28,9 +41,13 @@ def beam_world(skeleton):
 
 
 def _bumpy_table_and_beam(rng, subdivisions: int, top_y: float, beam_z: float) -> Environment:
-    """Floor, a table top of many small triangles with random bumps up to 3 cm (centred at
-    x 0.4, y ``top_y``, z 0.85, ``subdivisions`` times subdivided) and a 20 cm beam at
-    ``beam_z`` m across the path."""
+    """
+    Build a floor, a bumpy table top and a beam across the path.
+
+    Floor, a table top of many small triangles with random bumps up to 3 cm (centred at x 0.4, y
+    ``top_y``, z 0.85, ``subdivisions`` times subdivided) and a 20 cm beam at ``beam_z`` m across
+    the path.
+    """
     top = trimesh.creation.box(extents=[1.2, 1.6, 0.1])
     for _ in range(subdivisions):
         top = top.subdivide()
@@ -415,10 +432,14 @@ def test_first_legal_motion_agrees_with_goals_checked_one_by_one(beam_world):
 
 
 def _failures_written_out(space, motions, stop_at_legal, first):
-    """Each motion's first illegal frame (-1: legal), its rows checked one by one, and the rows
-    checked in waves of ``first`` rows of every open motion, then twice as many each wave
-    (all rows in one wave when first <= 0), up to the wave that answers the first legal one
-    with ``stop_at_legal``."""
+    """
+    Return each motion's first illegal frame, checked row by row and in waves.
+
+    Each motion's first illegal frame (-1: legal), its rows checked one by one, and the rows
+    checked in waves of ``first`` rows of every open motion, then twice as many each wave (all rows
+    in one wave when first <= 0), up to the wave that answers the first legal one with
+    ``stop_at_legal``.
+    """
     paths = [space._motion_rows(qa, ia, qb, ib) if ib > ia else (np.zeros((0, 2)), ia)
              for (qa, ia), (qb, ib) in motions]
     answers, bad_rows = [], []
@@ -588,8 +609,12 @@ def test_fixing_a_branch_moves_the_body_as_if_built_with_it(skeleton):
 
 
 def test_the_body_poses_every_shape_as_the_shape_model_does(skeleton):
-    """TimedBody's shape poses and boxes, written in place by one kernel, are those of
-    BodyShapes.poses and .bounds, and its swept boxes their extremes over the frames."""
+    """
+    The timed body poses every shape as the shape model does.
+
+    TimedBody's shape poses and boxes, written in place by one kernel, are those of
+    BodyShapes.poses and .bounds, and its swept boxes their extremes over the frames.
+    """
     environment = Environment([box([-2.5, -1.5, -0.1], [3.0, 1.5, 0.0])], resolution=0.05)
     _, frames = walk(skeleton, 30)
     frames[:, skeleton.branch('left_arm')] += np.linspace(-0.5, 0.5, 30)[:, None]

@@ -1,4 +1,19 @@
-"""The real ``dynamixel_bridge`` process against the Protocol 2.0 emulator, checked in registers.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The real ``dynamixel_bridge`` process against the Protocol 2.0 emulator, checked in registers.
 
 The emulator runs in a thread of the test process and serves a pseudo-terminal; the bridge
 opens it as its serial port. JointState messages are published from here with rclpy.
@@ -12,14 +27,13 @@ import sys
 import time
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
+import dynamixel_emulator as emu
 import pytest
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
+from ros_harness import NodeProcess, ros_env, wait_for
 from sensor_msgs.msg import JointState
 import yaml
-
-import dynamixel_emulator as emu
-from ros_harness import NodeProcess, ros_env, wait_for
 
 pytestmark = pytest.mark.ros
 
@@ -43,7 +57,7 @@ STARTUP_S = 90.0
 
 
 def expected_ticks(joint: str, angle: float) -> int:
-    """The e-Manual's resolution: 4096 ticks per turn, 2048 at the centre."""
+    """Return the ticks of ``angle``: the e-Manual's 4096 a turn, 2048 at the centre."""
     return round(2048 + (DIRECTION[joint] * angle + OFFSET.get(joint, 0.0)) / TICK)
 
 
@@ -223,7 +237,7 @@ def test_hostile_stream_is_clamped_and_rate_limited(rig):
     assert r.wait(lambda: (r.stream({'left_knee': 1.2}, 0.05) or True)
                   and r.goal('left_knee') == expected_ticks('left_knee', 1.2), timeout=15.0)
     status = r.status('dynamixel_bridge: bus')
-    ignored = dict((v.key, v.value) for v in status.values)['ignored inputs']
+    ignored = {v.key: v.value for v in status.values}['ignored inputs']
     assert 'not finite' in ignored and 'unknown name: 0' not in ignored
 
 
@@ -356,7 +370,7 @@ def test_port_vanishing_and_coming_back_is_survived(rig):
     r.stream({'left_elbow': 0.8}, 0.3)
     assert r.wait(lambda: (r.stream({'left_elbow': 0.8}, 0.05) or True)
                   and r.goal('left_elbow') == expected_ticks('left_elbow', 0.8))
-    reconnects = dict((v.key, v.value) for v in r.status('dynamixel_bridge: bus').values)
+    reconnects = {v.key: v.value for v in r.status('dynamixel_bridge: bus').values}
     assert int(reconnects['reconnects']) >= 1
 
 
@@ -397,7 +411,7 @@ def test_invalid_configuration_exits_naming_the_item(tmp_path, override, named):
 
 
 def _eased_in(r, joint, placed, since):
-    """The goals sent to ``joint`` from ``since`` on: start where it was placed, bounded steps."""
+    """Check the goals sent to ``joint`` from ``since`` on: start where placed, bounded steps."""
     ticks = [t for _, t in r.emulator.goal_history(ID[joint])[since:]]
     assert ticks, f'no goals for {joint}\n{r.bridge.output()}'
     assert abs(ticks[0] - placed) <= 1, (joint, ticks[:3], placed)  # torque on moves nothing

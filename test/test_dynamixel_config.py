@@ -1,13 +1,26 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Bridge configuration, tick conversion and the safety envelope, without ROS or a bus."""
 import math
 
-import numpy as np
-import pytest
-
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.dynamixel.config import (
-    ConfigError, config_from_parameters, load_config, servo_joint_names, ServoConfig)
+    config_from_parameters, ConfigError, load_config, servo_joint_names, ServoConfig)
 from digital_actor_planner.dynamixel.safety import SafetyEnvelope
+import numpy as np
+import pytest
 
 
 @pytest.fixture(scope='module')

@@ -1,9 +1,22 @@
-"""The bridge's controller against a scripted bus (no ROS, no serial port): shutdown outcomes."""
-import pytest
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
+"""The bridge's controller against a scripted bus (no ROS, no serial port): shutdown outcomes."""
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.dynamixel.config import config_from_parameters
 from digital_actor_planner.dynamixel.controller import BridgeController
+import pytest
 
 
 class PortGone(RuntimeError):
@@ -22,7 +35,7 @@ class ScriptedBus:
         if self.gone:
             raise PortGone('/dev/ttyUSB0: device disappeared')
 
-    def open(self):
+    def open(self):  # noqa: A003 (the bus interface it fakes)
         self._check()
 
     def close(self):
@@ -33,10 +46,10 @@ class ScriptedBus:
         return {i: 1020 for i in ids if i in self.torque}
 
     def read_hardware_errors(self, ids):
-        return {i: 0 for i in ids}
+        return dict.fromkeys(ids, 0)
 
     def read_positions(self, ids):
-        return {i: 2048 for i in ids}
+        return dict.fromkeys(ids, 2048)
 
     def write_goals(self, goals):
         self._check()

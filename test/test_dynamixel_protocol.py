@@ -1,4 +1,19 @@
-"""The emulator and dynamixel-sdk against the e-Manual's Protocol 2.0 example packets.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The emulator and dynamixel-sdk against the e-Manual's Protocol 2.0 example packets.
 
 The golden packets are the examples of the ROBOTIS e-Manual "DYNAMIXEL Protocol 2.0" page
 (instruction and status packets, CRC bytes included).
@@ -7,10 +22,9 @@ import os
 import select
 import time
 
+import dynamixel_emulator as emu
 import dynamixel_sdk as sdk
 import pytest
-
-import dynamixel_emulator as emu
 
 GOLDEN = {
     'ping': bytes.fromhex('FF FF FD 00 01 03 00 01 19 4E'),
@@ -148,9 +162,13 @@ def test_stuffed_parameters_cross_the_wire_intact(bus):
 
 
 def _answered(call, *args, result_at: int):
-    """``call(*args)`` until the reply arrives in time: the SDK waits about 35 ms for it, and
-    a loaded machine can keep the emulator thread from answering that fast. Only a timed-out
-    exchange is repeated; any answer that came back is returned as it is."""
+    """
+    Repeat ``call(*args)`` until the reply arrives in time.
+
+    The SDK waits about 35 ms for it, and a loaded machine can keep the emulator thread from
+    answering that fast. Only a timed-out exchange is repeated; any answer that came back is
+    returned as it is.
+    """
     deadline = time.monotonic() + 20.0
     while True:
         reply = call(*args)
@@ -180,7 +198,8 @@ def test_status_reports_access_errors_and_hardware_alert(bus):
 
 
 def test_a_late_reply_is_not_taken_for_the_next_read(bus):
-    """A present position answered after its read gave up is not read as Hardware Error Status.
+    """
+    A present position answered after its read gave up is not read as Hardware Error Status.
 
     Position 2080 is 0x0820: its first byte is the overload bit. The SDK alone would take it
     for servo 1's hardware error (a false fault that switches the servo off).

@@ -1,8 +1,19 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """The readable search of a footstep window (§4.2) and its compiled twin: the same footsteps."""
 import os
-
-import numpy as np
-import pytest
 
 from course_runs import course_names, scene, SCENES, simulate, skeleton
 from digital_actor_planner.cli import read_commands
@@ -11,6 +22,8 @@ from digital_actor_planner.core.footstep_window import (configuration_effort, IM
                                                         search_footstep_window, WindowFeet)
 from digital_actor_planner.core.footsteps import (FootstepConfig, FootstepPlanner, GroundProfile,
                                                   RIGHT)
+import numpy as np
+import pytest
 
 DS = 0.02
 TERRAIN = {'stairs': lambda s: 0.12 * (np.floor((s - 0.4) / 0.3) + 1) if s > 0.4 else 0.0,
@@ -19,7 +32,7 @@ TERRAIN = {'stairs': lambda s: 0.12 * (np.floor((s - 0.4) / 0.3) + 1) if s > 0.4
 
 
 def profile_from(height_of, length=4.0, s0=-0.3):
-    """A two-track profile from a height function of arc length (NaN = hole)."""
+    """Make a two-track profile from a height function of arc length (NaN = hole)."""
     s = s0 + DS * np.arange(int(length / DS))
     both = np.vstack([[height_of(v) for v in s]] * 2).astype(float)
     return GroundProfile(s0=s0, ds=DS, height=both, low=both.copy(),
@@ -46,9 +59,12 @@ def assert_same_window(compiled, readable, case):
 
 @pytest.mark.parametrize('greedy_restart', [True, False])
 def test_both_searches_plan_the_same_window_from_far_starts(greedy_restart):
-    """On stairs, over holes and bumps, from random starts, with random first footsteps
-    banned and a random longest footstep: the same footsteps, effort and configurations
-    judged."""
+    """
+    Both searches plan the same window from far starts.
+
+    On stairs, over holes and bumps, from random starts, with random first footsteps banned and a
+    random longest footstep: the same footsteps, effort and configurations judged.
+    """
     compiled, readable = planners(greedy_restart=greedy_restart)
     rng = np.random.default_rng(3)
     far = 0
@@ -69,8 +85,12 @@ def test_both_searches_plan_the_same_window_from_far_starts(greedy_restart):
 
 
 def test_the_readable_search_is_judged_by_its_own_effort():
-    """The search's answer is collision-free by :func:`configuration_effort`, has that effort,
-    and no climbing neighbour is cheaper."""
+    """
+    The readable search is judged by its own effort.
+
+    The search's answer is collision-free by :func:`configuration_effort`, has that effort, and no
+    climbing neighbour is cheaper.
+    """
     planner = planners()[1]
     profile = profile_from(TERRAIN['stairs'])
     table = planner.foothold_table(profile, RIGHT, 0.0)
@@ -107,8 +127,12 @@ def _walk(name, window_search):
 @pytest.mark.slow
 @pytest.mark.parametrize('name', course_names())
 def test_every_course_is_walked_alike_with_the_readable_search(name):
-    """A course walked with the readable search is the walk of the compiled one: the same
-    blocks and frames (so the same footsteps)."""
+    """
+    Every course is walked alike with the readable search.
+
+    A course walked with the readable search is the walk of the compiled one: the same blocks and
+    frames (so the same footsteps).
+    """
     _, times, frames, blocks = simulate(name)
     readable = _walk(name, 'readable')
     assert [b.status for b in readable] == [b.status for b in blocks], name

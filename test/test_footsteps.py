@@ -1,13 +1,25 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """The sliding-window footstep planner (§4.2) on synthetic ground profiles."""
-import numpy as np
-import pytest
-
-import footstep_reference as reference
-
 from digital_actor_planner.core import footstep_search, footsteps
 from digital_actor_planner.core.footsteps import (
     FootstepConfig, FootstepPlanner, GroundProfile, LEFT, RIGHT, validate_footstep_config)
 from digital_actor_planner.core.skeleton import Skeleton
+import footstep_reference as reference
+import numpy as np
+import pytest
 
 DS = 0.02
 #: The compiled search's functions (footstep_search), each calling the ones before.
@@ -25,8 +37,12 @@ def leg():
 
 @pytest.fixture(params=['compiled', 'plain'])
 def search_kind(request, monkeypatch):
-    """The footstep search compiled, or as the plain Python it runs as without numba (every
-    kernel's ``py_func``, calling each other)."""
+    """
+    Return the footstep search compiled, or as plain Python.
+
+    The footstep search compiled, or as the plain Python it runs as without numba (every kernel's
+    ``py_func``, calling each other).
+    """
     if request.param == 'plain':
         for name in SEARCH_KERNELS:
             plain = getattr(footstep_search, name).py_func
@@ -37,7 +53,7 @@ def search_kind(request, monkeypatch):
 
 
 def profile_from(height_of, length=4.0, s0=-0.3):
-    """A two-track profile from a height function of arc length (NaN = hole)."""
+    """Make a two-track profile from a height function of arc length (NaN = hole)."""
     s = s0 + DS * np.arange(int(length / DS))
     h = np.array([height_of(v) for v in s], dtype=float)
     both = np.vstack([h, h])
@@ -52,10 +68,14 @@ def plan(planner, profile, s_init=0.5, start=None, banned=()):
 
 
 def test_a_profile_keeps_its_samples_stacked_for_the_search_and_refuses_mismatched_ones():
-    """The search reads the profile's samples as one (4, 2, K) array: height, low and headroom
-    are views of it, the obstacle is there with -inf over empty space (NaN in the profile's
-    own), and the sampler's profile (which writes the array itself) is the same as one made
-    from its four arrays. Sample arrays of different shapes are refused, naming the shapes."""
+    """
+    A profile keeps its samples stacked for the search and refuses mismatched ones.
+
+    The search reads the profile's samples as one (4, 2, K) array: height, low and headroom are
+    views of it, the obstacle is there with -inf over empty space (NaN in the profile's own), and
+    the sampler's profile (which writes the array itself) is the same as one made from its four
+    arrays. Sample arrays of different shapes are refused, naming the shapes.
+    """
     profile = profile_from(lambda s: np.nan if 0.5 < s < 0.7 else 0.1 * s)
     stacked = profile.stacked
     assert stacked.shape == (4,) + profile.height.shape and stacked.flags.c_contiguous
@@ -76,8 +96,8 @@ def test_a_profile_keeps_its_samples_stacked_for_the_search_and_refuses_mismatch
                       headroom=np.zeros(200), obstacle=np.zeros(200))
     # Samples handed over already stacked are read by the search without numba's checks of
     # its arguments: one of another layout or type is refused, not read as if it were right.
-    views = dict(height=stacked[0], low=stacked[1], headroom=stacked[2],
-                 obstacle=profile.obstacle)
+    views = {'height': stacked[0], 'low': stacked[1], 'headroom': stacked[2],
+             'obstacle': profile.obstacle}
     for bad, named in ((stacked[:, :, ::2], r'\(4, 2, 100\)'),
                        (stacked.astype(np.float32), 'float32'),
                        (stacked[:3], r'\(3, 2, 200\)'), (stacked.tolist(), 'list')):
@@ -90,8 +110,12 @@ def test_a_profile_keeps_its_samples_stacked_for_the_search_and_refuses_mismatch
 
 
 def test_the_sampled_profile_writes_the_stacked_samples_itself():
-    """sample_ground_profile hands its (4, 2, K) array to the profile; the profile made from the
-    same four arrays stacks them alike."""
+    """
+    The sampled profile writes the stacked samples itself.
+
+    sample_ground_profile hands its (4, 2, K) array to the profile; the profile made from the same
+    four arrays stacks them alike.
+    """
     from digital_actor_planner.core.environment import Environment
     from digital_actor_planner.core.path import predict_path
     import trimesh
@@ -134,10 +158,14 @@ def test_a_hole_is_strided_over_and_no_foot_lands_in_it(leg):
 
 
 def test_a_footstep_with_nowhere_to_land_ends_the_search_at_once(leg, search_kind):
-    """Where the ground ends a little ahead, the second and third footsteps have no foothold
-    in reach: the search answers none having judged the start alone, not the breadth-first
-    search through all 2,744 configurations (it looks for a footstep without footholds only
-    once the start is not free)."""
+    """
+    A footstep with nowhere to land ends the search at once.
+
+    Where the ground ends a little ahead, the second and third footsteps have no foothold in reach:
+    the search answers none having judged the start alone, not the breadth-first search through all
+    2,744 configurations (it looks for a footstep without footholds only once the start is not
+    free).
+    """
     planner = FootstepPlanner(FootstepConfig(), leg)
     cliff = profile_from(lambda s: 0.0 if s < 0.4 else np.nan)
     arguments = (cliff, RIGHT, 0.0, 0.0, 0.0, 0.0, 0.5, 0.5)
@@ -276,8 +304,12 @@ def test_search_is_near_optimal_and_much_cheaper_than_exhaustive(leg):
 
 
 def test_greedy_restart_finds_the_stair_by_stair_optimum(leg):
-    """On stairs the paper's search settles on long strides that skip treads; the second climb
-    from a footstep-by-footstep start finds the optimum (one tread per footstep)."""
+    """
+    The greedy restart finds the stair-by-stair optimum.
+
+    On stairs the paper's search settles on long strides that skip treads; the second climb from a
+    footstep-by-footstep start finds the optimum (one tread per footstep).
+    """
     paper = FootstepPlanner(FootstepConfig(greedy_restart=False), leg)
     planner = FootstepPlanner(FootstepConfig(), leg)
     paper_ratios, ratios = [], []
@@ -321,8 +353,12 @@ def test_bad_plan_arguments_are_named(leg):
 
 
 def _reference_foothold(config, leg, profile, side, s):
-    """One sole evaluated on its own with slices: (ok, height, pitch), the rules of
-    :meth:`FootstepPlanner.footholds` written out sole by sole."""
+    """
+    Evaluate one sole on its own with slices.
+
+    One sole evaluated on its own with slices: (ok, height, pitch), the rules of
+    :meth:`FootstepPlanner.footholds` written out sole by sole.
+    """
     # The samples under the sole, heel to toe (none beyond its ends).
     i0 = int(np.ceil((s - leg.heel - profile.s0) / profile.ds - 1e-9))
     i1 = int(np.floor((s + leg.toe - profile.s0) / profile.ds + 1e-9))
@@ -389,8 +425,12 @@ def test_batched_footholds_agree_with_the_single_foothold(leg):
 
 
 def _swing_clear_reference(planner, profile, side, s_from, h_from, s_to, h_to):
-    """The swing test written plainly over the NumPy profile (GroundProfile.swing_top, which
-    the actor's follow check reads too; NaN: nothing there)."""
+    """
+    Test a swing, written plainly over the NumPy profile.
+
+    The swing test written plainly over the NumPy profile (GroundProfile.swing_top, which the
+    actor's follow check reads too; NaN: nothing there).
+    """
     top = profile.swing_top(side, s_from + planner.leg.toe, s_to - planner.leg.heel)
     return not top > max(h_from, h_to) + planner.config.max_swing_height
 
@@ -422,8 +462,12 @@ def test_search_swing_test_agrees_with_the_plain_one(leg):
 
 
 def test_search_rise_ahead_agrees_with_the_batched_one(leg):
-    """The search's one-foothold rise ahead of the toe (plain Python, asked for lazily) is
-    the batched rise_ahead of the same footholds, on slopes, edges, holes and faces."""
+    """
+    The search's rise ahead agrees with the batched one.
+
+    The search's one-foothold rise ahead of the toe (plain Python, asked for lazily) is the batched
+    rise_ahead of the same footholds, on slopes, edges, holes and faces.
+    """
     rng = np.random.default_rng(3)
     planner = FootstepPlanner(FootstepConfig(), leg)
     step, offsets, bounds = planner._table_layout
@@ -455,10 +499,14 @@ def test_search_rise_ahead_agrees_with_the_batched_one(leg):
 
 
 def _memos(n=3, m=13, prefix_rows=None, swings=True):
-    """Empty prefix and swing memos as a search of a window of ``n`` footsteps and ``m``
-    intervals makes them (``footstep_search._empty_memos``), the prefix memo cut to its first
-    ``prefix_rows`` rows (the prefixes of fewer footsteps) and the swing memo left out if
-    asked: the effort must come out the same with less remembered."""
+    """
+    Return empty prefix and swing memos as a search makes them.
+
+    Empty prefix and swing memos as a search of a window of ``n`` footsteps and ``m`` intervals
+    makes them (``footstep_search._empty_memos``), the prefix memo cut to its first ``prefix_rows``
+    rows (the prefixes of fewer footsteps) and the swing memo left out if asked: the effort must
+    come out the same with less remembered.
+    """
     _, prefixes, swing_memo = footstep_search._empty_memos(n, m, True)
     if prefix_rows is not None:
         prefixes = np.ascontiguousarray(prefixes[:prefix_rows])
@@ -467,11 +515,14 @@ def _memos(n=3, m=13, prefix_rows=None, swings=True):
 
 @pytest.mark.parametrize('memo', ['whole', 'one-footstep prefixes, no swings', 'none'])
 def test_the_compiled_effort_from_prefixes_is_the_plain_effort(leg, search_kind, memo):
-    """The compiled search's effort, resumed from the prefixes of the configurations judged
-    before it, is the plain effort to the last bit (NaN where that is None), feasible or not,
-    whatever order the configurations come in; also where the memos hold only the prefixes
-    of one footstep and no swing (as in a window with too many to keep) or nothing (as the
-    exhaustive search judges)."""
+    """
+    The compiled effort from prefixes is the plain effort.
+
+    The compiled search's effort, resumed from the prefixes of the configurations judged before it,
+    is the plain effort to the last bit (NaN where that is None), feasible or not, whatever order
+    the configurations come in; also where the memos hold only the prefixes of one footstep and no
+    swing (as in a window with too many to keep) or nothing (as the exhaustive search judges).
+    """
     rng = np.random.default_rng(5)
     planner = FootstepPlanner(FootstepConfig(), leg)
     lengths = planner.config.lengths().tolist()
@@ -511,11 +562,15 @@ def test_the_compiled_effort_from_prefixes_is_the_plain_effort(leg, search_kind,
 
 
 def test_the_compiled_effort_is_the_plain_effort_on_random_tables(leg, search_kind):
-    """The same on random foothold tables (heights, pitches, holes), obstacles (faces near the
-    toes, gaps) and walking speeds: tens of thousands of distinct values in every term of the
-    effort and in the swing test. Its squares computed as x * x (what numba makes of a
-    constant square) instead of Python's x ** 2 change about 12 of these efforts in the last
-    bit (checked: the test fails then)."""
+    """
+    The compiled effort is the plain effort on random tables.
+
+    The same on random foothold tables (heights, pitches, holes), obstacles (faces near the toes,
+    gaps) and walking speeds: tens of thousands of distinct values in every term of the effort and
+    in the swing test. Its squares computed as x * x (what numba makes of a constant square)
+    instead of Python's x ** 2 change about 12 of these efforts in the last bit (checked: the test
+    fails then).
+    """
     rng = np.random.default_rng(17)
     planner = FootstepPlanner(FootstepConfig(lift_room=0.1), leg)
     lengths = planner.config.lengths().tolist()
@@ -558,8 +613,12 @@ def test_the_compiled_effort_is_the_plain_effort_on_random_tables(leg, search_ki
 
 
 def test_the_exhaustive_search_is_the_least_plain_effort(leg, search_kind):
-    """The benchmarks' exhaustive optimum (compiled) is the configuration of least plain
-    effort over every configuration of the window, the first of equals in their order."""
+    """
+    The exhaustive search finds the least plain effort.
+
+    The benchmarks' exhaustive optimum (compiled) is the configuration of least plain effort over
+    every configuration of the window, the first of equals in their order.
+    """
     planner = FootstepPlanner(FootstepConfig(), leg)
     lengths = planner.config.lengths().tolist()
     sides = np.array([LEFT, RIGHT, LEFT])
@@ -594,13 +653,17 @@ def test_another_attempt_at_a_step_plans_as_a_fresh_planner_would(leg):
 
 
 def _paper_search(planner, profile, start, s_init, previous_length):
-    """§4.2 written out plainly: breadth-first search from ``start`` over one-footstep moves
-    to the first collision-free configuration (by levels, each level's configurations in the
-    order they were reached), then hill-climbing to the best neighbour (one footstep, or one
-    longer and the next shorter) while it lowers the effort; every configuration judged by
-    the plain effort. With ``greedy_restart`` another climb from the configuration built
-    footstep by footstep, each the cheapest by the effort's terms given the ones before, and
-    the better of the two. Returns (configuration, effort, configurations judged)."""
+    """
+    Search the window as §4.2 says, written out plainly.
+
+    §4.2 written out plainly: breadth-first search from ``start`` over one-footstep moves to the
+    first collision-free configuration (by levels, each level's configurations in the order they
+    were reached), then hill-climbing to the best neighbour (one footstep, or one longer and the
+    next shorter) while it lowers the effort; every configuration judged by the plain effort. With
+    ``greedy_restart`` another climb from the configuration built footstep by footstep, each the
+    cheapest by the effort's terms given the ones before, and the better of the two. Returns
+    (configuration, effort, configurations judged).
+    """
     n, m = planner.config.window_steps, planner.config.step_intervals
     sides, side_list = planner._sides[RIGHT]  # the feet's order when the right one stands
     tables = reference.search_tables(planner, profile, sides, 0.0)
@@ -681,10 +744,14 @@ def _paper_search(planner, profile, start, s_init, previous_length):
 @pytest.mark.parametrize('greedy_restart', [False, True])
 def test_the_search_is_the_papers_breadth_first_search_and_hill_climbing(leg, greedy_restart,
                                                                          search_kind):
-    """The planner's search finds the configuration the plain §4.2 search finds (and, with
-    the greedy restart, the better of that and the climb from the greedy configuration), with
-    the same effort, having judged the same configurations, from starts far from any free one
-    on stairs, holes and bumps; compiled and as plain Python."""
+    """
+    The search is the paper's breadth-first search and hill-climbing.
+
+    The planner's search finds the configuration the plain §4.2 search finds (and, with the greedy
+    restart, the better of that and the climb from the greedy configuration), with the same effort,
+    having judged the same configurations, from starts far from any free one on stairs, holes and
+    bumps; compiled and as plain Python.
+    """
     rng = np.random.default_rng(11)
     planner = FootstepPlanner(FootstepConfig(greedy_restart=greedy_restart), leg)
     terrain = {'stairs': lambda s: 0.12 * (np.floor((s - 0.4) / 0.3) + 1) if s > 0.4 else 0.0,
@@ -709,10 +776,14 @@ def test_the_search_is_the_papers_breadth_first_search_and_hill_climbing(leg, gr
 
 
 def test_the_greedy_configuration_does_not_displace_a_better_one_found(leg, search_kind):
-    """Started at the window's optimum, the search keeps it: the greedy configuration, built
-    footstep by footstep, is collision-free but worse there, and the climb from it ends
-    elsewhere (on these stairs on a configuration 2-50 % dearer, over these holes 35 %; had
-    the search climbed from it alone); the configurations judged are the plain search's."""
+    """
+    The greedy configuration does not displace a better one found.
+
+    Started at the window's optimum, the search keeps it: the greedy configuration, built footstep
+    by footstep, is collision-free but worse there, and the climb from it ends elsewhere (on these
+    stairs on a configuration 2-50 % dearer, over these holes 35 %; had the search climbed from it
+    alone); the configurations judged are the plain search's.
+    """
     planner = FootstepPlanner(FootstepConfig(), leg)
     terrain = {'stairs': lambda s: 0.15 * np.floor(max(s - 0.5, 0.0) / 0.35),
                'holes': lambda s: np.nan if 0.5 < s < 0.85 or 1.5 < s < 1.8 else 0.0}
@@ -728,10 +799,13 @@ def test_the_greedy_configuration_does_not_displace_a_better_one_found(leg, sear
 
 def test_a_window_of_many_configurations_keeps_its_memo_in_a_dictionary_and_searches_alike(
         leg, search_kind):
-    """Past ``DENSE_CONFIGURATIONS`` configurations (five footsteps: 14 ** 5) the search
-    remembers what it judged in a dictionary instead of arrays: the same configuration, effort
-    and configurations judged as the plain §4.2 search, on stairs from starts far from any
-    free one."""
+    """
+    A window of many configurations keeps its memo in a dictionary.
+
+    Past ``DENSE_CONFIGURATIONS`` configurations (five footsteps: 14 ** 5) the search remembers
+    what it judged in a dictionary instead of arrays: the same configuration, effort and
+    configurations judged as the plain §4.2 search, on stairs from starts far from any free one.
+    """
     config = FootstepConfig(window_steps=5)
     assert (config.step_intervals + 1) ** 5 > footstep_search.DENSE_CONFIGURATIONS
     planner = FootstepPlanner(config, leg)

@@ -1,16 +1,29 @@
-"""Walk generation of single steps (§4.1): key frames, IK, Bezier swing, pelvis."""
-import numpy as np
-import pytest
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
+"""Walk generation of single steps (§4.1): key frames, IK, Bezier swing, pelvis."""
+from digital_actor_planner.core import gait as gait_module
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment
-from digital_actor_planner.core import gait as gait_module
 from digital_actor_planner.core.footsteps import LEFT, RIGHT
 from digital_actor_planner.core.gait import (
     GaitConfig, GaitError, leg_inverse_kinematics, standing_stance, validate_gait_config,
     WalkGenerator)
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.core.trajectory_check import check_trajectory
+import numpy as np
+import pytest
 from scene_helpers import box as box_mesh
 
 
@@ -118,11 +131,15 @@ def test_swing_is_lifted_over_an_obstacle(skeleton, walker):
 
 
 def test_a_heel_lifting_over_an_edge_its_toes_overhang_does_not_sink_into_it(skeleton, walker):
-    """Stepping down off a 0.2 m platform, the stance foot's toes 2-6 cm over its edge, met
-    square or at an angle: the heel lifts about a line past the edge, so the sole never sinks
-    into it (rolling about the last supported point of the sole's middle line sank it 5-15 mm
-    into the edge in 12 of these 15 steps, and random terrain walks stopped there), and the
-    independent checker passes the step (a foot down, the stance foot not sliding)."""
+    """
+    A heel lifting over an edge its toes overhang does not sink into it.
+
+    Stepping down off a 0.2 m platform, the stance foot's toes 2-6 cm over its edge, met square or
+    at an angle: the heel lifts about a line past the edge, so the sole never sinks into it
+    (rolling about the last supported point of the sole's middle line sank it 5-15 mm into the edge
+    in 12 of these 15 steps, and random terrain walks stopped there), and the independent checker
+    passes the step (a foot down, the stance foot not sliding).
+    """
     leg = skeleton.leg
     height = 0.2
     environment = Environment([box_mesh([-1, -1, -0.1], [3, 1, 0]),
@@ -160,11 +177,15 @@ def test_a_heel_lifting_over_an_edge_its_toes_overhang_does_not_sink_into_it(ske
 
 def test_a_step_that_would_leave_a_knee_too_bent_for_the_next_is_refused(
         skeleton, walker, monkeypatch):
-    """Stepping 0.75 m down off a 0.33 m platform, the rear foot left at its edge: the rear
-    knee would end the step at 2.27 rad, 0.03 from its limit, from where no next step can
-    lift that foot (a weaving walk on the blocks was trapped so, bench_steer_away seed 32). The
-    step is refused, naming the knee; a shorter step off a lower platform is not; and without
-    the margin (``END_KNEE_MARGIN``) the same step is realised, its knee within the margin."""
+    """
+    A step that would leave a knee too bent for the next is refused.
+
+    Stepping 0.75 m down off a 0.33 m platform, the rear foot left at its edge: the rear knee would
+    end the step at 2.27 rad, 0.03 from its limit, from where no next step can lift that foot (a
+    weaving walk on the blocks was trapped so, bench_steer_away seed 32). The step is refused,
+    naming the knee; a shorter step off a lower platform is not; and without the margin
+    (``END_KNEE_MARGIN``) the same step is realised, its knee within the margin.
+    """
     leg = skeleton.leg
     limit = walker._leg_upper[RIGHT][2]
 
@@ -214,8 +235,11 @@ def test_gait_config_validation_names_the_field():
 
 
 def test_time_shapes_shared_by_steps_of_one_length_match_the_formulas(skeleton):
-    """Steps of the same number of frames reuse one set of time shapes: they are the plain
-    formulas, read-only, and a step planned with them equals one planned on a fresh generator.
+    """
+    Time shapes shared by steps of one length match the formulas.
+
+    Steps of the same number of frames reuse one set of time shapes: they are the plain formulas,
+    read-only, and a step planned with them equals one planned on a fresh generator.
     """
     from digital_actor_planner.core.gait import _ease, smoothstep
     warm = WalkGenerator(skeleton)
@@ -253,9 +277,13 @@ def test_time_shapes_shared_by_steps_of_one_length_match_the_formulas(skeleton):
 
 
 def steady_turn(skeleton, turn, config=GaitConfig(), steps=4, length=0.3, speed=0.8):
-    """Frames of ``steps`` steps turning the pelvis ``turn`` rad each on flat ground; every
-    foot lands pointing the pelvis's new heading, so the feet differ by ``turn`` at each
-    step's start and end. Returns the frames and the number of frames of the first step."""
+    """
+    Return the frames of steps turning the pelvis on flat ground.
+
+    Frames of ``steps`` steps turning the pelvis ``turn`` rad each on flat ground; every foot lands
+    pointing the pelvis's new heading, so the feet differ by ``turn`` at each step's start and end.
+    Returns the frames and the number of frames of the first step.
+    """
     walker = WalkGenerator(skeleton, config)
     leg = skeleton.leg
     stance = standing_stance(skeleton, 0.0, 0.0, 0.0, 0.0, stance_side=RIGHT)
@@ -278,10 +306,14 @@ def steady_turn(skeleton, turn, config=GaitConfig(), steps=4, length=0.3, speed=
 
 
 def test_in_a_turn_the_pelvis_slows_towards_lift_off_and_steps_join_at_one_speed(skeleton):
-    """With 2-DOF hips a pelvis travelling between feet that point different ways drags the
-    lifting foot across its own plane; the pelvis eases towards each step's start and end in
-    proportion to the angle between the feet (full rest at ``turn_ease_heading``), and the
-    next step starts at the speed the last one ended with. Straight walking is unchanged."""
+    """
+    In a turn the pelvis slows towards lift-off and steps join at one speed.
+
+    With 2-DOF hips a pelvis travelling between feet that point different ways drags the lifting
+    foot across its own plane; the pelvis eases towards each step's start and end in proportion to
+    the angle between the feet (full rest at ``turn_ease_heading``), and the next step starts at
+    the speed the last one ended with. Straight walking is unchanged.
+    """
     def speeds(frames):
         return np.hypot(*np.diff(frames[:, :2], axis=0).T)
 
@@ -312,12 +344,16 @@ def test_turn_ease_must_be_a_finite_non_negative_angle():
 
 
 def test_a_large_turn_keeps_the_swing_hip_yaw_in_range_in_mid_swing(skeleton, walker):
-    """After a zigzag the feet point 0.35 rad in (as far as ``ActorConfig.max_toe_in`` lets a
-    landing turn in) and the next step turns the swing foot 1.25 rad, to 0.9 rad out (a stance
-    captured from such a walk, its left foot and pelvis turned to those bounds; without the bound
-    it would be 0.87 rad in, where the thighs meet). The hip yaw starts and ends inside its +-0.6
-    rad range, but the foot's and the pelvis's turns follow different ramps: the swing foot
-    lags in the air instead of the step failing at the hip's limit."""
+    """
+    A large turn keeps the swing hip yaw in range in mid-swing.
+
+    After a zigzag the feet point 0.35 rad in (as far as ``ActorConfig.max_toe_in`` lets a landing
+    turn in) and the next step turns the swing foot 1.25 rad, to 0.9 rad out (a stance captured
+    from such a walk, its left foot and pelvis turned to those bounds; without the bound it would
+    be 0.87 rad in, where the thighs meet). The hip yaw starts and ends inside its +-0.6 rad range,
+    but the foot's and the pelvis's turns follow different ramps: the swing foot lags in the air
+    instead of the step failing at the hip's limit.
+    """
     from digital_actor_planner.core.gait import FootPose, Stance
     left = FootPose(np.array([3.0423, -1.2923]), 0.0883, -0.9562, -0.0926, 0.0)
     right = FootPose(np.array([3.2916, -1.7415]), 0.072, -0.6062, 0.0, 0.0)
@@ -338,9 +374,13 @@ def test_a_large_turn_keeps_the_swing_hip_yaw_in_range_in_mid_swing(skeleton, wa
 
 def test_a_foot_turned_in_onto_the_other_is_refused_one_turned_out_is_clear(
         skeleton, walker):
-    """The walk generator refuses a step whose swinging foot would pass into the stance foot
-    (seen from above, wherever it is not above the other's top); a step it takes keeps the
-    feet's collision boxes apart in every frame (FCL, the URDF's own boxes)."""
+    """
+    A foot turned in onto the other is refused; one turned out is clear.
+
+    The walk generator refuses a step whose swinging foot would pass into the stance foot (seen
+    from above, wherever it is not above the other's top); a step it takes keeps the feet's
+    collision boxes apart in every frame (FCL, the URDF's own boxes).
+    """
     import fcl
     stance = standing_stance(skeleton, 0.0, 0.0, 0.0, 0.0, stance_side=RIGHT)
 
@@ -382,13 +422,16 @@ def _legs_touch(skeleton, frames):
 
 def test_with_the_feet_toed_in_the_swinging_foot_turns_out_so_the_thighs_pass(
         skeleton, walker):
-    """A stance captured from a weaving walk: the feet point 0.35 rad towards each other (as far
-    as a landing may turn in, ``ActorConfig.max_toe_in``), and the next step keeps the left
-    foot's heading. Both thighs are turned in; as the swinging knee passes the stance knee
-    with both hips flexed they would meet, and the generator refuses such a step
-    (``swing_toe_in`` 10 rad: not bounded). By default the foot points at most
-    ``swing_toe_in`` in while it is in the air, lands as planned, and no thigh or shank
-    touches the other leg's (FCL, the URDF's cylinders)."""
+    """
+    With the feet toed in, the swinging foot turns out so the thighs pass.
+
+    A stance captured from a weaving walk: the feet point 0.35 rad towards each other (as far as a
+    landing may turn in, ``ActorConfig.max_toe_in``), and the next step keeps the left foot's
+    heading. Both thighs are turned in; as the swinging knee passes the stance knee with both hips
+    flexed they would meet, and the generator refuses such a step (``swing_toe_in`` 10 rad: not
+    bounded). By default the foot points at most ``swing_toe_in`` in while it is in the air, lands
+    as planned, and no thigh or shank touches the other leg's (FCL, the URDF's cylinders).
+    """
     from digital_actor_planner.core.gait import FootPose, Stance
     left = FootPose(np.array([1.6705, 0.5454]), 0.072, 1.039, 0.0, 0.0)
     right = FootPose(np.array([1.9718, 0.8566]), 0.072, 1.389, 0.0, 0.0)

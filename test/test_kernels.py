@@ -1,4 +1,19 @@
-"""The compiled kernels (core/jit.py) give what their own Python source gives, to the last bit.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The compiled kernels (core/jit.py) give what their own Python source gives, to the last bit.
 
 An installation without numba runs that source: it then plans the same frames, only slower.
 Each kernel is run compiled and as plain Python on the inputs the planners give it, including
@@ -10,12 +25,9 @@ import pkgutil
 import subprocess
 import sys
 
-import numpy as np
-import pytest
-
+from digital_actor_planner import core as core_package
 from digital_actor_planner.core import (collision, ct_space, environment, footstep_search, gait,
                                         path as path_module)
-from digital_actor_planner import core as core_package
 from digital_actor_planner.core import skeleton as skeleton_module, upper_body
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment
@@ -23,6 +35,8 @@ from digital_actor_planner.core.scene import start_configuration
 from digital_actor_planner.core.footsteps import FootstepConfig
 from digital_actor_planner.core.jit import COMPILED, direct, float_array
 from digital_actor_planner.core.skeleton import Skeleton
+import numpy as np
+import pytest
 from scene_helpers import box
 
 
@@ -36,7 +50,8 @@ def same(compiled, plain):
 
 
 def near(compiled, numpy_result):
-    """Assert a kernel result matches NumPy code that calls NumPy's trigonometry, to 1e-12.
+    """
+    Assert a kernel result matches NumPy code that calls NumPy's trigonometry, to 1e-12.
 
     Kernels call the C library's sin, cos, acos and atan2; NumPy calls the same ones on the
     development machine (an AVX2 build dispatch: the same bits, so every course plans the same
@@ -56,7 +71,7 @@ def skeleton():
 
 @pytest.fixture(scope='module')
 def world():
-    """A floor, a step, a table (a surface with another under it) and a post."""
+    """Make a floor, a step, a table (a surface with another under it) and a post."""
     return Environment([box((-3, -3, -0.2), (3, 3, 0.0)), box((0.5, -3, 0.0), (3, 3, 0.15)),
                         box((-1.5, -0.5, 0.7), (-0.7, 0.5, 0.75)),
                         box((1.0, 0.3, 0.15), (1.1, 0.4, 1.5))])
@@ -75,8 +90,12 @@ def _kernels():
 
 
 def test_numba_is_installed_and_the_kernels_are_compiled():
-    """requirements.txt pins numba: without it every kernel runs as Python, many times
-    slower, and the planning-time numbers in the README would not hold."""
+    """
+    The kernels are compiled: numba is installed.
+
+    requirements.txt pins numba: without it every kernel runs as Python, many times slower, and the
+    planning-time numbers in the README would not hold.
+    """
     assert COMPILED
     kernels = _kernels()
     # The stages that run compiled: the footstep search, the ground map, the gait, the 3D
@@ -89,9 +108,13 @@ def test_numba_is_installed_and_the_kernels_are_compiled():
 
 
 def test_a_kernel_called_without_numbas_dispatch_answers_alike():
-    """``jit.direct``: the footstep search as the planner calls it (its compiled code, not
-    numba's dispatcher) answers exactly what the dispatcher's call answers; a plain function,
-    or a kernel of more than one signature, is handed back as it is."""
+    """
+    A kernel called without numba's dispatch answers alike.
+
+    ``jit.direct``: the footstep search as the planner calls it (its compiled code, not numba's
+    dispatcher) answers exactly what the dispatcher's call answers; a plain function, or a kernel
+    of more than one signature, is handed back as it is.
+    """
     from digital_actor_planner.core import footsteps
     from digital_actor_planner.core.footsteps import FootstepPlanner, GroundProfile
     assert footsteps.window_search is not footstep_search.window_search
@@ -198,8 +221,12 @@ def test_the_broad_phase_of_the_3d_check(skeleton, world):
 
 
 def test_the_upper_body_kinematics_and_boxes(skeleton):
-    """Every link's pose over frames (the CT-space's kinematics), the shapes placed on them and
-    their boxes."""
+    """
+    The upper-body kinematics and boxes, compiled and as Python.
+
+    Every link's pose over frames (the CT-space's kinematics), the shapes placed on them and their
+    boxes.
+    """
     rng = np.random.default_rng(6)
     q = rng.uniform(np.maximum(skeleton.lower, -3), np.minimum(skeleton.upper, 3), (25, 22))
     kinematics = ct_space.BodyKinematics(skeleton)
@@ -245,15 +272,14 @@ def test_the_upper_body_kinematics_and_boxes(skeleton):
 
 
 def _rotation(rng) -> np.ndarray:
-    """A random rotation matrix."""
+    """Make a random rotation matrix."""
     q, r = np.linalg.qr(rng.normal(size=(3, 3)))
     q = q * np.sign(np.diag(r))
     return q if np.linalg.det(q) > 0 else -q
 
 
 def test_the_separating_axis_tests():
-    """Oriented boxes against boxes and triangles, parallel edges included: compiled and as
-    Python."""
+    """Oriented boxes against boxes and triangles, parallel edges included, compiled and not."""
     rng = np.random.default_rng(9)
     count = 400
     rotation_a = np.array([_rotation(rng) for _ in range(count)])
@@ -277,8 +303,12 @@ def test_the_separating_axis_tests():
 
 
 def test_the_contacts_of_a_branch_batch():
-    """Per row, whether a shape touches a triangle or its pair's other shape: compiled, as
-    Python, with and without the cut by the swept boxes, and by FCL on every pair."""
+    """
+    The contacts of a branch batch, compiled, as Python and by FCL.
+
+    Per row, whether a shape touches a triangle or its pair's other shape: compiled, as Python,
+    with and without the cut by the swept boxes, and by FCL on every pair.
+    """
     import fcl
     rng = np.random.default_rng(10)
     m, n, k, pairs = 40, 4, 30, 6
@@ -361,10 +391,13 @@ def test_the_leg_triangle():
 
 
 def test_the_leg_in_its_plane(skeleton):
-    """The in-plane leg solution, compiled and as Python, to the last bit, for a sole pitch
-    per frame and one for all; and against the same formulas in NumPy (arccos, arctan2),
-    to 1e-12 rad (the same bits where NumPy calls the C library, as on the development
-    machine)."""
+    """
+    The leg in its plane, compiled and as Python, to the last bit.
+
+    The in-plane leg solution, compiled and as Python, to the last bit, for a sole pitch per frame
+    and one for all; and against the same formulas in NumPy (arccos, arctan2), to 1e-12 rad (the
+    same bits where NumPy calls the C library, as on the development machine).
+    """
     rng = np.random.default_rng(6)
     leg = skeleton.leg
     forward = rng.uniform(-0.6, 0.6, 300)
@@ -390,8 +423,12 @@ def test_the_leg_in_its_plane(skeleton):
 
 
 def test_the_gait_checks_and_the_sole_points():
-    """The feet's separating-axis test and the leg's limits (both outcomes), and the points
-    and heights under a swinging sole."""
+    """
+    The gait checks and the sole points, compiled and as Python.
+
+    The feet's separating-axis test and the leg's limits (both outcomes), and the points and
+    heights under a swinging sole.
+    """
     rng = np.random.default_rng(7)
     met, violations = set(), set()
     for trial in range(200):
@@ -452,9 +489,13 @@ def test_the_swing_height_kernels():
 
 
 def test_without_numba_the_actor_walks_the_same_frames(tmp_path):
-    """The kernels' fallback: in a process where numba cannot be imported every kernel runs as
-    Python, and the actor climbs the stairs (lower body) and passes the table, flexing an arm
-    (whole body), with the same frames to the last bit."""
+    """
+    Without numba the actor walks the same frames.
+
+    The kernels' fallback: in a process where numba cannot be imported every kernel runs as Python,
+    and the actor climbs the stairs (lower body) and passes the table, flexing an arm (whole body),
+    with the same frames to the last bit.
+    """
     from course_runs import simulate
     courses = (('stairs_up', False), ('table', True))
     code = '\n'.join([
@@ -475,8 +516,12 @@ def test_without_numba_the_actor_walks_the_same_frames(tmp_path):
 
 
 def test_a_kernel_compiles_without_a_cache_when_numba_can_cache_it_nowhere(monkeypatch):
-    """numba refuses ``cache=True`` when neither the package nor the user's cache directory is
-    writable: the kernel is then compiled for the process alone, not an import error."""
+    """
+    A kernel compiles without a cache when numba can cache it nowhere.
+
+    numba refuses ``cache=True`` when neither the package nor the user's cache directory is
+    writable: the kernel is then compiled for the process alone, not an import error.
+    """
     from digital_actor_planner.core import jit
     real = jit.numba.njit
 
@@ -499,8 +544,12 @@ def test_a_kernel_compiles_without_a_cache_when_numba_can_cache_it_nowhere(monke
 
 
 def test_an_inline_kernel_is_compiled_into_the_kernels_that_call_it():
-    """``kernel(..., inline=True)``: numba compiles it into its callers (no call between
-    them); the same answers compiled and as Python."""
+    """
+    An inline kernel is compiled into the kernels that call it.
+
+    ``kernel(..., inline=True)``: numba compiles it into its callers (no call between them); the
+    same answers compiled and as Python.
+    """
     from digital_actor_planner.core import jit
 
     @jit.kernel('f8(f8, f8)', inline=True)
@@ -522,10 +571,14 @@ def test_an_inline_kernel_is_compiled_into_the_kernels_that_call_it():
 
 
 def test_motion_patterns_kernel(skeleton):
-    """The patterns' columns, compiled and as Python, against the pattern written in NumPy
-    (each column of each arm, then np.clip's arithmetic over the upper body), to the last bit:
-    strides past the tanh's knee, one frame, a Fortran array; and with limits narrow enough
-    that the clip cuts every arm column (the skeleton's own never cut the pattern)."""
+    """
+    The motion patterns kernel, compiled and as Python, against NumPy.
+
+    The patterns' columns, compiled and as Python, against the pattern written in NumPy (each
+    column of each arm, then np.clip's arithmetic over the upper body), to the last bit: strides
+    past the tanh's knee, one frame, a Fortran array; and with limits narrow enough that the clip
+    cuts every arm column (the skeleton's own never cut the pattern).
+    """
     rng = np.random.default_rng(5)
     index = skeleton.index
     upper = np.concatenate([skeleton.branch(name)
@@ -569,8 +622,12 @@ def test_motion_patterns_kernel(skeleton):
 def _swing_plane_in_numpy(progress, plane_turn, pinned, release, take, swing_hip, yaw, foot_x,
                           foot_y, foot_yaw, turn, landing_x, landing_y, turning, inward,
                           stance_yaw, toe_in, low, high, lift_pitch, landing_pitch):
-    """The swing foot's plane as WalkGenerator.step computes it in NumPy
-    (the reference of gait._swing_plane); also says which corrections applied."""
+    """
+    Compute the swing foot's plane as WalkGenerator.step does in NumPy.
+
+    The swing foot's plane as WalkGenerator.step computes it in NumPy (the reference of
+    gait._swing_plane); also says which corrections applied.
+    """
     wrap = gait._wrap
     foot_xy, landing_xy = np.array([foot_x, foot_y]), np.array([landing_x, landing_y])
     plane_yaw = foot_yaw + turn * plane_turn
@@ -610,10 +667,13 @@ def _swing_plane_in_numpy(progress, plane_turn, pinned, release, take, swing_hip
 
 
 def test_the_pelvis_track_and_the_swing_plane():
-    """The pelvis and the swing foot's plane over a step, compiled and as Python to the last
-    bit, and against the NumPy code they replace (see near): straight steps and turns, with
-    and without the toe-in bound and the hip yaw range cutting in, and the angle wrap at exact
-    multiples."""
+    """
+    The pelvis track and the swing foot's plane, compiled and as Python.
+
+    The pelvis and the swing foot's plane over a step, compiled and as Python to the last bit, and
+    against the NumPy code they replace (see near): straight steps and turns, with and without the
+    toe-in bound and the hip yaw range cutting in, and the angle wrap at exact multiples.
+    """
     rng = np.random.default_rng(12)
     k = 64
     ramp = np.linspace(1.0 / k, 1.0, k)
@@ -656,9 +716,13 @@ def test_the_pelvis_track_and_the_swing_plane():
 
 
 def test_the_swing_passes(skeleton):
-    """The swing's shared bounds and one swing pass, compiled and as Python, against the
-    NumPy code they replace, to the last bit: with and without the pelvis raised over the
-    swing, passes that converge and that do not, and a hip out of reach."""
+    """
+    The swing passes, compiled and as Python, against NumPy.
+
+    The swing's shared bounds and one swing pass, compiled and as Python, against the NumPy code
+    they replace, to the last bit: with and without the pelvis raised over the swing, passes that
+    converge and that do not, and a hip out of reach.
+    """
     rng = np.random.default_rng(13)
     leg = skeleton.leg
     k = 64
@@ -719,9 +783,13 @@ def test_the_swing_passes(skeleton):
 
 
 def test_the_stance_leg_and_the_ankle_fade(skeleton):
-    """The stance leg over a step and the swinging ankle's fade into its range, compiled and
-    as Python, against the NumPy code they replace, to the last bit; a heel-off is flagged
-    where the ankle passes its limit, and only there."""
+    """
+    The stance leg and the ankle fade, compiled and as Python, against NumPy.
+
+    The stance leg over a step and the swinging ankle's fade into its range, compiled and as
+    Python, against the NumPy code they replace, to the last bit; a heel-off is flagged where the
+    ankle passes its limit, and only there.
+    """
     rng = np.random.default_rng(14)
     leg = skeleton.leg
     k = 64
@@ -762,10 +830,14 @@ def test_the_stance_leg_and_the_ankle_fade(skeleton):
 
 
 def test_points_beside_the_path():
-    """Points beside a predicted path, compiled and as Python to the last bit, and against the
-    NumPy code they replace (the centre line and the offset along the normal; see near):
-    straight and curved paths, arc lengths past both ends, one offset for all points, one per
-    point, and one per track."""
+    """
+    Points beside the path, compiled and as Python, against NumPy.
+
+    Points beside a predicted path, compiled and as Python to the last bit, and against the NumPy
+    code they replace (the centre line and the offset along the normal; see near): straight and
+    curved paths, arc lengths past both ends, one offset for all points, one per point, and one per
+    track.
+    """
     rng = np.random.default_rng(15)
     for curvature in (0.0, 1e-10, 0.8, -2.5):
         path = path_module.PredictedPath(rng.uniform(-3, 3), rng.uniform(-3, 3),
@@ -825,9 +897,13 @@ def _heel_off_in_numpy(leg, hip, foot, pelvis_yaw, joints, limit, toe):
 
 
 def test_the_heel_off_roll(skeleton):
-    """A stance foot rolling about its toe where its ankle would pass its limit, compiled and
-    as Python to the last bit, and against the NumPy code it replaces (see near): joints, the
-    last rolled frame's ankle and pitch, with the roll reaching the last frame and not."""
+    """
+    The heel-off roll, compiled and as Python, against NumPy.
+
+    A stance foot rolling about its toe where its ankle would pass its limit, compiled and as
+    Python to the last bit, and against the NumPy code it replaces (see near): joints, the last
+    rolled frame's ankle and pitch, with the roll reaching the last frame and not.
+    """
     rng = np.random.default_rng(16)
     leg = skeleton.leg
     k = 64

@@ -1,4 +1,19 @@
-"""launch/actor.launch.py read without a ROS install: what it would start, and with what.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+launch/actor.launch.py read without a ROS install: what it would start, and with what.
 
 launch and launch_ros are stood in for by recorders that keep each action's arguments, so the
 launch description is built exactly as ``ros2 launch`` builds it and then inspected: mouse_teleop
@@ -10,10 +25,9 @@ import os
 import sys
 import types
 
+from digital_actor_planner.launch_support import MissingPackageError
 import pytest
 import yaml
-
-from digital_actor_planner.launch_support import MissingPackageError
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 LAUNCH_FILE = os.path.join(REPO, 'launch', 'actor.launch.py')
@@ -60,7 +74,11 @@ def _kinds():
 
 @pytest.fixture
 def launch(monkeypatch):
-    """``launch(installed=..., **arguments)``: the actions actor.launch.py returns."""
+    """
+    Return a function that gives the actions actor.launch.py returns.
+
+    Called as ``launch(installed=..., **arguments)``.
+    """
     for module, classes in _kinds().items():
         fake = types.ModuleType(module)
         fake.__dict__.update(classes)
@@ -118,12 +136,12 @@ def launch(monkeypatch):
 
 
 def nodes(actions):
-    """The launched nodes by package."""
+    """Return the launched nodes by package."""
     return {a.kwargs['package']: a for a in actions if type(a).__name__ == 'Node'}
 
 
 def parameters(node):
-    """A node's parameters from its dictionaries (ParameterValue unwrapped)."""
+    """Return a node's parameters from its dictionaries (ParameterValue unwrapped)."""
     merged = {}
     for entry in node.kwargs.get('parameters', []):
         if isinstance(entry, dict):

@@ -1,4 +1,19 @@
-"""package.xml as rosdep reads it: every key resolves, and every import is declared.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+package.xml as rosdep reads it: every key resolves, and every import is declared.
 
 One key rosdep cannot resolve and ``rosdep install --from-paths src --ignore-src`` installs
 nothing, so each key must be a ROS package released for Jazzy and Kilted or a rosdep rule with
@@ -47,8 +62,7 @@ TRIMESH_BACKENDS = {
 }
 OPTIONAL_PIP = ('embreex',)  # faster ray queries than rtree; nothing fails without it
 # Programs the tests run.
-PROGRAMS = {'check_urdf': 'liburdfdom-tools', 'colcon': 'python3-colcon-common-extensions',
-            'flake8': 'python3-flake8'}
+PROGRAMS = {'check_urdf': 'liburdfdom-tools', 'colcon': 'python3-colcon-common-extensions'}
 
 
 @pytest.fixture(scope='module')
@@ -67,7 +81,7 @@ def declared(manifest, tags=DEPEND_TAGS):
 
 
 def resolve(rule, family, codename):
-    """What rosdep installs for ``rule`` on ``family``/``codename`` (None: nothing)."""
+    """Return what rosdep installs for ``rule`` on ``family``/``codename`` (None: nothing)."""
     entry = rule.get(family, rule.get('*'))
     if isinstance(entry, dict) and not set(entry) & {'pip', 'apt', 'source'}:
         entry = entry.get(codename, entry.get('*'))
@@ -78,8 +92,12 @@ def resolve(rule, family, codename):
 
 
 def third_party_imports(folder):
-    """Top-level modules imported by the sources under ``folder``, outside the standard
-    library and the project itself, with a file that imports each."""
+    """
+    Find the third-party modules imported by the sources under ``folder``.
+
+    Top-level modules imported by the sources under ``folder``, outside the standard library and
+    the project itself, with a file that imports each.
+    """
     found = {}
     local = {'digital_actor_planner'} | {
         os.path.splitext(name)[0] for _, _, names in os.walk(os.path.join(REPO, 'test'))

@@ -1,17 +1,30 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """`digital-actor simulate --out run.mcap`: a rosbag2 bag (MCAP storage) that rosbags reads."""
 import os
-
-import numpy as np
-import pytest
-import yaml
 
 from digital_actor_planner import cli
 from digital_actor_planner.cli import read_trajectory
 from digital_actor_planner.core.scene import load_scene
+import numpy as np
+import pytest
 
 rosbags = pytest.importorskip('rosbags')
 from rosbags.rosbag2 import Reader  # noqa: E402 (after the skip)
 from rosbags.typesys import get_typestore, Stores  # noqa: E402
+import yaml  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = os.path.join(ROOT, 'config', 'scenes')
@@ -19,7 +32,7 @@ SCENES = os.path.join(ROOT, 'config', 'scenes')
 
 @pytest.fixture(scope='module')
 def recorded(tmp_path_factory):
-    """The same run written as CSV and as a bag."""
+    """Write the same run as CSV and as a bag."""
     folder = tmp_path_factory.mktemp('recording')
     run = ['simulate', '--scene', os.path.join(SCENES, 'stairs_up.yaml'),
            '--commands', os.path.join(SCENES, 'stairs_up.csv')]

@@ -1,15 +1,28 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Pictures of a run: PNG key poses and GIF animation are real, non-blank images of the actor."""
 import os
 import time
 
+from digital_actor_planner.core.render import render_gif, render_png
+from digital_actor_planner.core.skeleton import Skeleton
 import numpy as np
 from PIL import Image
 import pytest
 import trimesh
 import yaml
-
-from digital_actor_planner.core.render import render_gif, render_png
-from digital_actor_planner.core.skeleton import Skeleton
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = os.path.join(ROOT, 'config', 'scenes')
@@ -36,7 +49,7 @@ def course_meshes(name):
 
 
 def standing_run(skeleton, duration, distance, rate=100.0):
-    """A standing actor translated along +x: times (k,), frames (k, 22)."""
+    """Return a standing actor translated along +x: times (k,), frames (k, 22)."""
     times = np.arange(0.0, duration + 1e-9, 1.0 / rate)
     frames = np.tile(skeleton.neutral(), (len(times), 1))
     frames[:, skeleton.index['root_x']] = np.linspace(0.0, distance, len(times))
@@ -128,18 +141,18 @@ def test_gif_with_a_fixed_camera_shows_the_actor_moving(skeleton, tmp_path):
 
 
 @pytest.mark.parametrize('bad', [
-    dict(frames=np.zeros((10, 21))),
-    dict(frames=np.zeros(22)),
-    dict(times=np.arange(9) * 0.01),
-    dict(frames=np.full((10, 22), np.nan)),
-    dict(footsteps=np.zeros((3, 3))),
-    dict(meshes=['not a mesh']),
-    dict(n_poses=0),
-    dict(size=(10, 10)),
+    {'frames': np.zeros((10, 21))},
+    {'frames': np.zeros(22)},
+    {'times': np.arange(9) * 0.01},
+    {'frames': np.full((10, 22), np.nan)},
+    {'footsteps': np.zeros((3, 3))},
+    {'meshes': ['not a mesh']},
+    {'n_poses': 0},
+    {'size': (10, 10)},
 ])
 def test_bad_input_raises_and_writes_nothing(skeleton, tmp_path, bad):
     times, frames = standing_run(skeleton, 0.09, 0.1)
-    arguments = dict(meshes=course_meshes('flat'), times=times, frames=frames)
+    arguments = {'meshes': course_meshes('flat'), 'times': times, 'frames': frames}
     options = {}
     for key, value in bad.items():
         (arguments if key in arguments else options)[key] = value

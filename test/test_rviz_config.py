@@ -1,13 +1,26 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """config/actor.rviz shows the actor of the namespace RViz is started in, and only that one."""
 import os
 import re
 import xml.etree.ElementTree as ElementTree
 
-import pytest
-import yaml
-
 from digital_actor_planner.launch_support import (
     frame_prefix, rviz_config, rviz_topics, world_frame)
+import pytest
+import yaml
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 CONFIG = os.path.join(REPO, 'config', 'actor.rviz')

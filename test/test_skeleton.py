@@ -1,12 +1,25 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """The 22-DOF URDF and the skeleton read from it (paper §3.1, Figure 1)."""
 import shutil
 import subprocess
 
-import numpy as np
-import pytest
-
 from digital_actor_planner.core.skeleton import (
     default_urdf_path, EXPECTED_JOINT_NAMES, Skeleton, UrdfError)
+import numpy as np
+import pytest
 
 
 @pytest.fixture(scope='module')

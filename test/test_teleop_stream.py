@@ -1,4 +1,19 @@
-"""actor_planner as actor.launch.py starts it, steered as mouse_teleop steers a held drag.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+actor_planner as actor.launch.py starts it, steered as mouse_teleop steers a held drag.
 
 While the drag is held still, mouse_teleop (at the launch's ``teleop_frequency``, 10 Hz) repeats
 one unchanged TwistStamped; the actor must walk on for the whole hold, not stop after the
@@ -8,11 +23,10 @@ CI-proof: rclpy only, localhost discovery, own ROS_DOMAIN_ID.
 import os
 import time
 
+from digital_actor_planner.launch_support import TELEOP_FREQUENCY, world_frame
 import pytest
 from ros_harness import fresh_domain_id, NodeProcess, ros_env
 from test_node_helpers import node_command, Probe, REPO, ROOT_X, scene
-
-from digital_actor_planner.launch_support import TELEOP_FREQUENCY, world_frame
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 

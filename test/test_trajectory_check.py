@@ -1,12 +1,25 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """check_trajectory: the independent judge, on hand-built trajectories."""
 import time
-
-import numpy as np
-import pytest
 
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.scene import start_configuration
 from digital_actor_planner.core.trajectory_check import check_trajectory
+import numpy as np
+import pytest
 from scene_helpers import box
 
 RATE = 100.0
@@ -192,8 +205,12 @@ def test_a_link_wholly_inside_a_solid_is_found(skeleton, standing):
 
 def test_legs_passing_through_each_other_fail_naming_the_links(skeleton, floor_world,
                                                                standing):
-    """Knock-kneed: both thighs turned in and flexed until the knees meet. The checker judges
-    each leg's thigh, shank and foot against the other leg's (their URDF shapes, FCL)."""
+    """
+    Knock-kneed: both thighs turned in and flexed until the knees meet.
+
+    The checker judges each leg's thigh, shank and foot against the other leg's (their URDF shapes,
+    FCL).
+    """
     times, frames = _hold(standing, 0.2)
     assert check_trajectory(skeleton, floor_world, times, frames).leg_contacts == ()
     index = skeleton.index

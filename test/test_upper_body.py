@@ -1,12 +1,25 @@
-"""Upper-body compliant motion (paper §5): motion patterns and prioritized CT-roadmap planning."""
-import numpy as np
-import pytest
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
 
+"""Upper-body compliant motion (paper §5): motion patterns and prioritized CT-roadmap planning."""
 from digital_actor_planner.core import ct_roadmap
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.upper_body import (
     motion_patterns, UpperBodyConfig, UpperBodyPlanner, validate_upper_body_config)
+import numpy as np
+import pytest
 from scene_helpers import box, walk
 
 UPPER_LINKS = ['waist', 'torso', 'head', 'left_shoulder', 'right_shoulder',
@@ -155,11 +168,15 @@ def test_table_beside_the_path_makes_that_arm_flex(skeleton):
 @pytest.mark.parametrize('seeded', [False, True])
 def test_branches_off_their_pattern_go_straight_back_as_their_searches_would(
         skeleton, seeded):
-    """After an obstacle a branch starts off its motion pattern, too far to join it at once;
-    its search first tries going straight back. The plan tries that for every such branch
-    in one batch with the whole body first: wherever it takes it, the plan is the one the
-    searches make (the same frames), and where the way back is not legal, or the search
-    would go another way first, the searches plan as before."""
+    """
+    Branches off their pattern go straight back as their searches would.
+
+    After an obstacle a branch starts off its motion pattern, too far to join it at once; its
+    search first tries going straight back. The plan tries that for every such branch in one batch
+    with the whole body first: wherever it takes it, the plan is the one the searches make (the
+    same frames), and where the way back is not legal, or the search would go another way first,
+    the searches plan as before.
+    """
     obstacles = {'beam': [box([0.6, -1.0, 1.60], [0.8, 1.0, 1.80])],
                  'table': [box([0.3, 0.21, 0.0], [1.1, 1.0, 0.78])],
                  'pillars': [box([0.6, 0.235, 0.0], [0.75, 0.6, 2.2]),
@@ -280,8 +297,12 @@ def test_times_must_increase(skeleton):
 
 
 def _start_and_objective(space, start) -> tuple:
-    """Reference on the CT-space's own checks: whether the start is legal at frame 0, and
-    whether the start, then the objective at frames 1..k-1, is a legal motion (one batch)."""
+    """
+    Check the start and the objective on the CT-space, as a reference.
+
+    Reference on the CT-space's own checks: whether the start is legal at frame 0, and whether the
+    start, then the objective at frames 1..k-1, is a legal motion (one batch).
+    """
     path = np.vstack([start[None], space.objective[1:]])
     speed = np.abs(np.diff(path, axis=0)) / np.diff(space.times)[:, None]
     if np.any(speed > space.speed_limit * (1 + 1e-6)):
@@ -291,7 +312,7 @@ def _start_and_objective(space, start) -> tuple:
 
 
 def _objective_is_legal(space, start) -> bool:
-    """Reference: whether start, then the objective at frames 1..k-1, is a legal motion."""
+    """Check, as a reference, whether start then the objective is a legal motion."""
     path = np.vstack([start[None], space.objective[1:]])
     speed = np.abs(np.diff(path, axis=0)) / np.diff(space.times)[:, None]
     if np.any(speed > space.speed_limit * (1 + 1e-6)):

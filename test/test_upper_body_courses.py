@@ -1,4 +1,19 @@
-"""Upper-body compliant motion on the obstacle courses (paper §5).
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Upper-body compliant motion on the obstacle courses (paper §5).
 
 Collision-freedom of every link on these courses is judged in test_walk_courses.py; here: the
 upper body keeps its motion pattern on open ground, leaves it where the course demands (bend the
@@ -7,17 +22,16 @@ it.
 """
 import os
 
-import numpy as np
-import pytest
-
 from course_runs import scene, SCENES, simulate, skeleton
 from digital_actor_planner.cli import read_commands
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
+from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.trajectory_check import check_trajectory
-from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.upper_body import (motion_patterns, UpperBodyConfig,
                                                    UpperBodyPlanner)
+import numpy as np
+import pytest
 from scene_helpers import furniture_scene, pillars_moved_sideways
 
 COURSES = ['low_beam', 'table', 'pillars', 'uneven_beam']
@@ -56,10 +70,14 @@ def test_upper_body_leaves_its_pattern_only_at_the_obstacle_and_returns(name):
 
 @pytest.mark.slow
 def test_table_is_passed_with_the_left_elbow_flexed_not_the_arm_swung_back():
-    """At the table the arm must flex. Somewhere along the table the left elbow is
-    flexed at least 0.3 rad beyond its pattern, and the shoulder never swings more than 0.5 rad
-    off its own (a flexed elbow at the pattern's swing clears the table and the things on it:
-    test_courses.py::test_table_needs_the_left_elbow_flexed)."""
+    """
+    At the table the arm must flex.
+
+    Somewhere along the table the left elbow is flexed at least 0.3 rad beyond its pattern, and the
+    shoulder never swings more than 0.5 rad off its own (a flexed elbow at the pattern's swing
+    clears the table and the things on it:
+    test_courses.py::test_table_needs_the_left_elbow_flexed).
+    """
     sk = skeleton()
     _, _, frames, _ = simulate('table')
     signed = frames - motion_patterns(sk, frames)
@@ -76,11 +94,15 @@ def test_table_is_passed_with_the_left_elbow_flexed_not_the_arm_swung_back():
 
 @pytest.mark.slow
 def test_without_lasting_postures_the_arm_swings_back_past_the_table():
-    """What the arms' preference for lasting postures changes (UpperBodyConfig.lasting_branches):
+    """
+    Without lasting postures the arm swings back past the table.
+
+    What the arms' preference for lasting postures changes (UpperBodyConfig.lasting_branches):
     without it, best-first on closeness takes the arm held in (legal for a while), and past the
-    table's near end only swinging the arm far back is left; the course is still passed. The
-    search alone, each step afresh: a step seeded with the last plan (ActorConfig.upper_body_seed)
-    goes on along the posture the first step at the table found, whichever it was."""
+    table's near end only swinging the arm far back is left; the course is still passed. The search
+    alone, each step afresh: a step seeded with the last plan (ActorConfig.upper_body_seed) goes on
+    along the posture the first step at the table found, whichever it was.
+    """
     sk = skeleton()
     _, _, frames, blocks = simulate('table', lasting_branches=(), upper_body_seed=False)
     signed = frames - motion_patterns(sk, frames)
@@ -119,11 +141,15 @@ def test_whole_body_planning_is_deterministic():
 
 @pytest.mark.slow
 def test_random_furniture_beside_the_path_is_passed_without_a_touch():
-    """Sixteen seeded tables and cabinets at arm height beside the path (the first fourteen
-    scenes of bench_arm_obstacles.py --seed 0, and its scenes 67 and 86: tables about 1 m high
-    with a tall thing on the near edge, which the arms passed only once they preferred lasting
-    postures). Every walk is judged by the independent checker with the URDF's collision
-    shapes; each one gets past the furniture, mostly by leaving the arm's swing."""
+    """
+    Random furniture beside the path is passed without a touch.
+
+    Sixteen seeded tables and cabinets at arm height beside the path (the first fourteen scenes of
+    bench_arm_obstacles.py --seed 0, and its scenes 67 and 86: tables about 1 m high with a tall
+    thing on the near edge, which the arms passed only once they preferred lasting postures). Every
+    walk is judged by the independent checker with the URDF's collision shapes; each one gets past
+    the furniture, mostly by leaving the arm's swing.
+    """
     sk = skeleton()
     rng = np.random.default_rng(0)
     scenes = [furniture_scene(rng) for _ in range(87)]
@@ -147,13 +173,16 @@ def test_random_furniture_beside_the_path_is_passed_without_a_touch():
 @pytest.mark.slow
 @pytest.mark.parametrize('centre', [0.35, 0.37])
 def test_pillars_off_the_path_are_passed_or_met_in_front_never_between(tmp_path, centre):
-    """Pillars 3 cm to the left of the path (the right arm passes 3 cm closer to its pillar).
-    The actor either gets through or stops in front of the pillars, where steering away
-    frees it; it never takes a step whose upper body is blocked just after it (ActorConfig.
-    upper_body_preview_margin): such a step left the right arm between its pillar and the
-    turned body, blocked 0.02-0.12 s into every next step. A footstep refused for the upper
-    body may be taken after a pause (ActorConfig.upper_body_pause). The walk is judged by the
-    independent checker."""
+    """
+    Pillars 3 cm to the left of the path (the right arm passes 3 cm closer to its pillar).
+
+    The actor either gets through or stops in front of the pillars, where steering away frees it;
+    it never takes a step whose upper body is blocked just after it (ActorConfig.
+    upper_body_preview_margin): such a step left the right arm between its pillar and the turned
+    body, blocked 0.02-0.12 s into every next step. A footstep refused for the upper body may be
+    taken after a pause (ActorConfig.upper_body_pause). The walk is judged by the independent
+    checker.
+    """
     sk = skeleton()
     sc = pillars_moved_sideways(SCENES, tmp_path, centre, 0.03, sk)
     actor = Actor(sk, sc.environment, ActorConfig(), start=sc.start)
@@ -172,10 +201,14 @@ def test_pillars_off_the_path_are_passed_or_met_in_front_never_between(tmp_path,
 
 def test_the_moved_pillars_plan_the_same_with_the_expansion_compiled_as_in_python(
         tmp_path, monkeypatch):
-    """The search's expansion (ct_roadmap._expand) as a kernel and as plain Python (its
-    tried neighbours in Python's dictionaries) plans this walk alike. Pillars 2 cm to the
-    left, 0.35 m either side: here a neighbour's rounded target was -0.0 where the one tried
-    was 0.0, which numba's dictionaries told apart (bit by bit) and Python's did not."""
+    """
+    The moved pillars plan the same with the expansion compiled as in Python.
+
+    The search's expansion (ct_roadmap._expand) as a kernel and as plain Python (its tried
+    neighbours in Python's dictionaries) plans this walk alike. Pillars 2 cm to the left, 0.35 m
+    either side: here a neighbour's rounded target was -0.0 where the one tried was 0.0, which
+    numba's dictionaries told apart (bit by bit) and Python's did not.
+    """
     from digital_actor_planner.core import ct_roadmap
     sk = skeleton()
     sc = pillars_moved_sideways(SCENES, tmp_path, 0.35, 0.02, sk)
@@ -196,12 +229,14 @@ def test_the_moved_pillars_plan_the_same_with_the_expansion_compiled_as_in_pytho
     (0.1, 0.2, 'passed'), (0.1, 0.0, 'stopped in front'), (0.0, 0.0, 'held between')])
 def test_what_the_preview_margin_and_the_pause_change_at_the_pillars(
         tmp_path, margin, pause, outcome):
-    """Pillars 3 cm to the left of the path, 0.50 m apart (the course's gap). Without the
-    preview margin or the pause a step whose preview was blocked 0.03 s after it
-    is taken (the plan without the preview passes) and every next step finds the right arm
-    blocked within 0.12 s: held between the pillars. With the margin that footstep is refused
-    and the actor stops in front. With the pause too (the defaults) the refused footstep is
-    taken after 0.2 s standing, the right arm getting clear first, and the actor gets through.
+    """
+    Pillars 3 cm to the left of the path, 0.50 m apart (the course's gap).
+
+    Without the preview margin or the pause a step whose preview was blocked 0.03 s after it is
+    taken (the plan without the preview passes) and every next step finds the right arm blocked
+    within 0.12 s: held between the pillars. With the margin that footstep is refused and the actor
+    stops in front. With the pause too (the defaults) the refused footstep is taken after 0.2 s
+    standing, the right arm getting clear first, and the actor gets through.
     """
     sk = skeleton()
     sc = pillars_moved_sideways(SCENES, tmp_path, 0.37, 0.03, sk)
@@ -229,10 +264,14 @@ def test_what_the_preview_margin_and_the_pause_change_at_the_pillars(
 @pytest.mark.slow
 @pytest.mark.parametrize('name', ['low_beam', 'uneven_beam'])
 def test_a_slow_walk_bends_under_the_beam_in_time(name):
-    """At 0.4 m/s the 0.5 s preview sees only 0.2 m ahead: the waist must start bending when
-    the head is farther from the beam than that. The preview covers at least 0.5 m
-    (ActorConfig.upper_body_preview_distance); without that the actor stops in front of both
-    beams. The walk is judged by the independent checker."""
+    """
+    A slow walk bends under the beam in time.
+
+    At 0.4 m/s the 0.5 s preview sees only 0.2 m ahead: the waist must start bending when the head
+    is farther from the beam than that. The preview covers at least 0.5 m
+    (ActorConfig.upper_body_preview_distance); without that the actor stops in front of both beams.
+    The walk is judged by the independent checker.
+    """
     sk = skeleton()
     sc = scene(name)
     for distance, passes in ((0.5, True), (0.0, False)):
@@ -252,10 +291,13 @@ def test_a_slow_walk_bends_under_the_beam_in_time(name):
 
 @pytest.mark.slow
 def test_the_steps_after_the_first_under_the_beam_go_on_along_the_last_plan():
-    """Receding horizon (ActorConfig.upper_body_seed): the first step that meets the beam
-    searches; the next ones start along the rest of its plan and check far fewer
-    configurations, and the walk is the same kind of walk (under the beam, back on the
-    pattern, to the end)."""
+    """
+    The steps after the first under the beam go on along the last plan.
+
+    Receding horizon (ActorConfig.upper_body_seed): the first step that meets the beam searches;
+    the next ones start along the rest of its plan and check far fewer configurations, and the walk
+    is the same kind of walk (under the beam, back on the pattern, to the end).
+    """
     sc = scene('low_beam')
     commands = read_commands(os.path.join(SCENES, 'low_beam.csv'))
     runs = {}
@@ -288,9 +330,13 @@ def test_the_steps_after_the_first_under_the_beam_go_on_along_the_last_plan():
 
 @pytest.mark.slow
 def test_a_step_after_a_stop_is_not_seeded_with_the_plan_from_before_it():
-    """The last plan seeds only the step that directly follows it: after the actor stopped
-    (here under the beam, the waist bent), the pelvis did not go on as that plan's preview
-    had it, and the next step searches afresh."""
+    """
+    A step after a stop is not seeded with the plan from before it.
+
+    The last plan seeds only the step that directly follows it: after the actor stopped (here under
+    the beam, the waist bent), the pelvis did not go on as that plan's preview had it, and the next
+    step searches afresh.
+    """
     sc = scene('low_beam')
     actor = Actor(skeleton(), sc.environment, ActorConfig(), start=sc.start)
     calls = []

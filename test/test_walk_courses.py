@@ -1,15 +1,29 @@
-"""The actor walks every shipped course, judged by the independent checker.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The actor walks every shipped course, judged by the independent checker.
 
 The checker uses the URDF's own collision geometry with FCL at every frame, not the planner's
 ground map: no link penetrates by more than 3 mm (feet resting <= 15 mm), a foot is always down,
 limits hold, no NaN or jumps, a stance foot slides <= 1 cm.
 """
-import numpy as np
-import pytest
-
 from course_runs import course_names, judged, scene, simulate, skeleton
 from digital_actor_planner.core.gait import GaitConfig
 from digital_actor_planner.core.trajectory_check import check_trajectory
+import numpy as np
+import pytest
 
 FEASIBLE = [n for n in course_names() if not scene(n).expect.get('stuck')]
 INFEASIBLE = [n for n in course_names() if scene(n).expect.get('stuck')]
@@ -67,7 +81,8 @@ def test_stuck_actor_goes_on_when_steered_away():
 
 @pytest.mark.slow
 def test_figure8_one_step_window_falls_into_the_trap_three_step_window_strides_over():
-    """Paper Figure 8: n = 1 steps into the pit (or is stuck); n = 3, m = 13 strides over.
+    """
+    Paper Figure 8: n = 1 steps into the pit (or is stuck); n = 3, m = 13 strides over.
 
     The paper's search alone (no greedy restart): with one footstep in the window the greedy
     start is the exhaustive choice of that footstep, which is not what the figure is about.
@@ -94,8 +109,12 @@ def test_planning_is_deterministic():
 
 
 def turning_walk(speed, rate, gait=None):
-    """Straight for 1.5 s at ``speed``, then turning at ``rate`` until 7 s, on the flat course;
-    returns the checker's report and the final heading."""
+    """
+    Walk straight, then turn, on the flat course.
+
+    Straight for 1.5 s at ``speed``, then turning at ``rate`` until 7 s, on the flat course;
+    returns the checker's report and the final heading.
+    """
     from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
     sc = scene('flat')
     config = ActorConfig(plan_upper_body=False, gait=gait or GaitConfig())
@@ -108,19 +127,27 @@ def turning_walk(speed, rate, gait=None):
 @pytest.mark.parametrize('speed, rate', [(1.1, 0.7), (0.8, 0.7), (1.1, 0.5), (0.5, 1.0),
                                          (0.8, 1.0), (1.1, 1.0), (0.8, -0.7)])
 def test_a_sharp_fast_turn_keeps_the_stance_feet_within_1_cm(speed, rate):
-    """The sharpest turns of bench_turns.py. Without the swing plane's turn through the foot
-    the first three slide a foot 12-15 mm; without the pelvis easing towards lift-off in turns
-    (gait: ``turn_ease_heading``) the last four slide one 11-15 mm."""
+    """
+    The sharpest turns of bench_turns.py.
+
+    Without the swing plane's turn through the foot the first three slide a foot 12-15 mm; without
+    the pelvis easing towards lift-off in turns (gait: ``turn_ease_heading``) the last four slide
+    one 11-15 mm.
+    """
     report, heading = turning_walk(speed, rate)
     assert abs(heading) > 1.0, 'it turned'
     assert report.ok and max(report.slip.values()) <= 0.010, report.failures()
 
 
 def test_without_the_turn_ease_the_sharpest_turn_slides_a_foot():
-    """What keeps the sharpest turn's feet still: with a 2-DOF hip the swing hip drifts across
-    its foot's plane while the pelvis travels, so without the ease the lifting foot slides
-    (11.6 mm here; since the landing toe-in is bounded, ``ActorConfig.max_toe_in``, the feet
-    point less far apart in turns and this right turn is the one that slides most)."""
+    """
+    Without the turn ease the sharpest turn slides a foot.
+
+    What keeps the sharpest turn's feet still: with a 2-DOF hip the swing hip drifts across its
+    foot's plane while the pelvis travels, so without the ease the lifting foot slides (11.6 mm
+    here; since the landing toe-in is bounded, ``ActorConfig.max_toe_in``, the feet point less far
+    apart in turns and this right turn is the one that slides most).
+    """
     eased, _ = turning_walk(0.8, -1.0)
     plain, heading = turning_walk(0.8, -1.0, GaitConfig(turn_ease_heading=0.0))
     assert heading < -1.0, 'it turned'
@@ -128,10 +155,13 @@ def test_without_the_turn_ease_the_sharpest_turn_slides_a_foot():
 
 
 def test_after_a_zigzag_to_the_floor_edge_the_actor_turns_away_when_steered():
-    """Mouse steering that zigzags left and right leaves the feet pointing up to 0.9 rad apart.
-    Here it walks the actor to the floor's edge, where it stops (stuck); the user then steers
-    it away on the spot and it goes on. Before the swing hip yaw was held in range in
-    mid-swing (gait), every step of that turn was refused at 0.61 rad and it stayed put."""
+    """
+    Mouse steering that zigzags left and right leaves the feet pointing up to 0.9 rad apart.
+
+    Here it walks the actor to the floor's edge, where it stops (stuck); the user then steers it
+    away on the spot and it goes on. Before the swing hip yaw was held in range in mid-swing
+    (gait), every step of that turn was refused at 0.61 rad and it stayed put.
+    """
     from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
     sc = scene('flat')
     zigzag = [(0.0, 0.97, 0.79), (0.45, 0.23, -0.82), (1.15, 0.91, 0.98), (2.81, 0.57, -0.51),

@@ -1,4 +1,19 @@
-"""Exact contact tests of convex shapes, compiled: whether two shapes touch.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Exact contact tests of convex shapes, compiled: whether two shapes touch.
 
 The upper-body planner's narrow phase (see :mod:`.ct_space`). The shapes are those of the
 actor's collision model, a box, a cylinder (its axis the shape's z axis, as in FCL and URDF) or
@@ -32,7 +47,8 @@ _TINY = 1e-24
 
 @kernel('UniTuple(f8, 3)(i8, f8[:], f8[:, :], f8[:], f8[:, :], f8, f8, f8)')
 def support(kind, half, rotation, centre, corners, dx, dy, dz):
-    """The shape's farthest point along the direction (dx, dy, dz), world frame, m.
+    """
+    Return the shape's farthest point along the direction (dx, dy, dz), world frame, m.
 
     ``kind`` is :data:`BOX` (``half``: half extents), :data:`CYLINDER` (radius, half length),
     :data:`SPHERE` (radius) posed at ``rotation`` (3, 3) and ``centre`` (3,), or
@@ -79,7 +95,7 @@ def _cross(ax, ay, az, bx, by, bz):
 
 @kernel('UniTuple(f8, 3)(i8, f8[:], f8[:, :])')
 def _middle(kind, centre, corners):
-    """A point inside the shape: its centre, a triangle's centroid."""
+    """Return a point inside the shape: its centre, a triangle's centroid."""
     if kind != TRIANGLE:
         return centre[0], centre[1], centre[2]
     return ((corners[0, 0] + corners[1, 0] + corners[2, 0]) / 3.0,
@@ -90,7 +106,8 @@ def _middle(kind, centre, corners):
 @kernel('b1(i8, f8[:], f8[:, :], f8[:], f8[:, :], i8, f8[:], f8[:, :], f8[:], f8[:, :])')
 def touching(kind_a, half_a, rotation_a, centre_a, corners_a, kind_b, half_b, rotation_b,
              centre_b, corners_b):
-    """Whether two convex shapes share a point (each as in :func:`support`).
+    """
+    Whether two convex shapes share a point (each as in :func:`support`).
 
     GJK on the Minkowski difference A - B: the simplex (newest point last) is reduced to the
     feature nearest the origin at each iteration, and the next direction points from it to

@@ -1,4 +1,19 @@
-"""§4.2's search of one footstep window, written out as the code of record.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+§4.2's search of one footstep window, written out as the code of record.
 
 A footstep configuration q_f = (j_1, ..., j_n) holds the interval index of each of the next n
 footsteps: footstep i is ``lengths[j_i]`` long, one of the m + 1 lengths in [s_min, s_max].
@@ -30,7 +45,8 @@ IMPROVEMENT = 1e-12
 
 @dataclass(frozen=True)
 class WindowLimits:
-    """What a window's footsteps must respect and how their effort is weighed.
+    """
+    What a window's footsteps must respect and how their effort is weighed.
 
     Attributes
     ----------
@@ -82,7 +98,8 @@ class WindowLimits:
 
 @dataclass(frozen=True)
 class WindowFeet:
-    """Where the window starts: the feet and the commanded stride, lengths in m.
+    """
+    Where the window starts: the feet and the commanded stride, lengths in m.
 
     Attributes
     ----------
@@ -107,7 +124,8 @@ class WindowFeet:
 
 @dataclass(frozen=True)
 class FootholdTable:
-    """Every foothold a window can reach, judged beforehand.
+    """
+    Every foothold a window can reach, judged beforehand.
 
     Footstep i's foothold depends only on the sum c of the interval indices of footsteps
     1..i + 1 (its arc length is the stance foot's + (i + 1) s_min + c increments): entry
@@ -144,7 +162,8 @@ class FootholdTable:
 
 @dataclass(frozen=True)
 class WindowSearchResult:
-    """The configuration a window's search settled on.
+    """
+    The configuration a window's search settled on.
 
     Attributes
     ----------
@@ -166,7 +185,8 @@ def search_footstep_window(table: FootholdTable, limits: WindowLimits, feet: Win
                            start: Configuration, banned_first: FrozenSet[int] = frozenset(),
                            banned_lengths: FrozenSet[int] = frozenset()
                            ) -> Optional[WindowSearchResult]:
-    """Search one footstep window (§4.2): breadth-first to feasible, then hill-climbing.
+    """
+    Search one footstep window (§4.2): breadth-first to feasible, then hill-climbing.
 
     Parameters
     ----------
@@ -234,7 +254,7 @@ def search_footstep_window(table: FootholdTable, limits: WindowLimits, feet: Win
 
 
 def _single_moves(configuration: Configuration, m: int) -> Iterator[Configuration]:
-    """The breadth-first search's moves: one footstep one interval shorter, then longer."""
+    """List the breadth-first search's moves: one footstep one interval shorter, then longer."""
     for i, j in enumerate(configuration):
         for delta in (-1, 1):
             if 0 <= j + delta <= m:
@@ -242,9 +262,13 @@ def _single_moves(configuration: Configuration, m: int) -> Iterator[Configuratio
 
 
 def _climbing_moves(configuration: Configuration, m: int) -> Iterator[Configuration]:
-    """Hill-climbing's neighbours: each single move, followed by that move with the next
-    footstep changed the opposite way, so that the footholds after them stay where they are
-    (without it the climb stalls on ridges of the effort)."""
+    """
+    List hill-climbing's neighbours: single moves and compensated pairs.
+
+    Hill-climbing's neighbours: each single move, followed by that move with the next footstep
+    changed the opposite way, so that the footholds after them stay where they are (without it the
+    climb stalls on ridges of the effort).
+    """
     n = len(configuration)
     for i, j in enumerate(configuration):
         for delta in (-1, 1):
@@ -258,8 +282,12 @@ def _climbing_moves(configuration: Configuration, m: int) -> Iterator[Configurat
 
 def _hill_climb(configuration: Configuration,
                 effort: Callable[[Configuration], Optional[float]], m: int) -> Configuration:
-    """Move to the best collision-free neighbour while it lowers the effort (by more than
-    :data:`IMPROVEMENT` than the best before it); the configuration where that ends."""
+    """
+    Climb to the best collision-free neighbour while the effort falls.
+
+    Move to the best collision-free neighbour while it lowers the effort (by more than
+    :data:`IMPROVEMENT` than the best before it); the configuration where that ends.
+    """
     value = effort(configuration)
     while True:
         best, best_value = None, value
@@ -276,7 +304,8 @@ def configuration_effort(configuration: Configuration, table: FootholdTable,
                          limits: WindowLimits, feet: WindowFeet,
                          banned_first: FrozenSet[int] = frozenset(),
                          banned_lengths: FrozenSet[int] = frozenset()) -> Optional[float]:
-    """The effort criterion of a configuration, None where it is not collision-free.
+    """
+    Return the effort criterion of a configuration, None where it is not collision-free.
 
     Each footstep from the stance foot on must land on a foothold, rise or drop no more than
     allowed, and its foot must swing there from where it was two footsteps before (the swing
@@ -327,7 +356,8 @@ def configuration_effort(configuration: Configuration, table: FootholdTable,
 def swing_clear(table: FootholdTable, limits: WindowLimits, side: int,
                 lift: Tuple[float, float], land: Tuple[float, float],
                 placed: Optional[Tuple[int, int]] = None) -> bool:
-    """Whether a foot can swing from one foothold to the next.
+    """
+    Whether a foot can swing from one foothold to the next.
 
     Parameters
     ----------
@@ -360,8 +390,11 @@ def swing_clear(table: FootholdTable, limits: WindowLimits, side: int,
 
 def step_effort(limits: WindowLimits, feet: WindowFeet, length: float, rise: float,
                 pitch: float, length_before: float) -> float:
-    """One footstep's share of the effort: its length off the neutral one, its height change,
-    its sole's pitch and its change of length, each normalised by its range and squared.
+    """
+    Return one footstep's share of the effort.
+
+    One footstep's share of the effort: its length off the neutral one, its height change, its
+    sole's pitch and its change of length, each normalised by its range and squared.
 
     Parameters
     ----------
@@ -386,10 +419,12 @@ def greedy_configuration(table: FootholdTable, limits: WindowLimits, feet: Windo
                          banned_first: FrozenSet[int] = frozenset(),
                          banned_lengths: FrozenSet[int] = frozenset()
                          ) -> Optional[Configuration]:
-    """The configuration built footstep by footstep, each the cheapest by :func:`step_effort`
-    given the ones before (the shortest of equals), among footholds in step reach; not
-    judged for the swings (the search judges it whole). None where some footstep has no
-    candidate.
+    """
+    Build the configuration footstep by footstep, each the cheapest.
+
+    The configuration built footstep by footstep, each the cheapest by :func:`step_effort` given
+    the ones before (the shortest of equals), among footholds in step reach; not judged for the
+    swings (the search judges it whole). None where some footstep has no candidate.
 
     Parameters
     ----------

@@ -1,4 +1,19 @@
-"""Pictures of the actor on a course: key poses as a PNG, an animation as a GIF.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Pictures of the actor on a course: key poses as a PNG, an animation as a GIF.
 
 Headless and ROS-free: a small painter's-algorithm renderer on matplotlib's Agg canvas. The
 course meshes are clipped to the region around the run, large faces are split into tiles so
@@ -97,7 +112,8 @@ def _check_size(size):
 # -- course geometry -------------------------------------------------------------------------
 def _split_faces(triangles: np.ndarray, tile: float,
                  max_count: int = 60000) -> Tuple[np.ndarray, np.ndarray]:
-    """Split triangles (T, 3, 3) at their longest edge until every edge is below ``tile`` m.
+    """
+    Split triangles (T, 3, 3) at their longest edge until every edge is below ``tile`` m.
 
     Longest-edge bisection keeps the pieces well shaped, which the depth sort needs.
 
@@ -105,6 +121,7 @@ def _split_faces(triangles: np.ndarray, tile: float,
     -------
     tuple
         pieces (P, 3, 3) and the index (P,) of the triangle each piece came from.
+
     """
     parent = np.arange(len(triangles))
     done, done_parent = [], []
@@ -209,7 +226,8 @@ def _nudged_centres(triangles: np.ndarray) -> np.ndarray:
 
 
 def _inside_other(meshes, points: np.ndarray, owner: np.ndarray) -> np.ndarray:
-    """Mark points (N, 3) that lie inside a closed course mesh other than their ``owner`` (N,).
+    """
+    Mark points (N, 3) that lie inside a closed course mesh other than their ``owner`` (N,).
 
     Solids that overlap (a walkway sunk into the floor slab) hide each other's faces; drawn
     anyway they would poke through in the depth sort.
@@ -296,7 +314,7 @@ class _ActorModel:
         self.colours = np.concatenate(colours)           # (T, 3)
 
     def triangles(self, q: np.ndarray) -> np.ndarray:
-        """World triangles (T, 3, 3) of the collision shapes at configuration ``q`` (22,)."""
+        """Return the collision shapes' world triangles at ``q`` (22,): (T, 3, 3), m."""
         shapes = self.skeleton.shape_transforms(self.skeleton.forward_kinematics(q))
         rotation, translation = shapes[self.owner, :3, :3], shapes[self.owner, :3, 3]
         return np.einsum('tij,tvj->tvi', rotation, self.local) + translation[:, None, :]
@@ -342,7 +360,8 @@ class _Canvas:
 
     def draw(self, camera: _Camera, triangles: np.ndarray, colours: np.ndarray,
              bias: np.ndarray, limits: Tuple[float, float, float, float], labels=()) -> None:
-        """Cull, shade, depth-sort and draw ``triangles`` (T, 3, 3) with ``colours`` (T, 3).
+        """
+        Cull, shade, depth-sort and draw ``triangles`` (T, 3, 3) with ``colours`` (T, 3).
 
         ``bias`` (T,) m is subtracted from each triangle's sorting depth, so that things lying
         on a surface (footsteps, soles) are drawn after the surface tiles around them.
@@ -417,7 +436,8 @@ def _write_atomically(path: str, write) -> None:
 def render_png(path: str, skeleton, meshes: Sequence, times, frames, *, footsteps=None,
                n_poses: int = 6, title: Optional[str] = None,
                size: Tuple[int, int] = (1200, 800)) -> None:
-    """Write a PNG of the course with the actor at ``n_poses`` key poses along the run.
+    """
+    Write a PNG of the course with the actor at ``n_poses`` key poses along the run.
 
     Parameters
     ----------
@@ -496,7 +516,8 @@ def render_png(path: str, skeleton, meshes: Sequence, times, frames, *, footstep
 def render_gif(path: str, skeleton, meshes: Sequence, times, frames, *, fps: float = 10,
                footsteps=None, follow: bool = True, size: Tuple[int, int] = (640, 480),
                title: Optional[str] = None) -> None:
-    """Write an animated GIF of the run, the camera following the actor.
+    """
+    Write an animated GIF of the run, the camera following the actor.
 
     Parameters
     ----------

@@ -1,4 +1,19 @@
-"""The 22-DOF actor model read from the URDF: joint order, limits, segment lengths, kinematics.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The 22-DOF actor model read from the URDF: joint order, limits, segment lengths, kinematics.
 
 This is the one place the joint names come from (paper §3.1, Figure 1). Forward kinematics is
 one compiled kernel (:func:`_compose`, see ``jit``), batched over configurations, because it sits
@@ -26,7 +41,8 @@ class UrdfError(ValueError):
 
 
 def default_urdf_path() -> str:
-    """Return the path of the package's actor URDF, in a source tree or an install.
+    """
+    Return the path of the package's actor URDF, in a source tree or an install.
 
     The environment variable ``DIGITAL_ACTOR_URDF`` overrides the search.
     """
@@ -84,7 +100,8 @@ class Joint:
 
 @dataclass(frozen=True)
 class CollisionShape:
-    """A collision primitive of a link.
+    """
+    A collision primitive of a link.
 
     ``kind`` is 'box' (size = (3,) edge lengths), 'cylinder' (size = (radius, length), axis z)
     or 'sphere' (size = (radius,)); ``origin`` is (4, 4) link->shape frame. Metres.
@@ -147,7 +164,8 @@ def _origin_matrix(element) -> np.ndarray:
 
 
 def _compile_plan(plan) -> tuple:
-    """Constant matrices of a kinematic chain plan for :meth:`Skeleton.forward_kinematics`.
+    """
+    Constant matrices of a kinematic chain plan for :meth:`Skeleton.forward_kinematics`.
 
     ``plan``: (parent, child, origin (4, 4), q index or -1, kind, axis (3,)) per joint, parents
     first. Every joint's local transform origin @ motion(q) is A + w1 B + w2 C with (w1, w2) =
@@ -185,8 +203,11 @@ def _compile_plan(plan) -> tuple:
 @kernel('void(f8[:, ::1], i8[::1], i8[::1], f8[:, :, ::1], i8[::1], i8[::1], '
         'f8[:, :, :, ::1])')
 def _compose(qs, parents, children, basis, motion, joint_q, out):
-    """Compose a compiled chain (see :func:`_compile_plan`) for configurations ``qs`` (k, 22)
-    into ``out`` (k, L, 4, 4), whose link row 0 is the root (set to the identity here).
+    """
+    Compose a compiled chain for configurations into link transforms.
+
+    Compose a compiled chain (see :func:`_compile_plan`) for configurations ``qs`` (k, 22) into
+    ``out`` (k, L, 4, 4), whose link row 0 is the root (set to the identity here).
 
     Per frame, each joint's local transform A + w1 B + w2 C is composed onto its parent link's;
     ``motion``: 0 fixed, 1 revolute, 2 prismatic, with the joint's index ``joint_q`` into a
@@ -222,9 +243,13 @@ def _compose(qs, parents, children, basis, motion, joint_q, out):
 @kernel('f8[:, :, :, ::1](f8[:, ::1], i8[::1], i8[::1], f8[:, :, ::1], i8[::1], i8[::1], '
         'i8[::1], f8[:, :, ::1])')
 def _shape_transforms(qs, parents, children, basis, motion, joint_q, rows, origins):
-    """Shape->world transforms (k, S, 4, 4) of a compact chain (see
+    """
+    Compute shape->world transforms of a compact chain.
+
+    Shape->world transforms (k, S, 4, 4) of a compact chain (see
     :meth:`Skeleton.shape_transforms_at`): :func:`_compose`, then each shape's origin
-    ``origins[i]`` composed onto its link's row ``rows[i]`` (rigid, top three rows)."""
+    ``origins[i]`` composed onto its link's row ``rows[i]`` (rigid, top three rows).
+    """
     k, count = qs.shape[0], rows.shape[0]
     link = np.empty((k, parents.shape[0] + 1, 4, 4))
     _compose(qs, parents, children, basis, motion, joint_q, link)
@@ -245,7 +270,8 @@ def _shape_transforms(qs, parents, children, basis, motion, joint_q, rows, origi
 
 
 class Skeleton:
-    """The actor's kinematic tree, joint order and limits, read from a URDF.
+    """
+    The actor's kinematic tree, joint order and limits, read from a URDF.
 
     Parameters
     ----------
@@ -405,7 +431,8 @@ class Skeleton:
             raise ValueError(f'unknown joint name {error.args[0]!r}') from None
 
     def branch(self, name: str) -> np.ndarray:
-        """Indices of a branch of Figure 2.
+        """
+        Return the indices of a branch of Figure 2.
 
         ``name`` is 'root', 'waist', 'left_arm', 'right_arm', 'left_leg' or 'right_leg'.
         """
@@ -430,7 +457,7 @@ class Skeleton:
         raise ValueError(f'unknown branch {name!r}')
 
     def neutral(self) -> np.ndarray:
-        """A standing configuration at the origin: (22,) float64, rad or m."""
+        """Return a standing configuration at the origin: (22,) float64, rad or m."""
         q = np.zeros(len(self.joint_names))
         q[self.index['root_z']] = self.leg.standing_height
         for side in SIDES:
@@ -444,7 +471,7 @@ class Skeleton:
 
     # -- kinematics ----------------------------------------------------------------------
     def _plan_for(self, links):
-        """The compiled chain needed to place ``links`` (cached per link set)."""
+        """Return the compiled chain needed to place ``links`` (cached per link set)."""
         key = frozenset(links)
         compiled = self._partial_plans.get(key)
         if compiled is None:
@@ -462,7 +489,8 @@ class Skeleton:
         return compiled
 
     def forward_kinematics(self, q: np.ndarray, links=None) -> np.ndarray:
-        """World transforms of every link.
+        """
+        World transforms of every link.
 
         Parameters
         ----------
@@ -491,7 +519,8 @@ class Skeleton:
         return out[0] if single else out
 
     def shape_transforms_at(self, q: np.ndarray, shapes) -> np.ndarray:
-        """World transforms of some collision shapes straight from configurations.
+        """
+        World transforms of some collision shapes straight from configurations.
 
         The same as ``shape_transforms(forward_kinematics(q, links), shapes)`` for the shapes'
         links, but only the links the shapes hang from (and their ancestors) are composed,
@@ -538,7 +567,8 @@ class Skeleton:
         return self.forward_kinematics(q)[..., self.link_index[link], :, :]
 
     def shape_transforms(self, link_transforms: np.ndarray, shapes=None) -> np.ndarray:
-        """World transforms of every collision shape, in ``collision_shapes`` order.
+        """
+        World transforms of every collision shape, in ``collision_shapes`` order.
 
         Parameters
         ----------

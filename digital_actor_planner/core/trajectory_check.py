@@ -1,4 +1,19 @@
-"""The independent judge of a timed 22-DOF trajectory against an environment.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The independent judge of a timed 22-DOF trajectory against an environment.
 
 The courses' tests use this to decide whether a walk "works": no link deeper
 in the environment than a few millimetres, a foot always down, joint limits, no NaN, no jumps,
@@ -32,7 +47,8 @@ _SOLE_THICKNESS = 0.002
 
 @dataclass(frozen=True)
 class CheckReport:
-    """What :func:`check_trajectory` found; ``ok`` when nothing exceeds a tolerance.
+    """
+    What :func:`check_trajectory` found; ``ok`` when nothing exceeds a tolerance.
 
     Times are trajectory times (s). ``penetration`` maps each checked link to its largest
     penetration depth (m) and ``penetration_time`` to when it happened. ``foot_down_gap`` is the
@@ -203,8 +219,11 @@ class _Soles:
 
 def _leg_contacts(skeleton, transforms: np.ndarray, times: np.ndarray,
                   tol: float) -> Tuple[Tuple[str, str, float, int], ...]:
-    """Pairs of links of the two legs interpenetrating by more than ``tol`` (m): each shape
-    is shrunk by half of it and tested with FCL where the bounding spheres overlap.
+    """
+    Find the pairs of links of the two legs that interpenetrate.
+
+    Pairs of links of the two legs interpenetrating by more than ``tol`` (m): each shape is shrunk
+    by half of it and tested with FCL where the bounding spheres overlap.
 
     ``transforms`` (k, S, 4, 4) places every collision shape at the checked frames, whose
     times are ``times`` (k,).
@@ -235,7 +254,8 @@ def _leg_contacts(skeleton, transforms: np.ndarray, times: np.ndarray,
 
 
 def _buried_depths(skeleton, environment, transforms: np.ndarray) -> np.ndarray:
-    """How deep each shape's centre is buried inside a solid: (k, S) m, 0 where it is not.
+    """
+    How deep each shape's centre is buried inside a solid: (k, S) m, 0 where it is not.
 
     FCL tests surfaces, so a shape wholly inside a solid touches no triangle. A centre is inside
     when the first surface straight above it faces up (a solid's top, or a height-field terrain
@@ -280,7 +300,8 @@ def check_trajectory(skeleton, environment, times, frames, *, penetration_tol: f
                      slip_tol: float = 0.01, leg_contact_tol: float = 0.003,
                      stride: int = 1,
                      links: Optional[Iterable[str]] = None) -> CheckReport:
-    """Judge a timed trajectory: collisions, a foot down, limits, NaN, jumps, stance slip.
+    """
+    Judge a timed trajectory: collisions, a foot down, limits, NaN, jumps, stance slip.
 
     Parameters
     ----------
@@ -385,7 +406,7 @@ def check_trajectory(skeleton, environment, times, frames, *, penetration_tol: f
                           if shape.link == link] for link in penetration}
     foot_down_gap, foot_down_time = 0.0, float(times[0])
     corner_runs = {foot: [None] * 4 for foot in FEET}
-    slip = {foot: 0.0 for foot in FEET}
+    slip = dict.fromkeys(FEET, 0.0)
     slip_time = {foot: float(times[0]) for foot in FEET}
     for row, i in enumerate(checked):
         q = clean[i]
@@ -424,7 +445,8 @@ def check_trajectory(skeleton, environment, times, frames, *, penetration_tol: f
 def _track_slip(foot: str, soles: _Soles, transform: np.ndarray, stance: bool, time: float,
                 corner_runs: Dict[str, list], slip: Dict[str, float],
                 slip_time: Dict[str, float]) -> None:
-    """Follow each sole corner through its runs of contact; record its horizontal drift.
+    """
+    Follow each sole corner through its runs of contact; record its horizontal drift.
 
     A foot rolling over its heel or toe keeps those corners fixed while the others lift, so
     tracking corners (not the sole's centre) tells rolling from sliding.

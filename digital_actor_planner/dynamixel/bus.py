@@ -1,9 +1,22 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Drive a Protocol 2.0 X-series bus with dynamixel-sdk (the only module that imports it)."""
 from __future__ import annotations
 
-from typing import Dict, Iterable, Mapping, Tuple
-
 import termios
+from typing import Dict, Iterable, Mapping, Tuple
 
 import dynamixel_sdk as sdk
 import serial
@@ -31,7 +44,8 @@ _STUFFED_PATTERN = bytes((0xFF, 0xFF, 0xFD, 0xFD))
 
 
 class PacketHandler(sdk.Protocol2PacketHandler):
-    """The SDK's Protocol 2.0 handler with its two per-byte hot spots made cheap.
+    """
+    The SDK's Protocol 2.0 handler with its two per-byte hot spots made cheap.
 
     Every control cycle builds a sync write and checks the CRC of every status packet. The
     SDK's ``updateCRC`` rebuilds its 256-entry table on each call, ``addStuffing`` copies the
@@ -61,7 +75,8 @@ class PacketHandler(sdk.Protocol2PacketHandler):
         return super().removeStuffing(packet)
 
     def readRx(self, port, dxl_id, length):  # noqa: N802 (SDK's name)
-        """One servo's reply to a sync read: skip status packets that are not that reply.
+        """
+        One servo's reply to a sync read: skip status packets that are not that reply.
 
         The SDK skips packets of other IDs but takes any packet of the right ID. On a busy
         machine a reply can come after its read timed out and the next read was sent; the
@@ -85,7 +100,8 @@ class BusError(RuntimeError):
 
 
 class ServoBus:
-    """One serial port with X-series servos on it.
+    """
+    One serial port with X-series servos on it.
 
     Parameters
     ----------
@@ -122,7 +138,7 @@ class ServoBus:
             # termios.error: flushing a hung-up tty; TypeError: pyserial on a closed descriptor
             raise BusError(f'{self.port_name}: {error}') from None
 
-    def open(self) -> None:
+    def open(self) -> None:  # noqa: A003 (a port is opened and closed)
         """Open the port at the baud rate; raise :class:`BusError` if it cannot be opened."""
         self.close()
         port = sdk.PortHandler(self.port_name)
@@ -206,9 +222,13 @@ class ServoBus:
         return self.collect_positions()
 
     def request_positions(self, ids: Iterable[int]) -> bool:
-        """Send the sync read of present positions; the replies are taken by
-        :meth:`collect_positions`. Work done in between overlaps the replies' wire time.
-        Return False if there is nothing to read or the request could not be sent."""
+        """
+        Send the sync read of present positions.
+
+        The replies are taken by :meth:`collect_positions`. Work done in between overlaps the
+        replies' wire time. Return False if there is nothing to read or the request could not be
+        sent.
+        """
         port = self._require()
         ids = tuple(ids)
         self._pending = False

@@ -1,3 +1,17 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Bridge configuration: the servo table, its validation, and radians <-> X-series ticks."""
 from __future__ import annotations
 
@@ -5,9 +19,8 @@ from dataclasses import dataclass
 import math
 from typing import Dict, Mapping, Optional, Sequence, Tuple
 
-import numpy as np
-
 from digital_actor_planner.core.skeleton import ROOT_JOINTS, Skeleton
+import numpy as np
 
 #: X-series resolution: 4096 ticks per revolution, 2048 is the centre of the range.
 TICKS_PER_REVOLUTION = 4096
@@ -26,14 +39,15 @@ class ConfigError(ValueError):
 
 @dataclass(frozen=True)
 class ServoConfig:
-    """One joint driven by one servo.
+    """
+    One joint driven by one servo.
 
     ``offset`` is the servo angle (rad, from the 2048-tick centre) at joint angle zero;
     ``direction`` is +1 or -1; the safe range is in joint radians; ``max_speed`` in rad/s.
     """
 
     joint: str
-    id: int
+    id: int  # noqa: A003 (the servo's Dynamixel ID, the name its e-Manual uses)
     offset: float = 0.0
     direction: int = 1
     min_position: float = -math.pi
@@ -44,7 +58,8 @@ class ServoConfig:
         return CENTRE_TICKS + (self.direction * angle + self.offset) / RADIANS_PER_TICK
 
     def to_ticks(self, angle: float) -> int:
-        """Joint angle (rad) -> goal position ticks, kept within 0..4095.
+        """
+        Joint angle (rad) -> goal position ticks, kept within 0..4095.
 
         An angle inside the safe range gets the nearest tick that is also inside it: the ends
         of the range rarely fall on a tick, and rounding to the nearest one would put the
@@ -90,12 +105,12 @@ class BridgeConfig:
 
 
 def servo_joint_names(skeleton: Skeleton) -> Tuple[str, ...]:
-    """The 18 body joints that can be servos (every joint but the root), in skeleton order."""
+    """Return the 18 body joints that can be servos (all but the root), in skeleton order."""
     return tuple(n for n in skeleton.joint_names if n not in ROOT_JOINTS)
 
 
 def default_servo(skeleton: Skeleton, joint: str, servo_id: int) -> ServoConfig:
-    """A servo for ``joint`` using the URDF position and velocity limits as its envelope."""
+    """Make a servo for ``joint`` using the URDF position and velocity limits as its envelope."""
     i = skeleton.index[joint]
     return ServoConfig(joint=joint, id=servo_id, min_position=float(skeleton.lower[i]),
                        max_position=float(skeleton.upper[i]),
@@ -169,11 +184,12 @@ _SCALARS = {'port': str, 'baud_rate': int, 'control_rate': float, 'joint_state_t
 
 
 def config_from_parameters(parameters: Mapping[str, object], skeleton: Skeleton) -> BridgeConfig:
-    """Build and validate a config from flat parameter names.
+    """
+    Build and validate a config from flat parameter names.
 
     Parameters
     ----------
-    parameters
+    parameters : Mapping[str, object]
         ``port``, ``baud_rate``, ... and ``servo_joints`` (list of joint names) with
         ``servos.<joint>.<field>`` for each joint (fields in :data:`SERVO_FIELDS`); missing
         servo fields default to ID = position in the list + 1, zero offset, direction 1 and

@@ -1,4 +1,19 @@
-"""The bridge's control cycle without ROS: safety envelope in, one sync write/read per cycle out.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The bridge's control cycle without ROS: safety envelope in, one sync write/read per cycle out.
 
 The node feeds it joint states and a clock; it drives a :class:`~.bus.ServoBus` (or nothing in
 dry-run mode) and reports health as plain values that the node turns into diagnostics.
@@ -9,10 +24,9 @@ from dataclasses import dataclass
 import os
 from typing import Callable, Dict, Iterable, List, Optional, Sequence, Tuple
 
-import numpy as np
-
 from digital_actor_planner.dynamixel.config import BridgeConfig
 from digital_actor_planner.dynamixel.safety import SafetyEnvelope
+import numpy as np
 
 OK, WARN, ERROR = 0, 1, 2
 #: Torque Enable writes per servo at shutdown before it is reported as possibly still on.
@@ -51,7 +65,8 @@ class Feedback:
 
 
 class BridgeController:
-    """Safety envelope + bus driving + reconnection, one :meth:`cycle` per control period.
+    """
+    Safety envelope + bus driving + reconnection, one :meth:`cycle` per control period.
 
     Parameters
     ----------
@@ -188,7 +203,8 @@ class BridgeController:
         return self.envelope.command(names, positions, now)
 
     def cycle(self, now: float) -> Optional[Feedback]:
-        """Run one control cycle at time ``now`` (s); return the measured positions, if any.
+        """
+        Run one control cycle at time ``now`` (s); return the measured positions, if any.
 
         Order on the bus: sync read request, then (while the replies cross the wire) the
         safety envelope computes this cycle's goals, then the replies are taken and the goals
@@ -294,13 +310,15 @@ class BridgeController:
         self.bus.set_torque(ids, True)
 
     def shutdown(self) -> bool:
-        """Switch torque off (unless configured otherwise) and close the port.
+        """
+        Switch torque off (unless configured otherwise) and close the port.
 
         Returns
         -------
         bool
             False when servos may still hold torque that should have been switched off: the
             port is gone or they did not acknowledge. The log names them.
+
         """
         if self.bus is None:
             return True

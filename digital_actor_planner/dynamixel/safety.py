@@ -1,3 +1,17 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """The safety envelope between the joint stream and the servos: clamp, rate limit, watchdog."""
 from __future__ import annotations
 
@@ -8,7 +22,8 @@ import numpy as np
 
 
 class SafetyEnvelope:
-    """Turn whatever arrives on the input topic into goals that are safe to send.
+    """
+    Turn whatever arrives on the input topic into goals that are safe to send.
 
     Targets are clamped to each joint's safe range; the commanded position moves toward the
     target no faster than the joint's maximum speed; NaN/inf values and unknown names are
@@ -62,7 +77,8 @@ class SafetyEnvelope:
         self.ignored = {'not finite': 0, 'unknown name': 0, 'clamped': 0}
 
     def reset(self, positions, now: float) -> None:
-        """Start from measured positions (n,) rad: hold there, or ease in from outside the range.
+        """
+        Start from measured positions (n,) rad: hold there, or ease in from outside the range.
 
         Non-finite entries keep the joint's current commanded position.
         """
@@ -71,7 +87,8 @@ class SafetyEnvelope:
         self.holding = True
 
     def resume(self, indices: Iterable[int], positions) -> None:
-        """Restart the joints ``indices`` from measured ``positions`` (rad, one per index).
+        """
+        Restart the joints ``indices`` from measured ``positions`` (rad, one per index).
 
         The commanded position becomes the measured one, so the first goal moves nothing; the
         target becomes its nearest point in the safe range, reached at the speed limit.

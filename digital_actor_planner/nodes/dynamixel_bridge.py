@@ -1,4 +1,19 @@
-"""ROS 2 node ``dynamixel_bridge``: drive Dynamixel X-series servos from a JointState stream.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+ROS 2 node ``dynamixel_bridge``: drive Dynamixel X-series servos from a JointState stream.
 
 A thin adapter: parameters -> :class:`BridgeConfig`, messages -> :class:`BridgeController`,
 feedback -> ``~/joint_states``, health -> ``/diagnostics``. Exit codes: 0 after a clean
@@ -13,6 +28,12 @@ import time
 from typing import Dict, List, Optional
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from digital_actor_planner.core.skeleton import Skeleton
+from digital_actor_planner.dynamixel.config import (BridgeConfig, config_from_parameters,
+                                                    ConfigError, servo_joint_names,
+                                                    SUPPORTED_BAUD_RATES)
+from digital_actor_planner.dynamixel.controller import BridgeController, StartupError
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 import rclpy
 from rclpy.exceptions import (InvalidParameterTypeException, InvalidParameterValueException,
                               ParameterException)
@@ -20,14 +41,7 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.signals import SignalHandlerOptions
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from sensor_msgs.msg import JointState
-
-from digital_actor_planner.core.skeleton import Skeleton
-from digital_actor_planner.dynamixel.config import (BridgeConfig, config_from_parameters,
-                                                    ConfigError, servo_joint_names,
-                                                    SUPPORTED_BAUD_RATES)
-from digital_actor_planner.dynamixel.controller import BridgeController, StartupError
 
 EXIT_BAD_CONFIG = 2
 EXIT_MISSING_SERVOS = 3
