@@ -99,8 +99,10 @@ def third_party_imports(folder):
     the project itself, with a file that imports each.
     """
     found = {}
+    # The project's own: the package, and the test and bench modules the tests import.
     local = {'digital_actor_planner'} | {
-        os.path.splitext(name)[0] for _, _, names in os.walk(os.path.join(REPO, 'test'))
+        os.path.splitext(name)[0] for folder_name in ('test', 'bench')
+        for _, _, names in os.walk(os.path.join(REPO, folder_name))
         for name in names if name.endswith('.py')}
     for root, _, files in os.walk(os.path.join(REPO, folder)):
         for name in files:
