@@ -396,6 +396,20 @@ def test_invalid_configuration_exits_naming_the_item(tmp_path, override, named):
     assert named in result.stderr
 
 
+def test_a_bus_without_dynamixel_sdk_exits_naming_it(tmp_path):
+    params = write_params(tmp_path / 'bridge.yaml')
+    # The bridge as started where dynamixel_sdk is not installed.
+    without_sdk = ("import sys; sys.modules['dynamixel_sdk'] = None; "
+                   'from digital_actor_planner.nodes.dynamixel_bridge import main; main()')
+    result = subprocess.run(
+        [sys.executable, '-c', without_sdk, '--ros-args', '--params-file', params,
+         '-p', 'port:=/nonexistent'],
+        env=ros_env(next(_DOMAINS)), capture_output=True, text=True, timeout=STARTUP_S)
+    assert result.returncode == 2, result.stderr
+    assert 'dynamixel_sdk' in result.stderr and 'dry_run:=true' in result.stderr
+    assert 'Traceback' not in result.stderr
+
+
 def _eased_in(r, joint, placed, since):
     """The goals sent to ``joint`` from ``since`` on: start where it was placed, bounded steps."""
     ticks = [t for _, t in r.emulator.goal_history(ID[joint])[since:]]

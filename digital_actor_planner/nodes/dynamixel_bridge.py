@@ -93,7 +93,14 @@ class DynamixelBridge(Node):
         if self.config.dry_run:
             bus, bus_error = None, RuntimeError
         else:
-            from digital_actor_planner.dynamixel.bus import BusError, ServoBus
+            try:
+                from digital_actor_planner.dynamixel.bus import BusError, ServoBus
+            except ImportError as error:
+                raise ConfigError(
+                    'dry_run: false drives a serial bus, which needs the module '
+                    f'{error.name or error}, not installed (dynamixel_sdk: sudo apt install '
+                    'ros-<distro>-dynamixel-sdk, or pip install -r requirements.txt); '
+                    'dry_run:=true needs none') from None
             bus = ServoBus(self.config.port, self.config.baud_rate, self.config.fast_sync_read)
             bus_error = BusError
         self.controller = BridgeController(self.config, bus, log=self._log, bus_error=bus_error)
