@@ -320,3 +320,26 @@ def test_a_scene_that_is_a_directory_is_named_as_one(tmp_path, capsys):
     code, _, err = _simulate_here(capsys, '--scene', str(tmp_path), '--commands', commands,
                                   '--out', str(tmp_path / 't.csv'))
     assert code == 2 and f'{tmp_path}: is a directory' in err, err
+
+
+def test_ctrl_c_while_the_gif_is_written_leaves_the_old_outputs_alone(
+        tmp_path, capsys, monkeypatch):
+    from PIL import Image
+    (tmp_path / 't.csv').write_text('the previous trajectory\n')
+    (tmp_path / 'walk.gif').write_bytes(b'the previous animation')
+    written = []
+
+    def interrupted(image, target, *args, **kwargs):
+        # Ctrl-C with half the animation on disk.
+        with open(target, 'wb') as half:
+            half.write(b'GIF89a')
+        written.append(target)
+        raise KeyboardInterrupt
+    monkeypatch.setattr(Image.Image, 'save', interrupted)
+    code, _, err = _simulate_here(capsys, *_short_run(tmp_path), '--out', str(tmp_path / 't.csv'),
+                                  '--render', str(tmp_path / 'walk.gif'))
+    assert written, 'the GIF was never written'
+    assert code == 130 and 'interrupted' in err, err
+    assert sorted(os.listdir(tmp_path)) == ['c.csv', 't.csv', 'walk.gif']
+    assert (tmp_path / 't.csv').read_text() == 'the previous trajectory\n'
+    assert (tmp_path / 'walk.gif').read_bytes() == b'the previous animation'

@@ -410,6 +410,40 @@ def test_invalid_configuration_exits_naming_the_item(tmp_path, override, named):
     assert named in result.stderr
 
 
+def test_a_bus_without_dynamixel_sdk_exits_naming_it(tmp_path):
+    params = write_params(tmp_path / 'bridge.yaml')
+    # The bridge as started where dynamixel_sdk is not installed.
+    without_sdk = ("import sys; sys.modules['dynamixel_sdk'] = None; "
+                   'from digital_actor_planner.nodes.dynamixel_bridge import main; main()')
+    result = subprocess.run(
+        [sys.executable, '-c', without_sdk, '--ros-args', '--params-file', params,
+         '-p', 'port:=/nonexistent'],
+        env=ros_env(next(_DOMAINS)), capture_output=True, text=True, timeout=STARTUP_S)
+    assert result.returncode == 2, result.stderr
+    assert 'dynamixel_sdk' in result.stderr and 'dry_run:=true' in result.stderr
+    assert 'Traceback' not in result.stderr
+
+
+@pytest.mark.parametrize('delay', [0.3, 0.8])
+def test_ctrl_c_while_starting_exits_cleanly(tmp_path, delay):
+    # Ctrl-C as soon as the bridge is started (while its modules load, on any machine):
+    # nothing is driven yet, so exit 0 without a traceback.
+    params = write_params(tmp_path / 'bridge.yaml', dry_run=True)
+    process = subprocess.Popen(BRIDGE + ['--ros-args', '--params-file', params],
+                               env=ros_env(next(_DOMAINS)), stdout=subprocess.PIPE,
+                               stderr=subprocess.STDOUT, text=True)
+    try:
+        time.sleep(delay)
+        process.send_signal(signal.SIGINT)
+        output, _ = process.communicate(timeout=STARTUP_S)
+    finally:
+        if process.poll() is None:
+            process.kill()
+            process.wait()
+    assert process.returncode == 0, output
+    assert 'Traceback' not in output and 'KeyboardInterrupt' not in output, output
+
+
 def _eased_in(r, joint, placed, since):
     """Check the goals sent to ``joint`` from ``since`` on: start where placed, bounded steps."""
     ticks = [t for _, t in r.emulator.goal_history(ID[joint])[since:]]

@@ -108,3 +108,81 @@ def test_nothing_to_switch_off_is_not_an_error():
     controller = BridgeController(config, bus, bus_error=PortGone)
     controller.start(0.0)
     assert controller.shutdown() is True and bus.torque[1] == 1
+
+
+class UnreadBus(ScriptedBus):
+    """Servos left away from the centre; a sync read of both fails ``failed_group_reads``
+    times, and servo 2's own reads fail ``unread_2`` times. Every goal is kept, with what
+    torque was then."""
+
+    PLACED = {1: 2048 + 600, 2: 2048 - 500}  # a knee bent, the mirrored knee bent
+
+    def __init__(self, failed_group_reads=0, unread_2=0):
+        super().__init__()
+        self.failed_group_reads = failed_group_reads
+        self.unread_2 = unread_2
+        self.goals = []  # (id, goal ticks, torque before the write)
+        self._requested = ()
+
+    def read_positions(self, ids):
+        ids = tuple(ids)
+        if len(ids) > 1 and self.failed_group_reads > 0:
+            self.failed_group_reads -= 1
+            return {}
+        if 2 in ids and self.unread_2 > 0:
+            self.unread_2 -= 1
+            return {}
+        return {i: self.PLACED[i] for i in ids}
+
+    def request_positions(self, ids):
+        self._requested = tuple(ids)
+        return bool(self._requested)
+
+    def collect_positions(self):
+        return self.read_positions(self._requested)
+
+    def write_goals(self, goals):
+        super().write_goals(goals)
+        self.goals.extend((i, g, self.torque[i]) for i, g in goals.items())
+
+    def first_goals(self):
+        """Each servo's goal written just before its torque came on."""
+        first = {}
+        for servo_id, goal, torque in self.goals:
+            if torque:
+                continue
+            first[servo_id] = goal
+        return first
+
+
+def _started(bus):
+    config = config_from_parameters({'servo_joints': ['left_knee', 'right_knee'],
+                                     'reconnect_backoff_max': 0.2}, Skeleton())
+    log = []
+    controller = BridgeController(config, bus, log=lambda level, text: log.append((level, text)),
+                                  bus_error=PortGone)
+    controller.start(0.0)
+    return controller, log
+
+
+def test_a_failed_first_read_does_not_switch_torque_on_toward_the_old_goal():
+    # One lost reply fails the whole sync read at start-up; the servos are away from the
+    # goal the bridge starts with, so a goal not read from them would be a jump.
+    bus = UnreadBus(failed_group_reads=1)
+    _started(bus)
+    assert bus.torque == {1: 1, 2: 1}
+    assert bus.first_goals() == bus.PLACED  # torque on moves nothing
+
+
+def test_a_servo_whose_position_cannot_be_read_stays_off_until_it_is():
+    bus = UnreadBus(failed_group_reads=10, unread_2=3)
+    controller, log = _started(bus)
+    assert bus.torque == {1: 1, 2: 0}
+    assert all(servo_id == 1 for servo_id, _, _ in bus.goals)  # no goal for servo 2 yet
+    assert any('right_knee (ID 2)' in text for level, text in log if level == 'warn')
+    now = 0.0
+    while bus.torque[2] == 0 and now < 5.0:
+        now += 0.01
+        controller.cycle(now)
+    assert bus.torque[2] == 1
+    assert bus.first_goals() == bus.PLACED  # it too came on where it was

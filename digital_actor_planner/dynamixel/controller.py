@@ -146,7 +146,7 @@ class BridgeController:
             for servo_id, bits in errors.items():
                 if bits:
                     self._fault(servo_id, bits)
-            ticks = self.bus.read_positions(self.present)
+            ticks = self._present_positions()
             positions = self.envelope.commanded.copy()
             for i, servo in enumerate(self.servos):
                 if servo.id in ticks:
@@ -166,6 +166,28 @@ class BridgeController:
         self.backoff = self.config.reconnect_backoff_min
         self.read_failures = 0
         return True
+
+    def _present_positions(self) -> Dict[int, int]:
+        """Present positions (ticks) of the present servos; one not read counts as missing.
+
+        Torque must not come on before a servo's position is known: its first goal would be
+        the last commanded position, a jump to wherever that is. One lost reply fails a whole
+        sync read, so after a failed one each servo is read alone, and a servo that still does
+        not answer is left off (switched on later, once it is read, as a returning servo).
+        """
+        ticks = self.bus.read_positions(self.present)
+        if len(ticks) == len(self.present):
+            return ticks
+        ticks = {}
+        for servo_id in self.present:
+            ticks.update(self.bus.read_positions((servo_id,)))
+        unread = [i for i in self.present if i not in ticks]
+        if unread:
+            self.log('warn', f'present position not read: {self._names(unread)}; '
+                     'torque stays off until it is')
+            self.present = tuple(i for i in self.present if i in ticks)
+            self.missing = tuple(s.id for s in self.servos if s.id not in self.present)
+        return ticks
 
     def _lost(self, now: float, message: str) -> None:
         if self.connected or not self.port_error:

@@ -27,21 +27,26 @@ import sys
 import time
 from typing import Dict, List, Optional
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from digital_actor_planner.core.skeleton import Skeleton
-from digital_actor_planner.dynamixel.config import (BridgeConfig, config_from_parameters,
-                                                    ConfigError, servo_joint_names,
-                                                    SUPPORTED_BAUD_RATES)
-from digital_actor_planner.dynamixel.controller import BridgeController, StartupError
-from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
-import rclpy
-from rclpy.exceptions import (InvalidParameterTypeException, InvalidParameterValueException,
-                              ParameterException)
-from rclpy.executors import SingleThreadedExecutor
-from rclpy.node import Node
-from rclpy.parameter import Parameter
-from rclpy.signals import SignalHandlerOptions
-from sensor_msgs.msg import JointState
+# Ctrl-C while the modules load (seconds on a busy machine): nothing is driven yet, so the
+# bridge leaves quietly instead of with a traceback.
+try:
+    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+    from digital_actor_planner.core.skeleton import Skeleton
+    from digital_actor_planner.dynamixel.config import (BridgeConfig, config_from_parameters,
+                                                        ConfigError, servo_joint_names,
+                                                        SUPPORTED_BAUD_RATES)
+    from digital_actor_planner.dynamixel.controller import BridgeController, StartupError
+    from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+    import rclpy
+    from rclpy.exceptions import (InvalidParameterTypeException, InvalidParameterValueException,
+                                  ParameterException)
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.node import Node
+    from rclpy.parameter import Parameter
+    from rclpy.signals import SignalHandlerOptions
+    from sensor_msgs.msg import JointState
+except KeyboardInterrupt:  # pragma: no cover - depends on when the signal lands
+    sys.exit(0)
 
 EXIT_BAD_CONFIG = 2
 EXIT_MISSING_SERVOS = 3
@@ -107,7 +112,14 @@ class DynamixelBridge(Node):
         if self.config.dry_run:
             bus, bus_error = None, RuntimeError
         else:
-            from digital_actor_planner.dynamixel.bus import BusError, ServoBus
+            try:
+                from digital_actor_planner.dynamixel.bus import BusError, ServoBus
+            except ImportError as error:
+                raise ConfigError(
+                    'dry_run: false drives a serial bus, which needs the module '
+                    f'{error.name or error}, not installed (dynamixel_sdk: sudo apt install '
+                    'ros-<distro>-dynamixel-sdk, or pip install -r requirements.txt); '
+                    'dry_run:=true needs none') from None
             bus = ServoBus(self.config.port, self.config.baud_rate, self.config.fast_sync_read)
             bus_error = BusError
         self.controller = BridgeController(self.config, bus, log=self._log, bus_error=bus_error)
@@ -196,15 +208,17 @@ def main(args=None) -> int:
     # Own signal handling: the context must stay valid while torque is switched off, and a
     # signal must not tear it down in the middle of a control cycle.
     stop = []
-    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    # Taken over before rclpy starts, so that no moment of the start-up ends in a traceback.
     previous = {sig: signal.signal(sig, lambda number, frame: stop.append(number))
                 for sig in (signal.SIGINT, signal.SIGTERM)}
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
     node = None
     code = 0
     try:
-        node = DynamixelBridge()
-        executor = SingleThreadedExecutor()
-        executor.add_node(node)
+        if not stop:  # else asked to stop while rclpy started: nothing is driven yet
+            node = DynamixelBridge()
+            executor = SingleThreadedExecutor()
+            executor.add_node(node)
         while not stop and rclpy.ok():
             executor.spin_once(timeout_sec=0.05)
     except ConfigError as error:
