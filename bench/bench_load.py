@@ -1,4 +1,5 @@
-"""The obstacle courses walked on an idle machine and with a CPU hog on every core: same outcome.
+"""
+The obstacle courses walked on an idle machine and with a CPU hog on every core: same outcome.
 
 Run: .venv/bin/python bench/bench_load.py [--courses low_beam beam_too_low ...] [--hogs N]
 
@@ -15,14 +16,13 @@ import os
 import sys
 import time
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
 from bench_common import print_command  # noqa: E402
-from course_runs import SCENES, scene, skeleton  # noqa: E402
+from course_runs import scene, SCENES, skeleton  # noqa: E402
 from digital_actor_planner.cli import read_commands  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
+import numpy as np  # noqa: E402
 
 COURSES = ('low_beam', 'beam_too_low', 'table', 'pillars', 'uneven_beam', 'wall', 'blocks',
            'stairs_up')
@@ -56,7 +56,7 @@ def planning(blocks) -> str:
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--courses', nargs='+', default=list(COURSES))
     parser.add_argument('--hogs', type=int, default=os.cpu_count() or 2)
     args = parser.parse_args(argv)

@@ -1,5 +1,8 @@
-"""Benchmark the planner node's start: time to the first joint_states frame and to a ready
-planner, with the kernel cache as it is and (``--cold``) with an empty one.
+"""
+Benchmark the planner node's start: time to the first frame and to a ready planner.
+
+Benchmark the planner node's start: time to the first joint_states frame and to a ready planner,
+with the kernel cache as it is and (``--cold``) with an empty one.
 
     .venv/bin/python bench/bench_start.py [--runs 3] [--cold] [--scene flat]
 
@@ -42,7 +45,7 @@ def one_start(scene_path: str, cache: str = None) -> tuple:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--runs', type=int, default=3)
     parser.add_argument('--cold', action='store_true', help='also one start from an empty cache')
     parser.add_argument('--scene', default='flat')

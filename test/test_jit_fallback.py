@@ -1,4 +1,5 @@
-"""The kernels' fallback (core/jit.py): numba absent, present, or failing to compile.
+"""
+The kernels' fallback (core/jit.py): numba absent, present, or failing to compile.
 
 A numba that is installed but cannot compile a kernel (a distribution's older release) must
 not stop the planner: that kernel and those that call it run as Python, with one warning, and
@@ -19,7 +20,7 @@ COURSE = 'table'  # walks past the table flexing an arm: the CT-roadmap's kernel
 # Run in a child process: ``numba`` is ``absent`` (cannot be imported), ``failing`` (every
 # kernel of core/ct_roadmap.py refused, as numba before 0.57 refused np.round on an array
 # without ``out``) or ``present``; writes the frames and what the fallback reported.
-CHILD = '''
+CHILD = """
 import json, sys, warnings
 mode, out = sys.argv[1], sys.argv[2]
 sys.path.insert(0, {here!r})
@@ -52,7 +53,7 @@ messages = [str(w.message) for w in caught if w.category is getattr(jit, 'Kernel
 with open(out + '.json', 'w') as report:
     json.dump(dict(compiled=jit.COMPILED, failures=list(jit.compile_failures()),
                    kinds=kinds, messages=messages), report)
-'''
+"""
 
 
 def _plan(mode, tmp_path):

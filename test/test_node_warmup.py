@@ -1,4 +1,5 @@
-"""actor_planner started with an empty kernel cache streams at once and walks once ready.
+"""
+actor_planner started with an empty kernel cache streams at once and walks once ready.
 
 The planning process compiles the core's kernels first (minutes on a loaded machine); the node
 publishes the standing pose meanwhile and says "warming up" on /diagnostics.

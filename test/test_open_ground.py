@@ -2,20 +2,22 @@
 import os
 import sys
 
-import numpy as np
-import pytest
-
-from course_runs import scene, skeleton
-from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'bench'))
 
 from bench_open_ground import open_floor, walk_with_change  # noqa: E402
+from course_runs import scene, skeleton  # noqa: E402
+from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
 
 
 def walked_speed(speed: float, duration: float = 7.0) -> float:
-    """Metres per second along the flat course at command ``speed`` over ``duration`` s, from
-    the start (the first step's easing in included)."""
+    """
+    Return the speed walked along the flat course at command ``speed``, m/s.
+
+    Metres per second along the flat course at command ``speed`` over ``duration`` s, from the
+    start (the first step's easing in included).
+    """
     sc = scene('flat')
     actor = Actor(skeleton(), sc.environment, ActorConfig(), start=sc.start)
     blocks = run_commands(actor, [0.0, duration], [speed, 0.0], [0.0, 0.0])

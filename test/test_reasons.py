@@ -1,11 +1,10 @@
 """Stuck reasons a user understands: what stops the actor, with the number, in plain words."""
 import re
 
-import pytest
-
 from course_runs import simulate, skeleton
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
 from digital_actor_planner.core.environment import Environment
+import pytest
 from scene_helpers import box
 
 

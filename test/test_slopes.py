@@ -3,15 +3,13 @@ import functools
 import os
 import sys
 
-import numpy as np
-import pytest
-
-from course_runs import judged
-from digital_actor_planner.core.environment import Environment
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'bench'))
 
 from bench_slopes import heightmap_hill, hill_starts, slopes, weave  # noqa: E402
+from course_runs import judged  # noqa: E402
+from digital_actor_planner.core.environment import Environment  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
 
 
 @functools.lru_cache(maxsize=None)

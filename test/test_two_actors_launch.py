@@ -1,4 +1,5 @@
-"""launch_testing for a ROS 2 install: two actors launched side by side in two namespaces.
+"""
+launch_testing for a ROS 2 install: two actors launched side by side in two namespaces.
 
 Run with ``launch_test test/test_two_actors_launch.py`` or ``colcon test`` (needs
 robot_state_publisher; skipped where launch_testing is not installed: test_launch_files.py reads
@@ -13,7 +14,8 @@ import pytest
 
 launch_testing = pytest.importorskip('launch_testing')
 
-from launch import LaunchDescription  # noqa: E402
+# Imported once the skip above has run (pytest first, out of name order: I100).
+from launch import LaunchDescription  # noqa: E402, I100
 from launch.actions import GroupAction, IncludeLaunchDescription  # noqa: E402
 from launch.launch_description_sources import PythonLaunchDescriptionSource  # noqa: E402
 import launch_testing.actions  # noqa: E402
