@@ -1,4 +1,5 @@
-"""Launch the Dynamixel bridge with the package's servo table (config/dynamixel.yaml).
+"""
+Launch the Dynamixel bridge with the package's servo table (config/dynamixel.yaml).
 
     ros2 launch digital_actor_planner bridge.launch.py port:=/dev/ttyUSB0
     ros2 launch digital_actor_planner bridge.launch.py dry_run:=true

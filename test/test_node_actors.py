@@ -1,4 +1,5 @@
-"""Several actors hosted by one actor_planner process (``--actors NS ...``).
+"""
+Several actors hosted by one actor_planner process (``--actors NS ...``).
 
 One process, one DDS participant and one stream thread for all of them: each actor still has
 its own namespace, its own cmd_vel and its own 100 Hz joint_states; they share the planning

@@ -1,19 +1,24 @@
-"""Unit tests of the viewer helpers: drag mapping, status line, diagnostics, courses, follow
-camera, port."""
+"""
+Unit tests of the viewer helpers.
+
+Unit tests of the viewer helpers: drag mapping, status line, diagnostics, courses, follow camera,
+port.
+"""
 import glob
 import math
 import os
 import socket
 
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+from digital_actor_planner.nodes.viewer import (along_view_plane, build_parser, config_from_args,
+                                                course_catalog, drag_to_command, follow_target,
+                                                normalize_namespace, pad_pose,
+                                                parse_planner_diagnostics, pick_port,
+                                                shipped_scenes, smooth_step, status_text,
+                                                StreamMonitor, triangle_list_mesh, validate,
+                                                ViewerConfig)
 import numpy as np
 import pytest
-
-from digital_actor_planner.nodes.viewer import (
-    along_view_plane, config_from_args, build_parser, course_catalog, drag_to_command,
-    follow_target,
-    normalize_namespace, pad_pose, parse_planner_diagnostics, pick_port, shipped_scenes,
-    smooth_step, status_text, StreamMonitor, triangle_list_mesh, ViewerConfig, validate)
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 

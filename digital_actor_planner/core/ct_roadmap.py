@@ -1,4 +1,5 @@
-"""The CT-roadmap: best-first planning forward in configuration-time space (paper §5.2).
+"""
+The CT-roadmap: best-first planning forward in configuration-time space (paper §5.2).
 
 The roadmap's nodes are branch configurations stored as deviations from the objective O(t)
 (§5.1), so a node means the same posture relative to the motion pattern at any time and the
@@ -45,7 +46,8 @@ from .jit import kernel
 
 @dataclass(frozen=True)
 class SearchResult:
-    """Outcome of one CT-roadmap search.
+    """
+    Outcome of one CT-roadmap search.
 
     Attributes
     ----------
@@ -845,7 +847,8 @@ ROADMAP_SEARCHES = ('compiled', 'readable')
 
 @dataclass(frozen=True)
 class Expansion:
-    """What one expansion of a search state found (:func:`best_first_expansion`).
+    """
+    What one expansion of a search state found (:func:`best_first_expansion`).
 
     Attributes
     ----------
@@ -870,7 +873,8 @@ class Expansion:
 
 def best_first_expansion(roadmap: 'CTRoadmap', space: CTSpace, state: _State,
                          horizon: _Horizon, speed_fraction: float, visited) -> Expansion:
-    """Expand one state of §5.2's best-first search: the first legal advance to a neighbour.
+    """
+    Expand one state of §5.2's best-first search: the first legal advance to a neighbour.
 
     The neighbours are ranked once per state (the roadmap's nodes reached at joint speeds,
     the objective followed, the posture held; closest to the objective first, lasting
@@ -1116,7 +1120,8 @@ def _lasting_neighbours(space: CTSpace, horizon: _Horizon, here: int, targets: n
 def _neighbours(nodes: np.ndarray, space: CTSpace, state: _State, horizon: _Horizon,
                 rate: np.ndarray, weights: np.ndarray, approach_first: bool,
                 with_objective: bool) -> tuple:
-    """The neighbours of a state before they are ranked: the readable ``_neighbour_table``.
+    """
+    The neighbours of a state before they are ranked: the readable ``_neighbour_table``.
 
     In order: the objective followed to the final frame (``with_objective``); each of
     ``nodes`` (n, d) at its arrival at joint speeds ``rate`` (d,) rad/s (one the remaining
@@ -1189,9 +1194,12 @@ def _neighbours(nodes: np.ndarray, space: CTSpace, state: _State, horizon: _Hori
 
 
 def objective_grid(last: int, spacing: int) -> np.ndarray:
-    """Frames 0, ``spacing``, 2 ``spacing``, ... and ``last``: where a search first checks the
-    objective (:meth:`CTRoadmap._objective_free`); made once per (last, spacing) and shared,
-    never changed by a caller."""
+    """
+    Frames 0, ``spacing``, 2 ``spacing``, ...
+
+    and ``last``: where a search first checks the objective (:meth:`CTRoadmap._objective_free`);
+    made once per (last, spacing) and shared, never changed by a caller.
+    """
     grid = _GRIDS.get((last, spacing))
     if grid is None:
         grid = _GRIDS[last, spacing] = np.unique(np.append(np.arange(0, last + 1, spacing),
@@ -1239,7 +1247,8 @@ def direct_return(objective: np.ndarray, times: np.ndarray, start: np.ndarray,
 
 
 def warm_up(space: CTSpace, patterns: np.ndarray, weights: np.ndarray) -> None:
-    """Call the kernels a search calls from Python once, on ``space``, answers thrown away.
+    """
+    Call the kernels a search calls from Python once, on ``space``, answers thrown away.
 
     numba works out the types of a kernel's arguments the first time it meets them in a
     process (the check tables hold 45 arrays: about 2.5 ms for a search's kernels), a cost
@@ -1258,7 +1267,8 @@ def warm_up(space: CTSpace, patterns: np.ndarray, weights: np.ndarray) -> None:
 
 
 class _Horizon:
-    """Per search: where the objective is legal, and how far a posture is held from a frame.
+    """
+    Per search: where the objective is legal, and how far a posture is held from a frame.
 
     Parameters
     ----------
@@ -1290,7 +1300,8 @@ class _Horizon:
 
 
 class CTRoadmap:
-    """A CT-roadmap for one branch, kept between successive plans.
+    """
+    A CT-roadmap for one branch, kept between successive plans.
 
     Parameters
     ----------
@@ -1381,7 +1392,8 @@ class CTRoadmap:
     @staticmethod
     def _travel_frames(space: CTSpace, frame: int, change: np.ndarray,
                        speed_fraction: float) -> np.ndarray:
-        """Frames needed to change the deviation by ``change`` (..., d) at a fraction of the limit.
+        """
+        Frames needed to change the deviation by ``change`` (..., d) at a fraction of the limit.
 
         Returns an int (or an int array for a batch of changes), at least 1.
         """
@@ -1397,7 +1409,8 @@ class CTRoadmap:
               preview_backtracks: int = 2,
               seed: Optional[np.ndarray] = None,
               growth_lower: Optional[np.ndarray] = None) -> SearchResult:
-        """Search forward in time from ``start`` at frame 0 to any legal state at frame k-1.
+        """
+        Search forward in time from ``start`` at frame 0 to any legal state at frame k-1.
 
         Parameters
         ----------
@@ -1588,7 +1601,8 @@ class CTRoadmap:
 
     def _follow_seed(self, space: CTSpace, stack: List[_State], seed: np.ndarray,
                      spacing: int, horizon: _Horizon) -> int:
-        """Push states every ``spacing`` frames along a seed motion, as far as it is legal.
+        """
+        Push states every ``spacing`` frames along a seed motion, as far as it is legal.
 
         The seed is followed only to the end of the last stretch within it where the objective
         is blocked (not at all if there is none): past it the search itself returns to the
@@ -1622,7 +1636,8 @@ class CTRoadmap:
 
     @staticmethod
     def _objective_free(space: CTSpace, spacing: int) -> np.ndarray:
-        """Whether the objective is legal at each frame, checked every ``spacing`` frames: (k,).
+        """
+        Whether the objective is legal at each frame, checked every ``spacing`` frames: (k,).
 
         A frame between two checked frames counts as blocked when either of them is, so the
         blocked stretches found cover the real ones up to ``spacing - 1`` frames either side.
@@ -1648,7 +1663,8 @@ class CTRoadmap:
     @staticmethod
     def _lasting(space: CTSpace, horizon: _Horizon, here: int, targets: np.ndarray,
                  arrivals: np.ndarray) -> np.ndarray:
-        """Whether each neighbour, held from its arrival, lasts through the blocked stretch ahead.
+        """
+        Whether each neighbour, held from its arrival, lasts through the blocked stretch ahead.
 
         The stretch is the first one from ``here`` on where the objective is blocked, to the
         frame it is legal again (or the last frame). A deviation held from its arrival (from
@@ -1744,7 +1760,8 @@ class CTRoadmap:
         return child
 
     def _follow(self, space: CTSpace, state: _State, horizon: _Horizon) -> Optional[_State]:
-        """Follow the objective from a state on it, hold_frames at a time, in one motion check.
+        """
+        Follow the objective from a state on it, hold_frames at a time, in one motion check.
 
         The states every hold_frames frames up to the last one before the objective is blocked
         are the ones keeping the objective one hold at a time would reach, but only one motion
@@ -1809,7 +1826,8 @@ class CTRoadmap:
     def _jump_back(self, space: CTSpace, stack: List[_State], blocked: int,
                    speed_fraction: float, jumps: set, horizon: _Horizon, known: dict,
                    targets: int = 4) -> Optional[Tuple[int, _State]]:
-        """Backtrack to the latest earlier state that can reach a node legal at ``blocked``.
+        """
+        Backtrack to the latest earlier state that can reach a node legal at ``blocked``.
 
         For the few nodes closest to the objective that are legal at the blocking frame (those
         that can be held through the whole blocked stretch first), the latest departure that
@@ -1883,7 +1901,8 @@ class CTRoadmap:
 
     @staticmethod
     def _push(space: CTSpace, stack: List[_State], child: _State, spacing: int) -> None:
-        """Push a state, with relay states every ``spacing`` frames along the motion to it.
+        """
+        Push a state, with relay states every ``spacing`` frames along the motion to it.
 
         Deviations are interpolated linearly in time, so every piece of a checked motion is
         itself a legal motion: the relays are legal departure points for later backtracking.
@@ -1911,7 +1930,8 @@ class CTRoadmap:
 
     @staticmethod
     def _path(space: CTSpace, stack: List[_State]) -> np.ndarray:
-        """Configurations at every frame along the states of the stack: (k, d), rad.
+        """
+        Configurations at every frame along the states of the stack: (k, d), rad.
 
         The motions between the states as :meth:`CTSpace.motion_frames` gives them (one
         kernel, the same arithmetic), then the last state held to the final frame, within the

@@ -1,4 +1,5 @@
-"""Configuration-time space of one upper-body branch (paper §5.2).
+"""
+Configuration-time space of one upper-body branch (paper §5.2).
 
 The pelvis trajectory q_R(t) and the legs are fixed by the locomotion planner (§4), and the
 branches planned before this one are fixed by the priority order of §5 (waist, then left arm,
@@ -68,7 +69,8 @@ def _axis_code(axis: np.ndarray) -> Tuple[int, float]:
 def _link_poses(q, rotations, positions, parent, child, origin_rotation, turned,
                 origin_translation, offset_axis, offset_length, has_offset, joint, kind,
                 axis_coordinate, axis_sign, axis):
-    """:meth:`BodyKinematics.poses` of a sequence of joint steps for every frame, in place.
+    """
+    :meth:`BodyKinematics.poses` of a sequence of joint steps for every frame, in place.
 
     Per step (arrays over the steps): its ``parent`` and ``child`` link rows; its origin's
     rotation (where ``turned``) and translation (where ``has_offset``; along one coordinate
@@ -471,7 +473,8 @@ def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pa
                     pair_lower, pair_upper, rotation, centre, half, corners, pair_rotation,
                     pair_centre, pair_half, margin, kinds, shape_half, pair_kinds,
                     pair_shape_half, pair_other, skip):
-    """Whether each row of a branch's batch touches the environment or the body: (m,) bool.
+    """
+    Whether each row of a branch's batch touches the environment or the body: (m,) bool.
 
     The broad phase (the boxes along the world axes, cut by each shape's box swept over the
     rows when ``swept``, then the separating axis test of the oriented boxes holding the
@@ -628,7 +631,8 @@ def _row_key(bits, frames, r):
 
 @kernel('b1[::1](f8[:, :], i8[::1], ' + CHECK_TABLES_TYPE + ')')
 def _check_rows(q, frames, tables):
-    """:func:`_illegal_rows` of every row, none of them remembered: (m,) bool.
+    """
+    :func:`_illegal_rows` of every row, none of them remembered: (m,) bool.
 
     :func:`_branch_boxes` poses the branch's shapes, :func:`_row_collisions` tests them (rows
     where the body holds the branch at frames before ``clear_until`` skipped: the body's own
@@ -806,7 +810,8 @@ def _first_contacts(frames, checked, group, count, shape_lower, shape_upper, sha
 
 @kernel('i8[::1](f8[:, :], f8, f8[:, :, ::1], f8[:, :, ::1], i8[:], i8[:])')
 def _reachable_pairs(centre, reach2, shape_lower, shape_upper, obstacle, pair_obstacle):
-    """Indices of the pairs of a branch whose other shape it can reach during the step.
+    """
+    Indices of the pairs of a branch whose other shape it can reach during the step.
 
     An ``obstacle`` shape (O,) is within reach when its box comes within ``sqrt(reach2)`` of
     ``centre`` (k, 3) at some frame; pair p's obstacle is ``pair_obstacle[p]``.
@@ -835,11 +840,14 @@ def _reachable_pairs(centre, reach2, shape_lower, shape_upper, obstacle, pair_ob
 
 @kernel('Tuple((f8[:, ::1], i8))(f8[:, :], f8[:], f8[:, :], f8[:], f8[:], i8, f8[:], i8)')
 def _motion_path(objective, times, frame_step, speed_cap, qa, ia, qb, ib):
-    """:meth:`CTSpace._motion_rows`: the configurations at frames ia+1.. of the motion
-    (qa, ia) -> (qb, ib), its deviation from the ``objective`` (k, d) interpolated linearly in
-    ``times`` (:meth:`CTSpace.motion_frames`, the same arithmetic), up to the frame before the
-    first whose change from the frame before exceeds ``speed_cap`` (d,) over ``frame_step``
-    (k - 1, 1); and that frame, or -1 when there is none."""
+    """
+    :meth:`CTSpace._motion_rows`: the configurations at frames ia+1..
+
+    of the motion (qa, ia) -> (qb, ib), its deviation from the ``objective`` (k, d) interpolated
+    linearly in ``times`` (:meth:`CTSpace.motion_frames`, the same arithmetic), up to the frame
+    before the first whose change from the frame before exceeds ``speed_cap`` (d,) over
+    ``frame_step`` (k - 1, 1); and that frame, or -1 when there is none.
+    """
     d = objective.shape[1]
     count = ib - ia
     rows = np.empty((count, d))
@@ -1048,7 +1056,8 @@ class _Step:
 
 @dataclass(frozen=True)
 class _Chain:
-    """A set of joint steps laid out over a compact array of only the links they touch.
+    """
+    A set of joint steps laid out over a compact array of only the links they touch.
 
     ``links`` lists the links the steps start from, then each step's child; ``step_table``
     holds the steps as :func:`_link_poses` reads them, over those links' rows.
@@ -1079,7 +1088,8 @@ def _step_table(steps: Sequence[_Step], parents: Sequence[int], children: Sequen
 
 
 class BodyKinematics:
-    """Batched forward kinematics as link rotations and positions, fast for small batches.
+    """
+    Batched forward kinematics as link rotations and positions, fast for small batches.
 
     Equivalent to :meth:`Skeleton.forward_kinematics`, but it keeps rotations (3, 3) and
     positions (3,) apart, rotates about coordinate axes by mixing two columns, and can re-evaluate
@@ -1139,7 +1149,8 @@ class BodyKinematics:
 
     def chain_poses(self, q: np.ndarray, rotations: np.ndarray, positions: np.ndarray,
                     chain: _Chain) -> None:
-        """Evaluate a chain's steps in place over compact poses of its links.
+        """
+        Evaluate a chain's steps in place over compact poses of its links.
 
         The same numbers as :meth:`poses` with the chain's steps (the same kernel, the same
         arithmetic), but over (k, C) arrays of the C links of ``chain.links`` instead of every
@@ -1183,7 +1194,8 @@ class BodyKinematics:
     def poses(self, q: np.ndarray, rotations: Optional[np.ndarray] = None,
               positions: Optional[np.ndarray] = None,
               steps: Optional[Sequence[_Step]] = None) -> Tuple[np.ndarray, np.ndarray]:
-        """Link poses for a batch of configurations.
+        """
+        Link poses for a batch of configurations.
 
         Parameters
         ----------
@@ -1214,7 +1226,8 @@ class BodyKinematics:
 
 
 class BodyShapes:
-    """The actor's collision shapes: FCL objects, box bounds and the pairs worth checking.
+    """
+    The actor's collision shapes: FCL objects, box bounds and the pairs worth checking.
 
     Parameters
     ----------
@@ -1348,7 +1361,8 @@ class BodyShapes:
 
 
 class EnvironmentIndex:
-    """The environment's triangles as boxes for the broad phase, and FCL models per mesh.
+    """
+    The environment's triangles as boxes for the broad phase, and FCL models per mesh.
 
     Parameters
     ----------
@@ -1409,14 +1423,16 @@ class EnvironmentIndex:
         return self.objects[self._object_of[mesh]]
 
     def triangles_near(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
-        """Indices (int64, in order) of triangles whose boxes overlap the box [lower, upper]
-        (3,) m."""
+        """
+        Indices (int64, in order) of triangles whose boxes overlap the box [lower, upper] (3,) m.
+        """
         return _candidates_meeting(float_array(lower).reshape(3), float_array(upper).reshape(3),
                                    self.lower, self.upper, self._every)
 
 
 class TimedBody:
-    """The actor over the frames of one step, as far as it is fixed, with fast branch checks.
+    """
+    The actor over the frames of one step, as far as it is fixed, with fast branch checks.
 
     Holds the link poses at every frame for the current frames (lower body, root and the
     branches planned so far) and answers, for one branch, which frames of a candidate motion are
@@ -1453,7 +1469,8 @@ class TimedBody:
         self._near_lower = self._near_upper = None
 
     def triangles_near(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
-        """Indices of the environment's triangles whose boxes meet the box [lower, upper] (3,) m.
+        """
+        Indices of the environment's triangles whose boxes meet the box [lower, upper] (3,) m.
 
         The same indices, in the same order, as ``environment.triangles_near``, but searched
         among the triangles near the actor during the step (found once per step, with room for
@@ -1505,7 +1522,8 @@ class TimedBody:
     def first_collisions(self, checked: np.ndarray, pairs: np.ndarray,
                          group: Optional[np.ndarray], count: int,
                          frames: Optional[np.ndarray] = None) -> List[int]:
-        """Per group of checked shapes, the first frame at which one of them touches something.
+        """
+        Per group of checked shapes, the first frame at which one of them touches something.
 
         Uses the poses the body already holds (no kinematics), in one compiled pass
         (:func:`_first_contacts`): the broad phase, then the exact test of the shapes, frame by
@@ -1606,7 +1624,8 @@ class TimedBody:
 
 def branch_layout(kinematics: BodyKinematics, shapes: BodyShapes, branch: str,
                   checked_links: Sequence[str], obstacle_links: Sequence[str]) -> tuple:
-    """The model-only data of a branch, built once and kept in ``shapes.branch_layouts``.
+    """
+    The model-only data of a branch, built once and kept in ``shapes.branch_layouts``.
 
     Returns
     -------
@@ -1646,8 +1665,7 @@ def branch_layout(kinematics: BodyKinematics, shapes: BodyShapes, branch: str,
 
 @dataclass(frozen=True)
 class _BranchModel:
-    """What a branch's CT-space needs that depends on the model only (see
-    :func:`branch_model`)."""
+    """What a branch's CT-space needs that depends on the model only (see :func:`branch_model`)."""
 
     layout: tuple
     indices: np.ndarray
@@ -1707,7 +1725,8 @@ def branch_model(kinematics: BodyKinematics, shapes: BodyShapes, branch: str,
 
 def _reach_bound(shapes: BodyShapes, steps: Sequence[_Step],
                  checked: np.ndarray) -> Tuple[int, float]:
-    """Link at the centre and radius (m) of a ball holding the checked shapes at any pose.
+    """
+    Link at the centre and radius (m) of a ball holding the checked shapes at any pose.
 
     The centre is the branch's first joint, which the branch itself cannot move; the radius
     is the longest chain of joint offsets from it plus the shape's own extent.
@@ -1728,7 +1747,8 @@ def _reach_bound(shapes: BodyShapes, steps: Sequence[_Step],
 
 
 class CTSpace:
-    """Configuration-time space of one branch, with OMPL-shaped queries (paper §5.2).
+    """
+    Configuration-time space of one branch, with OMPL-shaped queries (paper §5.2).
 
     Parameters
     ----------
@@ -1853,7 +1873,8 @@ class CTSpace:
         return np.asarray(q) - self.objective[i]
 
     def motion_frames(self, a: Tuple[np.ndarray, int], b: Tuple[np.ndarray, int]) -> np.ndarray:
-        """Configurations at frames ia..ib of the motion a -> b: (ib - ia + 1, d), rad.
+        """
+        Configurations at frames ia..ib of the motion a -> b: (ib - ia + 1, d), rad.
 
         Interpolates the deviation from the objective linearly in time, so a motion between
         states on the objective follows it exactly.
@@ -1893,7 +1914,8 @@ class CTSpace:
 
     def first_invalid_motion(self, a: Tuple[np.ndarray, int],
                              b: Tuple[np.ndarray, int]) -> int:
-        """First illegal frame of the motion a -> b, or -1 when it is legal.
+        """
+        First illegal frame of the motion a -> b, or -1 when it is legal.
 
         A motion backwards or standing still in time is illegal at ``a``'s frame; a speed
         violation is reported at the frame it ends on.
@@ -1904,7 +1926,8 @@ class CTSpace:
     def first_legal_motion(self, a: Tuple[np.ndarray, int],
                            goals: Sequence[Tuple[np.ndarray, int]],
                            first_failure: Optional[int] = None) -> Tuple[int, List[int]]:
-        """Check motions from ``a`` to each goal in order; stop at the first legal one.
+        """
+        Check motions from ``a`` to each goal in order; stop at the first legal one.
 
         One kernel (:func:`first_legal_goal`): the first goal (the best one, usually legal)
         checked alone; all the others then in one batch, its answers read goal by goal.
@@ -1932,7 +1955,8 @@ class CTSpace:
         return int(chosen), failures.tolist()
 
     def first_invalid_path(self, waypoints: Sequence[Tuple[np.ndarray, int]]) -> int:
-        """First illegal frame along a chain of motions through ``waypoints``, or -1.
+        """
+        First illegal frame along a chain of motions through ``waypoints``, or -1.
 
         Each motion is checked as :meth:`first_invalid_motion` checks it (forward in time,
         speeds, collisions at every frame after its start), all of them in one batch, read
@@ -1954,7 +1978,8 @@ class CTSpace:
 
     def rows_and_path(self, q: np.ndarray, frames: np.ndarray,
                       waypoints: Sequence[Tuple[np.ndarray, int]]) -> Tuple[np.ndarray, int]:
-        """:meth:`valid_rows` of a batch and :meth:`first_invalid_path`, in one batch.
+        """
+        :meth:`valid_rows` of a batch and :meth:`first_invalid_path`, in one batch.
 
         Returns
         -------
@@ -2021,8 +2046,12 @@ class CTSpace:
 
     def _motion_rows(self, qa: np.ndarray, ia: int, qb: np.ndarray,
                      ib: int) -> Tuple[np.ndarray, int]:
-        """Configurations at frames ia+1.. of the motion to (qb, ib) that keep to the speed
-        limits, and the frame of the first speed violation (-1 when none)."""
+        """
+        Configurations at frames ia+1..
+
+        of the motion to (qb, ib) that keep to the speed limits, and the frame of the first speed
+        violation (-1 when none).
+        """
         if ib <= ia:
             return np.zeros((0, self.dimension)), ia
         rows, late = _motion_path(self.objective, self.times, self.frame_step,
@@ -2031,7 +2060,8 @@ class CTSpace:
         return rows, int(late)
 
     def first_invalid(self, q: np.ndarray, frames: np.ndarray) -> int:
-        """Row of the first illegal configuration in a batch, or -1 when all are legal.
+        """
+        Row of the first illegal configuration in a batch, or -1 when all are legal.
 
         Parameters
         ----------
@@ -2055,7 +2085,8 @@ class CTSpace:
         return -1 if not len(bad) else int(np.searchsorted(frames, frames[bad[0]]))
 
     def valid_rows(self, q: np.ndarray, frames: np.ndarray) -> np.ndarray:
-        """Legality of each configuration of a batch: (m,) bool.
+        """
+        Legality of each configuration of a batch: (m,) bool.
 
         Parameters
         ----------
@@ -2097,7 +2128,8 @@ class CTSpace:
         return rotation, centre, low, high, held
 
     def _illegal(self, q: np.ndarray, frames: np.ndarray) -> np.ndarray:
-        """Which rows of a batch are illegal, all rows at once: (m,) bool.
+        """
+        Which rows of a batch are illegal, all rows at once: (m,) bool.
 
         A row is illegal outside the joint limits (with :meth:`within_bounds`' tolerance) or
         where the branch touches the environment or the body: the broad phase (boxes, the

@@ -1,4 +1,5 @@
-"""The environment: meshes in, an FCL BVH and walkable-ground queries out.
+"""
+The environment: meshes in, an FCL BVH and walkable-ground queries out.
 
 The paper (§3.2, §4.2) asks the lower-body planner for the ground profile under the predicted
 path and for collision tests of the legs against obstacles. The environment is any set of
@@ -277,7 +278,8 @@ def check_memory(triangles: int, what: str) -> None:
 
 
 def load_mesh(path: str) -> trimesh.Trimesh:
-    """Read one mesh file (STL, OBJ, PLY, GLB/GLTF, DAE) as world-frame triangles.
+    """
+    Read one mesh file (STL, OBJ, PLY, GLB/GLTF, DAE) as world-frame triangles.
 
     Multi-geometry files (a GLB scene) are flattened with their node transforms.
 
@@ -342,7 +344,8 @@ def _check_mesh(mesh, what: str) -> None:
 
 
 class Environment:
-    """Triangle meshes in the world frame with an FCL BVH and a walkable-ground map in tiles.
+    """
+    Triangle meshes in the world frame with an FCL BVH and a walkable-ground map in tiles.
 
     Parameters
     ----------
@@ -655,7 +658,8 @@ class Environment:
         return column, row, min(_TILE, nx - column), min(_TILE, ny - row)
 
     def _build_ground_tile(self, tile: int):
-        """A tile's free intervals: (_TILE * _TILE, layers) grounds and ceilings, m.
+        """
+        A tile's free intervals: (_TILE * _TILE, layers) grounds and ceilings, m.
 
         Rasterises the triangles over the tile's nodes (a vertical ray per node, all hits);
         walking down each ray from the sky with a depth counter (+1 entering a solid at an
@@ -812,7 +816,8 @@ class Environment:
         return np.concatenate(out_nodes), np.concatenate(out_z), np.concatenate(out_sign)
 
     def _build_top_tile(self, tile: int) -> np.ndarray:
-        """A tile's top map and its dilations: (_TOP_LEVELS, _TILE, _TILE) m.
+        """
+        A tile's top map and its dilations: (_TOP_LEVELS, _TILE, _TILE) m.
 
         Level 0 is the upper bound of every triangle's height over each cell: from each
         triangle whose xy bounding box touches the cell, the lower of the triangle's highest
@@ -891,7 +896,8 @@ class Environment:
         return self._clock
 
     def top_height_near(self, xy, half_extent) -> np.ndarray:
-        """A cheap, looser :meth:`top_height`: a bound over squares around points.
+        """
+        A cheap, looser :meth:`top_height`: a bound over squares around points.
 
         One lookup per point in a precomputed dilation of the top map, so it bounds at least the
         rectangle of ``half_extent`` around each point (at most twice as wide, rounded to
@@ -973,7 +979,8 @@ class Environment:
         return out if out is not None else np.zeros(0)
 
     def top_height(self, low_xy, high_xy) -> np.ndarray:
-        """Upper bound of the environment's height over axis-aligned rectangles.
+        """
+        Upper bound of the environment's height over axis-aligned rectangles.
 
         Conservative: no point of any mesh (or of the solid under a surface) within a rectangle
         lies higher, so a body whose lowest point is above the bound cannot touch the
@@ -1048,7 +1055,8 @@ class Environment:
         return index[:, 0], index[:, 1], valid
 
     def lowest_ground(self, xy) -> np.ndarray:
-        """Height of the lowest walkable surface at each point (conservative over its cell).
+        """
+        Height of the lowest walkable surface at each point (conservative over its cell).
 
         Parameters
         ----------
@@ -1072,7 +1080,8 @@ class Environment:
         return ground
 
     def ground_height(self, xy, z_ref) -> Tuple[np.ndarray, np.ndarray]:
-        """Height of the highest walkable surface at or below ``z_ref``, and the room above it.
+        """
+        Height of the highest walkable surface at or below ``z_ref``, and the room above it.
 
         A walkable surface is an upward-facing surface with free space above it (§4.2: the
         ground profile under the feet). The answer is conservative over the grid cell that holds

@@ -1,4 +1,5 @@
-"""The footstep window's search (§4.2) as compiled kernels.
+"""
+The footstep window's search (§4.2) as compiled kernels.
 
 :meth:`footsteps.FootstepPlanner.plan` hands the profile's samples and the layout of the
 window's foothold table here. One call (:func:`window_search`) searches: a breadth-first search
@@ -265,8 +266,7 @@ def _empty_memos(n, m, resume):
 
 @kernel('void(i8, i8, i8[::1])')
 def _digits(number, base, config):
-    """Write configuration ``number``'s interval indices into ``config`` (its numbering
-    undone)."""
+    """Write configuration ``number``'s interval indices into ``config`` (its numbering undone)."""
     for i in range(config.shape[0] - 1, -1, -1):
         config[i] = number % base
         number //= base

@@ -1,4 +1,5 @@
-"""Walk generation for one step (§4.1): key frames, sagittal leg IK, Bezier swing, pelvis motion.
+"""
+Walk generation for one step (§4.1): key frames, sagittal leg IK, Bezier swing, pelvis motion.
 
 The legs are planned in their sagittal planes (§4): each leg has hip yaw, hip pitch, knee and
 ankle, so a foot on the ground must stay in the vertical plane of its hip. The pelvis trajectory
@@ -55,7 +56,8 @@ class GaitError(Exception):
 
 @dataclass(frozen=True)
 class GaitConfig:
-    """Walk generation settings. Lengths in m, times in s, angles in rad.
+    """
+    Walk generation settings. Lengths in m, times in s, angles in rad.
 
     Why each rule and default is as it is: docs/LOWER_BODY.md.
     """
@@ -109,7 +111,8 @@ class FootPose:
 
 @dataclass(frozen=True)
 class Stance:
-    """Double-support state between two steps.
+    """
+    Double-support state between two steps.
 
     ``pelvis`` is (x, y, z, yaw) with yaw unwrapped (continuous); ``feet`` is (left, right);
     ``stance_side`` is the foot that stays down during the next step (the one that landed last).
@@ -257,7 +260,8 @@ def standing_stance(skeleton: Skeleton, x: float, y: float, yaw: float, sole: fl
 def leg_inverse_kinematics(leg: LegGeometry, hip: np.ndarray, ankle: np.ndarray,
                            plane_yaw: np.ndarray, pelvis_yaw: np.ndarray,
                            foot_pitch: np.ndarray, plane_direction=None):
-    """Sagittal-plane IK of one leg for k frames (§4: legs move in their sagittal planes).
+    """
+    Sagittal-plane IK of one leg for k frames (§4: legs move in their sagittal planes).
 
     Parameters
     ----------
@@ -296,7 +300,8 @@ def leg_inverse_kinematics(leg: LegGeometry, hip: np.ndarray, ankle: np.ndarray,
 
 def _sagittal_leg(leg: LegGeometry, forward: np.ndarray, down: np.ndarray,
                   foot_pitch: np.ndarray, joints: np.ndarray) -> np.ndarray:
-    """The in-plane part of :func:`leg_inverse_kinematics`.
+    """
+    The in-plane part of :func:`leg_inverse_kinematics`.
 
     The ankle lies ``forward`` (k,) and ``down`` (k,) m from the hip in the leg's plane; hip
     pitch, knee and ankle (rad) go to columns 1..3 of ``joints`` (k, 4). Returns the reach
@@ -788,8 +793,7 @@ def _raise_swing(basis_0, basis_1, basis_2, basis_3, b, need, slack, z0, z1, h1,
 
 def _segment_gaps(a0: np.ndarray, a1: np.ndarray, b0: np.ndarray,
                   b1: np.ndarray) -> np.ndarray:
-    """Shortest distances (n,) between segments a0-a1 and b0-b1, all (3, n) (x, y, z rows), m.
-    """
+    """Shortest distances (n,) between segments a0-a1 and b0-b1, all (3, n) (x, y, z rows), m."""
     u, v, r = a1 - a0, b1 - b0, a0 - b0
     # Dot products of (3, n) rows written out (a reduction over an axis of 3 is slow).
     uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2]
@@ -840,7 +844,8 @@ def _ease(tau: np.ndarray, from_rest: bool, to_rest: bool) -> np.ndarray:
 
 @dataclass(frozen=True)
 class _StepTiming:
-    """The time shapes of a step of k frames: everything in a step that depends only on k.
+    """
+    The time shapes of a step of k frames: everything in a step that depends only on k.
 
     Steps of the same number of frames share them (the step's own geometry scales them), so
     :class:`WalkGenerator` builds them once per k. All arrays are (k,) and read-only.
@@ -927,7 +932,8 @@ def _read_only(value):
 
 
 class WalkGenerator:
-    """Generates the lower-body motion of single steps (§4.1, Figure 3).
+    """
+    Generates the lower-body motion of single steps (§4.1, Figure 3).
 
     Parameters
     ----------
@@ -1001,7 +1007,8 @@ class WalkGenerator:
     def step(self, stance: Stance, landing_xy: np.ndarray, landing_yaw: float,
              landing_sole: float, landing_pitch: float, pelvis_target: np.ndarray,
              duration: float, swing_profile, to_rest: bool = False) -> StepMotion:
-        """Generate one step: the swing foot moves to the landing foothold.
+        """
+        Generate one step: the swing foot moves to the landing foothold.
 
         Parameters
         ----------
@@ -1252,7 +1259,8 @@ class WalkGenerator:
 
     def _check_feet_apart(self, stance_foot: FootPose, swing_xy: np.ndarray,
                           direction: np.ndarray, swing_z: np.ndarray) -> None:
-        """Raise GaitError if the swinging foot would pass into the stance foot.
+        """
+        Raise GaitError if the swinging foot would pass into the stance foot.
 
         The feet are the soles' boxes seen from above, wherever the swinging one is not above
         the other's top (its ankle): a separating-axis test per such frame. In a tight arc or
@@ -1272,7 +1280,8 @@ class WalkGenerator:
     def _check_legs_apart(self, stance_outward: float, stance_hip: np.ndarray, stance_plane,
                           stance_joints: np.ndarray, swing_hip: np.ndarray, swing_plane,
                           swing_joints: np.ndarray) -> None:
-        """Raise GaitError if a thigh or shank would pass into the other leg's.
+        """
+        Raise GaitError if a thigh or shank would pass into the other leg's.
 
         ``stance_outward`` is +1 when the stance leg is the left one, else -1; the hips are
         (3, k) (x, y, z rows), the joints (k, 4), a plane a heading (rad) or (k,).
@@ -1385,7 +1394,8 @@ class WalkGenerator:
 
     def _swing_footprint(self, timing: _StepTiming, lift_foot: FootPose, landing: FootPose,
                          swing_xy, direction, swing_profile):
-        """The ground under the swinging sole at sampled frames (independent of its pitch).
+        """
+        The ground under the swinging sole at sampled frames (independent of its pitch).
 
         ``direction`` is (k, 2), the cosine and sine of the swing foot's heading per frame.
 
@@ -1413,7 +1423,8 @@ class WalkGenerator:
     def _swing_heights(self, tau, lift_foot: FootPose, landing: FootPose, swing_pitch,
                        footprint):
         # ``tau`` here is the Bezier parameter of each frame (k,), in [0, 1].
-        """Ankle heights of the swinging foot: a cubic Bezier raised until it clears (§4.1).
+        """
+        Ankle heights of the swinging foot: a cubic Bezier raised until it clears (§4.1).
 
         The control points sit above the lift-off and touchdown points; when the sole would
         touch the ground profile, both are raised ("the Bezier curve adjustment module") until

@@ -1,4 +1,5 @@
-"""Parameters of the ``actor_planner`` node: descriptors, the frozen node config, validation.
+"""
+Parameters of the ``actor_planner`` node: descriptors, the frozen node config, validation.
 
 The node declares every parameter listed here with its descriptor, reads them into a
 :class:`PlannerNodeConfig` and calls :func:`validate_node_config` once; a bad value makes the node
@@ -31,7 +32,8 @@ class ConfigurationError(ValueError):
 
 
 def default_scene_path() -> str:
-    """Return the package's default scene (``config/scenes/flat.yaml``), installed or in source.
+    """
+    Return the package's default scene (``config/scenes/flat.yaml``), installed or in source.
 
     Returns
     -------
@@ -88,7 +90,8 @@ def _descriptor(description: str, read_only: bool = True, floats=None,
 
 
 def parameter_declarations() -> List[Tuple[str, Any, ParameterDescriptor]]:
-    """Return ``(name, default, descriptor)`` for every parameter the node declares.
+    """
+    Return ``(name, default, descriptor)`` for every parameter the node declares.
 
     Returns
     -------
@@ -127,7 +130,7 @@ def parameter_declarations() -> List[Tuple[str, Any, ParameterDescriptor]]:
             'Backward speed limit (m/s): a negative linear.x walks backward, clamped to '
             '-this.', floats=(0.01, 3.0), constraints='max_backward_speed <= max_linear_speed')),
         ('allow_backward', True, _descriptor(
-            'Walk backward on a negative linear.x; false: the paper\'s actor, which walks '
+            "Walk backward on a negative linear.x; false: the paper's actor, which walks "
             'forward only (a negative linear.x becomes 0).')),
         ('cmd_timeout', 0.5, _descriptor(
             'No cmd_vel for this long (s) makes the actor come to a stop.', read_only=False,
@@ -155,7 +158,8 @@ def parameter_declarations() -> List[Tuple[str, Any, ParameterDescriptor]]:
 
 @dataclass(frozen=True)
 class PlannerNodeConfig:
-    """Everything the node runs with, read once from its parameters.
+    """
+    Everything the node runs with, read once from its parameters.
 
     ``start_pose`` is ``(x, y, yaw)`` in m, m, rad or None for the scene's own start;
     ``publish_rate`` in Hz; ``cmd_timeout`` and ``planning_lead`` in s.
@@ -199,7 +203,8 @@ def _value_or(value: Any, default: Any) -> Any:
 
 
 def read_node_config(get_value: Callable[[str], Any]) -> PlannerNodeConfig:
-    """Build the frozen node config from ``get_value(name)`` (the declared parameter values).
+    """
+    Build the frozen node config from ``get_value(name)`` (the declared parameter values).
 
     Parameters
     ----------
@@ -248,8 +253,12 @@ def read_node_config(get_value: Callable[[str], Any]) -> PlannerNodeConfig:
 
 
 def scene_file_error(path: str) -> str:
-    """Why ``path`` cannot be a scene file ('' when it may be one): the same words at start
-    and for a change at run time."""
+    """
+    Return why ``path`` cannot be a scene file ('' when it may be one).
+
+    Why ``path`` cannot be a scene file ('' when it may be one): the same words at start and for a
+    change at run time.
+    """
     if not path.strip():
         return 'must name a scene YAML or mesh file'
     if os.path.isdir(path):
@@ -260,7 +269,8 @@ def scene_file_error(path: str) -> str:
 
 
 def validate_node_config(config: PlannerNodeConfig) -> None:
-    """Check the cross-field and file rules the descriptors cannot express.
+    """
+    Check the cross-field and file rules the descriptors cannot express.
 
     Parameters
     ----------
