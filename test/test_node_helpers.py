@@ -293,7 +293,7 @@ def test_frame_buffer_truncate_drops_the_motion_not_yet_begun():
 
 
 def _binary_stl(path, z: float) -> None:
-    """Return a 20 m x 20 m square at height ``z`` (m), two triangles, binary STL."""
+    """Write a 20 m x 20 m square at height ``z`` (m), two triangles, binary STL."""
     import struct
     corners = np.array([[[-10, -10, z], [10, -10, z], [10, 10, z]],
                         [[-10, -10, z], [10, 10, z], [-10, 10, z]]], dtype='<f4')
