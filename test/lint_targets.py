@@ -27,7 +27,6 @@ NOT_YET_CLEAN = (
     'digital_actor_planner/core/actor.py',
     'digital_actor_planner/core/ct_roadmap.py',
     'digital_actor_planner/core/ct_space.py',
-    'digital_actor_planner/core/gait.py',
     'digital_actor_planner/nodes/actor_planner.py',
     'test/test_node_stream.py',
 )
