@@ -1,4 +1,19 @@
-"""Load time and memory of large scenes, against their triangles and against their area.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Load time and memory of large scenes, against their triangles and against their area.
 
 Each scene is loaded (and walked) in a fresh process, so its peak resident memory is the whole
 process's (``resource.getrusage``), interpreter and compiled kernels included:
@@ -31,7 +46,7 @@ TERRAIN_SIZE = 60.0
 
 
 def plane(size: float):
-    """A square ground plane of two triangles, ``size`` m a side, centred on the origin."""
+    """Return a square ground plane of two triangles, ``size`` m a side, centred on the origin."""
     import trimesh
     h = size / 2
     return trimesh.Trimesh([[-h, -h, 0], [h, -h, 0], [h, h, 0], [-h, h, 0]],
@@ -39,8 +54,12 @@ def plane(size: float):
 
 
 def terrain(size: float, cell: float, seed: int = 0):
-    """A rolling height field ``size`` m square on ``cell`` m cells (slopes under about 6
-    degrees), centred on the origin, as an open upward-facing surface."""
+    """
+    Return a rolling height field centred on the origin, as an open upward-facing surface.
+
+    A rolling height field ``size`` m square on ``cell`` m cells (slopes under about 6 degrees),
+    centred on the origin, as an open upward-facing surface.
+    """
     import trimesh
     count = int(round(size / cell)) + 1
     axis = np.linspace(-size / 2, size / 2, count)
@@ -58,7 +77,7 @@ def terrain(size: float, cell: float, seed: int = 0):
 
 
 def peak_rss_mb() -> float:
-    """This process's peak resident memory so far, MB."""
+    """Return this process's peak resident memory so far, MB."""
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
@@ -81,9 +100,9 @@ def measure(spec: str, walk_seconds: float) -> dict:
         environment, start_pose = Environment([mesh]), (0.0, 0.0, 0.0)
     load, load_cpu = time.perf_counter() - start, time.process_time() - cpu
     extent = environment.bounds[1, :2] - environment.bounds[0, :2]
-    out = dict(spec=spec, triangles=int(sum(len(m.faces) for m in environment.meshes)),
-               area_m2=float(extent[0] * extent[1]), load_s=load, load_cpu_s=load_cpu,
-               loaded_rss_mb=peak_rss_mb(), baseline_rss_mb=baseline)
+    out = {'spec': spec, 'triangles': int(sum(len(m.faces) for m in environment.meshes)),
+           'area_m2': float(extent[0] * extent[1]), 'load_s': load, 'load_cpu_s': load_cpu,
+           'loaded_rss_mb': peak_rss_mb(), 'baseline_rss_mb': baseline}
     if walk_seconds > 0:
         actor = Actor(skeleton, environment, ActorConfig(), start=start_pose)
         actor.set_command(0.5, 0.0)
@@ -108,7 +127,7 @@ def run(spec: str, walk_seconds: float) -> dict:
     done = subprocess.run([sys.executable, __file__, '--one', spec, '--walk', str(walk_seconds)],
                           capture_output=True, text=True, check=False)
     if done.returncode != 0:
-        return dict(spec=spec, error=(done.stderr.strip().splitlines() or ['?'])[-1])
+        return {'spec': spec, 'error': (done.stderr.strip().splitlines() or ['?'])[-1]}
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
@@ -128,7 +147,7 @@ def _row(result: dict) -> str:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--walk', type=float, default=20.0,
                         help='seconds of walking on the third-party scenes (0: none)')
     parser.add_argument('--one', help=argparse.SUPPRESS)

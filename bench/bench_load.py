@@ -1,4 +1,19 @@
-"""The obstacle courses walked on an idle machine and with a CPU hog on every core: same outcome.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The obstacle courses walked on an idle machine and with a CPU hog on every core: same outcome.
 
 Run: .venv/bin/python bench/bench_load.py [--courses low_beam beam_too_low ...] [--hogs N]
 
@@ -15,14 +30,13 @@ import os
 import sys
 import time
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
 from bench_common import print_command  # noqa: E402
-from course_runs import SCENES, scene, skeleton  # noqa: E402
+from course_runs import scene, SCENES, skeleton  # noqa: E402
 from digital_actor_planner.cli import read_commands  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
+import numpy as np  # noqa: E402
 
 COURSES = ('low_beam', 'beam_too_low', 'table', 'pillars', 'uneven_beam', 'wall', 'blocks',
            'stairs_up')
@@ -56,7 +70,7 @@ def planning(blocks) -> str:
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--courses', nargs='+', default=list(COURSES))
     parser.add_argument('--hogs', type=int, default=os.cpu_count() or 2)
     args = parser.parse_args(argv)

@@ -1,4 +1,19 @@
-"""Every legal command on open flat ground: the fraction of walks that end stuck (target 0).
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Every legal command on open flat ground: the fraction of walks that end stuck (target 0).
 
 Run: .venv/bin/python bench/bench_open_ground.py [--speeds 0.1 0.3 0.5 0.7 0.85 1.0]
      [--turn-rates -1 -0.6 -0.3 0 0.3 0.6 1] [--walk 6] [--then 5] [--list]
@@ -13,16 +28,15 @@ import argparse
 import os
 import sys
 
-import numpy as np
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
 from bench_common import print_command  # noqa: E402
 from course_runs import skeleton  # noqa: E402
-from scene_helpers import box  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 from digital_actor_planner.core.environment import Environment  # noqa: E402
 from digital_actor_planner.core.trajectory_check import check_trajectory  # noqa: E402
+import numpy as np  # noqa: E402
+from scene_helpers import box  # noqa: E402
 
 #: (linear m/s, angular rad/s) walked before the change: straight slow, middling and at the
 #: top speed, and arcs left and right (at the top speed, the turn reversed).
@@ -30,14 +44,18 @@ PREVIOUS = ((0.3, 0.0), (0.6, 0.0), (1.0, 0.0), (0.6, 0.6), (1.0, -1.0), (0.3, 1
 
 
 def open_floor() -> Environment:
-    """A 40 x 40 m floor, its top at z = 0, centred on the origin."""
+    """Return a 40 x 40 m floor, its top at z = 0, centred on the origin."""
     return Environment([box([-20.0, -20.0, -0.1], [20.0, 20.0, 0.0])])
 
 
 def walk_with_change(environment, previous, command, walk: float, then: float,
                      plan_upper_body: bool = True):
-    """Walk ``previous`` (linear m/s, angular rad/s) for ``walk`` s from the origin, then
-    ``command`` for ``then`` s. Returns (blocks before, blocks after)."""
+    """
+    Walk one command from the origin, then another; return the blocks before and after.
+
+    Walk ``previous`` (linear m/s, angular rad/s) for ``walk`` s from the origin, then ``command``
+    for ``then`` s. Returns (blocks before, blocks after).
+    """
     actor = Actor(skeleton(), environment, ActorConfig(plan_upper_body=plan_upper_body),
                   start=(0.0, 0.0, 0.0))
     before = run_commands(actor, [0.0, walk], [previous[0], 0.0], [previous[1], 0.0])
@@ -47,7 +65,7 @@ def walk_with_change(environment, previous, command, walk: float, then: float,
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--speeds', type=float, nargs='+',
                         default=[0.1, 0.3, 0.5, 0.7, 0.85, 1.0])
     parser.add_argument('--turn-rates', type=float, nargs='+',

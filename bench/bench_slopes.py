@@ -1,4 +1,19 @@
-"""Weaving on a gentle hill: stuck events where no contact would occur (target 0).
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Weaving on a gentle hill: stuck events where no contact would occur (target 0).
 
 Run: .venv/bin/python bench/bench_slopes.py [--starts 16] [--duration 16] [--list]
 
@@ -16,26 +31,29 @@ import argparse
 import os
 import sys
 
-import numpy as np
-import trimesh
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 
 from bench_common import print_command  # noqa: E402
 from course_runs import skeleton  # noqa: E402
 from digital_actor_planner.core.actor import (Actor, ActorConfig, LEG_LINKS,  # noqa: E402
-                                              run_commands)
+                                              run_commands)  # noqa: E402
 from digital_actor_planner.core.collision import BodyCollision  # noqa: E402
 from digital_actor_planner.core.environment import Environment  # noqa: E402
 from digital_actor_planner.core.trajectory_check import check_trajectory  # noqa: E402
+import numpy as np  # noqa: E402
+import trimesh  # noqa: E402
 
 #: Weaving: the forward speed (m/s), the turn rate (rad/s) and how long each turn lasts (s).
 WEAVE_SPEED, WEAVE_RATE, WEAVE_PERIOD = 0.5, 0.4, 2.0
 
 
 def heightmap_hill(size: float = 30.0, cell: float = 0.25) -> trimesh.Trimesh:
-    """A hill as a heightmap mesh, ``size`` m square in ``cell`` m cells, centred on the
-    origin, its lowest point at z = 0: slopes about 6 degrees at the median, at most 10."""
+    """
+    Return a hill as a heightmap mesh centred on the origin, its lowest point at z = 0.
+
+    A hill as a heightmap mesh, ``size`` m square in ``cell`` m cells, centred on the origin, its
+    lowest point at z = 0: slopes about 6 degrees at the median, at most 10.
+    """
     n = int(round(size / cell))
     x = np.linspace(-0.5 * size, 0.5 * size, n + 1)
     grid_x, grid_y = np.meshgrid(x, x, indexing='ij')
@@ -55,9 +73,12 @@ def slopes(mesh: trimesh.Trimesh) -> np.ndarray:
 
 
 def hill_starts(count: int):
-    """``count`` start poses (x, y, yaw): on rings 4 and 6.5 m from the top two by two, facing
-    up the slope, across it to the left, down it and across it to the right in turn, m and
-    rad."""
+    """
+    Return ``count`` start poses (x, y, yaw) on rings around the hill's top, m and rad.
+
+    ``count`` start poses (x, y, yaw): on rings 4 and 6.5 m from the top two by two, facing up the
+    slope, across it to the left, down it and across it to the right in turn, m and rad.
+    """
     starts = []
     for i in range(count):
         radius = (4.0, 6.5)[(i // 2) % 2]
@@ -69,10 +90,14 @@ def hill_starts(count: int):
 
 def weave(environment, start, duration: float, plan_upper_body: bool = True,
           body_collision=None):
-    """The blocks of a weaving walk from ``start`` (x, y, yaw) for ``duration`` s, or None
-    when the actor cannot stand there (its legs in the ground at the start: the start pose's
-    business, not the walk's). ``body_collision``: a :class:`collision.BodyCollision` of
-    ``environment`` to share between walks."""
+    """
+    Return the blocks of a weaving walk from ``start``, or None where the actor cannot stand.
+
+    The blocks of a weaving walk from ``start`` (x, y, yaw) for ``duration`` s, or None when the
+    actor cannot stand there (its legs in the ground at the start: the start pose's business, not
+    the walk's). ``body_collision``: a :class:`collision.BodyCollision` of ``environment`` to share
+    between walks.
+    """
     collision = body_collision or BodyCollision(skeleton(), environment)
     actor = Actor(skeleton(), environment, ActorConfig(plan_upper_body=plan_upper_body),
                   start=start, body_collision=collision)
@@ -85,7 +110,7 @@ def weave(environment, start, duration: float, plan_upper_body: bool = True,
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--starts', type=int, default=16)
     parser.add_argument('--duration', type=float, default=16.0, help='s of weaving per walk')
     parser.add_argument('--list', action='store_true', help='print every walk')

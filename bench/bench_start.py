@@ -1,5 +1,22 @@
-"""Benchmark the planner node's start: time to the first joint_states frame and to a ready
-planner, with the kernel cache as it is and (``--cold``) with an empty one.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Benchmark the planner node's start: time to the first frame and to a ready planner.
+
+Benchmark the planner node's start: time to the first joint_states frame and to a ready planner,
+with the kernel cache as it is and (``--cold``) with an empty one.
 
     .venv/bin/python bench/bench_start.py [--runs 3] [--cold] [--scene flat]
 
@@ -42,7 +59,7 @@ def one_start(scene_path: str, cache: str = None) -> tuple:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split('\n')[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--runs', type=int, default=3)
     parser.add_argument('--cold', action='store_true', help='also one start from an empty cache')
     parser.add_argument('--scene', default='flat')

@@ -1,4 +1,19 @@
-"""Third-party scenes for the large-scene benchmark and tests, fetched from a registry package.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Third-party scenes for the large-scene benchmark and tests, fetched from a registry package.
 
 pybullet's wheel ships ``pybullet_data``: a game level (a samurai monastery, 125 k triangles,
 125 m x 121 m), Kiva shelf pods, a table, a mug and a ground plane, under the zlib licence
@@ -37,8 +52,12 @@ SCENES = {
 
 
 def _warehouse() -> str:
-    """A 30 m x 30 m floor with two rows of seven shelf pods along a corridor, a crate (the
-    table's unit cube) and a mug on it: about 143 k triangles."""
+    """
+    Write a warehouse floor of shelf pods, a crate and a mug: about 143 k triangles.
+
+    A 30 m x 30 m floor with two rows of seven shelf pods along a corridor, a crate (the table's
+    unit cube) and a mug on it: about 143 k triangles.
+    """
     lines = ['description: a warehouse of pybullet_data meshes (plane, Kiva pods, table, mug)',
              'meshes:', '  - {file: pybullet_data/plane.obj}']
     for row in (-1.6, 1.6):
@@ -97,7 +116,7 @@ def fetch() -> None:
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('command', choices=('fetch', 'where'))
     args = parser.parse_args()
     if args.command == 'fetch':

@@ -1,4 +1,19 @@
-"""The one-command demo: the actor_planner node and the browser viewer as child processes.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The one-command demo: the actor_planner node and the browser viewer as child processes.
 
 Prints the page's address; Ctrl-C (or SIGTERM) stops both children and waits for them. Each child
 also gets SIGTERM from the kernel if this process dies without cleaning up, so none is orphaned.
@@ -29,12 +44,12 @@ def build_parser() -> argparse.ArgumentParser:
     add_page_options(parser, 'namespace for the planner and the viewer, e.g. /actor1')
     parser.add_argument('--scene', default=None,
                         help='course: a shipped name (e.g. stairs_up) or a scene YAML/mesh path '
-                             '(default: the planner\'s default course)')
+                             "(default: the planner's default course)")
     return parser
 
 
 def resolve_scene(scene: Optional[str]) -> Optional[str]:
-    """A shipped course name or a file path as an absolute path (None keeps the default)."""
+    """Return a shipped course name or a file path as an absolute path (None keeps the default)."""
     if scene is None:
         return None
     from digital_actor_planner.nodes.viewer import shipped_scenes
@@ -48,7 +63,7 @@ def resolve_scene(scene: Optional[str]) -> Optional[str]:
 
 
 def child_environment() -> dict:
-    """The children's environment: DDS discovery on this machine unless the user chose."""
+    """Return the children's environment: DDS discovery on this machine unless the user chose."""
     env = dict(os.environ)
     env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     env.setdefault('RMW_IMPLEMENTATION', 'rmw_fastrtps_cpp')
@@ -61,8 +76,12 @@ def child_environment() -> dict:
 
 
 def _warm_up(env: dict) -> None:
-    """Compile the planner's kernels first when they are not cached (progress printed), so the
-    planner streams as soon as it starts; a failure is reported and the demo goes on."""
+    """
+    Compile the planner's kernels first when they are not cached.
+
+    Compile the planner's kernels first when they are not cached (progress printed), so the planner
+    streams as soon as it starts; a failure is reported and the demo goes on.
+    """
     from digital_actor_planner.warmup import is_warm
     if is_warm():
         return

@@ -120,12 +120,14 @@ def required_packages(arguments: Dict[str, str]) -> List[str]:
 
 
 def switched_on(arguments: Dict[str, str], name: str) -> bool:
-    """Launch argument ``name`` (true when absent) as a boolean.
+    """
+    Return launch argument ``name`` (true when absent) as a boolean.
 
     Raises
     ------
     ValueError
         Naming the argument, when its value is not true or false.
+
     """
     try:
         return is_true(arguments.get(name, 'true'))

@@ -1,4 +1,19 @@
-"""Compile the planner's kernels once, ahead of the first walk: ``digital-actor warm-up``.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Compile the planner's kernels once, ahead of the first walk: ``digital-actor warm-up``.
 
 numba compiles every kernel when its module is first imported and keeps the machine code on disk
 (core/jit.py). The first import on a fresh install therefore takes about a minute (several on a
@@ -42,12 +57,14 @@ def _numba_version() -> Optional[str]:
 
 
 def cache_key() -> str:
-    """What the kernel cache depends on: the core's sources, numba, Python and the processor.
+    """
+    Return what the kernel cache depends on: the core's sources, numba, Python and the processor.
 
     Returns
     -------
     str
         16 hex digits; a different key means the cached kernels may be stale.
+
     """
     digest = hashlib.sha256()
     core = _core_directory()
@@ -73,7 +90,8 @@ def _processor_name() -> str:
 
 
 def stamp_path() -> str:
-    """Where the stamp lives: beside numba's cache in the package, else in the user's cache.
+    """
+    Where the stamp lives: beside numba's cache in the package, else in the user's cache.
 
     numba keeps its cache in ``core/__pycache__`` when that is writable and in the user's cache
     folder otherwise; the stamp follows it, so deleting the one deletes the other.
@@ -91,7 +109,7 @@ def stamp_path() -> str:
 
 
 def is_warm() -> bool:
-    """True when this installation's kernels were compiled for its current sources."""
+    """Return true when this installation's kernels were compiled for its current sources."""
     try:
         with open(stamp_path()) as f:
             return f.read().strip() == cache_key()
@@ -132,33 +150,41 @@ def _plan_one_step() -> None:
 
 
 def warm_up(report: Callable[[str], None] = print, force: bool = False) -> float:
-    """Compile (or load) every kernel and plan one step; return the seconds it took.
+    """
+    Compile (or load) every kernel and plan one step; return the seconds it took.
 
     Parameters
     ----------
-    report : called with one line of progress per stage (which stage, how long it took).
-    force : warm up even when the stamp says the cache is current.
+    report : callable
+        Called with one line of progress per stage (which stage, how long it took).
+    force : bool
+        Warm up even when the stamp says the cache is current.
 
     Returns
     -------
     float
         Wall time in s (0.0 when the cache was current and nothing was done).
+
     """
     if not force and is_warm():
-        report('warm-up: the planner\'s kernels are already compiled for this installation')
+        report("warm-up: the planner's kernels are already compiled for this installation")
         return 0.0
     with _exclusive(report):
         # Another warm-up may have finished while this one waited: nothing left to do.
         if not force and is_warm():
-            report('warm-up: the planner\'s kernels are already compiled for this installation')
+            report("warm-up: the planner's kernels are already compiled for this installation")
             return 0.0
         return _compile_all(report)
 
 
 @contextlib.contextmanager
 def _exclusive(report: Callable[[str], None]):
-    """Hold the warm-up lock: two warm-ups at once (set-up and a demo) would both compile,
-    each at half the speed; the second waits and then finds the cache current."""
+    """
+    Hold the warm-up lock, so that two warm-ups do not compile at once.
+
+    Hold the warm-up lock: two warm-ups at once (set-up and a demo) would both compile, each at
+    half the speed; the second waits and then finds the cache current.
+    """
     path = stamp_path() + '.lock'
     try:
         os.makedirs(os.path.dirname(path), exist_ok=True)
@@ -189,7 +215,7 @@ def _compile_all(report: Callable[[str], None]) -> float:
         report('warm-up: numba is not installed, so the kernels run as plain Python (slowly); '
                'nothing to compile')
     else:
-        report('warm-up: compiling the planner\'s kernels once for this installation (about a '
+        report("warm-up: compiling the planner's kernels once for this installation (about a "
                'minute on an idle machine, a few on a busy one; loading them from the cache '
                'takes seconds)')
     stages: List[tuple] = [('libraries (numpy, trimesh, fcl)', _import_libraries)]
@@ -224,7 +250,7 @@ def build_parser() -> argparse.ArgumentParser:
     """Command-line options of ``digital-actor warm-up``."""
     parser = argparse.ArgumentParser(
         prog='digital-actor warm-up',
-        description='Compile the planner\'s kernels once, so that the first start of the '
+        description="Compile the planner's kernels once, so that the first start of the "
                     'planner node streams at once.')
     parser.add_argument('--force', action='store_true',
                         help='compile (or load) even when the cache is recorded as current')

@@ -1,4 +1,19 @@
-"""Launch the digital actor: planner, robot_state_publisher, RViz2 and mouse teleop.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Launch the digital actor: planner, robot_state_publisher, RViz2 and mouse teleop.
 
     ros2 launch digital_actor_planner actor.launch.py [scene:=FILE] [use_rviz:=true]
         [use_teleop:=true] [teleop_frequency:=10.0] [namespace:=NS] [use_dynamixel:=false]
@@ -48,7 +63,7 @@ def generate_launch_description():
             'teleop_frequency', default_value=str(TELEOP_FREQUENCY),
             description='Hz at which mouse_teleop repeats the command while a drag is held '
                         '(0: only while the mouse moves; a held drag then stops the actor '
-                        'after the planner\'s cmd_timeout)'),
+                        "after the planner's cmd_timeout)"),
         DeclareLaunchArgument('namespace', default_value='',
                               description='Namespace of the actor and its helpers; also the '
                                           'prefix of its TF frames'),
@@ -59,7 +74,7 @@ def generate_launch_description():
 
 
 def _actor(context, share):
-    """The actor's actions for the arguments' values; raises before any starts if one cannot."""
+    """Return the actor's actions for the arguments; raise before any starts if one cannot."""
     values = {name: LaunchConfiguration(name).perform(context) for name in ARGUMENTS}
     # A Node of a missing package fails only when it is reached, after the planner started.
     check_packages(required_packages(values), get_package_share_directory,
@@ -100,12 +115,12 @@ def _actor(context, share):
 
 
 def _text(value):
-    """A string parameter passed as written (launch_ros would otherwise read it as YAML)."""
+    """Return a string parameter passed as written (launch_ros would otherwise read it as YAML)."""
     return ParameterValue(value, value_type=str)
 
 
 def _rviz_config_file(share, namespace):
-    """The shipped RViz config, or a copy of it with the namespace's frames."""
+    """Return the shipped RViz config, or a copy of it with the namespace's frames."""
     path = os.path.join(share, 'config', 'actor.rviz')
     if not frame_prefix(namespace):
         return path

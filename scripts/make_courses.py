@@ -519,7 +519,7 @@ def write_course(name, course, out_dir):
 
 
 def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--out', default=DEFAULT_OUT, help='output folder (config/scenes)')
     args = parser.parse_args(argv)
     for name, build in COURSES.items():

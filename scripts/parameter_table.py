@@ -119,7 +119,7 @@ def replace_table(text: str, table: str) -> str:
 
 def main(argv: Sequence[str] = None) -> int:
     """Print, write or check the README's parameter table; return the exit status."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     group = parser.add_mutually_exclusive_group()
     group.add_argument('--write', action='store_true', help='replace the table in README.md')
     group.add_argument('--check', action='store_true', help='exit 1 if README.md is stale')

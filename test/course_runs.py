@@ -19,8 +19,8 @@ import os
 from digital_actor_planner.cli import read_commands
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
 from digital_actor_planner.core.collision import BodyCollision
-from digital_actor_planner.core.scene import load_scene
 from digital_actor_planner.core.footsteps import FootstepConfig
+from digital_actor_planner.core.scene import load_scene
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.core.trajectory_check import check_trajectory
 from digital_actor_planner.core.upper_body import UpperBodyConfig, UpperBodyPlanner

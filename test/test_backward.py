@@ -1,24 +1,42 @@
-"""Backward walking: a downward mouse drag (negative linear speed) steps the actor backward.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Backward walking: a downward mouse drag (negative linear speed) steps the actor backward.
 
 Every walk here is judged by the independent checker (core/trajectory_check.py): no link
 penetrates, a foot is always down, a stance foot slides <= 1 cm, joint limits hold.
 """
-import numpy as np
-import pytest
-
 from course_runs import judged, scene, simulate, skeleton
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands, validate
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.footsteps import FootstepConfig
 from digital_actor_planner.core.path import predict_path
+import numpy as np
+import pytest
 from scene_helpers import box
 
 LEGS_ONLY = ActorConfig(plan_upper_body=False)
 
 
 def walk(environment, start, commands, config=LEGS_ONLY):
-    """(actor, blocks, frames, report) of ``commands`` ((time s, linear m/s, angular rad/s)
-    rows, the last one's time the end) from ``start``."""
+    """
+    Walk ``commands`` from ``start``; return (actor, blocks, frames, report).
+
+    (actor, blocks, frames, report) of ``commands`` ((time s, linear m/s, angular rad/s) rows, the
+    last one's time the end) from ``start``.
+    """
     actor = Actor(skeleton(), environment, config, start=start)
     blocks = run_commands(actor, *zip(*commands))
     _, frames, report = judged(blocks, environment)
@@ -162,8 +180,12 @@ def test_backward_into_the_wall_stops_cleanly_and_a_forward_drag_frees_it():
 @pytest.mark.slow
 @pytest.mark.parametrize('name, branch', [('low_beam', 'waist'), ('table', 'left_arm')])
 def test_backward_past_an_obstacle_the_upper_body_clears(name, branch):
-    """The CT-roadmap plans the upper body walking backward too: under the low beam the waist
-    bends, beside the table the left arm keeps clear of its top."""
+    """
+    The CT-roadmap plans the upper body walking backward too.
+
+    The CT-roadmap plans the upper body walking backward too: under the low beam the waist bends,
+    beside the table the left arm keeps clear of its top.
+    """
     sc = scene(name)
     _, blocks, frames, report = walk(sc.environment, (5.0, 0.0, 0.0),
                                      [(0.0, -0.4, 0.0), (13.0, 0.0, 0.0)], ActorConfig())
@@ -181,8 +203,12 @@ def test_backward_past_an_obstacle_the_upper_body_clears(name, branch):
 
 @pytest.mark.slow
 def test_backward_up_and_down_the_ramps_and_over_the_bumps():
-    """Feet land pitched with the ground behind the actor: up the 12 degree ramp to the
-    plateau and down the other one, and back over the rough course's bumps."""
+    """
+    Feet land pitched with the ground behind the actor.
+
+    Feet land pitched with the ground behind the actor: up the 12 degree ramp to the plateau and
+    down the other one, and back over the rough course's bumps.
+    """
     sc = scene('slope')
     plateau = skeleton().leg.standing_height + 0.6
     _, blocks, frames, report = walk(sc.environment, (0.5, 0.0, np.pi),
@@ -239,9 +265,13 @@ def test_up_a_curb_backward_and_a_clean_stop_before_a_flight():
 
 
 def escape(name, stuck_commands, config, start=None, backward=-0.4, duration=4.0):
-    """Walk course ``name`` with ``stuck_commands`` until the actor is stuck, then drag it
-    backward for ``duration`` s. Returns (position when stuck (2,), blocks after, frames,
-    report of the whole walk)."""
+    """
+    Walk course ``name`` until the actor is stuck, then drag it backward.
+
+    Walk course ``name`` with ``stuck_commands`` until the actor is stuck, then drag it backward
+    for ``duration`` s. Returns (position when stuck (2,), blocks after, frames, report of the
+    whole walk).
+    """
     sc = scene(name)
     actor = Actor(skeleton(), sc.environment, config,
                   start=sc.start if start is None else start)
@@ -285,9 +315,13 @@ def test_a_backward_drag_frees_the_actor_at_the_floor_edge():
 
 @pytest.mark.slow
 def test_a_backward_drag_frees_the_one_step_window_stuck_in_figure8s_trap():
-    """Paper Figure 8: a window of one footstep steps into the pit and is stuck there, one
-    foot down in it, the other on the walkway (0.33 m higher) behind; dragged backward, the
-    foot in the pit steps back up past the other and the actor walks back along the walkway."""
+    """
+    Paper Figure 8: a backward drag frees a one-step window stuck in the pit.
+
+    Paper Figure 8: a window of one footstep steps into the pit and is stuck there, one foot down
+    in it, the other on the walkway (0.33 m higher) behind; dragged backward, the foot in the pit
+    steps back up past the other and the actor walks back along the walkway.
+    """
     sc, _, _, blocks = simulate('figure8_trap', window_steps=1, greedy_restart=False)
     assert blocks[-1].status == 'stuck'
     config = ActorConfig(window_steps=1, plan_upper_body=False,

@@ -1,4 +1,19 @@
-"""End to end: the real demo (actor_planner + viewer) driven with the mouse in headless chromium.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+End to end: the real demo (actor_planner + viewer) driven with the mouse in headless chromium.
 
 The page renders (screenshot in test-artifacts/, not blank); dragging the pad up walks the actor
 forward (root_x in /joint_states grows), dragging sideways turns it (root_yaw changes), releasing
@@ -13,14 +28,12 @@ import shutil
 import sys
 import time
 
-import pytest
-
-from ros_harness import NodeProcess, ros_env, wait_for
-
 HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
 sys.path.insert(0, os.path.join(HERE, 'browser'))
 from chromium_page import ChromiumPage, missing_tools, not_blank  # noqa: E402
+import pytest  # noqa: E402
+from ros_harness import NodeProcess, ros_env, wait_for  # noqa: E402
 
 pytestmark = [pytest.mark.ros, pytest.mark.browser, pytest.mark.slow]
 
@@ -56,7 +69,7 @@ class JointStateRecorder:
         return self.samples[-1] if self.samples else None
 
     def still_for(self, seconds, tolerance=0.01):
-        """True when root_x and root_yaw stayed within ``tolerance`` over the last ``seconds``."""
+        """Return true when root_x and root_yaw stayed within ``tolerance`` for ``seconds``."""
         if not self.samples or self.samples[-1][0] - self.samples[0][0] < seconds:
             return False
         recent = [s for s in self.samples if s[0] >= self.samples[-1][0] - seconds]
@@ -71,7 +84,7 @@ class JointStateRecorder:
 
 
 def _children(pid):
-    """PIDs of the direct children of ``pid`` (Linux /proc)."""
+    """Return the PIDs of the direct children of ``pid`` (Linux /proc)."""
     found = []
     for task in os.listdir(f'/proc/{pid}/task'):
         with open(f'/proc/{pid}/task/{task}/children') as f:

@@ -1,16 +1,29 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Environment: scene loading, its errors, and the layered walkable-ground map."""
 import math
 import os
-
-import numpy as np
-import pytest
-import trimesh
 
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.scene import (check_start, load_scene, SceneError,
                                               start_configuration)
 from digital_actor_planner.core.skeleton import Skeleton
+import numpy as np
+import pytest
+import trimesh
 
 SCENES = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), 'config',
                       'scenes')
@@ -170,14 +183,14 @@ def _write_scene(tmp_path, text):
 def test_load_scene_reads_every_mesh_format_with_poses(tmp_path, extension):
     _box((-1, -1, -0.1), (3, 1, 0.0)).export(tmp_path / f'floor.{extension}')
     _box((-0.1, -0.1, 0.0), (0.1, 0.1, 0.3)).export(tmp_path / f'block.{extension}')
-    path = _write_scene(tmp_path, f'''
+    path = _write_scene(tmp_path, f"""
 meshes:
   - {{file: floor.{extension}}}
   - {{file: block.{extension}, pose: [2.0, 0.0, 0.0, 0.0, 0.0, 0.7853981633974483]}}
 start: [0.5, 0.0, 0.1]
 description: a block on a floor
 expect: {{reaches: true}}
-''')
+""")
     scene = load_scene(path, skeleton=Skeleton())
     assert scene.start == (0.5, 0.0, 0.1)
     assert scene.description == 'a block on a floor'
@@ -267,9 +280,13 @@ def test_start_configuration_stands_on_the_ground(world):
 
 
 def test_a_start_on_bumpy_ground_is_accepted():
-    """On the rough course's bumps (up to 4 cm) the feet rest on the ground under them, each at
-    its own height and pitch; placed level on the lowest ground they were inside the bumps and
-    the start was refused as inside an obstacle."""
+    """
+    On the rough course's bumps the feet rest on the ground under them.
+
+    On the rough course's bumps (up to 4 cm) the feet rest on the ground under them, each at its
+    own height and pitch; placed level on the lowest ground they were inside the bumps and the
+    start was refused as inside an obstacle.
+    """
     skeleton = Skeleton()
     scene = load_scene(os.path.join(SCENES, 'rough.yaml'), skeleton)
     for x in (3.0, 4.0, 5.0, 6.0, 7.0, 8.0):
@@ -316,8 +333,12 @@ def test_a_closed_mesh_wound_inside_out_is_still_a_solid():
 
 
 def test_one_reference_height_for_all_points_matches_one_per_point(world):
-    """A scalar z_ref answers what the same height repeated per point answers, on and off the
-    grid, for NaN points and for non-finite heights."""
+    """
+    A scalar z_ref answers what the same height repeated per point answers.
+
+    A scalar z_ref answers what the same height repeated per point answers, on and off the grid,
+    for NaN points and for non-finite heights.
+    """
     rng = np.random.default_rng(4)
     low, high = world.bounds[0, :2] - 0.5, world.bounds[1, :2] + 0.5
     xy = rng.uniform(low, high, (400, 2))
@@ -331,8 +352,12 @@ def test_one_reference_height_for_all_points_matches_one_per_point(world):
 
 
 def test_top_height_bounds_every_mesh_and_is_exact_over_level_faces(world):
-    """A box just above the bound over any rectangle is free; over level tops the bound is the
-    top itself."""
+    """
+    A box just above the bound is free; over level tops the bound is the top itself.
+
+    A box just above the bound over any rectangle is free; over level tops the bound is the top
+    itself.
+    """
     import fcl
     rng = np.random.default_rng(5)
     centre = rng.uniform((-1.5, -2.5), (9.5, 2.5), (400, 2))
@@ -365,8 +390,12 @@ def test_top_height_bounds_every_mesh_and_is_exact_over_level_faces(world):
 
 
 def test_the_environment_is_a_foundation_and_scenes_the_top_floor_of_core():
-    """environment imports no other planning module (the actor stands on it, not the other
-    way round); scene files and start checks, which need the actor, live in scene."""
+    """
+    The environment imports no other planning module; scene files live in scene.
+
+    environment imports no other planning module (the actor stands on it, not the other way round);
+    scene files and start checks, which need the actor, live in scene.
+    """
     import ast
     import digital_actor_planner.core.environment as environment_module
     import digital_actor_planner.core.scene as scene_module

@@ -1,4 +1,19 @@
-"""The kernels' fallback (core/jit.py): numba absent, present, or failing to compile.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The kernels' fallback (core/jit.py): numba absent, present, or failing to compile.
 
 A numba that is installed but cannot compile a kernel (a distribution's older release) must
 not stop the planner: that kernel and those that call it run as Python, with one warning, and
@@ -19,7 +34,7 @@ COURSE = 'table'  # walks past the table flexing an arm: the CT-roadmap's kernel
 # Run in a child process: ``numba`` is ``absent`` (cannot be imported), ``failing`` (every
 # kernel of core/ct_roadmap.py refused, as numba before 0.57 refused np.round on an array
 # without ``out``) or ``present``; writes the frames and what the fallback reported.
-CHILD = '''
+CHILD = """
 import json, sys, warnings
 mode, out = sys.argv[1], sys.argv[2]
 sys.path.insert(0, {here!r})
@@ -52,7 +67,7 @@ messages = [str(w.message) for w in caught if w.category is getattr(jit, 'Kernel
 with open(out + '.json', 'w') as report:
     json.dump(dict(compiled=jit.COMPILED, failures=list(jit.compile_failures()),
                    kinds=kinds, messages=messages), report)
-'''
+"""
 
 
 def _plan(mode, tmp_path):

@@ -1,4 +1,21 @@
-"""Large scenes: memory that follows the geometry and not the area, loading bounded in time and
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Large scenes: memory, loading, third-party meshes, starts on natural ground, bad meshes.
+
+Large scenes: memory that follows the geometry and not the area, loading bounded in time and
 memory, real third-party meshes walked and judged, starts on natural ground, bad meshes.
 
 Memory and time are measured in a fresh interpreter (``resource.getrusage``: the whole
@@ -11,15 +28,14 @@ import subprocess
 import sys
 import textwrap
 
-import numpy as np
-import pytest
-import trimesh
-
 from digital_actor_planner.core import environment
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.scene import (check_start, load_scene, SceneError,
                                               start_configuration)
 from digital_actor_planner.core.skeleton import Skeleton
+import numpy as np
+import pytest
+import trimesh
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 THIRD_PARTY = os.path.join(ROOT, '.cache', 'third_party')
@@ -39,7 +55,7 @@ def _plane(size, z=0.0):
 
 
 def _terrain(size, cell, seed=0):
-    """A rolling height field, ``size`` m square on ``cell`` m cells, slopes under 8 degrees."""
+    """Return a height field ``size`` m square on ``cell`` m cells, slopes under 8 degrees."""
     count = int(round(size / cell)) + 1
     axis = np.linspace(-size / 2, size / 2, count)
     gx, gy = np.meshgrid(axis, axis)
@@ -55,10 +71,13 @@ def _terrain(size, cell, seed=0):
 
 
 def _in_fresh_process(body):
-    """Run ``body`` (Python; it sets ``out``, a dict) in a fresh interpreter after imports;
-    returns ``out`` with ``peak_mb`` and ``baseline_mb`` (peak resident memory after and
-    before ``body``)."""
-    script = textwrap.dedent('''
+    """
+    Run ``body`` in a fresh interpreter and return its ``out`` with peak memory figures.
+
+    Run ``body`` (Python; it sets ``out``, a dict) in a fresh interpreter after imports; returns
+    ``out`` with ``peak_mb`` and ``baseline_mb`` (peak resident memory after and before ``body``).
+    """
+    script = textwrap.dedent("""
         import json, resource, sys, time
         import numpy as np
         sys.path.insert(0, {test!r})
@@ -67,12 +86,12 @@ def _in_fresh_process(body):
         from digital_actor_planner.core.scene import load_scene
         baseline = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
         out = {{}}
-    ''').format(test=os.path.dirname(os.path.abspath(__file__))) + textwrap.dedent(body) + \
-        textwrap.dedent('''
+    """).format(test=os.path.dirname(os.path.abspath(__file__))) + textwrap.dedent(body) + \
+        textwrap.dedent("""
         out['peak_mb'] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
         out['baseline_mb'] = baseline
         print(json.dumps(out))
-    ''')
+    """)
     done = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True,
                           timeout=900, cwd=ROOT, check=False)
     assert done.returncode == 0, done.stderr[-3000:]
@@ -82,7 +101,7 @@ def _in_fresh_process(body):
 @pytest.mark.slow
 def test_a_200_m_plane_loads_at_once_and_its_far_corners_are_ground():
     """Two triangles over 200 m x 200 m: the dense map of old needed more than 12 GB."""
-    out = _in_fresh_process('''
+    out = _in_fresh_process("""
         start = time.perf_counter()
         world = Environment([_plane(200.0)])
         out['load_s'] = time.perf_counter() - start
@@ -91,7 +110,7 @@ def test_a_200_m_plane_loads_at_once_and_its_far_corners_are_ground():
         out['height'] = height.tolist()
         out['open'] = bool(np.all(np.isinf(clearance)))
         out['cache_mb'] = world.cached_bytes() / 2 ** 20
-    ''')
+    """)
     assert out['height'] == [0.0] * 5 and out['open']
     assert out['load_s'] < 5.0
     # A handful of tiles, not the area.
@@ -101,9 +120,13 @@ def test_a_200_m_plane_loads_at_once_and_its_far_corners_are_ground():
 
 @pytest.mark.slow
 def test_memory_and_load_time_follow_the_triangles_not_the_area():
-    """Planes of 20 m and 2 km take the same memory; a large terrain loads in bounded memory
-    and a walk's worth of ground queries across it keeps the cache within its bound."""
-    out = _in_fresh_process('''
+    """
+    Large planes and terrains load in bounded memory, and the ground cache keeps its bound.
+
+    Planes of 20 m and 2 km take the same memory; a large terrain loads in bounded memory and a
+    walk's worth of ground queries across it keeps the cache within its bound.
+    """
+    out = _in_fresh_process("""
         for size in (20.0, 2000.0):
             start = time.perf_counter()
             world = Environment([_plane(size)])
@@ -119,7 +142,7 @@ def test_memory_and_load_time_follow_the_triangles_not_the_area():
             out.setdefault('found', []).append(float(np.isfinite(height).mean()))
         out['cache_mb'] = world.cached_bytes() / 2 ** 20
         out['tiles'] = world.cached_tiles()
-    ''')
+    """)
     assert out['plane_2000_mb'] == pytest.approx(out['plane_20_mb'], abs=1.0)
     assert out['plane_2000_s'] < 5.0
     assert out['terrain_s'] < 60.0
@@ -130,8 +153,12 @@ def test_memory_and_load_time_follow_the_triangles_not_the_area():
 
 
 def test_tiles_built_evicted_and_built_again_answer_as_a_cache_holding_every_tile():
-    """A cache of 10 MB (8 tiles) over a terrain of 25 tiles, read all over in random order,
-    gives every query the exact answer of a cache that holds the whole terrain."""
+    """
+    A ground cache smaller than the terrain answers every query as a full one does.
+
+    A cache of 10 MB (8 tiles) over a terrain of 25 tiles, read all over in random order, gives
+    every query the exact answer of a cache that holds the whole terrain.
+    """
     mesh = _terrain(12.0, 0.25, seed=3)
     steps = [trimesh.creation.box((1.0, 1.0, 0.3)) for _ in range(3)]
     for i, box in enumerate(steps):
@@ -158,11 +185,15 @@ def test_tiles_built_evicted_and_built_again_answer_as_a_cache_holding_every_til
 @needs_third_party
 @pytest.mark.parametrize('name, seconds', [('monastery', 12.0), ('warehouse', 8.0)])
 def test_a_third_party_scene_loads_and_is_walked_within_a_gigabyte(name, seconds):
-    """pybullet_data's game level (125 k triangles, 125 m x 121 m) and a warehouse of its
-    shelf pods (143 k triangles): loaded from their files, walked straight ahead from their
-    start (the level's has none: the ground over the origin), the walk judged by the
-    independent checker, the whole process under 1 GB."""
-    out = _in_fresh_process(f'''
+    """
+    Third-party meshes load, are walked and judged, the process under 1 GB.
+
+    pybullet_data's game level (125 k triangles, 125 m x 121 m) and a warehouse of its shelf pods
+    (143 k triangles): loaded from their files, walked straight ahead from their start (the level's
+    has none: the ground over the origin), the walk judged by the independent checker, the whole
+    process under 1 GB.
+    """
+    out = _in_fresh_process(f"""
         from digital_actor_planner.core.actor import Actor, ActorConfig
         from digital_actor_planner.core.skeleton import Skeleton
         from digital_actor_planner.core.trajectory_check import check_trajectory
@@ -181,7 +212,7 @@ def test_a_third_party_scene_loads_and_is_walked_within_a_gigabyte(name, seconds
         out['failures'] = report.failures()[:6]
         out['walked_m'] = float(np.linalg.norm(frames[-1, :2] - frames[0, :2]))
         out['walking'] = sum(b.status == 'walking' for b in blocks)
-    ''')
+    """)
     assert out['failures'] == []
     assert out['walking'] >= 5 and out['walked_m'] > 1.5
     assert out['load_s'] < 60.0
@@ -196,9 +227,13 @@ def hill():
 
 @pytest.mark.slow
 def test_starts_over_a_gentle_hill_are_accepted(hill):
-    """Each foot rests at its own height and pitch: on slopes of a few degrees, starts all
-    over the hill and at several headings stand (placed level at the lowest ground under both
-    feet, the uphill foot was inside the hill)."""
+    """
+    Each foot rests at its own height and pitch on the slopes of a hill.
+
+    Each foot rests at its own height and pitch: on slopes of a few degrees, starts all over the
+    hill and at several headings stand (placed level at the lowest ground under both feet, the
+    uphill foot was inside the hill).
+    """
     skeleton = Skeleton()
     accepted, tried = 0, 0
     for x in np.linspace(-11.0, 11.0, 4):
@@ -295,8 +330,12 @@ def test_the_cli_exits_2_with_the_file_and_reason_for_a_mesh_too_large(tmp_path)
 
 
 def test_the_compiled_corner_intersection_is_the_pairwise_one():
-    """The tiles intersect their cells' corners in one compiled pass; the readable pairwise
-    intersection (``_intersect``, three times) gives the same intervals in the same order."""
+    """
+    The compiled tile intersection gives the readable pairwise one's intervals.
+
+    The tiles intersect their cells' corners in one compiled pass; the readable pairwise
+    intersection (``_intersect``, three times) gives the same intervals in the same order.
+    """
     rng = np.random.default_rng(0)
 
     def corner(count, layers):

@@ -1,4 +1,21 @@
-"""actor_planner as a real process under faults: its planning process stopped past the planning
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The planner node as a real process under faults.
+
+actor_planner as a real process under faults: its planning process stopped past the planning
 timeout or killed, a large scene loading, a wrong cmd_vel type, Ctrl-C while starting.
 
 One node process serves the module (planning_timeout 3 s, so that the test need not wait the
@@ -81,9 +98,13 @@ def _parameter(probe, name: str, timeout: float = 30.0):
 
 def test_a_planning_process_stopped_past_its_timeout_is_replaced_and_a_scene_change_walks(
         actor):
-    """The planning process is frozen (SIGSTOP) past the planning timeout while the actor
-    walks, then let go, then the scene is set to another course: the actor walks there (the
-    frozen process's late replies must not be taken for the answers to later requests)."""
+    """
+    A planning process frozen past the timeout does not mix its late replies into later plans.
+
+    The planning process is frozen (SIGSTOP) past the planning timeout while the actor walks, then
+    let go, then the scene is set to another course: the actor walks there (the frozen process's
+    late replies must not be taken for the answers to later requests).
+    """
     process, probe = actor
     assert _advance(probe, 2.0) > 0.2
     replaced, pid = _replaced(probe), _planning_pid(probe)
@@ -128,7 +149,7 @@ def test_a_killed_planning_process_is_replaced_and_the_actor_goes_on_from_where_
 
 
 def _large_scene(folder) -> str:
-    """A floor of 400k triangles (binary STL) as a scene file: seconds to load."""
+    """Write a floor of 400k triangles (binary STL) as a scene file: seconds to load."""
     n = 448
     xs = np.linspace(-5.0, 25.0, n)
     ys = np.linspace(-5.0, 5.0, n)

@@ -1,4 +1,19 @@
-"""Probe for the actor_planner process tests, and tests of the node's ROS-free pieces.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Probe for the actor_planner process tests, and tests of the node's ROS-free pieces.
 
 The probe is an rclpy node in the test process, in its own context and ROS_DOMAIN_ID, that
 sends cmd_vel like a mouse teleop (a steady 20 Hz stream) and records joint_states,
@@ -11,10 +26,9 @@ import sys
 import threading
 import time
 
+from digital_actor_planner.core.skeleton import Skeleton
 import numpy as np
 import pytest
-
-from digital_actor_planner.core.skeleton import Skeleton
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 SCENES = os.path.join(REPO, 'config', 'scenes')
@@ -28,7 +42,8 @@ def scene(name: str) -> str:
 
 
 def node_command(*ros_args: str, executable: str = None) -> list:
-    """Command line that starts actor_planner, with ros args.
+    """
+    Command line that starts actor_planner, with ros args.
 
     The venv's console script by default; ``executable`` or the environment variable
     ``ACTOR_PLANNER_EXECUTABLE`` (e.g. a colcon install's ``lib/digital_actor_planner/
@@ -124,9 +139,12 @@ class Probe:
         return bool(predicate())
 
     def wait_for_stream(self, process=None, timeout: float = 30.0, ready: bool = True) -> bool:
-        """Wait until the actor's joint_states arrive and it sees our cmd_vel publisher, and
-        (``ready``) until its planner has placed the actor (diagnostics no longer say
-        "warming up").
+        """
+        Wait until the actor streams and sees our publisher, and optionally until it is ready.
+
+        Wait until the actor's joint_states arrive and it sees our cmd_vel publisher, and
+        (``ready``) until its planner has placed the actor (diagnostics no longer say "warming
+        up").
 
         Gives up early when ``process`` (a NodeProcess) exits.
         """
@@ -144,7 +162,7 @@ class Probe:
         return state is not None and state != 'warming up'
 
     def latest(self) -> np.ndarray:
-        """The latest received configuration (22,)."""
+        """Return the latest received configuration (22,)."""
         return np.array(self.joint_states[-1][1].position)
 
     def positions_since(self, since: float) -> tuple:
@@ -162,7 +180,8 @@ class Probe:
 
     def wait_until_still(self, timeout: float, still_for: float = 1.0,
                          tolerance: float = 2e-3) -> float:
-        """Spin until the root stays within ``tolerance`` m/rad for ``still_for`` s.
+        """
+        Spin until the root stays within ``tolerance`` m/rad for ``still_for`` s.
 
         Returns
         -------
@@ -197,7 +216,8 @@ class Probe:
         return {}
 
     def set_scene(self, path: str, node: str = '/actor_planner', timeout: float = 120.0):
-        """Set ``node``'s ``scene`` parameter; return the SetParametersResult.
+        """
+        Set ``node``'s ``scene`` parameter; return the SetParametersResult.
 
         Raises AssertionError when the service does not appear or answer within ``timeout`` s.
         """
@@ -287,7 +307,7 @@ def test_frame_buffer_truncate_drops_the_motion_not_yet_begun():
 
 
 def _binary_stl(path, z: float) -> None:
-    """A 20 m x 20 m square at height ``z`` (m), two triangles, binary STL."""
+    """Write a 20 m x 20 m square at height ``z`` (m), two triangles, binary STL."""
     import struct
     corners = np.array([[[-10, -10, z], [10, -10, z], [10, 10, z]],
                         [[-10, -10, z], [10, 10, z], [-10, 10, z]]], dtype='<f4')
@@ -296,9 +316,13 @@ def _binary_stl(path, z: float) -> None:
 
 
 def test_the_stand_in_pose_stands_on_the_scene_start(tmp_path):
-    """The pose streamed while the planner warms up: the scene's start pose, on the lowest
-    surface under it (a platform posed up in the YAML), or on height 0 where the mesh cannot
-    be read without a mesh library."""
+    """
+    The pose streamed while the planner warms up stands on the scene's start.
+
+    The pose streamed while the planner warms up: the scene's start pose, on the lowest surface
+    under it (a platform posed up in the YAML), or on height 0 where the mesh cannot be read
+    without a mesh library.
+    """
     from digital_actor_planner.runtime.standing import stand_in_configuration
     skeleton = Skeleton()
     _binary_stl(tmp_path / 'platform.stl', 0.1)
@@ -344,8 +368,12 @@ def test_validation_names_the_bad_parameter():
 
 
 def test_planning_worker_scene_cache_shares_and_forgets_scenes():
-    """Actors of one worker on the same scene file share the loaded scene; a scene no actor
-    uses any more is dropped."""
+    """
+    Actors of one worker share a loaded scene; a scene no actor uses is dropped.
+
+    Actors of one worker on the same scene file share the loaded scene; a scene no actor uses any
+    more is dropped.
+    """
     import gc
 
     from digital_actor_planner.core.actor import ActorConfig
@@ -366,8 +394,12 @@ def test_planning_worker_scene_cache_shares_and_forgets_scenes():
 
 
 class _ScheduledActor:
-    """Stands in for an ActorPlannerNode: due at ``due[name]`` (monotonic s; None: resting),
-    and logs its plans."""
+    """
+    Stand-in for an ActorPlannerNode that logs its plans.
+
+    Stands in for an ActorPlannerNode: due at ``due[name]`` (monotonic s; None: resting), and logs
+    its plans.
+    """
 
     def __init__(self, name, due, log):
         self.name, self.due, self.log = name, due, log
@@ -382,8 +414,12 @@ class _ScheduledActor:
 
 
 def test_environment_markers_are_built_once_per_scene_and_sent_serialized(monkeypatch):
-    """The environment is drawn as TRIANGLE_LISTs of exactly the scene's triangles (up to the
-    budget), serialized once for every actor on the same scene content."""
+    """
+    The environment markers are built once per scene and sent serialized.
+
+    The environment is drawn as TRIANGLE_LISTs of exactly the scene's triangles (up to the budget),
+    serialized once for every actor on the same scene content.
+    """
     from rclpy.serialization import deserialize_message
     from visualization_msgs.msg import Marker, MarkerArray
     from digital_actor_planner.nodes import actor_planner
@@ -420,9 +456,13 @@ def test_environment_markers_are_built_once_per_scene_and_sent_serialized(monkey
 
 
 class _TickRecorder:
-    """Stands in for an actor node attached to a StreamTicker: records, per frame, the time it
-    was published, the ticks skipped before it, its own instant (None: "now"), its tick and the
-    publishing thread; and each tick's stamp (ns)."""
+    """
+    Stand-in for an actor node attached to a StreamTicker that records its frames.
+
+    Stands in for an actor node attached to a StreamTicker: records, per frame, the time it was
+    published, the ticks skipped before it, its own instant (None: "now"), its tick and the
+    publishing thread; and each tick's stamp (ns).
+    """
 
     def __init__(self, ticker):
         self.ticker = ticker
@@ -451,14 +491,19 @@ class _TickRecorder:
 
 
 def test_stream_backup_thread_publishes_the_ticks_a_stalled_stream_thread_misses():
-    """The publishing thread stalls for three periods (as on a core the hypervisor took
-    away); the backup thread on the other core publishes those ticks, each tick once."""
+    """
+    The backup thread publishes the ticks a stalled stream thread misses, each once.
+
+    The publishing thread stalls for three periods (as on a core the hypervisor took away); the
+    backup thread on the other core publishes those ticks, each tick once.
+    """
     if len(os.sched_getaffinity(0)) < 2:
         pytest.skip('the backup thread needs a second core')
     from digital_actor_planner.nodes.actor_planner import StreamTicker
     period, stalled = 0.02, 20
 
     class Stalling(StreamTicker):
+
         def _publish(self, tick, now, backup):
             if tick == stalled and not backup:
                 time.sleep(3.2 * period)  # woke up for its tick, then lost the core
@@ -477,9 +522,13 @@ def test_stream_backup_thread_publishes_the_ticks_a_stalled_stream_thread_misses
 
 
 def test_stream_catches_up_the_ticks_a_stall_of_every_thread_slept_over():
-    """With no thread to take over (one core, or both stalled), a thread waking 4.5 periods late
-    publishes every tick it slept over at once, each showing its own instant, then the current
-    one: no frame is lost. A stall longer than ``CATCH_UP`` ticks skips the oldest ones."""
+    """
+    A thread waking late publishes every tick it slept over: no frame is lost.
+
+    With no thread to take over (one core, or both stalled), a thread waking 4.5 periods late
+    publishes every tick it slept over at once, each showing its own instant, then the current one:
+    no frame is lost. A stall longer than ``CATCH_UP`` ticks skips the oldest ones.
+    """
     from digital_actor_planner.nodes.actor_planner import StreamTicker
     period, stalled, long_stall = 0.02, 10, 30
 
@@ -512,14 +561,19 @@ def test_stream_catches_up_the_ticks_a_stall_of_every_thread_slept_over():
 
 
 def test_stream_stamps_stay_on_the_tick_grid_when_a_catch_up_burst_is_interrupted():
-    """Every thread stalls for 4.5 periods; the thread catching up then loses its core again
-    for 1.5 periods in the middle of the burst (the hypervisor, or the planner holding the
-    GIL). Each frame is stamped with the instant it shows, not the moment it got out: the
-    caught-up frames stay one period apart, and the stamps only increase."""
+    """
+    Stamps stay on the tick grid when a catch-up burst is interrupted.
+
+    Every thread stalls for 4.5 periods; the thread catching up then loses its core again for 1.5
+    periods in the middle of the burst (the hypervisor, or the planner holding the GIL). Each frame
+    is stamped with the instant it shows, not the moment it got out: the caught-up frames stay one
+    period apart, and the stamps only increase.
+    """
     from digital_actor_planner.nodes.actor_planner import StreamTicker
     period, stalled = 0.02, 10
 
     class Stalling(StreamTicker):
+
         def _publish(self, tick, now, backup):
             if tick == stalled:
                 time.sleep(4.5 * period)
@@ -527,6 +581,7 @@ def test_stream_stamps_stay_on_the_tick_grid_when_a_catch_up_burst_is_interrupte
             super()._publish(tick, now, backup)
 
     class Preempted(_TickRecorder):
+
         def publish_frame(self, now, skipped, instant, stamp_ns):
             super().publish_frame(now, skipped, instant, stamp_ns)
             if self.frames[-1][3] == stalled + 1:  # the second frame of the burst
@@ -584,7 +639,8 @@ def test_planning_scheduler_plans_the_most_urgent_actor_first_and_skips_resting_
 @pytest.mark.ros
 def test_a_scene_reload_racing_a_plan_neither_breaks_the_buffer_nor_drops_the_first_block(
         monkeypatch):
-    """The executor thread loads a new scene while the planning thread wants the next block.
+    """
+    The executor thread loads a new scene while the planning thread wants the next block.
 
     The worker serves one request at a time, so the plan runs on the new scene as soon as the
     load is done. If the planning thread got in before the executor thread handed the new
@@ -682,8 +738,12 @@ def test_a_scene_reload_racing_a_plan_neither_breaks_the_buffer_nor_drops_the_fi
 
 
 class _Executor:
-    """spin_once stand-in: on call ``fail_on`` sets the context's validity to ``valid_after``
-    and fails as rclpy does when the context is gone while it builds its wait set."""
+    """
+    Stand-in for spin_once that fails as rclpy does when the context is gone.
+
+    spin_once stand-in: on call ``fail_on`` sets the context's validity to ``valid_after`` and
+    fails as rclpy does when the context is gone while it builds its wait set.
+    """
 
     def __init__(self, context, fail_on, valid_after):
         self.context, self.fail_on, self.valid_after, self.calls = context, fail_on, valid_after, 0
@@ -697,10 +757,14 @@ class _Executor:
 
 @pytest.mark.parametrize('shut_down', [True, False])
 def test_spin_ends_quietly_when_ctrl_c_shuts_the_context_down_mid_spin(shut_down):
-    """Ctrl-C shuts the context down from rclpy's signal handler; landing between the loop's
-    ok() check and spin_once building its wait set, spin_once raises RCLError (a RuntimeError).
-    That is the shutdown asked for: the node returns (it exited 1 with a traceback). The same
-    error with the context still valid is a real failure and is raised."""
+    """
+    Spinning ends quietly when Ctrl-C shuts the context down mid-spin.
+
+    Ctrl-C shuts the context down from rclpy's signal handler; landing between the loop's ok()
+    check and spin_once building its wait set, spin_once raises RCLError (a RuntimeError). That is
+    the shutdown asked for: the node returns (it exited 1 with a traceback). The same error with
+    the context still valid is a real failure and is raised.
+    """
     from digital_actor_planner.nodes.actor_planner import spin_until_shutdown
     context = {'ok': True}
     executor = _Executor(context, fail_on=3, valid_after=not shut_down)

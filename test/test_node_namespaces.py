@@ -1,4 +1,19 @@
-"""Two actor_planner processes side by side under different namespaces, Twist and TwistStamped.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Two actor_planner processes side by side under different namespaces, Twist and TwistStamped.
 
 Each actor follows only its own cmd_vel: one takes geometry_msgs/Twist (cmd_vel_stamped false),
 the other geometry_msgs/TwistStamped (the default).
@@ -86,7 +101,8 @@ def _core_walks_backward() -> bool:
                    reason='the core walks forward only: negative linear.x is clamped to 0')
 @pytest.mark.parametrize('name', ['twist', 'stamped'])
 def test_a_negative_linear_x_walks_the_actor_backward(two_actors, name):
-    """A mouse teleop's downward drag (negative linear.x) steps back, in both message types.
+    """
+    A mouse teleop's downward drag (negative linear.x) steps back, in both message types.
 
     The backward distance depends on the core walking backward; a core that walks forward
     only clamps the command to 0 and the actor stays where it is, which fails the last

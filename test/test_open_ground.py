@@ -1,21 +1,37 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Every legal command on open flat ground is walked: faster is faster, and nothing gets stuck."""
 import os
 import sys
 
-import numpy as np
-import pytest
-
-from course_runs import scene, skeleton
-from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'bench'))
 
 from bench_open_ground import open_floor, walk_with_change  # noqa: E402
+from course_runs import scene, skeleton  # noqa: E402
+from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
 
 
 def walked_speed(speed: float, duration: float = 7.0) -> float:
-    """Metres per second along the flat course at command ``speed`` over ``duration`` s, from
-    the start (the first step's easing in included)."""
+    """
+    Return the speed walked along the flat course at command ``speed``, m/s.
+
+    Metres per second along the flat course at command ``speed`` over ``duration`` s, from the
+    start (the first step's easing in included).
+    """
     sc = scene('flat')
     actor = Actor(skeleton(), sc.environment, ActorConfig(), start=sc.start)
     blocks = run_commands(actor, [0.0, duration], [speed, 0.0], [0.0, 0.0])

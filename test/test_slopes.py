@@ -1,17 +1,29 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Weaving on a gentle hill walks on: no stuck event where nothing would touch."""
 import functools
 import os
 import sys
 
-import numpy as np
-import pytest
-
-from course_runs import judged
-from digital_actor_planner.core.environment import Environment
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'bench'))
 
 from bench_slopes import heightmap_hill, hill_starts, slopes, weave  # noqa: E402
+from course_runs import judged  # noqa: E402
+from digital_actor_planner.core.environment import Environment  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
 
 
 @functools.lru_cache(maxsize=None)

@@ -1,4 +1,19 @@
-"""launch_testing for a ROS 2 install: two actors launched side by side in two namespaces.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+launch_testing for a ROS 2 install: two actors launched side by side in two namespaces.
 
 Run with ``launch_test test/test_two_actors_launch.py`` or ``colcon test`` (needs
 robot_state_publisher; skipped where launch_testing is not installed: test_launch_files.py reads
@@ -13,7 +28,8 @@ import pytest
 
 launch_testing = pytest.importorskip('launch_testing')
 
-from launch import LaunchDescription  # noqa: E402
+# Imported once the skip above has run (pytest first, out of name order: I100).
+from launch import LaunchDescription  # noqa: E402, I100
 from launch.actions import GroupAction, IncludeLaunchDescription  # noqa: E402
 from launch.launch_description_sources import PythonLaunchDescriptionSource  # noqa: E402
 import launch_testing.actions  # noqa: E402

@@ -1,19 +1,38 @@
-"""Unit tests of the viewer helpers: drag mapping, status line, diagnostics, courses, follow
-camera, port."""
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Unit tests of the viewer helpers.
+
+Unit tests of the viewer helpers: drag mapping, status line, diagnostics, courses, follow camera,
+port.
+"""
 import glob
 import math
 import os
 import socket
 
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+from digital_actor_planner.nodes.viewer import (along_view_plane, build_parser, config_from_args,
+                                                course_catalog, drag_to_command, follow_target,
+                                                normalize_namespace, pad_pose,
+                                                parse_planner_diagnostics, pick_port,
+                                                shipped_scenes, smooth_step, status_text,
+                                                StreamMonitor, triangle_list_mesh, validate,
+                                                ViewerConfig)
 import numpy as np
 import pytest
-
-from digital_actor_planner.nodes.viewer import (
-    along_view_plane, config_from_args, build_parser, course_catalog, drag_to_command,
-    follow_target,
-    normalize_namespace, pad_pose, parse_planner_diagnostics, pick_port, shipped_scenes,
-    smooth_step, status_text, StreamMonitor, triangle_list_mesh, ViewerConfig, validate)
 
 REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 

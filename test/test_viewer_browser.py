@@ -1,4 +1,19 @@
-"""The viewer node in headless chromium against a stand-in planner (test/browser/fake_planner.py).
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The viewer node in headless chromium against a stand-in planner (test/browser/fake_planner.py).
 
 What a user sees: "waiting for joint_states" with no planner, the actor's status once one runs,
 cmd_vel from the drag pad (up = forward, left = turn left, release = zero), and the page telling
@@ -12,14 +27,12 @@ import socket
 import sys
 import time
 
-import numpy as np
-import pytest
-
-from ros_harness import NodeProcess, ros_env, wait_for
-
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, 'browser'))
 from chromium_page import ChromiumPage, missing_tools, not_blank  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from ros_harness import NodeProcess, ros_env, wait_for  # noqa: E402
 
 pytestmark = [pytest.mark.ros, pytest.mark.browser, pytest.mark.slow]
 
@@ -32,7 +45,7 @@ def _viewer(env, port, log):
 
 
 def _wait_for_address(process, timeout=60.0):
-    """The address the viewer printed (it names a busy port and the one it chose)."""
+    """Return the address the viewer printed (it names a busy port and the one it chose)."""
     found = {}
 
     def printed():
@@ -159,7 +172,7 @@ def test_viewer_page_waits_steers_and_survives_planner_death(
 
 
 def _latest_camera(page, last):
-    """The camera the page reported last (see ChromiumPage.camera_reports), or ``last``."""
+    """Return the camera the page reported last (see ChromiumPage.camera_reports), or ``last``."""
     reports = page.camera_reports()
     return reports[-1] if reports else last
 

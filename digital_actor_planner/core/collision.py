@@ -1,4 +1,19 @@
-"""Exact collision tests of the actor's URDF collision shapes against the environment.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Exact collision tests of the actor's URDF collision shapes against the environment.
 
 The paper checks the legs' swing (§4.1), the footsteps (§4.2) and the upper body's branches
 (§5) for collisions in 3D. Every check here uses the URDF's own primitives (boxes, cylinders,
@@ -30,8 +45,12 @@ _NO_POSES = np.zeros((0, 3, 4))
 
 @kernel('f8(i8, f8[::1], f8[:, :], i8)')
 def _extent(kind, half, rotation, axis):
-    """World axis-aligned half extent along ``axis`` of a shape (kind code, padded half
-    extents) turned by ``rotation`` (its top-left 3 x 3 is read), m."""
+    """
+    Return a turned shape's world axis-aligned half extent along ``axis``, m.
+
+    World axis-aligned half extent along ``axis`` of a shape (kind code, padded half extents)
+    turned by ``rotation`` (its top-left 3 x 3 is read), m.
+    """
     if kind == 0:
         return (abs(rotation[axis, 0]) * half[0] + abs(rotation[axis, 1]) * half[1]
                 + abs(rotation[axis, 2]) * half[2])
@@ -69,7 +88,8 @@ def _unmoved(a, b):
 def _suspects(transforms, kinds, halves, top_bound, pyramid, slot_of, stamp, clock, wanted,
               missed, tiles_x, nx, ny, x0, y0, inverse, free_end, after_free_end, reach,
               mesh_low, mesh_high):
-    """The broad phase of :meth:`BodyCollision.first_collision` in one pass.
+    """
+    Return the broad phase of :meth:`BodyCollision.first_collision` in one pass.
 
     ``transforms``: (k, S, 4, 4) shape poses over a motion. A shape is a suspect at a frame
     unless ``top_bound`` and its lowest point lies above the environment's height bound over
@@ -149,7 +169,7 @@ def _rotate_columns(r: Sequence[float], axis: int, angle: float) -> Tuple[float,
 
 
 def _quaternion(r: Sequence[float]) -> Tuple[float, float, float, float]:
-    """Unit quaternion (w, x, y, z) of a rotation matrix given as 9 floats, row-major."""
+    """Return the unit quaternion (w, x, y, z) of a rotation matrix as 9 floats, row-major."""
     trace = r[0] + r[4] + r[8]
     if trace > 0.0:
         s = 2.0 * math.sqrt(trace + 1.0)
@@ -166,9 +186,13 @@ def _quaternion(r: Sequence[float]) -> Tuple[float, float, float, float]:
 
 @kernel('f8[:, :, ::1](f8[:, :, :, :])')
 def _quaternions(rotation):
-    """:func:`_quaternion` of every rotation of an (m, n, 3, 3) batch: (m, n, 4), the same
-    numbers (posing an FCL object by quaternion and translation is several times cheaper than
-    by an ``fcl.Transform``)."""
+    """
+    Return :func:`_quaternion` of every rotation of an (m, n, 3, 3) batch: (m, n, 4).
+
+    :func:`_quaternion` of every rotation of an (m, n, 3, 3) batch: (m, n, 4), the same numbers
+    (posing an FCL object by quaternion and translation is several times cheaper than by an
+    ``fcl.Transform``).
+    """
     m, n = rotation.shape[0], rotation.shape[1]
     out = np.empty((m, n, 4))
     for i in range(m):
@@ -205,8 +229,12 @@ def _rodrigues(axis: Sequence[float], angle: float) -> Tuple[float, ...]:
 
 
 def shape_geometry(shape, padding: float = 0.0):
-    """FCL geometry of one URDF shape grown by ``padding`` (m; negative shrinks it, to no less
-    than a micrometre), and its (kind, half extents)."""
+    """
+    Return the FCL geometry of one URDF shape grown by ``padding`` m, and its (kind, half extents).
+
+    FCL geometry of one URDF shape grown by ``padding`` (m; negative shrinks it, to no less than a
+    micrometre), and its (kind, half extents).
+    """
     if shape.kind == 'box':
         size = np.maximum(np.asarray(shape.size, dtype=float) + 2 * padding, 1e-6)
         return fcl.Box(*size), ('box', size / 2)
@@ -221,8 +249,12 @@ def shape_geometry(shape, padding: float = 0.0):
 
 
 def shape_reach(half) -> float:
-    """Radius of the sphere about a shape's centre that holds it, from ``shape_geometry``'s
-    (kind, half extents), m."""
+    """
+    Return the radius of the sphere about a shape's centre that holds it, m.
+
+    Radius of the sphere about a shape's centre that holds it, from ``shape_geometry``'s (kind,
+    half extents), m.
+    """
     kind, extent = half
     if kind == 'box':
         return float(np.linalg.norm(extent))
@@ -232,7 +264,8 @@ def shape_reach(half) -> float:
 
 
 class BodyCollision:
-    """The actor's collision shapes as FCL objects, tested against an environment.
+    """
+    The actor's collision shapes as FCL objects, tested against an environment.
 
     Parameters
     ----------
@@ -393,11 +426,11 @@ class BodyCollision:
         return obj
 
     def _candidates(self, shape: int) -> List[int]:
-        """Indices of environment meshes whose bounds overlap the placed shape's bounding box."""
+        """Return the indices of environment meshes whose bounds overlap the placed shape's box."""
         return self._candidates_near(self._placed[shape][1], self._reach[shape])
 
     def _candidates_near(self, centre, reach: float) -> List[int]:
-        """Indices of environment meshes whose bounds come within ``reach`` of ``centre``."""
+        """Return indices of environment meshes with bounds within ``reach`` of ``centre``."""
         x, y, z = centre
         x0, x1, y0, y1, z0, z1 = x - reach, x + reach, y - reach, y + reach, z - reach, z + reach
         return [i for i, (lx, ly, lz, hx, hy, hz) in self._mesh_boxes
@@ -448,7 +481,8 @@ class BodyCollision:
 
     def first_collision(self, frames: np.ndarray,
                         links: Optional[Iterable[str]] = None) -> Tuple[int, List[str]]:
-        """First frame of a motion at which the given links touch the environment.
+        """
+        First frame of a motion at which the given links touch the environment.
 
         Batched: forward kinematics for all frames at once, a conservative height bound that
         clears the shapes lying above everything near their footprint (``top_bound``), then
@@ -543,7 +577,8 @@ class BodyCollision:
         return float(half[0] * math.sqrt(max(0.0, 1.0 - along * along)) + half[1] * along)
 
     def _shape_penetration(self, shape: int) -> float:
-        """Depth of one placed shape behind the surfaces it touches, m (0.0 if free).
+        """
+        Depth of one placed shape behind the surfaces it touches, m (0.0 if free).
 
         FCL's own contact depth for a primitive against a single triangle measures how far
         the shape must move to clear that triangle (often sideways off its edge), not how deep
@@ -581,7 +616,8 @@ class BodyCollision:
         return max(0.0, float((vertices[0] - centre) @ normal) + self._support(shape, normal))
 
     def penetration(self, q, links: Optional[Iterable[str]] = None) -> Dict[str, float]:
-        """Largest penetration depth of each link's shapes into the environment.
+        """
+        Largest penetration depth of each link's shapes into the environment.
 
         Returns
         -------
@@ -621,7 +657,8 @@ class BodyCollision:
 
     # -- self collision ------------------------------------------------------------------
     def self_collides(self, q, links_a: Sequence[str], links_b: Sequence[str]) -> bool:
-        """Whether any shape of a link in ``links_a`` touches any shape of a link in ``links_b``.
+        """
+        Whether any shape of a link in ``links_a`` touches any shape of a link in ``links_b``.
 
         The caller chooses the pairs: links joined by a joint (the upper arm and the forearm,
         the torso and the shoulders) overlap by construction and must not be passed against

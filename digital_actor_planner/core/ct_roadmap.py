@@ -1,4 +1,19 @@
-"""The CT-roadmap: best-first planning forward in configuration-time space (paper §5.2).
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The CT-roadmap: best-first planning forward in configuration-time space (paper §5.2).
 
 The roadmap's nodes are branch configurations stored as deviations from the objective O(t)
 (§5.1), so a node means the same posture relative to the motion pattern at any time and the
@@ -45,7 +60,8 @@ from .jit import kernel
 
 @dataclass(frozen=True)
 class SearchResult:
-    """Outcome of one CT-roadmap search.
+    """
+    Outcome of one CT-roadmap search.
 
     Attributes
     ----------
@@ -116,11 +132,15 @@ _GRIDS: Dict[Tuple[int, int], np.ndarray] = {}
 
 @kernel('f8[:, ::1](f8[:, :], f8[:], f8[:, ::1], i8[::1], f8[:], f8[:])')
 def _stack_path(objective, times, deviations, frames, lower, upper):
-    """:meth:`CTRoadmap._path` of states (``deviations`` (s, d) from the ``objective`` (k, d)
-    at ``frames`` (s,)): each motion between successive states interpolated as
-    :meth:`CTSpace.motion_frames` does it (the same operations in the same order, so the
-    same numbers), a later motion writing over the frame it shares with the one before, the
-    last state held to the final frame, then clipped to [lower, upper]."""
+    """
+    Return :meth:`CTRoadmap._path` of states, interpolated and clipped to the limits.
+
+    :meth:`CTRoadmap._path` of states (``deviations`` (s, d) from the ``objective`` (k, d) at
+    ``frames`` (s,)): each motion between successive states interpolated as
+    :meth:`CTSpace.motion_frames` does it (the same operations in the same order, so the same
+    numbers), a later motion writing over the frame it shares with the one before, the last state
+    held to the final frame, then clipped to [lower, upper].
+    """
     k, d = objective.shape
     out = np.empty((k, d))
     for i in range(k):
@@ -168,9 +188,13 @@ def _horizon_tables(free):
 
 @kernel('i8[::1](f8[:, :], f8[:], f8)')
 def _travel(change, rate, step):
-    """:meth:`CTRoadmap._travel_frames` of changes (n, d) at joint speeds ``rate`` (d,), frames
-    ``step`` s apart: the same arithmetic as NumPy's (largest time over the joints, rounded
-    up to whole frames, at least 1)."""
+    """
+    Return :meth:`CTRoadmap._travel_frames` of changes (n, d) at joint speeds ``rate``.
+
+    :meth:`CTRoadmap._travel_frames` of changes (n, d) at joint speeds ``rate`` (d,), frames
+    ``step`` s apart: the same arithmetic as NumPy's (largest time over the joints, rounded up to
+    whole frames, at least 1).
+    """
     out = np.empty(change.shape[0], dtype=np.int64)
     for i in range(change.shape[0]):
         seconds = 0.0
@@ -181,9 +205,13 @@ def _travel(change, rate, step):
 
 
 def _travel_over(times: np.ndarray, change: np.ndarray, rate: np.ndarray):
-    """Frames of ``times`` (k,) needed to change by ``change`` (..., d) at joint speeds
-    ``rate`` (d,) rad/s, the frames taken as evenly spaced: an int (an int array for a batch
-    of changes), at least 1."""
+    """
+    Return the frames of ``times`` needed to change by ``change`` at joint speeds ``rate``.
+
+    Frames of ``times`` (k,) needed to change by ``change`` (..., d) at joint speeds ``rate`` (d,)
+    rad/s, the frames taken as evenly spaced: an int (an int array for a batch of changes), at
+    least 1.
+    """
     step = (times[-1] - times[0]) / max(len(times) - 1, 1)
     change = np.asarray(change, dtype=np.float64)
     frames = _travel(change.reshape(-1, change.shape[-1]), rate, float(step))
@@ -195,12 +223,14 @@ def _travel_over(times: np.ndarray, change: np.ndarray, rate: np.ndarray):
         'b1[::1], f8[:], f8[:, :])')
 def _neighbour_table(nodes, deviation, here, last, hold_frames, with_objective, on_objective,
                      approach_first, times, rate, hold_end, free, weights, objective):
-    """The neighbours :func:`_expand` ranks for a state, in one pass: targets (m, d) as
-    deviations, arrival frames (m,), closeness (m,), the index of the approach hold or -1,
-    and for the ranking: whether each is the current posture held (m,), its arrival as
-    ranked (later first for holds and, on the objective, for all: negated), closeness
-    rounded to 1e-6 and targets to 1e-3 (NumPy's rounding), and the configurations
-    (``objective`` at the arrivals plus the targets).
+    """
+    Return the neighbours :func:`_expand` ranks for a state, in one pass.
+
+    The neighbours :func:`_expand` ranks for a state, in one pass: targets (m, d) as deviations,
+    arrival frames (m,), closeness (m,), the index of the approach hold or -1, and for the ranking:
+    whether each is the current posture held (m,), its arrival as ranked (later first for holds
+    and, on the objective, for all: negated), closeness rounded to 1e-6 and targets to 1e-3
+    (NumPy's rounding), and the configurations (``objective`` at the arrivals plus the targets).
 
     In order: the objective followed to the final frame (``with_objective``); each of
     ``nodes`` at its arrival at joint speeds ``rate`` (a node the remaining time does not
@@ -298,9 +328,12 @@ def _neighbour_table(nodes, deviation, here, last, hold_frames, with_objective, 
         'i1[:, ::1], f8[:, :], ' + CHECK_TABLES_TYPE + ', ' + ROW_MEMO_TYPE + ')')
 def _lasting_table(targets, ids, arrivals, begin, end, spacing, stride, free, held, objective,
                    tables, memo):
-    """:meth:`CTRoadmap._lasting` for the blocked stretch [``begin``, ``end``]: whether each
-    of ``targets`` (m, d), held from its ``arrivals`` (m,), lasts through it, and the
-    configurations checked.
+    """
+    Return whether each held target lasts through the blocked stretch [``begin``, ``end``].
+
+    :meth:`CTRoadmap._lasting` for the blocked stretch [``begin``, ``end``]: whether each of
+    ``targets`` (m, d), held from its ``arrivals`` (m,), lasts through it, and the configurations
+    checked.
 
     ``held`` (postures, frames) caches what is known of a posture (``ids`` (m,): each
     target's row, one per posture rounded to 1e-4 rad) at a frame: -1 unknown, 0 illegal, 1
@@ -385,10 +418,14 @@ def _lasting_table(targets, ids, arrivals, begin, end, spacing, stride, free, he
         'f8[:], f8[:])')
 def _grown_node(direction, deviation, frame, radius, weights, times, rate, objective, lower,
                 upper):
-    """:meth:`CTRoadmap._grow`'s node in a random ``direction`` (d,): the state's
-    ``deviation`` moved ``radius`` along it (scaled to unit weighted norm), arriving at joint
-    speeds ``rate`` no later than the final frame, kept within [``lower``, ``upper``]; as
-    (deviation, arrival frame), with the NumPy arithmetic it replaces."""
+    """
+    Return :meth:`CTRoadmap._grow`'s node in a random ``direction`` (d,).
+
+    :meth:`CTRoadmap._grow`'s node in a random ``direction`` (d,): the state's ``deviation`` moved
+    ``radius`` along it (scaled to unit weighted norm), arriving at joint speeds ``rate`` no later
+    than the final frame, kept within [``lower``, ``upper``]; as (deviation, arrival frame), with
+    the NumPy arithmetic it replaces.
+    """
     d = deviation.shape[0]
     last = times.shape[0] - 1
     total = 0.0
@@ -419,7 +456,7 @@ POSTURES_TYPE = 'DictType(UniTuple(f8, 4), i8)'
 
 @kernel(VISITED_TYPE + '()')
 def _empty_visited():
-    """An empty set of tried neighbours (typed by a first entry, removed at once)."""
+    """Return an empty set of tried neighbours (typed by a first entry, removed at once)."""
     visited = {(-1.0, 0.0, 0.0, 0.0, 0.0): np.bool_(True)}
     del visited[(-1.0, 0.0, 0.0, 0.0, 0.0)]
     return visited
@@ -427,7 +464,7 @@ def _empty_visited():
 
 @kernel(POSTURES_TYPE + '()')
 def _empty_postures():
-    """An empty numbering of postures (typed by a first entry, removed at once)."""
+    """Return an empty numbering of postures (typed by a first entry, removed at once)."""
     postures = {(0.0, 0.0, 0.0, 0.0): np.int64(0)}
     del postures[(0.0, 0.0, 0.0, 0.0)]
     return postures
@@ -435,16 +472,23 @@ def _empty_postures():
 
 @kernel('f8(f8)')
 def _unsigned_zero(value):
-    """``value`` with a zero of either sign as 0.0: numba's dictionaries compare float keys
-    bit by bit, where -0.0 (a deviation rounded from a tiny negative one) and 0.0 differ,
-    unlike Python's."""
+    """
+    Return ``value`` with a zero of either sign as 0.0.
+
+    ``value`` with a zero of either sign as 0.0: numba's dictionaries compare float keys bit by
+    bit, where -0.0 (a deviation rounded from a tiny negative one) and 0.0 differ, unlike Python's.
+    """
     return 0.0 if value == 0.0 else value
 
 
 @kernel('UniTuple(f8, 4)(f8[:, ::1], i8)')
 def _padded(rows, i):
-    """Row ``i`` of ``rows`` (m, d), d <= 4, zero-padded to four values, as a dictionary key
-    (zeros unsigned, :func:`_unsigned_zero`)."""
+    """
+    Return row ``i`` of ``rows`` (m, d), zero-padded to four values, as a dictionary key.
+
+    Row ``i`` of ``rows`` (m, d), d <= 4, zero-padded to four values, as a dictionary key (zeros
+    unsigned, :func:`_unsigned_zero`).
+    """
     d = rows.shape[1]
     return (_unsigned_zero(rows[i, 0]), _unsigned_zero(rows[i, 1]) if d > 1 else 0.0,
             _unsigned_zero(rows[i, 2]) if d > 2 else 0.0,
@@ -453,8 +497,12 @@ def _padded(rows, i):
 
 @kernel('UniTuple(f8, 5)(i8, f8[:, ::1], i8)')
 def _visited_key(arrival, rounded, i):
-    """The key of the neighbour (arrival frame, row ``i`` of ``rounded``, its target rounded to
-    1e-3 rad) among a search's tried ones."""
+    """
+    Return the key of a neighbour among a search's tried ones.
+
+    The key of the neighbour (arrival frame, row ``i`` of ``rounded``, its target rounded to 1e-3
+    rad) among a search's tried ones.
+    """
     padded = _padded(rounded, i)
     return (float(arrival), padded[0], padded[1], padded[2], padded[3])
 
@@ -464,10 +512,12 @@ def _visited_key(arrival, rounded, i):
         + ROW_MEMO_TYPE + ')')
 def _lasting_from(targets, arrivals, here, hold_frames, free, next_free, held, postures,
                   objective, tables, memo):
-    """:meth:`CTRoadmap._lasting`: whether each of ``targets`` (m, d), held from its
-    ``arrivals`` (m,), lasts through the first blocked stretch from ``here`` on (all True
-    where there is none), the configurations checked, and ``held`` (a larger copy where new
-    postures outgrew it).
+    """
+    Return :meth:`CTRoadmap._lasting`: whether each held target lasts through the blockage.
+
+    :meth:`CTRoadmap._lasting`: whether each of ``targets`` (m, d), held from its ``arrivals``
+    (m,), lasts through the first blocked stretch from ``here`` on (all True where there is none),
+    the configurations checked, and ``held`` (a larger copy where new postures outgrew it).
 
     Each posture (a target rounded to 1e-4 rad) is numbered in ``postures`` as it first
     appears (its row of ``held``), then :func:`_lasting_table` answers.
@@ -501,9 +551,12 @@ def _lasting_from(targets, arrivals, here, hold_frames, free, next_free, held, p
 
 @kernel('i8[::1](i8[::1], f8[::1], b1, b1[::1])')
 def _ranking(ranked_frames, ranked_closeness, with_lasting, lasting):
-    """The order :func:`numpy.lexsort` gives the keys (``ranked_frames``,
-    ``ranked_closeness``), with ``~lasting`` as the first key when ``with_lasting``: row
-    indices, ties in row order."""
+    """
+    Return the order :func:`numpy.lexsort` gives the ranking keys.
+
+    The order :func:`numpy.lexsort` gives the keys (``ranked_frames``, ``ranked_closeness``), with
+    ``~lasting`` as the first key when ``with_lasting``: row indices, ties in row order.
+    """
     m = ranked_frames.shape[0]
     order = np.empty(m, dtype=np.int64)
     for i in range(m):
@@ -527,8 +580,11 @@ def _ranking(ranked_frames, ranked_closeness, with_lasting, lasting):
 
 @kernel('i8(f8[::1], i8, f8[:, ::1], i8[::1], i8[::1])')
 def _longest_hold(deviation, arrival, before, before_arrivals, failures):
-    """Arrival frame of a hold of ``deviation`` (d,) chosen to ``arrival``, made as long as the
-    failed longer holds of it checked before show it is legal.
+    """
+    Return the arrival frame of the longest legal hold of ``deviation`` (d,).
+
+    Arrival frame of a hold of ``deviation`` (d,) chosen to ``arrival``, made as long as the failed
+    longer holds of it checked before show it is legal.
 
     A longer hold that failed was legal up to the frame before it failed, and of two holds
     the longer ranks first (see _neighbour_table): the hold goes on to there in this advance
@@ -555,10 +611,13 @@ def _expand(deviation, here, has_candidates, candidate_targets, candidate_frames
             nodes, weights, max_candidates, prefer_lasting, hold_frames, free, next_free,
             held, postures, objective, times, rate, frame_step, speed_cap, tables, memo,
             visited):
-    """:meth:`CTRoadmap._advance` from a state at ``here`` with ``deviation`` (d,), past the
-    shortcuts it takes on the objective: rank the neighbours (once per state: ``has_candidates``
-    says whether ``candidate_targets``, ``candidate_frames`` and ``candidate_keys`` hold the
-    ones left from an earlier visit), then try the untried ones in order.
+    """
+    Advance from a state at ``here`` as :meth:`CTRoadmap._advance` does.
+
+    :meth:`CTRoadmap._advance` from a state at ``here`` with ``deviation`` (d,), past the shortcuts
+    it takes on the objective: rank the neighbours (once per state: ``has_candidates`` says whether
+    ``candidate_targets``, ``candidate_frames`` and ``candidate_keys`` hold the ones left from an
+    earlier visit), then try the untried ones in order.
 
     The state's other fields: ``followed``, ``tried_objective``, ``relaxed``, ``until``, and
     ``allowed`` (the nodes of a sub-goal, used while ``sub_goal``); the roadmap's ``nodes``,
@@ -845,7 +904,8 @@ ROADMAP_SEARCHES = ('compiled', 'readable')
 
 @dataclass(frozen=True)
 class Expansion:
-    """What one expansion of a search state found (:func:`best_first_expansion`).
+    """
+    What one expansion of a search state found (:func:`best_first_expansion`).
 
     Attributes
     ----------
@@ -870,7 +930,8 @@ class Expansion:
 
 def best_first_expansion(roadmap: 'CTRoadmap', space: CTSpace, state: _State,
                          horizon: _Horizon, speed_fraction: float, visited) -> Expansion:
-    """Expand one state of §5.2's best-first search: the first legal advance to a neighbour.
+    """
+    Expand one state of §5.2's best-first search: the first legal advance to a neighbour.
 
     The neighbours are ranked once per state (the roadmap's nodes reached at joint speeds,
     the objective followed, the posture held; closest to the objective first, lasting
@@ -966,11 +1027,15 @@ def best_first_expansion(roadmap: 'CTRoadmap', space: CTSpace, state: _State,
 
 def _rank_neighbours(roadmap: 'CTRoadmap', space: CTSpace, state: _State, horizon: _Horizon,
                      speed_fraction: float, visited) -> tuple:
-    """The neighbours of a state in rank order whose end points are legal: the closest
-    ``max_candidates``, and holding the current posture whatever its rank (targets (c, d),
-    arrivals (c,), keys (c, d)); whether only lasting ones are offered; and the motion to
-    the best untried one, checked in the same batch as the end points ((goal, arrival,
-    first illegal frame) or None)."""
+    """
+    Return the neighbours of a state in rank order whose end points are legal.
+
+    The neighbours of a state in rank order whose end points are legal: the closest
+    ``max_candidates``, and holding the current posture whatever its rank (targets (c, d), arrivals
+    (c,), keys (c, d)); whether only lasting ones are offered; and the motion to the best untried
+    one, checked in the same batch as the end points ((goal, arrival, first illegal frame) or
+    None).
+    """
     here, deviation = state.frame, state.deviation
     hold_frames = horizon.hold_frames
     on_objective = not np.any(deviation)
@@ -1037,8 +1102,11 @@ def _rank_neighbours(roadmap: 'CTRoadmap', space: CTSpace, state: _State, horizo
 
 def _lasting_neighbours(space: CTSpace, horizon: _Horizon, here: int, targets: np.ndarray,
                         arrivals: np.ndarray) -> np.ndarray:
-    """Whether each neighbour, held from its arrival, lasts through the blocked stretch ahead:
-    the readable ``CTRoadmap._lasting``, through the space's ``valid_rows``.
+    """
+    Return whether each neighbour, held from its arrival, lasts through the blockage ahead.
+
+    Whether each neighbour, held from its arrival, lasts through the blocked stretch ahead: the
+    readable ``CTRoadmap._lasting``, through the space's ``valid_rows``.
 
     The stretch is the first one from ``here`` on where the objective is blocked, to the frame
     it is legal again. A moved posture must be legal on a grid over it (the stretch's start
@@ -1116,7 +1184,8 @@ def _lasting_neighbours(space: CTSpace, horizon: _Horizon, here: int, targets: n
 def _neighbours(nodes: np.ndarray, space: CTSpace, state: _State, horizon: _Horizon,
                 rate: np.ndarray, weights: np.ndarray, approach_first: bool,
                 with_objective: bool) -> tuple:
-    """The neighbours of a state before they are ranked: the readable ``_neighbour_table``.
+    """
+    Return the neighbours of a state before they are ranked: the readable ``_neighbour_table``.
 
     In order: the objective followed to the final frame (``with_objective``); each of
     ``nodes`` (n, d) at its arrival at joint speeds ``rate`` (d,) rad/s (one the remaining
@@ -1189,9 +1258,12 @@ def _neighbours(nodes: np.ndarray, space: CTSpace, state: _State, horizon: _Hori
 
 
 def objective_grid(last: int, spacing: int) -> np.ndarray:
-    """Frames 0, ``spacing``, 2 ``spacing``, ... and ``last``: where a search first checks the
-    objective (:meth:`CTRoadmap._objective_free`); made once per (last, spacing) and shared,
-    never changed by a caller."""
+    """
+    Frames 0, ``spacing``, 2 ``spacing``, ...
+
+    and ``last``: where a search first checks the objective (:meth:`CTRoadmap._objective_free`);
+    made once per (last, spacing) and shared, never changed by a caller.
+    """
     grid = _GRIDS.get((last, spacing))
     if grid is None:
         grid = _GRIDS[last, spacing] = np.unique(np.append(np.arange(0, last + 1, spacing),
@@ -1201,8 +1273,11 @@ def objective_grid(last: int, spacing: int) -> np.ndarray:
 
 def direct_return(objective: np.ndarray, times: np.ndarray, start: np.ndarray,
                   rate: np.ndarray) -> Optional[Tuple[int, np.ndarray]]:
-    """The motion a search from a start off the objective tries first: straight back to it at
-    joint speeds ``rate`` (d,), then along it (:meth:`CTRoadmap._return_directly`).
+    """
+    Return the motion a search from a start off the objective tries first.
+
+    The motion a search from a start off the objective tries first: straight back to it at joint
+    speeds ``rate`` (d,), then along it (:meth:`CTRoadmap._return_directly`).
 
     Parameters
     ----------
@@ -1239,7 +1314,8 @@ def direct_return(objective: np.ndarray, times: np.ndarray, start: np.ndarray,
 
 
 def warm_up(space: CTSpace, patterns: np.ndarray, weights: np.ndarray) -> None:
-    """Call the kernels a search calls from Python once, on ``space``, answers thrown away.
+    """
+    Call the kernels a search calls from Python once, on ``space``, answers thrown away.
 
     numba works out the types of a kernel's arguments the first time it meets them in a
     process (the check tables hold 45 arrays: about 2.5 ms for a search's kernels), a cost
@@ -1258,7 +1334,8 @@ def warm_up(space: CTSpace, patterns: np.ndarray, weights: np.ndarray) -> None:
 
 
 class _Horizon:
-    """Per search: where the objective is legal, and how far a posture is held from a frame.
+    """
+    Per search: where the objective is legal, and how far a posture is held from a frame.
 
     Parameters
     ----------
@@ -1283,14 +1360,19 @@ class _Horizon:
         self.next_free, self.run_start = _horizon_tables(self.free)
 
     def hold_end(self, here: int) -> int:
-        """Frame a posture held from ``here`` is held to: ``hold_frames`` on, then on to where
-        the objective is legal again if it is blocked there."""
+        """
+        Return the frame a posture held from ``here`` is held to.
+
+        Frame a posture held from ``here`` is held to: ``hold_frames`` on, then on to where the
+        objective is legal again if it is blocked there.
+        """
         end = min(here + self.hold_frames, self.last)
         return int(self.next_free[end])
 
 
 class CTRoadmap:
-    """A CT-roadmap for one branch, kept between successive plans.
+    """
+    A CT-roadmap for one branch, kept between successive plans.
 
     Parameters
     ----------
@@ -1359,8 +1441,12 @@ class CTRoadmap:
 
     @property
     def nodes(self) -> np.ndarray:
-        """All roadmap nodes as deviations from the objective: (n, d), rad (read-only; made
-        again only when a node is grown)."""
+        """
+        Return all roadmap nodes as deviations from the objective: (n, d), rad.
+
+        All roadmap nodes as deviations from the objective: (n, d), rad (read-only; made again only
+        when a node is grown).
+        """
         if self._nodes is None:
             self._nodes = np.vstack([self.patterns, self.grown_nodes])
             self._nodes.flags.writeable = False
@@ -1381,7 +1467,8 @@ class CTRoadmap:
     @staticmethod
     def _travel_frames(space: CTSpace, frame: int, change: np.ndarray,
                        speed_fraction: float) -> np.ndarray:
-        """Frames needed to change the deviation by ``change`` (..., d) at a fraction of the limit.
+        """
+        Frames needed to change the deviation by ``change`` (..., d) at a fraction of the limit.
 
         Returns an int (or an int array for a batch of changes), at least 1.
         """
@@ -1397,7 +1484,8 @@ class CTRoadmap:
               preview_backtracks: int = 2,
               seed: Optional[np.ndarray] = None,
               growth_lower: Optional[np.ndarray] = None) -> SearchResult:
-        """Search forward in time from ``start`` at frame 0 to any legal state at frame k-1.
+        """
+        Search forward in time from ``start`` at frame 0 to any legal state at frame k-1.
 
         Parameters
         ----------
@@ -1544,8 +1632,11 @@ class CTRoadmap:
     def _return_directly(self, space: CTSpace, stack: List[_State], horizon: _Horizon,
                          speed_fraction: float, route: Optional[tuple] = None,
                          route_bad: Optional[int] = None) -> bool:
-        """From a state off the objective with the objective free from where it can be
-        reached on, go back to it and follow it to the final frame, if that is legal.
+        """
+        Go back to the objective from a state off it and follow it, if that is legal.
+
+        From a state off the objective with the objective free from where it can be reached on, go
+        back to it and follow it to the final frame, if that is legal.
 
         This is the path best-first search takes first there (the objective is the closest
         neighbour, and following it to the final frame the best advance from it), checked in
@@ -1572,9 +1663,13 @@ class CTRoadmap:
 
     def _direct_route(self, space: CTSpace, state: _State,
                       speed_fraction: float) -> Optional[Tuple[int, list]]:
-        """(arrival frame, waypoints) of the way back from an off-objective state to the
-        objective and along it to the final frame; None on the objective or when the way
-        back takes until the final frame."""
+        """
+        Return the way back from an off-objective state to the objective and along it.
+
+        (arrival frame, waypoints) of the way back from an off-objective state to the objective and
+        along it to the final frame; None on the objective or when the way back takes until the
+        final frame.
+        """
         if not state.deviation.any():
             return None
         last = space.frame_count - 1
@@ -1588,7 +1683,8 @@ class CTRoadmap:
 
     def _follow_seed(self, space: CTSpace, stack: List[_State], seed: np.ndarray,
                      spacing: int, horizon: _Horizon) -> int:
-        """Push states every ``spacing`` frames along a seed motion, as far as it is legal.
+        """
+        Push states every ``spacing`` frames along a seed motion, as far as it is legal.
 
         The seed is followed only to the end of the last stretch within it where the objective
         is blocked (not at all if there is none): past it the search itself returns to the
@@ -1622,7 +1718,8 @@ class CTRoadmap:
 
     @staticmethod
     def _objective_free(space: CTSpace, spacing: int) -> np.ndarray:
-        """Whether the objective is legal at each frame, checked every ``spacing`` frames: (k,).
+        """
+        Whether the objective is legal at each frame, checked every ``spacing`` frames: (k,).
 
         A frame between two checked frames counts as blocked when either of them is, so the
         blocked stretches found cover the real ones up to ``spacing - 1`` frames either side.
@@ -1648,7 +1745,8 @@ class CTRoadmap:
     @staticmethod
     def _lasting(space: CTSpace, horizon: _Horizon, here: int, targets: np.ndarray,
                  arrivals: np.ndarray) -> np.ndarray:
-        """Whether each neighbour, held from its arrival, lasts through the blocked stretch ahead.
+        """
+        Whether each neighbour, held from its arrival, lasts through the blocked stretch ahead.
 
         The stretch is the first one from ``here`` on where the objective is blocked, to the
         frame it is legal again (or the last frame). A deviation held from its arrival (from
@@ -1744,7 +1842,8 @@ class CTRoadmap:
         return child
 
     def _follow(self, space: CTSpace, state: _State, horizon: _Horizon) -> Optional[_State]:
-        """Follow the objective from a state on it, hold_frames at a time, in one motion check.
+        """
+        Follow the objective from a state on it, hold_frames at a time, in one motion check.
 
         The states every hold_frames frames up to the last one before the objective is blocked
         are the ones keeping the objective one hold at a time would reach, but only one motion
@@ -1791,8 +1890,12 @@ class CTRoadmap:
 
     def _grow(self, space: CTSpace, state: _State, speed_fraction: float,
               attempts: int, lower: Optional[np.ndarray] = None) -> Optional[_State]:
-        """Grow a roadmap node at distance r from the current state (§5.2), its joints no
-        lower than ``lower`` (rad; None: the space's limits)."""
+        """
+        Grow a roadmap node at distance r from the current state (§5.2).
+
+        Grow a roadmap node at distance r from the current state (§5.2), its joints no lower than
+        ``lower`` (rad; None: the space's limits).
+        """
         rate = speed_fraction * space.speed_limit
         lower = space.lower if lower is None else np.maximum(space.lower, lower)
         for _ in range(attempts):
@@ -1809,7 +1912,8 @@ class CTRoadmap:
     def _jump_back(self, space: CTSpace, stack: List[_State], blocked: int,
                    speed_fraction: float, jumps: set, horizon: _Horizon, known: dict,
                    targets: int = 4) -> Optional[Tuple[int, _State]]:
-        """Backtrack to the latest earlier state that can reach a node legal at ``blocked``.
+        """
+        Backtrack to the latest earlier state that can reach a node legal at ``blocked``.
 
         For the few nodes closest to the objective that are legal at the blocking frame (those
         that can be held through the whole blocked stretch first), the latest departure that
@@ -1883,7 +1987,8 @@ class CTRoadmap:
 
     @staticmethod
     def _push(space: CTSpace, stack: List[_State], child: _State, spacing: int) -> None:
-        """Push a state, with relay states every ``spacing`` frames along the motion to it.
+        """
+        Push a state, with relay states every ``spacing`` frames along the motion to it.
 
         Deviations are interpolated linearly in time, so every piece of a checked motion is
         itself a legal motion: the relays are legal departure points for later backtracking.
@@ -1911,7 +2016,8 @@ class CTRoadmap:
 
     @staticmethod
     def _path(space: CTSpace, stack: List[_State]) -> np.ndarray:
-        """Configurations at every frame along the states of the stack: (k, d), rad.
+        """
+        Return the configuration at every frame along the states of the stack: (k, d), rad.
 
         The motions between the states as :meth:`CTSpace.motion_frames` gives them (one
         kernel, the same arithmetic), then the last state held to the final frame, within the

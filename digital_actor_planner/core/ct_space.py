@@ -1,4 +1,19 @@
-"""Configuration-time space of one upper-body branch (paper §5.2).
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Configuration-time space of one upper-body branch (paper §5.2).
 
 The pelvis trajectory q_R(t) and the legs are fixed by the locomotion planner (§4), and the
 branches planned before this one are fixed by the priority order of §5 (waist, then left arm,
@@ -68,7 +83,8 @@ def _axis_code(axis: np.ndarray) -> Tuple[int, float]:
 def _link_poses(q, rotations, positions, parent, child, origin_rotation, turned,
                 origin_translation, offset_axis, offset_length, has_offset, joint, kind,
                 axis_coordinate, axis_sign, axis):
-    """:meth:`BodyKinematics.poses` of a sequence of joint steps for every frame, in place.
+    """
+    :meth:`BodyKinematics.poses` of a sequence of joint steps for every frame, in place.
 
     Per step (arrays over the steps): its ``parent`` and ``child`` link rows; its origin's
     rotation (where ``turned``) and translation (where ``has_offset``; along one coordinate
@@ -149,9 +165,13 @@ def _link_poses(q, rotations, positions, parent, child, origin_rotation, turned,
         'i8[::1], f8[:, :, :, ::1], f8[:, :, ::1])')
 def _place_shapes(rotations, positions, links, offsets, turns, turned, slots, rotation,
                   centre):
-    """Shapes' world poses over frames, into ``rotation`` (k, S, 3, 3) and ``centre``
-    (k, S, 3) at their ``slots``: shape i hangs from link row ``links[i]`` at ``offsets[i]``
-    (m, in the link's frame), turned by ``turns[i]`` where ``turned[i]``."""
+    """
+    Place the shapes' world poses over frames into ``rotation`` and ``centre``.
+
+    Shapes' world poses over frames, into ``rotation`` (k, S, 3, 3) and ``centre`` (k, S, 3) at
+    their ``slots``: shape i hangs from link row ``links[i]`` at ``offsets[i]`` (m, in the link's
+    frame), turned by ``turns[i]`` where ``turned[i]``.
+    """
     for f in range(rotations.shape[0]):
         for i in range(links.shape[0]):
             link, s = links[i], slots[i]
@@ -175,12 +195,16 @@ def _place_shapes(rotations, positions, links, offsets, turns, turned, slots, ro
 def _pose_shapes_into(rotations, positions, links, offsets, turns, turned, kinds, halves,
                       slots, shape_rotation, shape_centre, shape_lower, shape_upper,
                       swept_lower, swept_upper):
-    """:meth:`BodyShapes.poses` and :meth:`BodyShapes.bounds` of some shapes (their links,
-    origins, kind codes and half extents; one row each) written in place at their ``slots``
-    of a body's (k, S, ...) pose and box arrays, and their boxes swept over the k frames into
-    ``swept_lower``/``swept_upper`` (S, 3): the same kernels and arithmetic, without the
-    copies of scattering the results from Python, nor temporary arrays (the memory a
-    step's body takes is much of what a first plan after other work waits for)."""
+    """
+    Pose some shapes and bound their boxes in place, swept over the k frames.
+
+    :meth:`BodyShapes.poses` and :meth:`BodyShapes.bounds` of some shapes (their links, origins,
+    kind codes and half extents; one row each) written in place at their ``slots`` of a body's (k,
+    S, ...) pose and box arrays, and their boxes swept over the k frames into
+    ``swept_lower``/``swept_upper`` (S, 3): the same kernels and arithmetic, without the copies of
+    scattering the results from Python, nor temporary arrays (the memory a step's body takes is
+    much of what a first plan after other work waits for).
+    """
     k, n = rotations.shape[0], links.shape[0]
     _place_shapes(rotations, positions, links, offsets, turns, turned, slots, shape_rotation,
                   shape_centre)
@@ -204,9 +228,13 @@ def _pose_shapes_into(rotations, positions, links, offsets, turns, turned, kinds
 
 @kernel('b1(f8[:, ::1], i8[::1], f8[:, :], b1[::1])')
 def _write_columns(frames, indices, values, changed):
-    """Write ``values`` (k, d) into the ``indices`` columns of ``frames`` (k, n); False (and
-    nothing written) when they already hold them (as ``np.array_equal``: a NaN differs).
-    ``changed`` (k,): set where a frame's values differ (left as it is elsewhere)."""
+    """
+    Write ``values`` (k, d) into the ``indices`` columns of ``frames`` (k, n).
+
+    Write ``values`` (k, d) into the ``indices`` columns of ``frames`` (k, n); False (and nothing
+    written) when they already hold them (as ``np.array_equal``: a NaN differs). ``changed`` (k,):
+    set where a frame's values differ (left as it is elsewhere).
+    """
     same = True
     for f in range(values.shape[0]):
         for j in range(indices.shape[0]):
@@ -236,9 +264,11 @@ def _branch_boxes(q, frames, body_frames, indices, body_rotations, body_position
                   offsets, turns, turned, kinds, halves, rotation, centre, low, high, held,
                   parent, child, origin_rotation, step_turned, origin_translation, offset_axis,
                   offset_length, has_offset, joint, kind, axis_coordinate, axis_sign, axis):
-    """:meth:`CTSpace._shape_boxes` in one pass, into ``rotation`` (m, n, 3, 3), ``centre``,
-    ``low`` and ``high`` (m, n, 3), and ``held`` (m,): whether the row is where the body holds
-    the branch.
+    """
+    Compute :meth:`CTSpace._shape_boxes` in one pass, in place.
+
+    :meth:`CTSpace._shape_boxes` in one pass, into ``rotation`` (m, n, 3, 3), ``centre``, ``low``
+    and ``high`` (m, n, 3), and ``held`` (m,): whether the row is where the body holds the branch.
 
     A row whose branch values ``q`` (m, d) are the body's at its frame (``body_frames`` at
     ``indices``) takes the body's poses and boxes of the ``checked`` shapes; the others are
@@ -312,8 +342,11 @@ def _column_dots(rotation_a, rotation_b, i):
 
 @kernel('b1(f8[:, :], f8[:], f8[:], f8[:, :], f8[:], f8[:], f8)')
 def _boxes_apart(rotation_a, centre_a, half_a, rotation_b, centre_b, half_b, margin):
-    """Whether two oriented boxes are more than ``margin`` apart along one of the 15 axes of
-    the separating axis test (box axes are the rotations' columns, half extents in them).
+    """
+    Return whether two oriented boxes are more than ``margin`` apart (separating axes).
+
+    Whether two oriented boxes are more than ``margin`` apart along one of the 15 axes of the
+    separating axis test (box axes are the rotations' columns, half extents in them).
 
     True only for boxes that do not touch: a conservative test, never True for boxes whose
     gap is less than ``margin`` (m). Near-parallel edge axes are skipped (their face axes
@@ -359,9 +392,13 @@ def _boxes_apart(rotation_a, centre_a, half_a, rotation_b, centre_b, half_b, mar
 
 @kernel('b1(f8, f8, f8, f8, f8, f8, f8, f8, f8, f8, f8, f8, f8[:], f8)')
 def _triangle_apart_along(x, y, z, a0, a1, a2, b0, b1, b2, d0, d1, d2, half, margin):
-    """Whether a box (half extents ``half``, centred at the origin of its frame) and a
-    triangle (corners a, b, d in that frame) are more than ``margin`` apart along the axis
-    (x, y, z), which need not be a unit vector (a near-zero one parts nothing)."""
+    """
+    Return whether a box and a triangle are more than ``margin`` apart along one axis.
+
+    Whether a box (half extents ``half``, centred at the origin of its frame) and a triangle
+    (corners a, b, d in that frame) are more than ``margin`` apart along the axis (x, y, z), which
+    need not be a unit vector (a near-zero one parts nothing).
+    """
     length = np.sqrt(x * x + y * y + z * z)
     if length < 1e-12:
         return False
@@ -375,9 +412,13 @@ def _triangle_apart_along(x, y, z, a0, a1, a2, b0, b1, b2, d0, d1, d2, half, mar
 
 @kernel('b1(f8[:, :], f8[:], f8[:], f8[:, :], f8)')
 def _box_triangle_apart(rotation, centre, half, corners, margin):
-    """Whether an oriented box and a triangle (corners (3, 3), m) are more than ``margin``
-    apart along one of the 13 axes of the separating axis test (a conservative test, as in
-    :func:`_boxes_apart`). Scalars only: it runs for every box and triangle that meet."""
+    """
+    Return whether an oriented box and a triangle are more than ``margin`` apart.
+
+    Whether an oriented box and a triangle (corners (3, 3), m) are more than ``margin`` apart along
+    one of the 13 axes of the separating axis test (a conservative test, as in
+    :func:`_boxes_apart`). Scalars only: it runs for every box and triangle that meet.
+    """
     # The corners in the box's frame: a, b, d.
     x, y, z = corners[0, 0] - centre[0], corners[0, 1] - centre[1], corners[0, 2] - centre[2]
     a0 = x * rotation[0, 0] + y * rotation[1, 0] + z * rotation[2, 0]
@@ -425,9 +466,13 @@ def _box_triangle_apart(rotation, centre, half, corners, margin):
 
 @kernel('b1(i8, f8[:], f8[:], f8[:, :], f8[:], f8[:, :], f8)')
 def _touches_triangle(kind, half, box_half, rotation, centre, corners, margin):
-    """Whether a shape (kind code, padded ``half`` extents, its box's ``box_half``, posed at
-    ``rotation``, ``centre``) touches a triangle (``corners`` (3, 3)): the separating axis
-    test of the box holding the shape (``margin`` apart), then the exact test."""
+    """
+    Return whether a shape touches a triangle (``corners`` (3, 3)).
+
+    Whether a shape (kind code, padded ``half`` extents, its box's ``box_half``, posed at
+    ``rotation``, ``centre``) touches a triangle (``corners`` (3, 3)): the separating axis test of
+    the box holding the shape (``margin`` apart), then the exact test.
+    """
     # A shape's corners are not read: the triangle's stand in for them.
     return (not _box_triangle_apart(rotation, centre, box_half, corners, margin)
             and touching(kind, half, rotation, centre, corners, TRIANGLE, half, rotation,
@@ -437,8 +482,12 @@ def _touches_triangle(kind, half, box_half, rotation, centre, corners, margin):
 @kernel('b1(i8, f8[:], f8[:], f8[:, :], f8[:], i8, f8[:], f8[:], f8[:, :], f8[:], f8)')
 def _touches_shape(kind_a, half_a, box_a, rotation_a, centre_a, kind_b, half_b, box_b,
                    rotation_b, centre_b, margin):
-    """Whether two shapes (as in :func:`_touches_triangle`) touch: the separating axis test
-    of their boxes, then the exact test."""
+    """
+    Return whether two shapes (as in :func:`_touches_triangle`) touch.
+
+    Whether two shapes (as in :func:`_touches_triangle`) touch: the separating axis test of their
+    boxes, then the exact test.
+    """
     # A shape's corners are not read: its rotation stands in for them.
     return (not _boxes_apart(rotation_a, centre_a, box_a, rotation_b, centre_b, box_b, margin)
             and touching(kind_a, half_a, rotation_a, centre_a, rotation_a, kind_b, half_b,
@@ -447,8 +496,12 @@ def _touches_shape(kind_a, half_a, box_a, rotation_a, centre_a, kind_b, half_b, 
 
 @kernel('i8[::1](f8[::1], f8[::1], f8[:, ::1], f8[:, ::1], i8[::1])')
 def _candidates_meeting(lower, upper, box_lower, box_upper, candidates):
-    """The ``candidates`` (indices into the (T, 3) box corners), in order, whose boxes meet the
-    box [lower, upper] (3,): the answers of a test of every box."""
+    """
+    Return the ``candidates`` whose boxes meet the box [lower, upper] (3,), in order.
+
+    The ``candidates`` (indices into the (T, 3) box corners), in order, whose boxes meet the box
+    [lower, upper] (3,): the answers of a test of every box.
+    """
     out = np.empty(candidates.shape[0], dtype=np.int64)
     n = 0
     for i in range(candidates.shape[0]):
@@ -471,7 +524,8 @@ def _row_collisions(low, high, triangle_lower, triangle_upper, swept, frames, pa
                     pair_lower, pair_upper, rotation, centre, half, corners, pair_rotation,
                     pair_centre, pair_half, margin, kinds, shape_half, pair_kinds,
                     pair_shape_half, pair_other, skip):
-    """Whether each row of a branch's batch touches the environment or the body: (m,) bool.
+    """
+    Whether each row of a branch's batch touches the environment or the body: (m,) bool.
 
     The broad phase (the boxes along the world axes, cut by each shape's box swept over the
     rows when ``swept``, then the separating axis test of the oriented boxes holding the
@@ -586,9 +640,13 @@ def _within(q, lower, upper):
 
 @kernel('b1(i8, i8, i8)')
 def _sweeps(rows, shapes, triangles):
-    """Whether a batch of ``rows`` of a branch's ``shapes`` against ``triangles`` kept
-    triangles first cuts the (shape, triangle) pairs by each shape's box swept over the rows
-    (which also drops the triangles far from every box): many triangles, or many tests."""
+    """
+    Return whether a batch of rows first cuts the (shape, triangle) pairs by swept boxes.
+
+    Whether a batch of ``rows`` of a branch's ``shapes`` against ``triangles`` kept triangles first
+    cuts the (shape, triangle) pairs by each shape's box swept over the rows (which also drops the
+    triangles far from every box): many triangles, or many tests.
+    """
     return rows > 1 and (triangles > FEW_TRIANGLES or rows * shapes * triangles > SWEPT_CONTACTS)
 
 
@@ -611,7 +669,7 @@ CHECK_TABLES_TYPE = (
 
 @kernel(ROW_MEMO_TYPE + '()')
 def _empty_row_memo():
-    """An empty row memo (typed by a first entry, removed at once)."""
+    """Return an empty row memo (typed by a first entry, removed at once)."""
     memo = {(-1, 0, 0, 0, 0): np.int64(0)}
     del memo[(-1, 0, 0, 0, 0)]
     return memo
@@ -619,8 +677,12 @@ def _empty_row_memo():
 
 @kernel('UniTuple(i8, 5)(i8[:, ::1], i8[::1], i8)')
 def _row_key(bits, frames, r):
-    """Row ``r``'s key in the row memo: its frame and its joints' bits (``bits`` (m, d), d <=
-    :data:`MEMO_WIDTH`, the rows viewed as int64), zero-padded."""
+    """
+    Return row ``r``'s key in the row memo: its frame and its joints' bits.
+
+    Row ``r``'s key in the row memo: its frame and its joints' bits (``bits`` (m, d), d <=
+    :data:`MEMO_WIDTH`, the rows viewed as int64), zero-padded.
+    """
     d = bits.shape[1]
     return (frames[r], bits[r, 0], bits[r, 1] if d > 1 else 0, bits[r, 2] if d > 2 else 0,
             bits[r, 3] if d > 3 else 0)
@@ -628,7 +690,8 @@ def _row_key(bits, frames, r):
 
 @kernel('b1[::1](f8[:, :], i8[::1], ' + CHECK_TABLES_TYPE + ')')
 def _check_rows(q, frames, tables):
-    """:func:`_illegal_rows` of every row, none of them remembered: (m,) bool.
+    """
+    :func:`_illegal_rows` of every row, none of them remembered: (m,) bool.
 
     :func:`_branch_boxes` poses the branch's shapes, :func:`_row_collisions` tests them (rows
     where the body holds the branch at frames before ``clear_until`` skipped: the body's own
@@ -672,9 +735,12 @@ def _check_rows(q, frames, tables):
 
 @kernel('b1[::1](f8[:, :], i8[::1], ' + CHECK_TABLES_TYPE + ', ' + ROW_MEMO_TYPE + ')')
 def _illegal_rows(q, frames, tables, memo):
-    """:meth:`CTSpace._illegal`: whether each row of a batch (``q`` (m, d) at ``frames``) is
-    illegal, outside the joint limits or touching the environment or the body: (m,) bool.
-    ``tables``: :attr:`CTSpace.check_tables`; ``memo``: :attr:`CTSpace.row_memo`.
+    """
+    Return whether each row of a batch is illegal: (m,) bool.
+
+    :meth:`CTSpace._illegal`: whether each row of a batch (``q`` (m, d) at ``frames``) is illegal,
+    outside the joint limits or touching the environment or the body: (m,) bool. ``tables``:
+    :attr:`CTSpace.check_tables`; ``memo``: :attr:`CTSpace.row_memo`.
 
     A row's answer depends on the row alone (its configuration, its frame) while the body
     holds still, and searches check the same rows again (backtracking, motions sharing their
@@ -721,11 +787,14 @@ def _illegal_rows(q, frames, tables, memo):
 def _first_contacts(frames, checked, group, count, shape_lower, shape_upper, shape_rotation,
                     shape_centre, box_half, kinds, halves, triangle_lower, triangle_upper,
                     corners, near, pairs, swept_lower, swept_upper, margin):
-    """:meth:`TimedBody.first_collisions` on the poses and boxes the body holds: per group
-    (``group[s]`` in [0, ``count``) for each ``checked`` shape s), the first of the
-    ``frames`` (m,) where one of its shapes touches an environment triangle of ``near``
-    (indices into ``triangle_lower`` ... ``corners``) or the other shape of one of its
-    ``pairs`` (P, 2) of body shapes, or -1.
+    """
+    Return the first colliding frame per group of shapes, or -1.
+
+    :meth:`TimedBody.first_collisions` on the poses and boxes the body holds: per group
+    (``group[s]`` in [0, ``count``) for each ``checked`` shape s), the first of the ``frames`` (m,)
+    where one of its shapes touches an environment triangle of ``near`` (indices into
+    ``triangle_lower`` ... ``corners``) or the other shape of one of its ``pairs`` (P, 2) of body
+    shapes, or -1.
 
     The tests of :func:`_row_collisions` (boxes, cut first by each shape's box swept over the
     frames, and a pair by the boxes ``swept_lower``/``swept_upper`` (S, 3) its shapes sweep
@@ -806,7 +875,8 @@ def _first_contacts(frames, checked, group, count, shape_lower, shape_upper, sha
 
 @kernel('i8[::1](f8[:, :], f8, f8[:, :, ::1], f8[:, :, ::1], i8[:], i8[:])')
 def _reachable_pairs(centre, reach2, shape_lower, shape_upper, obstacle, pair_obstacle):
-    """Indices of the pairs of a branch whose other shape it can reach during the step.
+    """
+    Return the indices of the pairs of a branch whose other shape it can reach during the step.
 
     An ``obstacle`` shape (O,) is within reach when its box comes within ``sqrt(reach2)`` of
     ``centre`` (k, 3) at some frame; pair p's obstacle is ``pair_obstacle[p]``.
@@ -835,11 +905,14 @@ def _reachable_pairs(centre, reach2, shape_lower, shape_upper, obstacle, pair_ob
 
 @kernel('Tuple((f8[:, ::1], i8))(f8[:, :], f8[:], f8[:, :], f8[:], f8[:], i8, f8[:], i8)')
 def _motion_path(objective, times, frame_step, speed_cap, qa, ia, qb, ib):
-    """:meth:`CTSpace._motion_rows`: the configurations at frames ia+1.. of the motion
-    (qa, ia) -> (qb, ib), its deviation from the ``objective`` (k, d) interpolated linearly in
-    ``times`` (:meth:`CTSpace.motion_frames`, the same arithmetic), up to the frame before the
-    first whose change from the frame before exceeds ``speed_cap`` (d,) over ``frame_step``
-    (k - 1, 1); and that frame, or -1 when there is none."""
+    """
+    :meth:`CTSpace._motion_rows`: the configurations at frames ia+1..
+
+    of the motion (qa, ia) -> (qb, ib), its deviation from the ``objective`` (k, d) interpolated
+    linearly in ``times`` (:meth:`CTSpace.motion_frames`, the same arithmetic), up to the frame
+    before the first whose change from the frame before exceeds ``speed_cap`` (d,) over
+    ``frame_step`` (k - 1, 1); and that frame, or -1 when there is none.
+    """
     d = objective.shape[1]
     count = ib - ia
     rows = np.empty((count, d))
@@ -870,10 +943,14 @@ def _motion_path(objective, times, frame_step, speed_cap, qa, ia, qb, ib):
 @kernel('Tuple((f8[:, ::1], i8[::1], i8[::1], i8[::1]))(f8[:, :], f8[:], f8[:, :], f8[:], '
         'f8[:, ::1], i8[::1], f8[:, ::1], i8[::1])')
 def _motion_paths(objective, times, frame_step, speed_cap, qa, ia, qb, ib):
-    """:func:`_motion_path` of several motions (qa[i], ia[i]) -> (qb[i], ib[i]) in one batch:
-    their rows one after the other (m, d), each row's frame (m,), where each motion's rows
-    end (M,), and each motion's first speed violation, -1 or, for a motion that does not go
-    forward in time (no rows), its start frame (M,)."""
+    """
+    Return :func:`_motion_path` of several motions in one batch.
+
+    :func:`_motion_path` of several motions (qa[i], ia[i]) -> (qb[i], ib[i]) in one batch: their
+    rows one after the other (m, d), each row's frame (m,), where each motion's rows end (M,), and
+    each motion's first speed violation, -1 or, for a motion that does not go forward in time (no
+    rows), its start frame (M,).
+    """
     count, d = ia.shape[0], objective.shape[1]
     total = 0
     for i in range(count):
@@ -902,8 +979,11 @@ def _motion_paths(objective, times, frame_step, speed_cap, qa, ia, qb, ib):
         'f8[:, ::1], i8[::1], b1, i8, ' + CHECK_TABLES_TYPE + ', ' + ROW_MEMO_TYPE + ')')
 def _motion_failures(objective, times, frame_step, speed_cap, qa, ia, qb, ib, stop_at_legal,
                      first, tables, memo):
-    """:meth:`CTSpace._failures`: the first illegal frame of each motion (qa[i], ia[i]) ->
-    (qb[i], ib[i]) in order, -1 for a legal one, and the configurations checked.
+    """
+    Return the first illegal frame of each motion in order, -1 for a legal one.
+
+    :meth:`CTSpace._failures`: the first illegal frame of each motion (qa[i], ia[i]) -> (qb[i],
+    ib[i]) in order, -1 for a legal one, and the configurations checked.
 
     The motions' rows are :func:`_motion_paths`'; they are judged by :func:`_illegal_rows`,
     with ``first`` <= 0 all in one batch, else in waves along the motions (``first`` rows of
@@ -978,8 +1058,11 @@ OTHERS_WAVE = 8
         'f8[:, ::1], i8[::1], i8, ' + CHECK_TABLES_TYPE + ', ' + ROW_MEMO_TYPE + ')')
 def first_legal_goal(objective, times, frame_step, speed_cap, start, here, goals, arrivals,
                      first_answer, tables, memo):
-    """:meth:`CTSpace.first_legal_motion`: the motions from (``start`` (d,), ``here``) to each
-    of ``goals`` (m, d) at ``arrivals`` (m,), checked in order up to the first legal one.
+    """
+    Check the motions from a start to each goal in order, up to the first legal one.
+
+    :meth:`CTSpace.first_legal_motion`: the motions from (``start`` (d,), ``here``) to each of
+    ``goals`` (m, d) at ``arrivals`` (m,), checked in order up to the first legal one.
 
     The first goal (the best one, usually legal) is checked alone, all its rows in one batch,
     unless ``first_answer`` (>= -1) already gives its first illegal frame (-2: not known); the
@@ -1048,7 +1131,8 @@ class _Step:
 
 @dataclass(frozen=True)
 class _Chain:
-    """A set of joint steps laid out over a compact array of only the links they touch.
+    """
+    A set of joint steps laid out over a compact array of only the links they touch.
 
     ``links`` lists the links the steps start from, then each step's child; ``step_table``
     holds the steps as :func:`_link_poses` reads them, over those links' rows.
@@ -1059,8 +1143,12 @@ class _Chain:
 
 
 def _step_table(steps: Sequence[_Step], parents: Sequence[int], children: Sequence[int]) -> tuple:
-    """Joint steps as the arrays :func:`_link_poses` reads, their parent and child links at
-    rows ``parents`` and ``children`` of the pose arrays."""
+    """
+    Return joint steps as the arrays :func:`_link_poses` reads.
+
+    Joint steps as the arrays :func:`_link_poses` reads, their parent and child links at rows
+    ``parents`` and ``children`` of the pose arrays.
+    """
     count = len(steps)
     return (np.array(parents, dtype=np.int64).reshape(count),
             np.array(children, dtype=np.int64).reshape(count),
@@ -1079,7 +1167,8 @@ def _step_table(steps: Sequence[_Step], parents: Sequence[int], children: Sequen
 
 
 class BodyKinematics:
-    """Batched forward kinematics as link rotations and positions, fast for small batches.
+    """
+    Batched forward kinematics as link rotations and positions, fast for small batches.
 
     Equivalent to :meth:`Skeleton.forward_kinematics`, but it keeps rotations (3, 3) and
     positions (3,) apart, rotates about coordinate axes by mixing two columns, and can re-evaluate
@@ -1119,7 +1208,7 @@ class BodyKinematics:
         self._chains: Dict[Tuple[int, ...], _Chain] = {}
 
     def chain(self, steps: Sequence[_Step]) -> _Chain:
-        """The compact layout of ``steps`` for :meth:`chain_poses` (built once per set)."""
+        """Return the compact layout of ``steps`` for :meth:`chain_poses` (built once per set)."""
         key = tuple(step.child for step in steps)
         chain = self._chains.get(key)
         if chain is not None:
@@ -1139,7 +1228,8 @@ class BodyKinematics:
 
     def chain_poses(self, q: np.ndarray, rotations: np.ndarray, positions: np.ndarray,
                     chain: _Chain) -> None:
-        """Evaluate a chain's steps in place over compact poses of its links.
+        """
+        Evaluate a chain's steps in place over compact poses of its links.
 
         The same numbers as :meth:`poses` with the chain's steps (the same kernel, the same
         arithmetic), but over (k, C) arrays of the C links of ``chain.links`` instead of every
@@ -1172,7 +1262,7 @@ class BodyKinematics:
         return tuple(out)
 
     def _step_arrays(self, steps: Sequence[_Step]) -> tuple:
-        """The steps as :func:`_link_poses` reads them over every link (built once per set)."""
+        """Return the steps as :func:`_link_poses` reads them over every link, once per set."""
         key = tuple(step.child for step in steps)
         arrays = self._layouts.get(key)
         if arrays is None:
@@ -1183,7 +1273,8 @@ class BodyKinematics:
     def poses(self, q: np.ndarray, rotations: Optional[np.ndarray] = None,
               positions: Optional[np.ndarray] = None,
               steps: Optional[Sequence[_Step]] = None) -> Tuple[np.ndarray, np.ndarray]:
-        """Link poses for a batch of configurations.
+        """
+        Link poses for a batch of configurations.
 
         Parameters
         ----------
@@ -1214,7 +1305,8 @@ class BodyKinematics:
 
 
 class BodyShapes:
-    """The actor's collision shapes: FCL objects, box bounds and the pairs worth checking.
+    """
+    The actor's collision shapes: FCL objects, box bounds and the pairs worth checking.
 
     Parameters
     ----------
@@ -1293,16 +1385,16 @@ class BodyShapes:
         return distance
 
     def shapes_of(self, link_names: Sequence[str]) -> np.ndarray:
-        """Indices of the shapes attached to the named links: (n,) int."""
+        """Return the indices of the shapes attached to the named links: (n,) int."""
         links = [self.skeleton.link_index[name] for name in link_names]
         return np.flatnonzero(np.isin(self.link, links))
 
     def shapes_of_links(self, links) -> np.ndarray:
-        """Indices of the shapes attached to links given by index: (n,) int."""
+        """Return the indices of the shapes attached to links given by index: (n,) int."""
         return np.flatnonzero(np.isin(self.link, list(links)))
 
     def pairs(self, shapes_a: np.ndarray, shapes_b: np.ndarray) -> np.ndarray:
-        """Shape pairs (a, b) on links more than ``ADJACENT_JOINTS`` joints apart: (P, 2) int."""
+        """Return shape pairs on links more than ``ADJACENT_JOINTS`` joints apart, (P, 2) int."""
         a, b = np.meshgrid(shapes_a, shapes_b, indexing='ij')
         a, b = a.ravel(), b.ravel()
         keep = self._tree_distance[self.link[a], self.link[b]] > ADJACENT_JOINTS
@@ -1320,9 +1412,13 @@ class BodyShapes:
         return rotation, centre
 
     def shape_table(self, shapes: np.ndarray) -> tuple:
-        """What :func:`_pose_shapes_into` reads of some shapes (kept per set of shapes by the
-        caller): (links, origin translations, origin rotations, whether turned, kind codes,
-        half extents, the shapes' indices)."""
+        """
+        Return what :func:`_pose_shapes_into` reads of some shapes.
+
+        What :func:`_pose_shapes_into` reads of some shapes (kept per set of shapes by the caller):
+        (links, origin translations, origin rotations, whether turned, kind codes, half extents,
+        the shapes' indices).
+        """
         shapes = np.asarray(shapes, dtype=np.int64)
         return (self.link[shapes], self.origin_translation[shapes],
                 self.origin_rotation[shapes], ~self.identity_origin[shapes],
@@ -1337,7 +1433,7 @@ class BodyShapes:
 
     def collides(self, shape: int, rotation: np.ndarray, centre: np.ndarray,
                  other) -> bool:
-        """Narrow phase: does shape ``shape`` posed at (rotation, centre) touch ``other``?"""
+        """Return whether shape ``shape`` posed at (rotation, centre) touches ``other``."""
         obj = self.objects[shape]
         obj.setTransform(fcl.Transform(rotation, centre))
         # The contact count says it; one result serves every call.
@@ -1348,7 +1444,8 @@ class BodyShapes:
 
 
 class EnvironmentIndex:
-    """The environment's triangles as boxes for the broad phase, and FCL models per mesh.
+    """
+    The environment's triangles as boxes for the broad phase, and FCL models per mesh.
 
     Parameters
     ----------
@@ -1405,18 +1502,22 @@ class EnvironmentIndex:
             self._object_of = {i: i for i in range(len(meshes))}
 
     def object_of(self, mesh: int):
-        """The FCL object of mesh ``mesh``."""
+        """Return the FCL object of mesh ``mesh``."""
         return self.objects[self._object_of[mesh]]
 
     def triangles_near(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
-        """Indices (int64, in order) of triangles whose boxes overlap the box [lower, upper]
-        (3,) m."""
+        """
+        Return the indices of triangles whose boxes overlap the box [lower, upper] (3,) m.
+
+        The indices are int64, in order.
+        """
         return _candidates_meeting(float_array(lower).reshape(3), float_array(upper).reshape(3),
                                    self.lower, self.upper, self._every)
 
 
 class TimedBody:
-    """The actor over the frames of one step, as far as it is fixed, with fast branch checks.
+    """
+    The actor over the frames of one step, as far as it is fixed, with fast branch checks.
 
     Holds the link poses at every frame for the current frames (lower body, root and the
     branches planned so far) and answers, for one branch, which frames of a candidate motion are
@@ -1453,7 +1554,8 @@ class TimedBody:
         self._near_lower = self._near_upper = None
 
     def triangles_near(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
-        """Indices of the environment's triangles whose boxes meet the box [lower, upper] (3,) m.
+        """
+        Return the indices of the triangles whose boxes meet the box [lower, upper] (3,) m.
 
         The same indices, in the same order, as ``environment.triangles_near``, but searched
         among the triangles near the actor during the step (found once per step, with room for
@@ -1465,9 +1567,13 @@ class TimedBody:
                                    self._step_near(lower, upper))
 
     def _step_near(self, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
-        """The triangles near the actor over the step: (N,) int64 indices, a superset of those
-        meeting the box [lower, upper] or any shape's box swept over the step (found once
-        per step, again only when a box reaches past where they were searched)."""
+        """
+        Return the triangles near the actor over the step: (N,) int64 indices.
+
+        The triangles near the actor over the step: (N,) int64 indices, a superset of those meeting
+        the box [lower, upper] or any shape's box swept over the step (found once per step, again
+        only when a box reaches past where they were searched).
+        """
         if self._near is None or not _box_within(lower, upper, self._near_lower,
                                                  self._near_upper):
             box_lower = np.minimum(lower, self.swept_lower.min(axis=0) - NEAR_MARGIN)
@@ -1489,23 +1595,31 @@ class TimedBody:
         self._pose_shapes(self.shapes.every_table)
 
     def _pose_shapes(self, table: tuple) -> None:
-        """Pose the shapes of a :meth:`BodyShapes.shape_table` at every frame, with their boxes
-        and swept boxes, in place."""
+        """
+        Pose the shapes of a :meth:`BodyShapes.shape_table` at every frame, in place.
+
+        Pose the shapes of a :meth:`BodyShapes.shape_table` at every frame, with their boxes and
+        swept boxes, in place.
+        """
         _pose_shapes_into(self.rotations, self.positions, *table, self.shape_rotation,
                           self.shape_centre, self.shape_lower, self.shape_upper,
                           self.swept_lower, self.swept_upper)
 
     def first_collision(self, checked: np.ndarray, pairs: np.ndarray,
                         frames: Optional[np.ndarray] = None) -> int:
-        """First frame at which a checked shape touches the environment or its pair's shape,
-        or -1: :meth:`first_collisions` with all the shapes in one group (the same
-        parameters)."""
+        """
+        Return the first frame at which a checked shape touches something, or -1.
+
+        First frame at which a checked shape touches the environment or its pair's shape, or -1:
+        :meth:`first_collisions` with all the shapes in one group (the same parameters).
+        """
         return self.first_collisions(checked, pairs, None, 1, frames)[0]
 
     def first_collisions(self, checked: np.ndarray, pairs: np.ndarray,
                          group: Optional[np.ndarray], count: int,
                          frames: Optional[np.ndarray] = None) -> List[int]:
-        """Per group of checked shapes, the first frame at which one of them touches something.
+        """
+        Per group of checked shapes, the first frame at which one of them touches something.
 
         Uses the poses the body already holds (no kinematics), in one compiled pass
         (:func:`_first_contacts`): the broad phase, then the exact test of the shapes, frame by
@@ -1551,23 +1665,31 @@ class TimedBody:
             self.swept_upper, SAT_MARGIN).tolist()
 
     def posed_shape(self, frame: int, shape: int) -> fcl.CollisionObject:
-        """The FCL object of body shape ``shape``, placed where it is at ``frame``."""
+        """Return the FCL object of body shape ``shape``, placed where it is at ``frame``."""
         target = self.shapes.objects[shape]
         target.setTransform(fcl.Transform(self.shape_rotation[frame, shape],
                                           self.shape_centre[frame, shape]))
         return target
 
     def set_clear(self, name: str, first: int) -> None:
-        """Record that branch ``name``'s shapes, where the body holds them, first touch
-        something at frame ``first`` (-1: at none), every frame before it checked."""
+        """
+        Record the first frame at which branch ``name``'s shapes touch something.
+
+        Record that branch ``name``'s shapes, where the body holds them, first touch something at
+        frame ``first`` (-1: at none), every frame before it checked.
+        """
         self.clear_until[name] = len(self.frames) if first < 0 else int(first)
         self._stale.pop(name, None)
 
     def frames_to_recheck(self, name: str) -> Optional[np.ndarray]:
-        """Frames where branch ``name``'s contacts are not known since branches were fixed:
-        those they changed before the first contact found earlier, and every frame from that
-        contact on (sorted, int64); None when nothing is known (check every frame). The
-        first contact among them is the body's first contact for the branch."""
+        """
+        Return the frames where branch ``name``'s contacts are not known, or None.
+
+        Frames where branch ``name``'s contacts are not known since branches were fixed: those they
+        changed before the first contact found earlier, and every frame from that contact on
+        (sorted, int64); None when nothing is known (check every frame). The first contact among
+        them is the body's first contact for the branch.
+        """
         stale = self._stale.get(name)
         if stale is None:
             return None
@@ -1606,7 +1728,8 @@ class TimedBody:
 
 def branch_layout(kinematics: BodyKinematics, shapes: BodyShapes, branch: str,
                   checked_links: Sequence[str], obstacle_links: Sequence[str]) -> tuple:
-    """The model-only data of a branch, built once and kept in ``shapes.branch_layouts``.
+    """
+    Return the model-only data of a branch, built once and kept in ``shapes.branch_layouts``.
 
     Returns
     -------
@@ -1646,8 +1769,7 @@ def branch_layout(kinematics: BodyKinematics, shapes: BodyShapes, branch: str,
 
 @dataclass(frozen=True)
 class _BranchModel:
-    """What a branch's CT-space needs that depends on the model only (see
-    :func:`branch_model`)."""
+    """What a branch's CT-space needs that depends on the model only (see :func:`branch_model`)."""
 
     layout: tuple
     indices: np.ndarray
@@ -1670,8 +1792,12 @@ class _BranchModel:
 
 def branch_model(kinematics: BodyKinematics, shapes: BodyShapes, branch: str,
                  checked_links: Sequence[str], obstacle_links: Sequence[str]) -> _BranchModel:
-    """The branch's layout (:func:`branch_layout`) and the tables its CT-space builds from it,
-    built once and kept in ``shapes.branch_layouts``."""
+    """
+    Return the branch's layout and the tables its CT-space builds from it, built once.
+
+    The branch's layout (:func:`branch_layout`) and the tables its CT-space builds from it, built
+    once and kept in ``shapes.branch_layouts``.
+    """
     key = ('model', branch, tuple(checked_links), tuple(obstacle_links), id(kinematics))
     model = shapes.branch_layouts.get(key)
     if model is not None:
@@ -1707,7 +1833,8 @@ def branch_model(kinematics: BodyKinematics, shapes: BodyShapes, branch: str,
 
 def _reach_bound(shapes: BodyShapes, steps: Sequence[_Step],
                  checked: np.ndarray) -> Tuple[int, float]:
-    """Link at the centre and radius (m) of a ball holding the checked shapes at any pose.
+    """
+    Link at the centre and radius (m) of a ball holding the checked shapes at any pose.
 
     The centre is the branch's first joint, which the branch itself cannot move; the radius
     is the longest chain of joint offsets from it plus the shape's own extent.
@@ -1728,7 +1855,8 @@ def _reach_bound(shapes: BodyShapes, steps: Sequence[_Step],
 
 
 class CTSpace:
-    """Configuration-time space of one branch, with OMPL-shaped queries (paper §5.2).
+    """
+    Configuration-time space of one branch, with OMPL-shaped queries (paper §5.2).
 
     Parameters
     ----------
@@ -1829,21 +1957,21 @@ class CTSpace:
     # -- OMPL-shaped space ---------------------------------------------------------------
     @property
     def dimension(self) -> int:
-        """Number of branch joints d."""
+        """Return the number of branch joints d."""
         return len(self.indices)
 
     @property
     def bounds(self) -> Tuple[np.ndarray, np.ndarray]:
-        """Joint bounds (lower (d,), upper (d,)), rad."""
+        """Return the joint bounds: lower (d,) and upper (d,), rad."""
         return self.lower, self.upper
 
     @property
     def frame_count(self) -> int:
-        """Number of frames k of the time grid."""
+        """Return the number of frames k of the time grid."""
         return len(self.times)
 
     def distance(self, a: Tuple[np.ndarray, int], b: Tuple[np.ndarray, int]) -> float:
-        """Distance between CT states: joint distance (rad) plus weighted time gap."""
+        """Return the distance between CT states: joint distance in rad plus weighted time gap."""
         (qa, ia), (qb, ib) = a, b
         return float(np.linalg.norm(np.asarray(qa) - np.asarray(qb))
                      + self.time_weight * abs(self.times[ib] - self.times[ia]))
@@ -1853,7 +1981,8 @@ class CTSpace:
         return np.asarray(q) - self.objective[i]
 
     def motion_frames(self, a: Tuple[np.ndarray, int], b: Tuple[np.ndarray, int]) -> np.ndarray:
-        """Configurations at frames ia..ib of the motion a -> b: (ib - ia + 1, d), rad.
+        """
+        Return the configurations at frames ia..ib of the motion a -> b: (ib - ia + 1, d), rad.
 
         Interpolates the deviation from the objective linearly in time, so a motion between
         states on the objective follows it exactly.
@@ -1893,7 +2022,8 @@ class CTSpace:
 
     def first_invalid_motion(self, a: Tuple[np.ndarray, int],
                              b: Tuple[np.ndarray, int]) -> int:
-        """First illegal frame of the motion a -> b, or -1 when it is legal.
+        """
+        First illegal frame of the motion a -> b, or -1 when it is legal.
 
         A motion backwards or standing still in time is illegal at ``a``'s frame; a speed
         violation is reported at the frame it ends on.
@@ -1904,7 +2034,8 @@ class CTSpace:
     def first_legal_motion(self, a: Tuple[np.ndarray, int],
                            goals: Sequence[Tuple[np.ndarray, int]],
                            first_failure: Optional[int] = None) -> Tuple[int, List[int]]:
-        """Check motions from ``a`` to each goal in order; stop at the first legal one.
+        """
+        Check motions from ``a`` to each goal in order; stop at the first legal one.
 
         One kernel (:func:`first_legal_goal`): the first goal (the best one, usually legal)
         checked alone; all the others then in one batch, its answers read goal by goal.
@@ -1932,7 +2063,8 @@ class CTSpace:
         return int(chosen), failures.tolist()
 
     def first_invalid_path(self, waypoints: Sequence[Tuple[np.ndarray, int]]) -> int:
-        """First illegal frame along a chain of motions through ``waypoints``, or -1.
+        """
+        First illegal frame along a chain of motions through ``waypoints``, or -1.
 
         Each motion is checked as :meth:`first_invalid_motion` checks it (forward in time,
         speeds, collisions at every frame after its start), all of them in one batch, read
@@ -1954,7 +2086,8 @@ class CTSpace:
 
     def rows_and_path(self, q: np.ndarray, frames: np.ndarray,
                       waypoints: Sequence[Tuple[np.ndarray, int]]) -> Tuple[np.ndarray, int]:
-        """:meth:`valid_rows` of a batch and :meth:`first_invalid_path`, in one batch.
+        """
+        :meth:`valid_rows` of a batch and :meth:`first_invalid_path`, in one batch.
 
         Returns
         -------
@@ -1983,8 +2116,11 @@ class CTSpace:
         return legal, -1
 
     def _failures(self, motions: Sequence[tuple], stop_at_legal: bool, first: int) -> List[int]:
-        """The first illegal frame of each motion ((qa, ia), (qb, ib)) in order, -1 for a legal
-        one (the rows are counted in ``checks``).
+        """
+        Return the first illegal frame of each motion in order, -1 for a legal one.
+
+        The first illegal frame of each motion ((qa, ia), (qb, ib)) in order, -1 for a legal one
+        (the rows are counted in ``checks``).
 
         With ``first`` <= 0 every row is checked in one batch; else in waves along the
         motions, ``first`` rows of each motion still open, then twice as many each wave (so
@@ -2001,8 +2137,12 @@ class CTSpace:
         return answers.tolist()
 
     def _motion_ends(self, motions: Sequence[tuple]) -> tuple:
-        """The end points of motions ((qa, ia), (qb, ib)) as the motion kernels take them:
-        (qa (n, d), ia (n,), qb (n, d), ib (n,))."""
+        """
+        Return the end points of motions as the motion kernels take them.
+
+        The end points of motions ((qa, ia), (qb, ib)) as the motion kernels take them: (qa (n, d),
+        ia (n,), qb (n, d), ib (n,)).
+        """
         count = len(motions)
         qa, qb = np.empty((count, self.dimension)), np.empty((count, self.dimension))
         ia, ib = np.empty(count, dtype=np.int64), np.empty(count, dtype=np.int64)
@@ -2011,9 +2151,13 @@ class CTSpace:
         return qa, ia, qb, ib
 
     def _motion_batch(self, motions: Sequence[tuple]) -> tuple:
-        """The rows of motions ((qa, ia), (qb, ib)) for one check: (q (m, d) rad, frames (m,),
-        segments [(begin, end)] per motion, early: each motion's speed violation frame or -1,
-        its start frame for one that does not go forward in time)."""
+        """
+        Return the rows of motions for one check.
+
+        The rows of motions ((qa, ia), (qb, ib)) for one check: (q (m, d) rad, frames (m,),
+        segments [(begin, end)] per motion, early: each motion's speed violation frame or -1, its
+        start frame for one that does not go forward in time).
+        """
         q, frames, ends, late = _motion_paths(self.objective, self.times, self.frame_step,
                                               self.speed_cap, *self._motion_ends(motions))
         ends = ends.tolist()
@@ -2021,8 +2165,12 @@ class CTSpace:
 
     def _motion_rows(self, qa: np.ndarray, ia: int, qb: np.ndarray,
                      ib: int) -> Tuple[np.ndarray, int]:
-        """Configurations at frames ia+1.. of the motion to (qb, ib) that keep to the speed
-        limits, and the frame of the first speed violation (-1 when none)."""
+        """
+        Return the configurations at frames ia+1..
+
+        of the motion to (qb, ib) that keep to the speed limits, and the frame of the first speed
+        violation (-1 when none).
+        """
         if ib <= ia:
             return np.zeros((0, self.dimension)), ia
         rows, late = _motion_path(self.objective, self.times, self.frame_step,
@@ -2031,7 +2179,8 @@ class CTSpace:
         return rows, int(late)
 
     def first_invalid(self, q: np.ndarray, frames: np.ndarray) -> int:
-        """Row of the first illegal configuration in a batch, or -1 when all are legal.
+        """
+        Row of the first illegal configuration in a batch, or -1 when all are legal.
 
         Parameters
         ----------
@@ -2055,7 +2204,8 @@ class CTSpace:
         return -1 if not len(bad) else int(np.searchsorted(frames, frames[bad[0]]))
 
     def valid_rows(self, q: np.ndarray, frames: np.ndarray) -> np.ndarray:
-        """Legality of each configuration of a batch: (m,) bool.
+        """
+        Legality of each configuration of a batch: (m,) bool.
 
         Parameters
         ----------
@@ -2074,7 +2224,10 @@ class CTSpace:
         return ~self._illegal(q, frames)
 
     def _shape_boxes(self, q: np.ndarray, frames: np.ndarray) -> tuple:
-        """Poses and boxes of the branch's checked shapes for a batch of rows (what
+        """
+        Return the poses and boxes of the branch's checked shapes for a batch of rows.
+
+        Poses and boxes of the branch's checked shapes for a batch of rows (what
         :func:`_illegal_rows` works out first, as the checks see it; the tests read it here).
 
         Rows where the branch is where the body already holds it (the objective, or the start
@@ -2097,7 +2250,8 @@ class CTSpace:
         return rotation, centre, low, high, held
 
     def _illegal(self, q: np.ndarray, frames: np.ndarray) -> np.ndarray:
-        """Which rows of a batch are illegal, all rows at once: (m,) bool.
+        """
+        Which rows of a batch are illegal, all rows at once: (m,) bool.
 
         A row is illegal outside the joint limits (with :meth:`within_bounds`' tolerance) or
         where the branch touches the environment or the body: the broad phase (boxes, the

@@ -1,4 +1,19 @@
-"""The environment: meshes in, an FCL BVH and walkable-ground queries out.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The environment: meshes in, an FCL BVH and walkable-ground queries out.
 
 The paper (§3.2, §4.2) asks the lower-body planner for the ground profile under the predicted
 path and for collision tests of the legs against obstacles. The environment is any set of
@@ -58,9 +73,12 @@ _MAX_TILES = 1 << 22
         'i8[::1], i8[::1], f8[::1], f8[::1], i8[::1], i8, u1[::1], i8[::1])')
 def _ground_heights(xy, z_ref, x0, y0, inverse, last_x, last_y, tiles_x, slot_of, offset,
                     layers, ground, ceiling, stamp, clock, wanted, missed):
-    """:meth:`Environment.ground_height` of each point in one pass (see there): the grid
-    cell holding it (node indices up to ``last_x``, ``last_y``), the highest of its tile's
-    grounds at or below ``z_ref`` and the ceiling over that.
+    """
+    Return :meth:`Environment.ground_height` of each point in one pass.
+
+    :meth:`Environment.ground_height` of each point in one pass (see there): the grid cell holding
+    it (node indices up to ``last_x``, ``last_y``), the highest of its tile's grounds at or below
+    ``z_ref`` and the ceiling over that.
 
     The cells are read from the tiles of the cache (:meth:`Environment.ground_grid`): tile
     ``slot_of[t]`` holds ``layers`` intervals a cell from ``offset`` on in ``ground`` and
@@ -111,9 +129,12 @@ def _ground_heights(xy, z_ref, x0, y0, inverse, last_x, last_y, tiles_x, slot_of
         'f8)', inline=True)
 def _top_near(pyramid, slot_of, stamp, clock, wanted, missed, tiles_x, nx, ny, x0, y0,
               inverse, x, y, half):
-    """:meth:`Environment.top_height_near` of one square: the smallest dilation of the top map
-    that covers ``half`` (m) read at the cell holding (x, y) (clamped onto the grid of ``nx``
-    x ``ny`` cells); +inf where no dilation is wide enough or the centre is NaN.
+    """
+    Return :meth:`Environment.top_height_near` of one square, m.
+
+    :meth:`Environment.top_height_near` of one square: the smallest dilation of the top map that
+    covers ``half`` (m) read at the cell holding (x, y) (clamped onto the grid of ``nx`` x ``ny``
+    cells); +inf where no dilation is wide enough or the centre is NaN.
 
     The dilations are read from the tiles of the cache (:meth:`Environment.top_near_grid`):
     tile ``slot_of[t]`` holds ``_TOP_LEVELS`` maps of ``_TILE`` x ``_TILE`` cells in
@@ -175,9 +196,12 @@ def _intersect(ground_a, ceiling_a, ground_b, ceiling_b):
 
 @kernel('Tuple((f8[:, ::1], f8[:, ::1]))(f8[:, :, ::1], f8[:, :, ::1])')
 def _intersect_cells(grounds, ceilings):
-    """Intersect the free intervals of each cell's four corners: (4, M, K) grounds and
-    ceilings, each corner's intervals disjoint and sorted by ground (empty ones, +inf, last)
-    -> (M, K') the same of the cells.
+    """
+    Intersect the free intervals of each cell's four corners.
+
+    Intersect the free intervals of each cell's four corners: (4, M, K) grounds and ceilings, each
+    corner's intervals disjoint and sorted by ground (empty ones, +inf, last) -> (M, K') the same
+    of the cells.
 
     As :func:`_intersect` three times over, without its (M, K x K) arrays: the pairs of one
     interval of the cell so far and one of the next corner, in that order, meet where their
@@ -238,8 +262,12 @@ _FILE_BYTES_PER_TRIANGLE = 50
 
 
 def available_memory() -> int:
-    """Memory the machine can give this process without swapping, bytes (its
-    ``MemAvailable``; where that is not known, its physical memory)."""
+    """
+    Return the memory the machine can give this process without swapping, bytes.
+
+    Memory the machine can give this process without swapping, bytes (its ``MemAvailable``; where
+    that is not known, its physical memory).
+    """
     try:
         with open('/proc/meminfo', 'r', encoding='ascii') as meminfo:
             for line in meminfo:
@@ -254,8 +282,11 @@ def available_memory() -> int:
 
 
 def check_memory(triangles: int, what: str) -> None:
-    """Refuse, before allocating, geometry of ``triangles`` triangles that would not fit in
-    the memory the machine has available.
+    """
+    Refuse geometry of ``triangles`` triangles that would not fit in the available memory.
+
+    Refuse, before allocating, geometry of ``triangles`` triangles that would not fit in the memory
+    the machine has available.
 
     Parameters
     ----------
@@ -277,7 +308,8 @@ def check_memory(triangles: int, what: str) -> None:
 
 
 def load_mesh(path: str) -> trimesh.Trimesh:
-    """Read one mesh file (STL, OBJ, PLY, GLB/GLTF, DAE) as world-frame triangles.
+    """
+    Read one mesh file (STL, OBJ, PLY, GLB/GLTF, DAE) as world-frame triangles.
 
     Multi-geometry files (a GLB scene) are flattened with their node transforms.
 
@@ -303,7 +335,7 @@ def load_mesh(path: str) -> trimesh.Trimesh:
                  f'{path}: a mesh file of {size / 2 ** 20:.0f} MB, up to')
     try:
         loaded = trimesh.load(path, force='scene', process=False)
-        geometry = [g for g in loaded.dump(concatenate=False)] if loaded.geometry else []
+        geometry = list(loaded.dump(concatenate=False)) if loaded.geometry else []
     except MemoryError as error:
         raise SceneError(f'{path}: the machine ran out of memory reading it') from error
     except Exception as error:  # trimesh's loaders raise many exception types
@@ -317,8 +349,12 @@ def load_mesh(path: str) -> trimesh.Trimesh:
 
 
 def _check_mesh(mesh, what: str) -> None:
-    """Raise SceneError for a mesh without triangles, with a non-finite vertex, or whose
-    triangles all have no area (nothing to stand on or to collide with)."""
+    """
+    Raise SceneError for a mesh with nothing to stand on or to collide with.
+
+    Raise SceneError for a mesh without triangles, with a non-finite vertex, or whose triangles all
+    have no area (nothing to stand on or to collide with).
+    """
     if not isinstance(mesh, trimesh.Trimesh):
         raise ValueError(f'{what}: expected a trimesh.Trimesh, got {type(mesh).__name__}')
     if len(mesh.faces) == 0:
@@ -342,7 +378,8 @@ def _check_mesh(mesh, what: str) -> None:
 
 
 class Environment:
-    """Triangle meshes in the world frame with an FCL BVH and a walkable-ground map in tiles.
+    """
+    Triangle meshes in the world frame with an FCL BVH and a walkable-ground map in tiles.
 
     Parameters
     ----------
@@ -461,8 +498,12 @@ class Environment:
         self._tile_count = self._tiles_x * self._tiles_y
 
     def _prepare_ground_triangles(self) -> None:
-        """Per triangle, the nodes it covers and the affine maps of its barycentric weights and
-        height over them, on the whole lattice, so a tile's values are those of the lattice."""
+        """
+        Prepare the nodes each triangle covers and its affine maps over the whole lattice.
+
+        Per triangle, the nodes it covers and the affine maps of its barycentric weights and height
+        over them, on the whole lattice, so a tile's values are those of the lattice.
+        """
         res, (x0, y0) = self.resolution, self._origin
         ny, nx = self._shape
         parts = []
@@ -508,8 +549,12 @@ class Environment:
             sign=np.where(det[covers] > 0, 1, -1).astype(np.int8))
 
     def _prepare_top_triangles(self) -> None:
-        """Per triangle, the cells its xy box touches and the plane's bound over them (see
-        _build_tops): an upper bound of its height over each cell."""
+        """
+        Prepare the cells each triangle's xy box touches and the plane's bound over them.
+
+        Per triangle, the cells its xy box touches and the plane's bound over them (see
+        _build_tops): an upper bound of its height over each cell.
+        """
         res, (x0, y0) = self.resolution, self._origin
         ny, nx = self._shape[0] - 1, self._shape[1] - 1
         triangles = np.concatenate([v[f] for v, f in zip(self._vertices, self._faces)])
@@ -540,7 +585,7 @@ class Environment:
 
     # -- the cache of tiles ------------------------------------------------------------------
     def _open_cache(self) -> None:
-        """An empty cache: no tile built, no slot taken."""
+        """Open an empty cache: no tile built, no slot taken."""
         self._slot_of = np.full(self._tile_count, -1, dtype=np.int64)
         self._wanted = np.zeros(self._tile_count, dtype=np.uint8)
         self._missed = np.zeros(1, dtype=np.int64)
@@ -593,8 +638,12 @@ class Environment:
             pinned.add(slot)
 
     def _take_slot(self, values: int, pinned: set) -> int:
-        """A free slot for a tile of ``values`` ground values, evicting the tiles read longest
-        ago (but not ``pinned``) while the cache would exceed its bytes."""
+        """
+        Return a free slot for a tile of ``values`` ground values, evicting old tiles.
+
+        A free slot for a tile of ``values`` ground values, evicting the tiles read longest ago
+        (but not ``pinned``) while the cache would exceed its bytes.
+        """
         def used_bytes():
             taken = int(np.count_nonzero(self._tile_in >= 0))
             return taken * _PYRAMID_VALUES * 8 + self._live_values * 16
@@ -655,7 +704,8 @@ class Environment:
         return column, row, min(_TILE, nx - column), min(_TILE, ny - row)
 
     def _build_ground_tile(self, tile: int):
-        """A tile's free intervals: (_TILE * _TILE, layers) grounds and ceilings, m.
+        """
+        Return a tile's free intervals: (_TILE * _TILE, layers) grounds and ceilings, m.
 
         Rasterises the triangles over the tile's nodes (a vertical ray per node, all hits);
         walking down each ray from the sky with a depth counter (+1 entering a solid at an
@@ -739,8 +789,11 @@ class Environment:
                 out_ceiling.reshape(_TILE * _TILE, width_layers))
 
     def _rasterise(self, i0: int, i1: int, j0: int, j1: int):
-        """Heights and facing of every non-vertical triangle at the lattice nodes
-        [i0, i1] x [j0, j1] it covers.
+        """
+        Rasterise the non-vertical triangles at the lattice nodes [i0, i1] x [j0, j1].
+
+        Heights and facing of every non-vertical triangle at the lattice nodes [i0, i1] x [j0, j1]
+        it covers.
 
         Returns (node index within the block, row-major, height m, +1 upward / -1 downward
         facing) of each hit, in triangle order.
@@ -812,7 +865,8 @@ class Environment:
         return np.concatenate(out_nodes), np.concatenate(out_z), np.concatenate(out_sign)
 
     def _build_top_tile(self, tile: int) -> np.ndarray:
-        """A tile's top map and its dilations: (_TOP_LEVELS, _TILE, _TILE) m.
+        """
+        Return a tile's top map and its dilations: (_TOP_LEVELS, _TILE, _TILE) m.
 
         Level 0 is the upper bound of every triangle's height over each cell: from each
         triangle whose xy bounding box touches the cell, the lower of the triangle's highest
@@ -886,12 +940,13 @@ class Environment:
 
     # -- queries -----------------------------------------------------------------------------
     def _tick(self) -> int:
-        """The cache's clock for one query (tiles read get it as their stamp)."""
+        """Advance the cache's clock for one query (tiles read get it as their stamp)."""
         self._clock += 1
         return self._clock
 
     def top_height_near(self, xy, half_extent) -> np.ndarray:
-        """A cheap, looser :meth:`top_height`: a bound over squares around points.
+        """
+        Return a cheap, looser :meth:`top_height`: a bound over squares around points.
 
         One lookup per point in a precomputed dilation of the top map, so it bounds at least the
         rectangle of ``half_extent`` around each point (at most twice as wide, rounded to
@@ -925,10 +980,13 @@ class Environment:
         return out
 
     def top_near_grid(self) -> tuple:
-        """The tiled top map's layout for the compiled :func:`_top_near`, from its first
-        argument up to the query point: the dilations' pool, slot of each tile, stamps, clock,
-        wanted tiles and missed count, tiles a row, columns and rows of cells, grid origin x
-        and y (m), inverse resolution (1/m).
+        """
+        Return the tiled top map's layout for the compiled :func:`_top_near`.
+
+        The tiled top map's layout for the compiled :func:`_top_near`, from its first argument up
+        to the query point: the dilations' pool, slot of each tile, stamps, clock, wanted tiles and
+        missed count, tiles a row, columns and rows of cells, grid origin x and y (m), inverse
+        resolution (1/m).
 
         Tiles a previous call found missing are built first.
         """
@@ -940,10 +998,14 @@ class Environment:
                 float(self._origin[1]), float(self._inverse_resolution))
 
     def ground_grid(self) -> tuple:
-        """The tiled ground map's layout for the compiled :func:`_ground_heights`, after the
-        query points and heights: grid origin x and y (m), inverse resolution (1/m), last node
-        indices, tiles a row, slot of each tile, offsets and layers of each slot, grounds and
-        ceilings (m), stamps, clock, wanted tiles and missed count."""
+        """
+        Return the tiled ground map's layout for the compiled :func:`_ground_heights`.
+
+        The tiled ground map's layout for the compiled :func:`_ground_heights`, after the query
+        points and heights: grid origin x and y (m), inverse resolution (1/m), last node indices,
+        tiles a row, slot of each tile, offsets and layers of each slot, grounds and ceilings (m),
+        stamps, clock, wanted tiles and missed count.
+        """
         return (float(self._origin[0]), float(self._origin[1]),
                 float(self._inverse_resolution), float(self._grid_last[0]),
                 float(self._grid_last[1]), self._tiles_x, self._slot_of, self._offset,
@@ -954,8 +1016,12 @@ class Environment:
         return (row // _TILE) * self._tiles_x + column // _TILE
 
     def _read_cells(self, column: np.ndarray, row: np.ndarray, read) -> np.ndarray:
-        """``read(slots, local cells)`` for cells given by lattice column and row, with their
-        tiles built first (in groups the cache holds at once)."""
+        """
+        Return ``read(slots, local cells)`` for cells given by lattice column and row.
+
+        ``read(slots, local cells)`` for cells given by lattice column and row, with their tiles
+        built first (in groups the cache holds at once).
+        """
         tiles = self._tiles_of_cells(column, row)
         local = (row % _TILE) * _TILE + column % _TILE
         out = None
@@ -973,7 +1039,8 @@ class Environment:
         return out if out is not None else np.zeros(0)
 
     def top_height(self, low_xy, high_xy) -> np.ndarray:
-        """Upper bound of the environment's height over axis-aligned rectangles.
+        """
+        Upper bound of the environment's height over axis-aligned rectangles.
 
         Conservative: no point of any mesh (or of the solid under a surface) within a rectangle
         lies higher, so a body whose lowest point is above the bound cannot touch the
@@ -1048,7 +1115,8 @@ class Environment:
         return index[:, 0], index[:, 1], valid
 
     def lowest_ground(self, xy) -> np.ndarray:
-        """Height of the lowest walkable surface at each point (conservative over its cell).
+        """
+        Height of the lowest walkable surface at each point (conservative over its cell).
 
         Parameters
         ----------
@@ -1072,7 +1140,8 @@ class Environment:
         return ground
 
     def ground_height(self, xy, z_ref) -> Tuple[np.ndarray, np.ndarray]:
-        """Height of the highest walkable surface at or below ``z_ref``, and the room above it.
+        """
+        Height of the highest walkable surface at or below ``z_ref``, and the room above it.
 
         A walkable surface is an upward-facing surface with free space above it (§4.2: the
         ground profile under the feet). The answer is conservative over the grid cell that holds
@@ -1126,9 +1195,13 @@ class Environment:
 
 @dataclass(frozen=True)
 class _Raster:
-    """The non-vertical triangles (T, 3, 3) m with the lattice nodes each covers
-    ([ix0, ix1] x [iy0, iy1]), the affine maps of their two barycentric weights and height
-    over those nodes' indices (T, 9) and their facing (+1 up, -1 down)."""
+    """
+    The non-vertical triangles with the lattice nodes each covers and their affine maps.
+
+    The non-vertical triangles (T, 3, 3) m with the lattice nodes each covers ([ix0, ix1] x [iy0,
+    iy1]), the affine maps of their two barycentric weights and height over those nodes' indices
+    (T, 9) and their facing (+1 up, -1 down).
+    """
 
     triangles: np.ndarray
     ix0: np.ndarray
@@ -1141,9 +1214,13 @@ class _Raster:
 
 @dataclass(frozen=True)
 class _TopTriangles:
-    """Every triangle's cells ([ix0, ix1] x [iy0, iy1]) and the bound of its height over cell
-    (i, j) of them: min(base + step_x * i + step_y * j, z_max), m; ``large`` ones are added
-    to the top map as blocks (the sum taken in the other order)."""
+    """
+    Every triangle's cells and the bound of its height over them.
+
+    Every triangle's cells ([ix0, ix1] x [iy0, iy1]) and the bound of its height over cell (i, j)
+    of them: min(base + step_x * i + step_y * j, z_max), m; ``large`` ones are added to the top map
+    as blocks (the sum taken in the other order).
+    """
 
     ix0: np.ndarray
     ix1: np.ndarray

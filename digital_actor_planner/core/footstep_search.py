@@ -1,4 +1,19 @@
-"""The footstep window's search (§4.2) as compiled kernels.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The footstep window's search (§4.2) as compiled kernels.
 
 :meth:`footsteps.FootstepPlanner.plan` hands the profile's samples and the layout of the
 window's foothold table here. One call (:func:`window_search`) searches: a breadth-first search
@@ -63,9 +78,13 @@ NUMBER_COUNT = 28
         'f8, f8, f8)', inline=True)
 def _judge_sole(high, low, headroom, s0, ds, row, sn, heel, toe, min_headroom, max_pitch,
                 tolerance, min_fraction):
-    """One sole of :func:`judge_footholds`, its ankle at arc length ``sn`` on side ``row``:
-    (ok, height, pitch). A maximum or minimum over a NaN sample is NaN, as NumPy's: a missing
-    sample makes the sole neither flat nor supported at an edge."""
+    """
+    Judge one sole of :func:`judge_footholds`: (ok, height, pitch).
+
+    One sole of :func:`judge_footholds`, its ankle at arc length ``sn`` on side ``row``: (ok,
+    height, pitch). A maximum or minimum over a NaN sample is NaN, as NumPy's: a missing sample
+    makes the sole neither flat nor supported at an edge.
+    """
     samples = high.shape[1]
     # The samples from the heel to the toe, none beyond them.
     i0 = int(math.ceil((sn - heel - s0) / ds - 1e-9))
@@ -140,8 +159,11 @@ def _judge_sole(high, low, headroom, s0, ds, row, sn, heel, toe, min_headroom, m
         'f8[::1], f8, f8, f8, f8, f8, f8)')
 def judge_footholds(high, low, headroom, s0, ds, side, s, heel, toe, min_headroom, max_pitch,
                     tolerance, min_fraction):
-    """:meth:`footsteps.FootstepPlanner.footholds` for every sole in one pass (see there for
-    the rules): :func:`_judge_sole` of each.
+    """
+    Judge every sole in one pass, as :meth:`footsteps.FootstepPlanner.footholds` does.
+
+    :meth:`footsteps.FootstepPlanner.footholds` for every sole in one pass (see there for the
+    rules): :func:`_judge_sole` of each.
 
     Returns (ok, sole height under the ankle (NaN where not ok), pitch of the sole's plane,
     the C library's arctangent of its slope: 0 on an edge and where the sole is not usable).
@@ -198,7 +220,7 @@ _BANNED = 'readonly(b1[::1])'
 
 @kernel('readonly(i8[::1])(' + PROFILE_TYPE + ')', inline=True)
 def _entry_sides(profile):
-    """The side of each entry of the foothold table (T,), from a :data:`PROFILE_TYPE`."""
+    """Return the side of each entry of the foothold table (T,), from a :data:`PROFILE_TYPE`."""
     layout = profile[2]
     n = layout[0]
     return layout[2 * n + 3:]
@@ -206,9 +228,13 @@ def _entry_sides(profile):
 
 @kernel(TABLES_TYPE + '(' + PROFILE_TYPE + ')', inline=True)
 def _unjudged_tables(profile):
-    """:func:`foothold_tables` before any entry is judged (not ok, height NaN, pitch 0):
-    :func:`window_search` judges the entries it reads, as it first reads them. Its numbers
-    are the planner's with the window's own (:data:`WINDOW_NUMBERS`) written in."""
+    """
+    Return :func:`foothold_tables` before any entry is judged.
+
+    :func:`foothold_tables` before any entry is judged (not ok, height NaN, pitch 0):
+    :func:`window_search` judges the entries it reads, as it first reads them. Its numbers are the
+    planner's with the window's own (:data:`WINDOW_NUMBERS`) written in.
+    """
     samples, constants, layout, window = profile
     n, m = layout[0], layout[1]
     numbers = constants[:NUMBER_COUNT].copy()
@@ -224,11 +250,14 @@ def _unjudged_tables(profile):
 
 @kernel(TABLES_TYPE + '(' + PROFILE_TYPE + ')')
 def foothold_tables(profile):
-    """The window's foothold table (:func:`_judge_sole` of every entry, as
-    :func:`judge_footholds` judges them, written into :func:`_unjudged_tables`' arrays) and
-    the profile's obstacle with -inf over empty space: the
-    :data:`TABLES_TYPE` the searches read, from the :data:`PROFILE_TYPE` they are given
-    (:func:`window_search` judges its entries as it reads them instead)."""
+    """
+    Return the window's foothold table and the profile's obstacles, judged.
+
+    The window's foothold table (:func:`_judge_sole` of every entry, as :func:`judge_footholds`
+    judges them, written into :func:`_unjudged_tables`' arrays) and the profile's obstacle with
+    -inf over empty space: the :data:`TABLES_TYPE` the searches read, from the :data:`PROFILE_TYPE`
+    they are given (:func:`window_search` judges its entries as it reads them instead).
+    """
     samples, entry_sides = profile[0], _entry_sides(profile)
     high, low, headroom = samples[0], samples[1], samples[2]
     tables = _unjudged_tables(profile)
@@ -245,10 +274,14 @@ def foothold_tables(profile):
 @kernel('Tuple((' + _FEASIBLE_TYPE + ', ' + _PREFIXES_TYPE + ', ' + _SWINGS_TYPE
         + '))(i8, i8, b1)', inline=True)
 def _empty_memos(n, m, resume):
-    """Empty ``feasible``, ``prefixes`` and ``swings`` memos for one search of a window of
-    ``n`` footsteps and ``m`` intervals; ``prefixes`` without rows unless ``resume``. The
-    dictionary typed by a first entry (computed, not a literal value: a literal one would be
-    part of its type), removed at once."""
+    """
+    Return empty ``feasible``, ``prefixes`` and ``swings`` memos for one search.
+
+    Empty ``feasible``, ``prefixes`` and ``swings`` memos for one search of a window of ``n``
+    footsteps and ``m`` intervals; ``prefixes`` without rows unless ``resume``. The dictionary
+    typed by a first entry (computed, not a literal value: a literal one would be part of its
+    type), removed at once.
+    """
     feasible = {-1: math.nan}
     del feasible[-1]
     rows, power = 0, 1
@@ -265,8 +298,7 @@ def _empty_memos(n, m, resume):
 
 @kernel('void(i8, i8, i8[::1])')
 def _digits(number, base, config):
-    """Write configuration ``number``'s interval indices into ``config`` (its numbering
-    undone)."""
+    """Write configuration ``number``'s interval indices into ``config`` (its numbering undone)."""
     for i in range(config.shape[0] - 1, -1, -1):
         config[i] = number % base
         number //= base
@@ -274,9 +306,13 @@ def _digits(number, base, config):
 
 @kernel('f8(f8, f8, f8, f8, f8[::1])', inline=True)
 def _step_cost(length, rise, pitch, length_before, numbers):
-    """One footstep's share of the effort: length off the neutral one, height change, sole
-    pitch and change of length, each normalised by its range, in the plain effort's order
-    (the squares as ``** two``, see the module's docstring)."""
+    """
+    Return one footstep's share of the effort.
+
+    One footstep's share of the effort: length off the neutral one, height change, sole pitch and
+    change of length, each normalised by its range, in the plain effort's order (the squares as
+    ``** two``, see the module's docstring).
+    """
     two, span = numbers[TWO], numbers[SPAN]
     return (numbers[W_LENGTH] * ((length - numbers[S_INIT]) / span) ** two
             + numbers[W_HEIGHT] * (rise / numbers[UP_RANGE]) ** two
@@ -286,10 +322,14 @@ def _step_cost(length, rise, pitch, length_before, numbers):
 
 @kernel('f8(i8, i8, ' + TABLES_TYPE + ')', inline=True)
 def _rise_ahead(row, cumulative, tables):
-    """How far the ground within ``lift_room`` ahead of a foothold's toe rises above its sole's
-    plane carried on, m: -inf where nothing does (or no room is asked for), NaN where the
-    foothold has no height. :meth:`footsteps.FootstepPlanner.rise_ahead` of one foothold of
-    the table (row ``row``, cumulative interval index ``cumulative``)."""
+    """
+    Return how far the ground ahead of a foothold's toe rises above its sole's plane, m.
+
+    How far the ground within ``lift_room`` ahead of a foothold's toe rises above its sole's plane
+    carried on, m: -inf where nothing does (or no room is asked for), NaN where the foothold has no
+    height. :meth:`footsteps.FootstepPlanner.rise_ahead` of one foothold of the table (row ``row``,
+    cumulative interval index ``cumulative``).
+    """
     ok, height, pitch, bounds, offsets, obstacle, sides, lengths, last, numbers = tables
     entry = bounds[row] + cumulative
     sole = height[entry]
@@ -317,10 +357,14 @@ def _rise_ahead(row, cumulative, tables):
 
 @kernel('b1(i8, f8, f8, f8, f8, i8, i8, ' + TABLES_TYPE + ')', inline=True)
 def _swing_clear(side, s_from, h_from, s_to, h_to, from_row, from_cumulative, tables):
-    """Whether a foot can swing from one foothold (arc length, sole height) to the next over
-    the profile's obstacles, at most ``max_swing_height`` above the higher of the two; where it
-    leaves a foothold the window placed (``from_row`` >= 0, with its cumulative index), that
-    foothold must also let it lift off (``FootstepConfig.lift_room``)."""
+    """
+    Return whether a foot can swing from one foothold to the next over the obstacles.
+
+    Whether a foot can swing from one foothold (arc length, sole height) to the next over the
+    profile's obstacles, at most ``max_swing_height`` above the higher of the two; where it leaves
+    a foothold the window placed (``from_row`` >= 0, with its cumulative index), that foothold must
+    also let it lift off (``FootstepConfig.lift_room``).
+    """
     ok, height, pitch, bounds, offsets, obstacle, sides, lengths, last, numbers = tables
     toe, heel, s0, ds = numbers[TOE], numbers[HEEL], numbers[S0], numbers[DS]
     i0 = max(int(math.floor((s_from + toe - s0) / ds)), 0)
@@ -346,9 +390,13 @@ def _swing_clear(side, s_from, h_from, s_to, h_to, from_row, from_cumulative, ta
 @kernel('f8(i8[::1], ' + _BANNED + ', ' + TABLES_TYPE + ', ' + _PREFIXES_TYPE + ', '
         + _SWINGS_TYPE + ')', inline=True)
 def _effort(config, banned_first, tables, prefixes, swings):
-    """Effort of a configuration, NaN if it is not collision-free, resumed from the longest
-    prefix of it already in ``prefixes`` (and adding its own). Compiled into both searches
-    rather than called (a call reference-counts every array it is given, the table's too)."""
+    """
+    Return the effort of a configuration, NaN if it is not collision-free.
+
+    Effort of a configuration, NaN if it is not collision-free, resumed from the longest prefix of
+    it already in ``prefixes`` (and adding its own). Compiled into both searches rather than called
+    (a call reference-counts every array it is given, the table's too).
+    """
     ok, height, pitch, bounds, offsets, obstacle, sides, lengths, last, numbers = tables
     if banned_first[config[0]]:
         return math.nan
@@ -428,9 +476,13 @@ def _effort(config, banned_first, tables, prefixes, swings):
 
 @kernel('f8[:, ::1](i8[::1], ' + TABLES_TYPE + ')', inline=True)
 def _footholds_of(config, tables):
-    """A configuration's footholds, (4, n): the footstep lengths (m), the footholds' arc
-    lengths along the path (m, the stance foot's plus the running sum of the lengths), sole
-    heights (m) and pitches (rad). One array: boxing it for Python costs a third of four."""
+    """
+    Return a configuration's footholds, (4, n).
+
+    A configuration's footholds, (4, n): the footstep lengths (m), the footholds' arc lengths along
+    the path (m, the stance foot's plus the running sum of the lengths), sole heights (m) and
+    pitches (rad). One array: boxing it for Python costs a third of four.
+    """
     ok, height, pitch, bounds, offsets, obstacle, sides, lengths, last, numbers = tables
     n = config.shape[0]
     footholds = np.empty((4, n))
@@ -461,9 +513,12 @@ DENSE_CONFIGURATIONS = 1 << 16
 
 @kernel(_RESULT_TYPE + '(i8, ' + _BANNED + ', ' + _BANNED + ', b1, ' + PROFILE_TYPE + ')')
 def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
-    """§4.2's search of one window: (configuration (n,) interval indices, empty when no
-    configuration is collision-free; its footholds (4, n), :func:`_footholds_of`; its effort;
-    configurations judged).
+    """
+    Search one window (§4.2): breadth-first to a feasible one, then hill-climbing.
+
+    §4.2's search of one window: (configuration (n,) interval indices, empty when no configuration
+    is collision-free; its footholds (4, n), :func:`_footholds_of`; its effort; configurations
+    judged).
 
     ``start``: the configuration the breadth-first search starts from, numbered (base m + 1,
     footstep 0 the most significant digit: one number to pass, not an array); ``banned_first``
@@ -794,11 +849,15 @@ def window_search(start, banned_first, banned_lengths, greedy_restart, profile):
 
 @kernel(_RESULT_TYPE + '(i8, i8, ' + PROFILE_TYPE + ')')
 def exhaustive_search(n, m, profile):
-    """The optimum over every configuration of the window, the first of equals: as
+    """
+    Return the optimum over every configuration of the window, the first of equals.
+
+    The optimum over every configuration of the window, the first of equals: as
     :func:`window_search` returns it, the configurations judged (m + 1) ** n. For benchmarks, what
-    :func:`window_search` is measured against: each configuration judged whole by
-    :func:`_effort` (its prefix memo has no rows: nothing of another configuration is resumed
-    or written), the swing tests remembered, as the plain effort judges them."""
+    :func:`window_search` is measured against: each configuration judged whole by :func:`_effort`
+    (its prefix memo has no rows: nothing of another configuration is resumed or written), the
+    swing tests remembered, as the plain effort judges them.
+    """
     tables = foothold_tables(profile)
     _, prefixes, swings = _empty_memos(n, m, False)
     base = m + 1

@@ -1,4 +1,19 @@
-"""The sliding-window footstep planner (§4.2).
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The sliding-window footstep planner (§4.2).
 
 A footstep configuration q_f = (s_1, ..., s_n) holds the lengths of the next n steps, each in
 [s_min, s_max] divided into m intervals. From q_init = (s_init, ..., s_init) a breadth-first search
@@ -16,13 +31,12 @@ from typing import Optional, Tuple
 
 import numpy as np
 
-from .footstep_search import (DENSE_CONFIGURATIONS, DOWN, HEEL, LIFT_RISE, LIFT_ROOM,
-                              LIFT_STEP_UP, MAX_PITCH, MAX_SWING, MIN_FRACTION, MIN_HEADROOM,
-                              NUMBER_COUNT, PITCH_RANGE, SPAN, TOE, TOLERANCE, TWO, UP, UP_RANGE,
-                              W_HEIGHT, W_LENGTH, W_PITCH, W_SMOOTH, exhaustive_search,
-                              foothold_tables, judge_footholds, window_search)
-from .footstep_window import (FootholdTable, WindowFeet, WindowLimits,
-                              search_footstep_window)
+from .footstep_search import (DENSE_CONFIGURATIONS, DOWN, exhaustive_search, foothold_tables,
+                              HEEL, judge_footholds, LIFT_RISE, LIFT_ROOM, LIFT_STEP_UP,
+                              MAX_PITCH, MAX_SWING, MIN_FRACTION, MIN_HEADROOM, NUMBER_COUNT,
+                              PITCH_RANGE, SPAN, TOE, TOLERANCE, TWO, UP, UP_RANGE, W_HEIGHT,
+                              W_LENGTH, W_PITCH, W_SMOOTH, window_search)
+from .footstep_window import FootholdTable, search_footstep_window, WindowFeet, WindowLimits
 from .jit import direct, float_array
 from .skeleton import LegGeometry
 
@@ -47,7 +61,8 @@ WINDOW_SEARCHES = ('compiled', 'readable')
 
 @dataclass(frozen=True)
 class FootstepConfig:
-    """Footstep planner settings (paper defaults n = 3, m = 13). Lengths in m, angles in rad.
+    """
+    Footstep planner settings (paper defaults n = 3, m = 13). Lengths in m, angles in rad.
 
     Why each rule and default is as it is: docs/LOWER_BODY.md.
 
@@ -105,7 +120,7 @@ class FootstepConfig:
         return (self.step_length_max - self.step_length_min) / self.step_intervals
 
     def lengths(self) -> np.ndarray:
-        """The m + 1 allowed footstep lengths, (m + 1,) m."""
+        """Return the m + 1 allowed footstep lengths, (m + 1,) m."""
         return self.step_length_min + self.step_increment * np.arange(self.step_intervals + 1)
 
 
@@ -136,14 +151,19 @@ def validate_footstep_config(config: FootstepConfig) -> None:
 
 
 def _samples(array) -> np.ndarray:
-    """A profile's (2, K) samples as the compiled kernels take them: float64, C-contiguous and
-    writable (copied only when they are not)."""
+    """
+    Return a profile's (2, K) samples as the compiled kernels take them.
+
+    A profile's (2, K) samples as the compiled kernels take them: float64, C-contiguous and
+    writable (copied only when they are not).
+    """
     return np.ascontiguousarray(float_array(array))
 
 
 @dataclass(frozen=True)
 class GroundProfile:
-    """The ground under each foot's track, sampled along the predicted path (§3.2).
+    """
+    The ground under each foot's track, sampled along the predicted path (§3.2).
 
     Attributes
     ----------
@@ -211,7 +231,7 @@ class GroundProfile:
 
     @property
     def samples(self) -> int:
-        """Number of samples K per side."""
+        """Return the number of samples K per side."""
         return self.height.shape[1]
 
     def arc_lengths(self) -> np.ndarray:
@@ -219,7 +239,8 @@ class GroundProfile:
         return self.s0 + self.ds * np.arange(self.samples)
 
     def swing_top(self, side: int, s_toe: float, s_heel: float) -> float:
-        """Highest ground a foot swings over between a sole's toe and a later sole's heel.
+        """
+        Highest ground a foot swings over between a sole's toe and a later sole's heel.
 
         Parameters
         ----------
@@ -246,8 +267,12 @@ class GroundProfile:
 
 @dataclass(frozen=True)
 class Foothold:
-    """Where a sole can rest at arc length ``s`` on one side: height of the sole under the ankle
-    (m), sole pitch (rad, toes up positive) and whether it is usable at all."""
+    """
+    Where a sole can rest at arc length ``s`` on one side.
+
+    Where a sole can rest at arc length ``s`` on one side: height of the sole under the ankle (m),
+    sole pitch (rad, toes up positive) and whether it is usable at all.
+    """
 
     ok: bool
     height: float
@@ -256,7 +281,10 @@ class Foothold:
 
 @dataclass(slots=True)
 class FootstepWindow:
-    """Result of one footstep-window search (treat it as read-only: not a frozen dataclass only
+    """
+    Result of one footstep-window search (treat it as read-only).
+
+    Result of one footstep-window search (treat it as read-only: not a frozen dataclass only
     because one is built on every planned step and freezing costs four times as much).
 
     Attributes
@@ -290,12 +318,16 @@ class FootstepWindow:
 
 @functools.lru_cache(maxsize=None)
 def _numbering(n: int, m: int) -> tuple:
-    """Every configuration of a window of ``n`` footsteps and ``m`` intervals by its number as
-    the searches number them (base m + 1, footstep 0 first), a list of index tuples, and the
-    numbers by the tuples, a dictionary: (None, None) past ``DENSE_CONFIGURATIONS``. The
-    planner looks up a search's answer in the list (where the search would return an array
-    to box and convert) and a start's number in the dictionary (where a loop would check and
-    number it); planners of one window size share them."""
+    """
+    Return every configuration of a window of ``n`` footsteps and ``m`` intervals by number.
+
+    Every configuration of a window of ``n`` footsteps and ``m`` intervals by its number as the
+    searches number them (base m + 1, footstep 0 first), a list of index tuples, and the numbers by
+    the tuples, a dictionary: (None, None) past ``DENSE_CONFIGURATIONS``. The planner looks up a
+    search's answer in the list (where the search would return an array to box and convert) and a
+    start's number in the dictionary (where a loop would check and number it); planners of one
+    window size share them.
+    """
     if (m + 1) ** n > DENSE_CONFIGURATIONS:
         return None, None
     configurations = list(itertools.product(range(m + 1), repeat=n))
@@ -303,7 +335,8 @@ def _numbering(n: int, m: int) -> tuple:
 
 
 class FootstepPlanner:
-    """Sliding-window footstep planner (§4.2) over a ground profile.
+    """
+    Sliding-window footstep planner (§4.2) over a ground profile.
 
     Parameters
     ----------
@@ -395,13 +428,17 @@ class FootstepPlanner:
 
     # -- the ground under a sole -----------------------------------------------------------
     def foothold(self, profile: GroundProfile, side: int, s: float) -> Foothold:
-        """Evaluate a sole with its ankle at arc length ``s`` on ``side`` (see :meth:`footholds`).
+        """
+        Evaluate a sole with its ankle at arc length ``s`` on ``side``.
+
+        One sole of :meth:`footholds`.
         """
         ok, height, pitch = self.footholds(profile, side, np.array([s], dtype=float))
         return Foothold(bool(ok[0]), float(height[0]), float(pitch[0]))
 
     def footholds(self, profile: GroundProfile, side: int, s: np.ndarray):
-        """Evaluate soles with their ankles at arc lengths ``s``, all at once.
+        """
+        Evaluate soles with their ankles at arc lengths ``s``, all at once.
 
         A sole needs support under its whole length that is flat within the tolerance after
         fitting a plane (so slopes are fine), not steeper than the pitch limit, and with
@@ -447,7 +484,8 @@ class FootstepPlanner:
 
     def rise_ahead(self, profile: GroundProfile, side, s: np.ndarray, height: np.ndarray,
                    pitch: np.ndarray) -> np.ndarray:
-        """How far the ground just ahead of soles' toes rises above their planes.
+        """
+        How far the ground just ahead of soles' toes rises above their planes.
 
         Parameters
         ----------
@@ -494,7 +532,8 @@ class FootstepPlanner:
              previous_length: float, start: Optional[Tuple[int, ...]] = None,
              banned_first: Tuple[int, ...] = (),
              max_length: float = np.inf) -> Optional[FootstepWindow]:
-        """Plan the next n footsteps.
+        """
+        Plan the next n footsteps.
 
         Parameters
         ----------
@@ -527,6 +566,7 @@ class FootstepPlanner:
         ``FootstepConfig.window_search`` asks for the readable search of record
         (:func:`footstep_window.search_footstep_window`): both judge the same configurations
         and find the same footsteps and efforts to the last bit.
+
         """
         n, m = self._window_size
         if start is None:
@@ -566,12 +606,15 @@ class FootstepPlanner:
 
     @property
     def window_limits(self) -> WindowLimits:
-        """The window's rules and effort weights as the readable search reads them."""
+        """Return the window's rules and effort weights as the readable search reads them."""
         return self._window_limits
 
     def foothold_table(self, profile: GroundProfile, stance_side: int,
                        stance_s: float) -> FootholdTable:
-        """Every foothold a window from the stance foot at ``stance_s`` can reach, judged by
+        """
+        Return every foothold a window from the stance foot at ``stance_s`` can reach.
+
+        Every foothold a window from the stance foot at ``stance_s`` can reach, judged by
         :meth:`footholds` and :meth:`rise_ahead`: what the readable search reads
         (:func:`footstep_window.search_footstep_window`).
 
@@ -627,26 +670,37 @@ class FootstepPlanner:
     def search_profile(self, profile: GroundProfile, stance_side: int, stance_s: float,
                        stance_height: float, swing_s: float, swing_height: float,
                        s_init: float, previous_length: float) -> tuple:
-        """What the compiled search of a window is given
-        (:data:`footstep_search.PROFILE_TYPE`): the profile's samples, the layout of the
-        window's foothold table, the planner's numbers and the window's own as a tuple (the
-        arguments are :meth:`plan`'s). The search builds the table itself
-        (:func:`footstep_search.foothold_tables`)."""
+        """
+        Return what the compiled search of a window is given, as a tuple.
+
+        What the compiled search of a window is given (:data:`footstep_search.PROFILE_TYPE`): the
+        profile's samples, the layout of the window's foothold table, the planner's numbers and the
+        window's own as a tuple (the arguments are :meth:`plan`'s). The search builds the table
+        itself (:func:`footstep_search.foothold_tables`).
+        """
         return (profile.stacked, self._search_constants, self._search_layout[stance_side],
                 (stance_s, stance_height, swing_s, swing_height, s_init, previous_length,
                  profile.s0, profile.ds))
 
     def search_tables(self, *arguments) -> tuple:
-        """The foothold table and numbers the search reads
-        (:data:`footstep_search.TABLES_TYPE`), for :meth:`search_profile`'s arguments."""
+        """
+        Return the foothold table and numbers the search reads.
+
+        The foothold table and numbers the search reads (:data:`footstep_search.TABLES_TYPE`), for
+        :meth:`search_profile`'s arguments.
+        """
         return foothold_tables(self.search_profile(*arguments))
 
     def plan_exhaustive(self, profile: GroundProfile, stance_side: int, stance_s: float,
                         stance_height: float, swing_s: float, swing_height: float,
                         s_init: float, previous_length: float) -> Optional[FootstepWindow]:
-        """The optimum over every configuration of the window (for benchmarks only): each
-        judged by the same compiled effort as :meth:`plan`'s search
-        (:func:`footstep_search.exhaustive_search`)."""
+        """
+        Return the optimum over every configuration of the window (for benchmarks only).
+
+        The optimum over every configuration of the window (for benchmarks only): each judged by
+        the same compiled effort as :meth:`plan`'s search
+        (:func:`footstep_search.exhaustive_search`).
+        """
         cfg = self.config
         return self._window(exhaustive_search(
             cfg.window_steps, cfg.step_intervals,
@@ -654,8 +708,12 @@ class FootstepPlanner:
                                 swing_height, s_init, previous_length)), stance_side)
 
     def _window(self, found: tuple, stance_side: int) -> Optional[FootstepWindow]:
-        """The window a search found (:func:`footstep_search.window_search`'s answer), None
-        when it found none."""
+        """
+        Return the window a search found, None when it found none.
+
+        The window a search found (:func:`footstep_search.window_search`'s answer), None when it
+        found none.
+        """
         number, footholds, effort, evaluated = found
         if number < 0:
             return None
@@ -676,7 +734,8 @@ class FootstepPlanner:
 def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: float,
                           hip_half_width: float, foot_width: float, base_height: float,
                           max_step_up: float, levels: int) -> GroundProfile:
-    """Sample the ground under both foot tracks along a predicted path (§3.2).
+    """
+    Sample the ground under both foot tracks along a predicted path (§3.2).
 
     "By taking the intersection of the ground and the sagittal plane of the actor, one can
     compute the ground profile along the global path." Here each foot has its own track, offset
@@ -750,7 +809,8 @@ def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: f
 def describe_ground_ahead(environment, path, profile: GroundProfile, s_from: float,
                           s_to: float, sole: float, config: FootstepConfig,
                           hip_half_width: float, foot_width: float) -> str:
-    """Why no footstep can be placed ahead, in a user's words with the number, or ''.
+    """
+    Why no footstep can be placed ahead, in a user's words with the number, or ''.
 
     The first sample of either foot's track between arc lengths ``s_from`` and ``s_to`` (m)
     where a foot cannot stand relative to the stance sole height ``sole`` (m): ground that

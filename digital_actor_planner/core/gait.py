@@ -1,4 +1,19 @@
-"""Walk generation for one step (§4.1): key frames, sagittal leg IK, Bezier swing, pelvis motion.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Walk generation for one step (§4.1): key frames, sagittal leg IK, Bezier swing, pelvis motion.
 
 The legs are planned in their sagittal planes (§4): each leg has hip yaw, hip pitch, knee and
 ankle, so a foot on the ground must stay in the vertical plane of its hip. The pelvis trajectory
@@ -55,7 +70,8 @@ class GaitError(Exception):
 
 @dataclass(frozen=True)
 class GaitConfig:
-    """Walk generation settings. Lengths in m, times in s, angles in rad.
+    """
+    Walk generation settings. Lengths in m, times in s, angles in rad.
 
     Why each rule and default is as it is: docs/LOWER_BODY.md.
     """
@@ -97,8 +113,12 @@ def validate_gait_config(config: GaitConfig) -> None:
 
 @dataclass(frozen=True)
 class FootPose:
-    """A foot resting on the ground: ankle joint xy (m), ankle height (m), yaw and sole pitch
-    (rad, toes up positive), and the sole height under the ankle (m)."""
+    """
+    A foot resting on the ground: ankle position, yaw, sole pitch and sole height.
+
+    A foot resting on the ground: ankle joint xy (m), ankle height (m), yaw and sole pitch (rad,
+    toes up positive), and the sole height under the ankle (m).
+    """
 
     xy: np.ndarray
     z: float
@@ -109,7 +129,8 @@ class FootPose:
 
 @dataclass(frozen=True)
 class Stance:
-    """Double-support state between two steps.
+    """
+    Double-support state between two steps.
 
     ``pelvis`` is (x, y, z, yaw) with yaw unwrapped (continuous); ``feet`` is (left, right);
     ``stance_side`` is the foot that stays down during the next step (the one that landed last).
@@ -123,8 +144,12 @@ class Stance:
 
 @dataclass(frozen=True)
 class StepMotion:
-    """One generated step: frames (k, 22) at times (k,) s relative to the step start (the last
-    frame is at the step's duration), the stance after it, and its category."""
+    """
+    One generated step: frames (k, 22) at times (k,) s, the stance after it, its category.
+
+    One generated step: frames (k, 22) at times (k,) s relative to the step start (the last frame
+    is at the step's duration), the stance after it, and its category.
+    """
 
     times: np.ndarray
     frames: np.ndarray
@@ -152,8 +177,12 @@ _SWING_RAMPS = np.array([[0.0, 0.88 - 0.0], [0.12, 0.88 - 0.12], [0.2, 0.55], [0
 
 @functools.lru_cache(maxsize=256)
 def _step_timing(k: int, swing_clearance: float) -> _StepTiming:
-    """The time shapes of a k-frame step: a function of its arguments alone, remembered (a
-    handful of step durations recur) and shared by every generator, so read-only."""
+    """
+    Return the time shapes of a k-frame step, remembered and read-only.
+
+    The time shapes of a k-frame step: a function of its arguments alone, remembered (a handful of
+    step durations recur) and shared by every generator, so read-only.
+    """
     tau = np.arange(1, k + 1) / k
     # The ramps over time through one smoothstep call, the ramps over the swing curve's
     # parameter through another (each row is the formula's own (x - start) / length).
@@ -193,8 +222,12 @@ def _step_timing(k: int, swing_clearance: float) -> _StepTiming:
 
 
 def _bezier_terms(tau, samples, swing_clearance: float):
-    """Per-frame Bernstein weights of the swing Bezier and the clearance terms at the
-    sampled frames (the parts of :meth:`WalkGenerator._swing_heights` fixed during one step)."""
+    """
+    Return the Bernstein weights of the swing Bezier and the clearance terms per frame.
+
+    Per-frame Bernstein weights of the swing Bezier and the clearance terms at the sampled frames
+    (the parts of :meth:`WalkGenerator._swing_heights` fixed during one step).
+    """
     b = tau[samples]
     ramp = np.minimum(1.0, 10.0 * np.minimum(b, 1.0 - b))
     # Near lift-off and touchdown the sole is by definition at its foothold: the
@@ -234,8 +267,12 @@ def _points(xy: np.ndarray, z) -> np.ndarray:
 
 
 def foot_pose_on(xy, yaw, sole, pitch, leg: LegGeometry) -> FootPose:
-    """The resting foot pose whose sole lies on a plane of ``pitch`` at height ``sole`` under the
-    ankle."""
+    """
+    Return the resting foot pose whose sole lies on a plane of ``pitch``.
+
+    The resting foot pose whose sole lies on a plane of ``pitch`` at height ``sole`` under the
+    ankle.
+    """
     z = sole + leg.ankle_height / np.cos(pitch) + SOLE_CLEARANCE
     return FootPose(np.asarray(xy, dtype=float).copy(), float(z), float(yaw), float(pitch),
                     float(sole))
@@ -257,10 +294,13 @@ def standing_stance(skeleton: Skeleton, x: float, y: float, yaw: float, sole: fl
 def leg_inverse_kinematics(leg: LegGeometry, hip: np.ndarray, ankle: np.ndarray,
                            plane_yaw: np.ndarray, pelvis_yaw: np.ndarray,
                            foot_pitch: np.ndarray, plane_direction=None):
-    """Sagittal-plane IK of one leg for k frames (§4: legs move in their sagittal planes).
+    """
+    Sagittal-plane IK of one leg for k frames (§4: legs move in their sagittal planes).
 
     Parameters
     ----------
+    leg
+        The leg's sagittal-plane dimensions, m.
     hip, ankle
         (k, 3) world positions of the hip and ankle joints, m.
     plane_yaw
@@ -296,7 +336,8 @@ def leg_inverse_kinematics(leg: LegGeometry, hip: np.ndarray, ankle: np.ndarray,
 
 def _sagittal_leg(leg: LegGeometry, forward: np.ndarray, down: np.ndarray,
                   foot_pitch: np.ndarray, joints: np.ndarray) -> np.ndarray:
-    """The in-plane part of :func:`leg_inverse_kinematics`.
+    """
+    Return the in-plane part of :func:`leg_inverse_kinematics`.
 
     The ankle lies ``forward`` (k,) and ``down`` (k,) m from the hip in the leg's plane; hip
     pitch, knee and ankle (rad) go to columns 1..3 of ``joints`` (k, 4). Returns the reach
@@ -316,13 +357,16 @@ def _sagittal_leg(leg: LegGeometry, forward: np.ndarray, down: np.ndarray,
         'readonly(f8[::1]), f8, f8, f8, f8, f8, f8, f8, f8, f8, f8)')
 def _pelvis_track(turn, progress, yaw0, yaw1, lam0, lam1, foot_x, foot_y, along_x, along_y,
                   stance_offset, swing_offset):
-    """:meth:`WalkGenerator.step`'s pelvis over a step: the yaw (k,) turning from ``yaw0`` to
-    ``yaw1`` as ``turn`` and the stance hip's place (k,) along its foot's line from ``lam0``
-    to ``lam1`` as ``progress``, m, then the stance hip (k, 2)
-    on that line (from the foot at (``foot_x``, ``foot_y``) along (``along_x``,
-    ``along_y``)), the pelvis (k, 2) ``stance_offset`` m to its right of the heading and the
-    swing hip (k, 2) ``swing_offset`` m to the pelvis' left (what _lateral gives, from one
-    sine and cosine of the yaw)."""
+    """
+    Return :meth:`WalkGenerator.step`'s pelvis over a step: yaw and the stance hip's place.
+
+    :meth:`WalkGenerator.step`'s pelvis over a step: the yaw (k,) turning from ``yaw0`` to ``yaw1``
+    as ``turn`` and the stance hip's place (k,) along its foot's line from ``lam0`` to ``lam1`` as
+    ``progress``, m, then the stance hip (k, 2) on that line (from the foot at (``foot_x``,
+    ``foot_y``) along (``along_x``, ``along_y``)), the pelvis (k, 2) ``stance_offset`` m to its
+    right of the heading and the swing hip (k, 2) ``swing_offset`` m to the pelvis' left (what
+    _lateral gives, from one sine and cosine of the yaw).
+    """
     count = turn.shape[0]
     yaw, lam = np.empty(count), np.empty(count)
     stance_hip, pelvis, swing_hip = np.empty((count, 2)), np.empty((count, 2)), np.empty(
@@ -352,9 +396,12 @@ def _wrapped(angle):
 def _swing_plane(progress, plane_turn, pinned, pitch_release, pitch_take, swing_hip, yaw,
                  foot_x, foot_y, foot_yaw, turn, landing_x, landing_y, turning, inward,
                  stance_yaw, toe_in, low, high, lift_pitch, landing_pitch):
-    """:meth:`WalkGenerator.step`'s swing foot over a step, before its heights: the leg's
-    plane heading (k,), its direction (k, 2) as cosine and sine, the ankle's reach along it
-    from the hip (k,), the ankle (k, 2) and the sole pitch (k,).
+    """
+    Return :meth:`WalkGenerator.step`'s swing foot over a step, before its heights.
+
+    :meth:`WalkGenerator.step`'s swing foot over a step, before its heights: the leg's plane
+    heading (k,), its direction (k, 2) as cosine and sine, the ankle's reach along it from the hip
+    (k,), the ankle (k, 2) and the sole pitch (k,).
 
     The foot (at (``foot_x``, ``foot_y``), heading ``foot_yaw``) travels to the landing
     (``landing_x``, ``landing_y``) as ``progress`` and turns by ``turn`` as ``plane_turn``
@@ -442,12 +489,16 @@ def _swing_plane(progress, plane_turn, pinned, pitch_release, pitch_take, swing_
 @kernel('b1(f8[:, :], f8[:, :], f8[:], f8, f8, f8, f8, f8, f8, f8, f8, f8)')
 def _feet_meet(swing_xy, direction, swing_z, stance_x, stance_y, top, ux, uy, shift,
                half_length, half_width, far):
-    """Whether the swinging sole (ankle ``swing_xy`` (k, 2), heading ``direction`` (k, 2) as
-    cosine and sine, ankle height ``swing_z`` (k,)) meets the stance sole (ankle at
-    (``stance_x``, ``stance_y``), heading (``ux``, ``uy``)) seen from above at a frame where it
-    is below the stance foot's ``top``: a separating-axis test of the two boxes, ``shift`` from
-    the ankle to the middle of a sole, ``half_length`` and ``half_width`` its half sizes. Sole
-    middles farther apart than ``far`` squared (two half-diagonals) cannot meet."""
+    """
+    Return whether the swinging sole meets the stance sole at any frame.
+
+    Whether the swinging sole (ankle ``swing_xy`` (k, 2), heading ``direction`` (k, 2) as cosine
+    and sine, ankle height ``swing_z`` (k,)) meets the stance sole (ankle at (``stance_x``,
+    ``stance_y``), heading (``ux``, ``uy``)) seen from above at a frame where it is below the
+    stance foot's ``top``: a separating-axis test of the two boxes, ``shift`` from the ankle to the
+    middle of a sole, ``half_length`` and ``half_width`` its half sizes. Sole middles farther apart
+    than ``far`` squared (two half-diagonals) cannot meet.
+    """
     for f in range(swing_xy.shape[0]):
         if not swing_z[f] < top:
             continue
@@ -472,9 +523,13 @@ def _feet_meet(swing_xy, direction, swing_z, stance_x, stance_y, top, ux, uy, sh
 
 @kernel('f8[:, ::1](f8[:, :], f8[:, :], readonly(i8[::1]), f8[::1], f8[::1])')
 def _sole_points(swing_xy, direction, samples, along, across):
-    """Points under the swinging sole at the sampled frames: for each sample, each offset
-    ``along`` the sole from the ankle and each line ``across`` it (m, left positive), the
-    point (x, y); (samples x along x across, 2), m, in that order."""
+    """
+    Return the points under the swinging sole at the sampled frames.
+
+    Points under the swinging sole at the sampled frames: for each sample, each offset ``along``
+    the sole from the ankle and each line ``across`` it (m, left positive), the point (x, y);
+    (samples x along x across, 2), m, in that order.
+    """
     out = np.empty((samples.shape[0] * along.shape[0] * across.shape[0], 2))
     row = 0
     for i in samples:
@@ -491,8 +546,12 @@ def _sole_points(swing_xy, direction, samples, along, across):
 
 @kernel('f8[:, ::1](f8[::1], i8, i8)')
 def _across_sole(heights, along, across):
-    """The highest of ``across`` heights at each point along the sole: (samples, along), m;
-    NaN (nothing to clear) read as -inf."""
+    """
+    Return the highest of ``across`` heights at each point along the sole, m.
+
+    The highest of ``across`` heights at each point along the sole: (samples, along), m; NaN
+    (nothing to clear) read as -inf.
+    """
     out = np.empty((heights.shape[0] // (along * across), along))
     for i in range(out.shape[0]):
         for a in range(along):
@@ -507,9 +566,12 @@ def _across_sole(heights, along, across):
 
 @kernel('UniTuple(i8, 2)(f8[:, :], f8[:], f8[::1], f8[::1])')
 def _leg_violation(joints, reach, low, high):
-    """Where a leg's (k, 4) ``joints`` first leave their bounds [``low``, ``high``]: (-2, -1)
-    when some ``reach`` (hip-ankle distance over the leg's length) passes 1, else (the first
-    frame with a joint out of bounds, the first joint out of bounds in any frame), or (-1, -1).
+    """
+    Return where a leg's (k, 4) ``joints`` first leave their bounds.
+
+    Where a leg's (k, 4) ``joints`` first leave their bounds [``low``, ``high``]: (-2, -1) when
+    some ``reach`` (hip-ankle distance over the leg's length) passes 1, else (the first frame with
+    a joint out of bounds, the first joint out of bounds in any frame), or (-1, -1).
     """
     for f in range(reach.shape[0]):
         if reach[f] > 1.0 + 1e-9:
@@ -526,10 +588,13 @@ def _leg_violation(joints, reach, low, high):
 
 @kernel('UniTuple(f8[::1], 3)(f8[:], f8[:], f8, f8)')
 def _leg_triangle(forward, down, l1, l2):
-    """The leg's triangle for ankles ``forward`` and ``down`` of the hip (m): the reach (the
-    hip-ankle distance over the leg's length), and the cosines of the knee's inner angle and
-    of the thigh's angle off the hip-ankle line (law of cosines, the distance kept within
-    (0, l1 + l2])."""
+    """
+    Return the leg's triangle for ankles ``forward`` and ``down`` of the hip.
+
+    The leg's triangle for ankles ``forward`` and ``down`` of the hip (m): the reach (the hip-ankle
+    distance over the leg's length), and the cosines of the knee's inner angle and of the thigh's
+    angle off the hip-ankle line (law of cosines, the distance kept within (0, l1 + l2]).
+    """
     count = forward.shape[0]
     reach, cos_knee, cos_beta = np.empty(count), np.empty(count), np.empty(count)
     for i in range(count):
@@ -545,13 +610,16 @@ def _leg_triangle(forward, down, l1, l2):
 
 @kernel('f8[::1](f8[:], f8[:], f8[:], i8, f8, f8, f8[:, :])')
 def _sagittal_joints(forward, down, foot_pitch, pitch_step, l1, l2, joints):
-    """:func:`_sagittal_leg`'s arithmetic: :func:`_leg_triangle`, then per frame the knee
-    (pi less the triangle's inner angle), the hip pitch (the hip-ankle line's angle off the
-    vertical plus the thigh's off that line) and the ankle that gives the sole pitch
-    ``foot_pitch[i * pitch_step]``, into columns 1..3 of ``joints``; returns the reach. The
-    C library's acos and atan2: on the development machine NumPy's float64 arccos and arctan2
-    give the same bits (every course's frames are unchanged); a NumPy built with other
-    vector maths may differ in the last bit."""
+    """
+    Return :func:`_sagittal_leg`'s joints from the leg's triangle, per frame.
+
+    :func:`_sagittal_leg`'s arithmetic: :func:`_leg_triangle`, then per frame the knee (pi less the
+    triangle's inner angle), the hip pitch (the hip-ankle line's angle off the vertical plus the
+    thigh's off that line) and the ankle that gives the sole pitch ``foot_pitch[i * pitch_step]``,
+    into columns 1..3 of ``joints``; returns the reach. The C library's acos and atan2: on the
+    development machine NumPy's float64 arccos and arctan2 give the same bits (every course's
+    frames are unchanged); a NumPy built with other vector maths may differ in the last bit.
+    """
     reach, cos_knee, cos_beta = _leg_triangle(forward, down, l1, l2)
     for i in range(forward.shape[0]):
         knee = np.pi - math.acos(cos_knee[i])
@@ -566,14 +634,17 @@ def _sagittal_joints(forward, down, foot_pitch, pitch_step, l1, l2, joints):
         'f8, f8, f8, f8, f8, f8, f8, f8)')
 def _rolled_stance(hip, pelvis_yaw, joints, over, limit, p0, foot_yaw, direction_x,
                    direction_y, toe_x, toe_y, toe_z, toe, ankle_height, l1, l2):
-    """:meth:`WalkGenerator._heel_off`'s roll: at the frames ``over`` (where the ankle of
-    ``joints`` (k, 4) passes ``limit``) the sole pitches about the toe line at (``toe_x``,
-    ``toe_y``, ``toe_z``), ``toe`` m ahead of the ankle along the foot's heading, by as much
-    as brings the ankle back to its limit (at most to the foot's own pitch ``p0``): five
-    rounds of the pitch from the last round's shank angle and the leg solved again
-    (leg_inverse_kinematics written out, hips ``hip`` (k, 3), pelvis ``pelvis_yaw``).
-    Returns a copy of the joints with those frames replaced, the ankle of the last of them
-    (3,) and its sole pitch."""
+    """
+    Roll the sole about the toe line where the ankle passes ``limit``.
+
+    :meth:`WalkGenerator._heel_off`'s roll: at the frames ``over`` (where the ankle of ``joints``
+    (k, 4) passes ``limit``) the sole pitches about the toe line at (``toe_x``, ``toe_y``,
+    ``toe_z``), ``toe`` m ahead of the ankle along the foot's heading, by as much as brings the
+    ankle back to its limit (at most to the foot's own pitch ``p0``): five rounds of the pitch from
+    the last round's shank angle and the leg solved again (leg_inverse_kinematics written out, hips
+    ``hip`` (k, 3), pelvis ``pelvis_yaw``). Returns a copy of the joints with those frames
+    replaced, the ankle of the last of them (3,) and its sole pitch.
+    """
     count = over.shape[0]
     shank = np.empty(count)
     for m in range(count):
@@ -615,12 +686,15 @@ def _rolled_stance(hip, pelvis_yaw, joints, over, limit, p0, foot_yaw, direction
         'f8, f8, f8, f8, f8)')
 def _stance_leg(stance_hip, yaw, z, foot_x, foot_y, foot_yaw, foot_z, foot_pitch, cos_s, sin_s,
                 l1, l2, limit):
-    """The stance leg over a step (leg_inverse_kinematics written out): its ankle at
-    (``foot_x``, ``foot_y``, ``foot_z``), its plane along (``cos_s``, ``sin_s``) heading
-    ``foot_yaw`` and its sole pitch ``foot_pitch`` stay put while the hip moves
-    (``stance_hip`` (k, 2) at pelvis heights ``z``, pelvis ``yaw``). Returns the joints
-    (k, 4), the reach, the ankle's distance from the hip's plane at the last frame, and
-    whether the ankle passes ``limit`` anywhere (a heel-off)."""
+    """
+    Return the stance leg's joints over a step (leg inverse kinematics written out).
+
+    The stance leg over a step (leg_inverse_kinematics written out): its ankle at (``foot_x``,
+    ``foot_y``, ``foot_z``), its plane along (``cos_s``, ``sin_s``) heading ``foot_yaw`` and its
+    sole pitch ``foot_pitch`` stay put while the hip moves (``stance_hip`` (k, 2) at pelvis heights
+    ``z``, pelvis ``yaw``). Returns the joints (k, 4), the reach, the ankle's distance from the
+    hip's plane at the last frame, and whether the ankle passes ``limit`` anywhere (a heel-off).
+    """
     count = yaw.shape[0]
     joints = np.empty((count, 4))
     forward, down = np.empty(count), np.empty(count)
@@ -641,15 +715,23 @@ def _stance_leg(stance_hip, yaw, z, foot_x, foot_y, foot_yaw, foot_z, foot_pitch
 
 @kernel('f8(f8, f8, f8, f8)')
 def _ankle_correction(ankle, low, high, fade):
-    """What brings a swinging foot's ``ankle`` (rad) into [``low``, ``high``], by the share
-    ``fade`` (none at touchdown)."""
+    """
+    Return what brings a swinging foot's ``ankle`` (rad) into [``low``, ``high``].
+
+    What brings a swinging foot's ``ankle`` (rad) into [``low``, ``high``], by the share ``fade``
+    (none at touchdown).
+    """
     return (min(max(ankle, low), high) - ankle) * fade
 
 
 @kernel('void(f8[:, :], f8, f8, readonly(f8[::1]))')
 def _fade_ankle(joints, low, high, fade):
-    """:func:`_ankle_correction` of a swinging foot's ankle (column 3 of ``joints``) at each
-    frame, applied in place."""
+    """
+    Apply :func:`_ankle_correction` to a swinging foot's ankle at each frame, in place.
+
+    :func:`_ankle_correction` of a swinging foot's ankle (column 3 of ``joints``) at each frame,
+    applied in place.
+    """
     for i in range(joints.shape[0]):
         joints[i, 3] = joints[i, 3] + _ankle_correction(joints[i, 3], low, high, fade[i])
 
@@ -659,15 +741,18 @@ def _fade_ankle(joints, low, high, fade):
         'f8, f8, f8, f8)')
 def _swing_bounds(lam, forward, swing_xy, swing_hip, direction, plane_yaw, yaw, weight, z0,
                   nominal, r, stance_z, closest):
-    """What :meth:`WalkGenerator.step`'s swing passes share: whether either hip is farther
-    than ``r`` from its ankle along the legs' lines (``lam``, ``forward``: out of reach);
-    the highest pelvis the stance leg allows (its ankle at ``stance_z``); the pelvis height
-    bound of both legs' reach and the key frames' height (``z0`` + (``nominal`` - ``z0``) x
-    ``weight``); how far above the swing ankle its leg reaches; the swing ankle's reach in
-    the leg's plane, the hip yaw of that plane off the pelvis ``yaw``, and how far above the
-    ankle the hip must stay so the knee bends no more than the knee's limit allows
-    (``closest``: the hip-ankle distance there); and the ankle's distance from the plane at
-    the last frame."""
+    """
+    Return what :meth:`WalkGenerator.step`'s swing passes share.
+
+    What :meth:`WalkGenerator.step`'s swing passes share: whether either hip is farther than ``r``
+    from its ankle along the legs' lines (``lam``, ``forward``: out of reach); the highest pelvis
+    the stance leg allows (its ankle at ``stance_z``); the pelvis height bound of both legs' reach
+    and the key frames' height (``z0`` + (``nominal`` - ``z0``) x ``weight``); how far above the
+    swing ankle its leg reaches; the swing ankle's reach in the leg's plane, the hip yaw of that
+    plane off the pelvis ``yaw``, and how far above the ankle the hip must stay so the knee bends
+    no more than the knee's limit allows (``closest``: the hip-ankle distance there); and the
+    ankle's distance from the plane at the last frame.
+    """
     count = lam.shape[0]
     out_of_reach = False
     for i in range(count):
@@ -698,15 +783,18 @@ def _swing_bounds(lam, forward, swing_xy, swing_hip, direction, plane_yaw, yaw, 
         'f8, f8, f8, f8)')
 def _swing_pass(swing_z, z_bound, swing_reach, hip_over_ankle, hump, stance_bound, hip_yaw,
                 swing_forward, swing_pitch, fade, ankle_low, ankle_high, l1, l2):
-    """One pass of :meth:`WalkGenerator.step`'s swing: for swing ankle heights ``swing_z``
-    (k,), the pelvis height (the lowest of ``z_bound`` and what the swing leg reaches,
-    raised by a smooth ``hump`` over the swing, scaled to cover any shortfall below
-    ``hip_over_ankle``, up to the stance leg's ``stance_bound``: a frame-by-frame maximum
-    jerked the pelvis up, and the arms swinging with the hips past their speed limit), the
-    swing leg's joints (k, 4) (hip yaw ``hip_yaw``, then :func:`_sagittal_joints` for the
-    sole pitch ``swing_pitch``) and reach; whether the ankle keeps within [``ankle_low``,
-    ``ankle_high``] (a correction, faded by ``fade``, under 5 mm-rad everywhere), and the
-    sole pitch that corrects it."""
+    """
+    Run one pass of :meth:`WalkGenerator.step`'s swing for ankle heights ``swing_z``.
+
+    One pass of :meth:`WalkGenerator.step`'s swing: for swing ankle heights ``swing_z`` (k,), the
+    pelvis height (the lowest of ``z_bound`` and what the swing leg reaches, raised by a smooth
+    ``hump`` over the swing, scaled to cover any shortfall below ``hip_over_ankle``, up to the
+    stance leg's ``stance_bound``: a frame-by-frame maximum jerked the pelvis up, and the arms
+    swinging with the hips past their speed limit), the swing leg's joints (k, 4) (hip yaw
+    ``hip_yaw``, then :func:`_sagittal_joints` for the sole pitch ``swing_pitch``) and reach;
+    whether the ankle keeps within [``ankle_low``, ``ankle_high``] (a correction, faded by
+    ``fade``, under 5 mm-rad everywhere), and the sole pitch that corrects it.
+    """
     count = swing_z.shape[0]
     z = np.empty(count)
     most = -np.inf
@@ -737,10 +825,14 @@ def _swing_pass(swing_z, z_bound, swing_reach, hip_over_ankle, hump, stance_boun
 
 @kernel('f8[::1](f8[:, :], readonly(f8[::1]), f8[::1], f8[::1], f8, readonly(f8[:]))')
 def _swing_need(tops, along, sin_pitch, cos_pitch, ankle_height, clearance):
-    """Height the swinging ankle must keep at each sampled frame (s,), m: the highest of the
-    ground ``tops`` (s, P) under P points ``along`` the sole (m from the ankle) relative to the
-    sole pitched as (sin, cos) of the frame's pitch, plus the ankle's height over the sole and
-    the ``clearance`` kept there."""
+    """
+    Return the height the swinging ankle must keep at each sampled frame (s,), m.
+
+    Height the swinging ankle must keep at each sampled frame (s,), m: the highest of the ground
+    ``tops`` (s, P) under P points ``along`` the sole (m from the ankle) relative to the sole
+    pitched as (sin, cos) of the frame's pitch, plus the ankle's height over the sole and the
+    ``clearance`` kept there.
+    """
     out = np.empty(tops.shape[0])
     for i in range(tops.shape[0]):
         most = -np.inf
@@ -755,11 +847,15 @@ def _swing_need(tops, along, sin_pitch, cos_pitch, ankle_height, clearance):
 @kernel('Tuple((f8, f8, b1))(readonly(f8[:]), readonly(f8[:]), readonly(f8[:]), '
         'readonly(f8[:]), readonly(f8[:]), f8[:], readonly(f8[:]), f8, f8, f8, f8, f8)')
 def _raise_swing(basis_0, basis_1, basis_2, basis_3, b, need, slack, z0, z1, h1, h2, cap):
-    """The Bezier adjustment of :meth:`WalkGenerator._swing_heights` (§4.1): raise the inner
-    control heights h1, h2 (above z0 and z1) at the worst sample until the curve clears
-    ``need`` less ``slack`` at every sample, at most 12 times and while neither passes ``cap``.
-    ``basis_*`` are the Bernstein weights and ``b`` the curve parameter at the samples.
-    Returns (h1, h2, whether it cleared)."""
+    """
+    Raise the swing Bezier's inner control heights until the curve clears (§4.1).
+
+    The Bezier adjustment of :meth:`WalkGenerator._swing_heights` (§4.1): raise the inner control
+    heights h1, h2 (above z0 and z1) at the worst sample until the curve clears ``need`` less
+    ``slack`` at every sample, at most 12 times and while neither passes ``cap``. ``basis_*`` are
+    the Bernstein weights and ``b`` the curve parameter at the samples. Returns (h1, h2, whether it
+    cleared).
+    """
     for _ in range(12):
         worst, most = 0, -np.inf
         for i in range(need.shape[0]):
@@ -788,8 +884,7 @@ def _raise_swing(basis_0, basis_1, basis_2, basis_3, b, need, slack, z0, z1, h1,
 
 def _segment_gaps(a0: np.ndarray, a1: np.ndarray, b0: np.ndarray,
                   b1: np.ndarray) -> np.ndarray:
-    """Shortest distances (n,) between segments a0-a1 and b0-b1, all (3, n) (x, y, z rows), m.
-    """
+    """Shortest distances (n,) between segments a0-a1 and b0-b1, all (3, n) (x, y, z rows), m."""
     u, v, r = a1 - a0, b1 - b0, a0 - b0
     # Dot products of (3, n) rows written out (a reduction over an axis of 3 is slow).
     uu = u[0] * u[0] + u[1] * u[1] + u[2] * u[2]
@@ -809,8 +904,12 @@ def _segment_gaps(a0: np.ndarray, a1: np.ndarray, b0: np.ndarray,
 
 
 def _leg_segments(leg: LegGeometry, hip: np.ndarray, plane_yaw, joints: np.ndarray):
-    """(knee, ankle) points, each (3, k) (x, y, z rows), of a leg whose (k, 4) joints hang
-    from ``hip`` (3, k) in the vertical plane of heading ``plane_yaw`` (scalar or (k,))."""
+    """
+    Return the (knee, ankle) points of a leg, each (3, k).
+
+    (knee, ankle) points, each (3, k) (x, y, z rows), of a leg whose (k, 4) joints hang from
+    ``hip`` (3, k) in the vertical plane of heading ``plane_yaw`` (scalar or (k,)).
+    """
     cos_p, sin_p = np.cos(plane_yaw), np.sin(plane_yaw)
     thigh = joints[:, 1]
     shank = thigh - joints[:, 2]
@@ -840,7 +939,8 @@ def _ease(tau: np.ndarray, from_rest: bool, to_rest: bool) -> np.ndarray:
 
 @dataclass(frozen=True)
 class _StepTiming:
-    """The time shapes of a step of k frames: everything in a step that depends only on k.
+    """
+    The time shapes of a step of k frames: everything in a step that depends only on k.
 
     Steps of the same number of frames share them (the step's own geometry scales them), so
     :class:`WalkGenerator` builds them once per k. All arrays are (k,) and read-only.
@@ -899,7 +999,7 @@ class _StepTiming:
 
 
 def _columns(indices: np.ndarray):
-    """A slice over ``indices`` when they are consecutive, else the indices themselves."""
+    """Return a slice over ``indices`` when they are consecutive, else the indices themselves."""
     indices = np.asarray(indices)
     if indices.size and np.array_equal(indices, np.arange(indices[0], indices[0] + indices.size)):
         return slice(int(indices[0]), int(indices[0]) + indices.size)
@@ -927,7 +1027,8 @@ def _read_only(value):
 
 
 class WalkGenerator:
-    """Generates the lower-body motion of single steps (§4.1, Figure 3).
+    """
+    Generates the lower-body motion of single steps (§4.1, Figure 3).
 
     Parameters
     ----------
@@ -974,7 +1075,7 @@ class WalkGenerator:
         self._seat_across = np.array([-0.5, 0.0, 0.5]) * self.leg.foot_width
 
     def _timing(self, k: int) -> _StepTiming:
-        """The time shapes of a k-frame step (:func:`_step_timing`)."""
+        """Return the time shapes of a k-frame step (:func:`_step_timing`)."""
         return _step_timing(k, float(self.config.swing_clearance))
 
     def _turn_ease(self, heading_difference: float) -> float:
@@ -985,9 +1086,13 @@ class WalkGenerator:
         return min(abs(_wrap(heading_difference)) / full, 1.0)
 
     def preferred_step_length(self, speed: float, nominal_step_time: float) -> float:
-        """The step length a walk at ``speed`` m/s aims for, m: ``speed`` x
-        ``nominal_step_time`` s, at most ``fast_step_length`` (a faster walk quickens its
-        cadence instead, :meth:`step_duration`)."""
+        """
+        Return the step length a walk at ``speed`` m/s aims for, m.
+
+        The step length a walk at ``speed`` m/s aims for, m: ``speed`` x ``nominal_step_time`` s,
+        at most ``fast_step_length`` (a faster walk quickens its cadence instead,
+        :meth:`step_duration`).
+        """
         return float(min(speed * nominal_step_time, self.config.fast_step_length))
 
     def step_duration(self, length: float, speed: float, rise: float) -> float:
@@ -1001,7 +1106,8 @@ class WalkGenerator:
     def step(self, stance: Stance, landing_xy: np.ndarray, landing_yaw: float,
              landing_sole: float, landing_pitch: float, pelvis_target: np.ndarray,
              duration: float, swing_profile, to_rest: bool = False) -> StepMotion:
-        """Generate one step: the swing foot moves to the landing foothold.
+        """
+        Generate one step: the swing foot moves to the landing foothold.
 
         Parameters
         ----------
@@ -1212,9 +1318,12 @@ class WalkGenerator:
 
     def _seated_sole(self, xy: np.ndarray, yaw: float, sole: float, pitch: float,
                      ground) -> float:
-        """The landing sole's height: ``sole`` (m) moved onto the ground where the foot lands,
-        by at most ``SEAT_SHIFT`` up or down, where that ground is smooth (it varies under the
-        sole by at most ``SEAT_SHIFT`` from the sole's plane).
+        """
+        Return the landing sole's height, moved onto smooth ground where the foot lands, m.
+
+        The landing sole's height: ``sole`` (m) moved onto the ground where the foot lands, by at
+        most ``SEAT_SHIFT`` up or down, where that ground is smooth (it varies under the sole by at
+        most ``SEAT_SHIFT`` from the sole's plane).
 
         The foothold was judged at the planned point and heading; the foot lands in its hip's
         plane, centimetres away, and turned up to ``max_toe_in`` from the path. On a slope
@@ -1252,7 +1361,8 @@ class WalkGenerator:
 
     def _check_feet_apart(self, stance_foot: FootPose, swing_xy: np.ndarray,
                           direction: np.ndarray, swing_z: np.ndarray) -> None:
-        """Raise GaitError if the swinging foot would pass into the stance foot.
+        """
+        Raise GaitError if the swinging foot would pass into the stance foot.
 
         The feet are the soles' boxes seen from above, wherever the swinging one is not above
         the other's top (its ankle): a separating-axis test per such frame. In a tight arc or
@@ -1272,7 +1382,8 @@ class WalkGenerator:
     def _check_legs_apart(self, stance_outward: float, stance_hip: np.ndarray, stance_plane,
                           stance_joints: np.ndarray, swing_hip: np.ndarray, swing_plane,
                           swing_joints: np.ndarray) -> None:
-        """Raise GaitError if a thigh or shank would pass into the other leg's.
+        """
+        Raise GaitError if a thigh or shank would pass into the other leg's.
 
         ``stance_outward`` is +1 when the stance leg is the left one, else -1; the hips are
         (3, k) (x, y, z rows), the joints (k, 4), a plane a heading (rad) or (k,).
@@ -1325,8 +1436,11 @@ class WalkGenerator:
                             'limits')
 
     def _supported_toe(self, foot: FootPose, ground) -> float:
-        """How far ahead of the ankle a stance sole's heel lifts about, m: its toe tip where its
-        toes rest on the ground, else the first sampled point past the end of its support.
+        """
+        Return how far ahead of the ankle a stance sole's heel lifts about, m.
+
+        How far ahead of the ankle a stance sole's heel lifts about, m: its toe tip where its toes
+        rest on the ground, else the first sampled point past the end of its support.
 
         Rolling about a line, the sole behind it rises and the sole ahead of it sinks; so no
         support may lie ahead of the line. Where the toes overhang an edge the line is therefore
@@ -1361,8 +1475,11 @@ class WalkGenerator:
     @staticmethod
     def _heel_off(leg: LegGeometry, hip: np.ndarray, foot: FootPose, pelvis_yaw: np.ndarray,
                   joints: np.ndarray, limit: float, toe: float):
-        """Roll a stance foot about the front of its support, ``toe`` m ahead of the ankle
-        (its toe tip, or an edge its toes overhang), where the ankle would pass ``limit``.
+        """
+        Roll a stance foot about the front of its support where the ankle would pass ``limit``.
+
+        Roll a stance foot about the front of its support, ``toe`` m ahead of the ankle (its toe
+        tip, or an edge its toes overhang), where the ankle would pass ``limit``.
 
         Returns the corrected (k, 4) leg joints and the foot pose at the last frame.
         """
@@ -1385,7 +1502,8 @@ class WalkGenerator:
 
     def _swing_footprint(self, timing: _StepTiming, lift_foot: FootPose, landing: FootPose,
                          swing_xy, direction, swing_profile):
-        """The ground under the swinging sole at sampled frames (independent of its pitch).
+        """
+        Return the ground under the swinging sole at sampled frames (independent of its pitch).
 
         ``direction`` is (k, 2), the cosine and sine of the swing foot's heading per frame.
 
@@ -1413,7 +1531,8 @@ class WalkGenerator:
     def _swing_heights(self, tau, lift_foot: FootPose, landing: FootPose, swing_pitch,
                        footprint):
         # ``tau`` here is the Bezier parameter of each frame (k,), in [0, 1].
-        """Ankle heights of the swinging foot: a cubic Bezier raised until it clears (§4.1).
+        """
+        Ankle heights of the swinging foot: a cubic Bezier raised until it clears (§4.1).
 
         The control points sit above the lift-off and touchdown points; when the sole would
         touch the ground profile, both are raised ("the Bezier curve adjustment module") until
@@ -1448,10 +1567,13 @@ class WalkGenerator:
     @staticmethod
     def _flat_topped_swing(tau: np.ndarray, sampled_tau: np.ndarray, z0: float, z1: float,
                            need: np.ndarray, least: Tuple[float, float], cap: float):
-        """Ankle heights of a swing over a degree-5 Bezier with control heights (z0, z0 + h1,
-        z0 + h1, z1 + h2, z1 + h2, z1), h1 and h2 the lowest pair (on a 5 mm grid, each at least
-        ``least`` and at most ``cap``) whose curve is above ``need`` at the sampled curve
-        parameters ``sampled_tau``. Returns (heights (k,), the larger control height), like
+        """
+        Return the ankle heights of a swing over a degree-5 Bezier that clears ``need``.
+
+        Ankle heights of a swing over a degree-5 Bezier with control heights (z0, z0 + h1, z0 + h1,
+        z1 + h2, z1 + h2, z1), h1 and h2 the lowest pair (on a 5 mm grid, each at least ``least``
+        and at most ``cap``) whose curve is above ``need`` at the sampled curve parameters
+        ``sampled_tau``. Returns (heights (k,), the larger control height), like
         :meth:`_swing_heights`.
 
         Raises
@@ -1490,12 +1612,12 @@ class WalkGenerator:
 
 def hold_frames(configuration: np.ndarray, start_time: float, duration: float,
                 frame_rate: float) -> Tuple[np.ndarray, np.ndarray]:
-    """A still block: (times (k,), frames (k, 22)) holding ``configuration``."""
+    """Return a still block: (times (k,), frames (k, 22)) holding ``configuration``."""
     k = max(1, int(round(duration * frame_rate)))
     times = start_time + np.arange(1, k + 1) / frame_rate
     return times, np.repeat(configuration[None, :], k, axis=0)
 
 
 def with_at_rest(stance: Stance, at_rest: bool) -> Stance:
-    """The same stance with the at-rest flag changed."""
+    """Return the same stance with the at-rest flag changed."""
     return replace(stance, at_rest=at_rest)

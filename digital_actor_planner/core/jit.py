@@ -1,4 +1,19 @@
-"""Compiled kernels: numba's ``njit`` when numba is installed, plain Python otherwise.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Compiled kernels: numba's ``njit`` when numba is installed, plain Python otherwise.
 
 A kernel is written as plain loops over NumPy arrays, with an explicit signature, so numba
 compiles it once when its module is imported (cached on disk next to the module, or in the
@@ -37,14 +52,17 @@ class KernelCompileWarning(RuntimeWarning):
 
 
 def compile_failures() -> Tuple[Tuple[str, str], ...]:
-    """The kernels numba could not compile in this process, as (name, reason) pairs."""
+    """Return the kernels numba could not compile in this process, as (name, reason) pairs."""
     return tuple(_FAILURES)
 
 
 def kernel(signature: str, inline: bool = False) -> Callable:
-    """Decorator: compile ``function`` for ``signature`` if numba is installed, else return it
-    unchanged. The plain function stays reachable as ``py_func`` either way (the tests compare
-    the two).
+    """
+    Compile ``function`` for ``signature`` if numba is installed, else return it unchanged.
+
+    Decorator: compile ``function`` for ``signature`` if numba is installed, else return it
+    unchanged. The plain function stays reachable as ``py_func`` either way (the tests compare the
+    two).
 
     ``signature`` is numba's type string (``'f8(f8[::1], i8)'``), where ``readonly(T)`` is
     the array type T that also accepts read-only arrays (shared tables).
@@ -64,8 +82,8 @@ def kernel(signature: str, inline: bool = False) -> Callable:
 
 
 def _compile(function: Callable, signature: str, inline: bool) -> Callable:
-    """``function`` compiled by numba for ``signature`` (raises what numba raises)."""
-    options = dict(nogil=True, inline='always' if inline else 'never')
+    """Return ``function`` compiled by numba for ``signature`` (raises what numba raises)."""
+    options = {'nogil': True, 'inline': 'always' if inline else 'never'}
     try:
         return numba.njit(_parse(signature), cache=True, **options)(function)
     except RuntimeError as error:
@@ -77,7 +95,7 @@ def _compile(function: Callable, signature: str, inline: bool) -> Callable:
 
 
 def _as_python(function: Callable, error: Exception) -> Callable:
-    """``function`` as the plain-Python kernel, the failure recorded (and warned of once)."""
+    """Return ``function`` as the plain-Python kernel, the failure recorded and warned of once."""
     name = f'{function.__module__}.{function.__qualname__}'
     # numba's first line names only the pipeline stage; the cause and place come after it.
     lines = [line.strip() for line in str(error).splitlines() if line.strip()]
@@ -96,14 +114,16 @@ def _as_python(function: Callable, error: Exception) -> Callable:
 
 
 def direct(function: Callable) -> Callable:
-    """Kernel ``function``'s compiled code as Python calls it without numba's dispatch: no
-    typing of the arguments to choose among signatures (a measurable share of a call as
-    short as the footstep search's, more in a walk, where that code is out of the processor's
-    caches). Only
-    for a caller that passes exactly the signature's types and array layouts: it converts
-    numbers and refuses what is not an array of the element type, but reads an array of
-    another layout (not C-contiguous where the signature says ``::1``) as if it were one.
-    Without numba, or with more than one signature, ``function`` itself.
+    """
+    Return kernel ``function``'s compiled code as Python calls it without numba's dispatch.
+
+    Kernel ``function``'s compiled code as Python calls it without numba's dispatch: no typing of
+    the arguments to choose among signatures (a measurable share of a call as short as the footstep
+    search's, more in a walk, where that code is out of the processor's caches). Only for a caller
+    that passes exactly the signature's types and array layouts: it converts numbers and refuses
+    what is not an array of the element type, but reads an array of another layout (not
+    C-contiguous where the signature says ``::1``) as if it were one. Without numba, or with more
+    than one signature, ``function`` itself.
     """
     overloads = getattr(function, 'overloads', None)
     if not overloads or len(overloads) != 1:
@@ -112,14 +132,18 @@ def direct(function: Callable) -> Callable:
 
 
 def _parse(signature: str):
-    """numba's signature string with ``readonly`` added to its type names."""
+    """Return numba's signature string with ``readonly`` added to its type names."""
     names = dict(vars(numba.types))
     names['readonly'] = lambda array: array.copy(readonly=True)
     return eval(signature, {'__builtins__': {}}, names)
 
 
 def float_array(array) -> np.ndarray:
-    """``array`` as float64 that a compiled kernel accepts: a read-only or non-float one is
-    copied, any other passed as it is."""
+    """
+    Return ``array`` as float64 that a compiled kernel accepts.
+
+    ``array`` as float64 that a compiled kernel accepts: a read-only or non-float one is copied,
+    any other passed as it is.
+    """
     array = np.asarray(array, dtype=np.float64)
     return array if array.flags.writeable else array.copy()

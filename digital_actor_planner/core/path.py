@@ -1,4 +1,19 @@
-"""Path prediction: a velocity command becomes the horizontal path of the next steps (§3.2).
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Path prediction: a velocity command becomes the horizontal path of the next steps (§3.2).
 
 "Given a user mouse input command, the horizontal location and facing direction of the actor for
 the next step can be computed. If the input is not changed often, the path for the actor in the
@@ -16,7 +31,8 @@ from .jit import kernel
 
 @dataclass(frozen=True)
 class PredictedPath:
-    """A circular arc (or a straight line) in the ground plane.
+    """
+    A circular arc (or a straight line) in the ground plane.
 
     Attributes
     ----------
@@ -41,8 +57,12 @@ class PredictedPath:
 
     @property
     def facing_offset(self) -> float:
-        """What to add to the path's heading for the way the actor faces on it, rad (the
-        inverse of :func:`predict_path`'s half turn, so the facing stays unwrapped as given)."""
+        """
+        Return what to add to the path's heading for the way the actor faces on it, rad.
+
+        What to add to the path's heading for the way the actor faces on it, rad (the inverse of
+        :func:`predict_path`'s half turn, so the facing stays unwrapped as given).
+        """
         return -math.pi if self.backward else 0.0
 
     @property
@@ -51,7 +71,8 @@ class PredictedPath:
         return -1.0 if self.backward else 1.0
 
     def poses(self, s: np.ndarray) -> np.ndarray:
-        """Poses on the path at arc lengths ``s``.
+        """
+        Poses on the path at arc lengths ``s``.
 
         Parameters
         ----------
@@ -67,7 +88,8 @@ class PredictedPath:
         return self.offset_poses(s, 0.0)
 
     def offset_points(self, s: np.ndarray, lateral) -> np.ndarray:
-        """Points on the parallel tracks ``lateral`` m to the left of the path.
+        """
+        Points on the parallel tracks ``lateral`` m to the left of the path.
 
         Parameters
         ----------
@@ -93,8 +115,11 @@ class PredictedPath:
         return self.offset_poses(s, lateral)[..., :2].copy()
 
     def offset_poses(self, s: np.ndarray, lateral) -> np.ndarray:
-        """Points on parallel tracks with the path's heading there: :meth:`offset_points` and
-        the heading column of :meth:`poses` from one evaluation of the path.
+        """
+        Return points on parallel tracks with the path's heading there.
+
+        Points on parallel tracks with the path's heading there: :meth:`offset_points` and the
+        heading column of :meth:`poses` from one evaluation of the path.
 
         Parameters
         ----------
@@ -135,11 +160,15 @@ class PredictedPath:
 
 @kernel('f8[:, :, ::1](f8[::1], f8[::1], b1, f8, f8, f8, f8)')
 def _arc_offsets(s, lateral, paired, x0, y0, heading0, curvature):
-    """Points beside a path: x, y (m) and the path's heading (rad) at arc lengths ``s``
-    (N,), ``lateral`` m to the left of the path (along the normal, (-sin, cos) of the
-    heading); the arc's centre line in closed form, a straight line below 1e-9 /m. With
-    ``paired`` one row (1, N, 3) with ``lateral`` (N,) per point, or (1,) for all; else a
-    row per track, (T, N, 3) for ``lateral`` (T,)."""
+    """
+    Return points beside a path with the path's heading, at arc lengths ``s`` (N,).
+
+    Points beside a path: x, y (m) and the path's heading (rad) at arc lengths ``s`` (N,),
+    ``lateral`` m to the left of the path (along the normal, (-sin, cos) of the heading); the arc's
+    centre line in closed form, a straight line below 1e-9 /m. With ``paired`` one row (1, N, 3)
+    with ``lateral`` (N,) per point, or (1,) for all; else a row per track, (T, N, 3) for
+    ``lateral`` (T,).
+    """
     rows = 1 if paired else lateral.shape[0]
     out = np.empty((rows, s.shape[0], 3))
     straight = abs(curvature) < 1e-9
@@ -166,7 +195,8 @@ def _arc_offsets(s, lateral, paired, x0, y0, heading0, curvature):
 
 def predict_path(x: float, y: float, heading: float, linear: float, angular: float,
                  length: float, min_turn_speed: float = 0.25) -> PredictedPath:
-    """Predict the path of a constant velocity command from a pose (§3.2).
+    """
+    Predict the path of a constant velocity command from a pose (§3.2).
 
     Parameters
     ----------

@@ -1,5 +1,22 @@
-"""Scene files in (a YAML list of meshes or one bare mesh file), the start pose settled and
-checked with the actor.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Scene files in, the start pose settled and checked with the actor.
+
+Scene files in (a YAML list of meshes or one bare mesh file), the start pose settled and checked
+with the actor.
 
 The top floor of the core: it reads the files with :mod:`environment` and stands the actor of
 :mod:`actor` at the start to check it, so neither of those needs to know about scene files.
@@ -27,7 +44,8 @@ YAML_SUFFIXES = ('.yaml', '.yml')
 
 @dataclass(frozen=True)
 class Scene:
-    """A loaded scene: the environment, the actor's start pose and the file's annotations.
+    """
+    A loaded scene: the environment, the actor's start pose and the file's annotations.
 
     ``start`` is (x m, y m, yaw rad); ``source`` the scene file; ``mesh_files`` the mesh files
     read; ``expect`` the optional ``expect:`` mapping of the YAML (used by tests).
@@ -90,7 +108,8 @@ def _read_yaml(path: str) -> dict:
 
 
 def load_scene(path: str, skeleton=None) -> Scene:
-    """Load a scene: a YAML file listing meshes and the start pose, or one bare mesh file.
+    """
+    Load a scene: a YAML file listing meshes and the start pose, or one bare mesh file.
 
     YAML form::
 
@@ -186,7 +205,8 @@ def load_scene(path: str, skeleton=None) -> Scene:
 
 
 def start_configuration(environment: 'Environment', start, skeleton) -> np.ndarray:
-    """Place the actor's neutral standing configuration at a start pose.
+    """
+    Place the actor's neutral standing configuration at a start pose.
 
     The actor stands on the lowest walkable surface under its soles and pelvis, so a start in
     a wall, under a table or under a beam puts it at floor level (where it collides) rather
@@ -233,7 +253,8 @@ def start_configuration(environment: 'Environment', start, skeleton) -> np.ndarr
 
 
 def check_start(environment: Environment, start, skeleton) -> None:
-    """Check the actor can stand at a start pose.
+    """
+    Check the actor can stand at a start pose.
 
     Places the configuration an :class:`actor.Actor` starts in there (each foot resting on the
     ground under it, at its own height and pitch, where it can; else both level on the lowest
@@ -269,8 +290,12 @@ _LEG_LINKS = {f'{side}_{part}' for side in ('left', 'right')
 
 def _start_problem(environment: Environment, start: Tuple[float, float, float], skeleton,
                    body: BodyCollision) -> Optional[str]:
-    """Why the actor cannot stand at ``start`` (a phrase after "start pose (x, y, yaw)"), or
-    None where it can."""
+    """
+    Return why the actor cannot stand at ``start``, or None where it can.
+
+    Why the actor cannot stand at ``start`` (a phrase after "start pose (x, y, yaw)"), or None
+    where it can.
+    """
     x, y, yaw = start
     try:
         actor = Actor(skeleton, environment, ActorConfig(plan_upper_body=False), start=start,
@@ -292,8 +317,12 @@ def _start_problem(environment: Environment, start: Tuple[float, float, float], 
 
 def _uneven_feet(environment: Environment, start: Tuple[float, float, float],
                  skeleton) -> str:
-    """What makes the ground under a foot at ``start`` unfit to rest a sole on (too uneven
-    across the sole, or too steep along it, by the footstep planner's limits), or ''."""
+    """
+    Return what makes the ground under a foot at ``start`` unfit for a sole, or ''.
+
+    What makes the ground under a foot at ``start`` unfit to rest a sole on (too uneven across the
+    sole, or too steep along it, by the footstep planner's limits), or ''.
+    """
     x, y, yaw = start
     leg = skeleton.leg
     limits = ActorConfig().footstep_config()
@@ -323,8 +352,12 @@ def _uneven_feet(environment: Environment, start: Tuple[float, float, float],
 
 def _nearest_standable(environment: Environment, start: Tuple[float, float, float], skeleton,
                        body: BodyCollision) -> str:
-    """"the nearest standable start is [x, y, yaw]" for the nearest start on rings around
-    ``start`` (same heading) where the actor can stand, or that there is none near."""
+    """
+    Name the nearest start around ``start`` where the actor can stand, or say there is none.
+
+    "the nearest standable start is [x, y, yaw]" for the nearest start on rings around ``start``
+    (same heading) where the actor can stand, or that there is none near.
+    """
     x, y, yaw = start
     for radius in _SEARCH_RADII:
         count = max(8, int(math.ceil(2 * math.pi * radius / _SEARCH_SPACING)))

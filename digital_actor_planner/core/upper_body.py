@@ -1,4 +1,19 @@
-"""Upper-body compliant motion: objective motion patterns and prioritized planning (paper §5).
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Upper-body compliant motion: objective motion patterns and prioritized planning (paper §5).
 
 §5.1 defines the motion patterns O_x(t), x in {waist, left arm, right arm}, that the upper body
 follows whenever it can: the waist kept erect, the arms swinging alternately in step with the
@@ -10,8 +25,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 import math
 import time
-import weakref
 from typing import Dict, Optional, Tuple
+import weakref
 
 import numpy as np
 
@@ -34,7 +49,8 @@ NOMINAL_HIP_SWING = 0.35
 
 def motion_patterns(skeleton: Skeleton, frames: np.ndarray,
                     swing_amplitude: float = 0.35) -> np.ndarray:
-    """Fill the upper-body columns with the walking motion patterns O_x(t) (§5.1).
+    """
+    Fill the upper-body columns with the walking motion patterns O_x(t) (§5.1).
 
     The waist is erect (yaw = pitch = 0). Each arm swings opposite to the leg on its own side:
     the left shoulder pitch follows the right hip pitch and the right shoulder pitch the left,
@@ -80,9 +96,13 @@ _PATTERN_LAYOUTS = weakref.WeakKeyDictionary()
 
 
 def _pattern_layout(skeleton: Skeleton) -> tuple:
-    """The columns and limits :func:`motion_patterns` writes, built once per skeleton: the
-    waist's columns, the left then the right arm's (shoulder pitch, roll, yaw, elbow), the
-    right and the left hip pitch, and every joint's lower and upper limit."""
+    """
+    Return the columns and limits :func:`motion_patterns` writes, built once per skeleton.
+
+    The columns and limits :func:`motion_patterns` writes, built once per skeleton: the waist's
+    columns, the left then the right arm's (shoulder pitch, roll, yaw, elbow), the right and the
+    left hip pitch, and every joint's lower and upper limit.
+    """
     layout = _PATTERN_LAYOUTS.get(skeleton)
     if layout is None:
         index = skeleton.index
@@ -98,11 +118,15 @@ def _pattern_layout(skeleton: Skeleton) -> tuple:
 
 @kernel('void(f8[:, ::1], f8[::1], i8[::1], i8[::1], f8[::1], f8[::1])')
 def _write_patterns(out, swing, waist, arms, lower, upper):
-    """:func:`motion_patterns`' columns of ``out`` (k, 22): the ``waist`` columns erect; each
-    arm's ``arms`` columns (the left arm's shoulder pitch, roll, yaw and elbow, then the
-    right's) swinging with ``swing`` (k,) rad, the left arm forward where it is positive,
-    the elbow flexing more as its arm swings forward; every value clipped to its joint's
-    [``lower``, ``upper``] as np.minimum(np.maximum(value, lower), upper) would."""
+    """
+    Write :func:`motion_patterns`' columns of ``out`` (k, 22).
+
+    :func:`motion_patterns`' columns of ``out`` (k, 22): the ``waist`` columns erect; each arm's
+    ``arms`` columns (the left arm's shoulder pitch, roll, yaw and elbow, then the right's)
+    swinging with ``swing`` (k,) rad, the left arm forward where it is positive, the elbow flexing
+    more as its arm swings forward; every value clipped to its joint's [``lower``, ``upper``] as
+    np.minimum(np.maximum(value, lower), upper) would.
+    """
     for f in range(out.shape[0]):
         for j in waist:
             out[f, j] = min(max(0.0, lower[j]), upper[j])
@@ -129,7 +153,8 @@ _ARM_LINKS = {side: (f'{side}_shoulder_roll_link', f'{side}_upper_arm', f'{side}
 
 @dataclass(frozen=True)
 class UpperBodyConfig:
-    """Settings of the upper-body compliant motion planner (§5.2).
+    """
+    Settings of the upper-body compliant motion planner (§5.2).
 
     Why each rule and default is as it is: docs/UPPER_BODY.md.
 
@@ -253,7 +278,8 @@ def validate_upper_body_config(config: UpperBodyConfig) -> UpperBodyConfig:
 
 @dataclass(frozen=True)
 class UpperBodyPlan:
-    """The upper-body motion of one step.
+    """
+    The upper-body motion of one step.
 
     Attributes
     ----------
@@ -288,7 +314,7 @@ class UpperBodyPlan:
 
 
 def _waist_patterns() -> np.ndarray:
-    """Common waist postures as deviations (yaw, pitch) from erect, rad: bends and turns."""
+    """Return common waist postures as deviations (yaw, pitch) from erect, rad: bends and turns."""
     bends = [(0.0, p) for p in (0.15, 0.3, 0.45, 0.6, 0.75, 0.9, 1.05, 1.2)]
     turns = [(y, 0.0) for y in (0.25, -0.25, 0.5, -0.5, 0.75, -0.75)]
     both = [(y, p) for y in (0.4, -0.4) for p in (0.4, 0.8)]
@@ -296,7 +322,8 @@ def _waist_patterns() -> np.ndarray:
 
 
 def _arm_patterns() -> np.ndarray:
-    """Common arm postures as deviations (pitch, roll, yaw, elbow) from the swing, rad.
+    """
+    Return common arm postures as deviations (pitch, roll, yaw, elbow) from the swing, rad.
 
     Flexed, raised and abducted arms, and (last) the arm held in against the side, nearly
     straight: the one posture that does not stick out sideways, for squeezing between two
@@ -309,7 +336,8 @@ def _arm_patterns() -> np.ndarray:
 
 
 class UpperBodyPlanner:
-    """Prioritized CT-roadmap planning of the waist, then the left arm, then the right arm.
+    """
+    Prioritized CT-roadmap planning of the waist, then the left arm, then the right arm.
 
     Parameters
     ----------
@@ -398,10 +426,13 @@ class UpperBodyPlanner:
             self._warm_up()
 
     def _warm_up(self) -> None:
-        """Once per process: a search's kernels called on a small CT-space of an arm (the
-        actor at the origin over three frames, in this environment), so that numba's first
-        look at their arguments does not fall on the first step that searches
-        (:func:`ct_roadmap.warm_up`)."""
+        """
+        Call a search's kernels once per process on a small CT-space of an arm.
+
+        Once per process: a search's kernels called on a small CT-space of an arm (the actor at the
+        origin over three frames, in this environment), so that numba's first look at their
+        arguments does not fall on the first step that searches (:func:`ct_roadmap.warm_up`).
+        """
         global _WARMED
         frames = np.zeros((3, len(self.skeleton.joint_names)))
         body = TimedBody(self.kinematics, self.shapes, self.environment, frames)
@@ -441,7 +472,8 @@ class UpperBodyPlanner:
     def plan(self, times: np.ndarray, frames: np.ndarray,
              preview_from: Optional[int] = None,
              seeds: Optional[Dict[str, np.ndarray]] = None) -> UpperBodyPlan:
-        """Plan the upper body over one step (§5), optionally with a preview after it.
+        """
+        Plan the upper body over one step (§5), optionally with a preview after it.
 
         Parameters
         ----------
@@ -506,8 +538,8 @@ class UpperBodyPlanner:
         legality = self.pattern_checks(times, body, (start_inside, within))
         if all(start and motion for start, motion in legality.values()):
             for name in BRANCH_ORDER:
-                per_branch[name] = dict(ok=True, fast=True, nodes=0, backtracks=0, grown=0,
-                                        deviation=0.0, checks=0, time=0.0)
+                per_branch[name] = {'ok': True, 'fast': True, 'nodes': 0, 'backtracks': 0,
+                                    'grown': 0, 'deviation': 0.0, 'checks': 0, 'time': 0.0}
             return UpperBodyPlan(frames=out, ok=True, reason='', deviation=0.0,
                                  planning_time=time.perf_counter() - began,
                                  per_branch=per_branch)
@@ -519,7 +551,7 @@ class UpperBodyPlanner:
             columns = self._columns[name]
             start = frames[0, columns].copy()
             objective = self._objective(frames, columns)
-            record = dict(ok=True, fast=False, nodes=0, backtracks=0, grown=0)
+            record = {'ok': True, 'fast': False, 'nodes': 0, 'backtracks': 0, 'grown': 0}
             path = None
             checks = 0
             start_legal, objective_legal = (self.start_and_objective(times, body, name)
@@ -579,8 +611,12 @@ class UpperBodyPlanner:
                              blocked_frame=blocked_frame)
 
     def _objective(self, frames: np.ndarray, columns) -> np.ndarray:
-        """A branch's objective over the step, (k, d) rad: its columns of ``frames``, where
-        frame 0 holds the start, not the pattern: there the pattern continued back one frame."""
+        """
+        Return a branch's objective over the step, (k, d) rad.
+
+        A branch's objective over the step, (k, d) rad: its columns of ``frames``, where frame 0
+        holds the start, not the pattern: there the pattern continued back one frame.
+        """
         objective = frames[:, columns].copy()
         objective[0] = np.minimum(np.maximum(
             2 * objective[1] - objective[2] if len(frames) > 2 else objective[1],
@@ -589,8 +625,11 @@ class UpperBodyPlanner:
 
     def _plan_returning(self, times: np.ndarray, frames: np.ndarray, within: np.ndarray,
                         seeds: dict, began: float) -> Optional[UpperBodyPlan]:
-        """The plan of a step whose branches, each, keep their motion pattern or go straight
-        back to it, when all of that is legal; None otherwise.
+        """
+        Plan a step where each branch keeps its motion pattern or goes straight back to it.
+
+        The plan of a step whose branches, each, keep their motion pattern or go straight back to
+        it, when all of that is legal; None otherwise.
 
         A branch that starts too far off its pattern to join it at once (the joined motion
         breaks a speed limit) must search, and its search first tries to go straight back to
@@ -666,21 +705,22 @@ class UpperBodyPlanner:
         for name in BRANCH_ORDER:
             if name in returning:
                 columns = self._columns[name]
-                per_branch[name] = dict(
-                    ok=True, fast=False, returned=True, nodes=0, backtracks=0, grown=0,
-                    preview_backtracks=0, seeded=0,
-                    deviation=float(np.abs(out[1:, columns] - frames[1:, columns]).max()),
-                    checks=k - 1 + returning[name], time=0.0)
+                per_branch[name] = {
+                    'ok': True, 'fast': False, 'returned': True, 'nodes': 0, 'backtracks': 0,
+                    'grown': 0, 'preview_backtracks': 0, 'seeded': 0,
+                    'deviation': float(np.abs(out[1:, columns] - frames[1:, columns]).max()),
+                    'checks': k - 1 + returning[name], 'time': 0.0}
             else:
-                per_branch[name] = dict(ok=True, fast=True, nodes=0, backtracks=0, grown=0,
-                                        deviation=0.0, checks=0, time=0.0)
+                per_branch[name] = {'ok': True, 'fast': True, 'nodes': 0, 'backtracks': 0,
+                                    'grown': 0, 'deviation': 0.0, 'checks': 0, 'time': 0.0}
         return UpperBodyPlan(frames=out, ok=True, reason='',
                              deviation=max(r['deviation'] for r in per_branch.values()),
                              planning_time=time.perf_counter() - began, per_branch=per_branch)
 
     def start_and_objective(self, times: np.ndarray, body: TimedBody,
                             name: str) -> Tuple[bool, bool]:
-        """Whether a branch's start is legal, and whether its motion in ``body`` is.
+        """
+        Whether a branch's start is legal, and whether its motion in ``body`` is.
 
         Before the branch is planned its columns of ``body`` hold its start at frame 0, then
         its objective: the motion its fast path would take. Checked on the poses ``body``
@@ -719,7 +759,8 @@ class UpperBodyPlanner:
 
     def pattern_checks(self, times: np.ndarray, body: TimedBody,
                        limits: Optional[tuple] = None) -> Dict[str, Tuple[bool, bool]]:
-        """:meth:`start_and_objective` of every branch, in one batch over the upper body.
+        """
+        :meth:`start_and_objective` of every branch, in one batch over the upper body.
 
         The input upper-body motion is the start at frame 0, then the objective: the motion
         every branch's fast path would take. Each branch's answer is the one
@@ -758,10 +799,14 @@ class UpperBodyPlanner:
 
     def _blocking(self, frames: np.ndarray, objective: np.ndarray, columns, frame: int,
                   branch: str) -> str:
-        """What blocks a branch, for its reason: ': the head would be 85 mm into an obstacle'
-        (the deepest of its links in its motion pattern at the blocked ``frame``, the branches
-        planned before it where they were planned), or '' when none would touch there (the
-        joints could not move it clear in time)."""
+        """
+        Return what blocks a branch, for its reason, or '' when nothing would touch there.
+
+        What blocks a branch, for its reason: ': the head would be 85 mm into an obstacle' (the
+        deepest of its links in its motion pattern at the blocked ``frame``, the branches planned
+        before it where they were planned), or '' when none would touch there (the joints could not
+        move it clear in time).
+        """
         q = frames[frame].copy()
         q[columns] = objective[frame]
         try:
@@ -782,7 +827,7 @@ class UpperBodyPlanner:
 
 
 def _columns(indices: np.ndarray):
-    """``indices`` as a slice when they are consecutive (the same columns), else as they are."""
+    """Return ``indices`` as a slice when they are consecutive, else as they are."""
     indices = np.asarray(indices)
     if len(indices) and np.array_equal(indices, np.arange(indices[0], indices[0] + len(indices))):
         return slice(int(indices[0]), int(indices[0]) + len(indices))
@@ -791,7 +836,7 @@ def _columns(indices: np.ndarray):
 
 @kernel('Tuple((b1[::1], b1[::1]))(f8[:, :], f8[:], UniTuple(f8[::1], 3), i8[::1])')
 def _within_limits_kernel(path, times, bounds, groups):
-    """:func:`_within_limits` with the limits as one tuple (lower, upper, speed cap)."""
+    """Check a motion ``path`` (k, c) per group of columns against the joint limits and speeds."""
     lower, upper, cap = bounds
     count = groups.shape[0] - 1
     start = np.ones(count, dtype=np.bool_)
@@ -810,19 +855,27 @@ def _within_limits_kernel(path, times, bounds, groups):
 
 
 def _within_limits(path: np.ndarray, times: np.ndarray, limits: tuple) -> tuple:
-    """Per group of columns of a motion ``path`` (k, c) over ``times`` (k,): whether its first
-    frame is within the joint limits, and whether every frame is and no joint moves faster
-    than its cap between frames. ``limits``: (lower (c,), upper (c,), speed cap (c,), the
-    groups' first columns and the end (G + 1,)), the limits' tolerances included."""
+    """
+    Check a motion ``path`` (k, c) per group of columns against the joint limits and speeds.
+
+    Per group of columns of a motion ``path`` (k, c) over ``times`` (k,): whether its first frame
+    is within the joint limits, and whether every frame is and no joint moves faster than its cap
+    between frames. ``limits``: (lower (c,), upper (c,), speed cap (c,), the groups' first columns
+    and the end (G + 1,)), the limits' tolerances included.
+    """
     lower, upper, cap, groups = limits
     return _within_limits_kernel(path, times, (lower, upper, cap), groups)
 
 
 @kernel('b1(f8[:], f8[:, :], i8[::1], f8[::1], f8[::1])')
 def _input_sound(times, frames, columns, lower, upper):
-    """Whether ``times`` (k,) and ``frames`` (k, J) are finite, the times strictly increase
-    and the ``columns`` of every frame lie in [lower, upper] (the checks of
-    :meth:`UpperBodyPlanner._check_input`)."""
+    """
+    Return whether ``times`` and ``frames`` are finite, increasing and within the limits.
+
+    Whether ``times`` (k,) and ``frames`` (k, J) are finite, the times strictly increase and the
+    ``columns`` of every frame lie in [lower, upper] (the checks of
+    :meth:`UpperBodyPlanner._check_input`).
+    """
     for i in range(times.shape[0]):
         if not math.isfinite(times[i]) or (i > 0 and not times[i] > times[i - 1]):
             return False

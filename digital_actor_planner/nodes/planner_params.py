@@ -1,4 +1,19 @@
-"""Parameters of the ``actor_planner`` node: descriptors, the frozen node config, validation.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Parameters of the ``actor_planner`` node: descriptors, the frozen node config, validation.
 
 The node declares every parameter listed here with its descriptor, reads them into a
 :class:`PlannerNodeConfig` and calls :func:`validate_node_config` once; a bad value makes the node
@@ -31,7 +46,8 @@ class ConfigurationError(ValueError):
 
 
 def default_scene_path() -> str:
-    """Return the package's default scene (``config/scenes/flat.yaml``), installed or in source.
+    """
+    Return the package's default scene (``config/scenes/flat.yaml``), installed or in source.
 
     Returns
     -------
@@ -88,7 +104,8 @@ def _descriptor(description: str, read_only: bool = True, floats=None,
 
 
 def parameter_declarations() -> List[Tuple[str, Any, ParameterDescriptor]]:
-    """Return ``(name, default, descriptor)`` for every parameter the node declares.
+    """
+    Return ``(name, default, descriptor)`` for every parameter the node declares.
 
     Returns
     -------
@@ -127,7 +144,7 @@ def parameter_declarations() -> List[Tuple[str, Any, ParameterDescriptor]]:
             'Backward speed limit (m/s): a negative linear.x walks backward, clamped to '
             '-this.', floats=(0.01, 3.0), constraints='max_backward_speed <= max_linear_speed')),
         ('allow_backward', True, _descriptor(
-            'Walk backward on a negative linear.x; false: the paper\'s actor, which walks '
+            "Walk backward on a negative linear.x; false: the paper's actor, which walks "
             'forward only (a negative linear.x becomes 0).')),
         ('cmd_timeout', 0.5, _descriptor(
             'No cmd_vel for this long (s) makes the actor come to a stop.', read_only=False,
@@ -155,7 +172,8 @@ def parameter_declarations() -> List[Tuple[str, Any, ParameterDescriptor]]:
 
 @dataclass(frozen=True)
 class PlannerNodeConfig:
-    """Everything the node runs with, read once from its parameters.
+    """
+    Everything the node runs with, read once from its parameters.
 
     ``start_pose`` is ``(x, y, yaw)`` in m, m, rad or None for the scene's own start;
     ``publish_rate`` in Hz; ``cmd_timeout`` and ``planning_lead`` in s.
@@ -199,7 +217,8 @@ def _value_or(value: Any, default: Any) -> Any:
 
 
 def read_node_config(get_value: Callable[[str], Any]) -> PlannerNodeConfig:
-    """Build the frozen node config from ``get_value(name)`` (the declared parameter values).
+    """
+    Build the frozen node config from ``get_value(name)`` (the declared parameter values).
 
     Parameters
     ----------
@@ -248,8 +267,12 @@ def read_node_config(get_value: Callable[[str], Any]) -> PlannerNodeConfig:
 
 
 def scene_file_error(path: str) -> str:
-    """Why ``path`` cannot be a scene file ('' when it may be one): the same words at start
-    and for a change at run time."""
+    """
+    Return why ``path`` cannot be a scene file ('' when it may be one).
+
+    Why ``path`` cannot be a scene file ('' when it may be one): the same words at start and for a
+    change at run time.
+    """
     if not path.strip():
         return 'must name a scene YAML or mesh file'
     if os.path.isdir(path):
@@ -260,7 +283,8 @@ def scene_file_error(path: str) -> str:
 
 
 def validate_node_config(config: PlannerNodeConfig) -> None:
-    """Check the cross-field and file rules the descriptors cannot express.
+    """
+    Check the cross-field and file rules the descriptors cannot express.
 
     Parameters
     ----------

@@ -1,4 +1,19 @@
-"""Browser viewer node: the actor, its course and a drag pad in a web page served by viser.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+Browser viewer node: the actor, its course and a drag pad in a web page served by viser.
 
 Like RViz, it is only a ROS 2 client: it subscribes to ``robot_description``, ``joint_states``,
 the planner's markers and path and ``/diagnostics``, and publishes ``cmd_vel`` from the drag pad
@@ -39,20 +54,26 @@ ASKING = '(asking the planner)'
 def drag_to_command(start: Sequence[float], end: Sequence[float], span: float,
                     max_linear_speed: float, max_angular_speed: float,
                     max_backward_speed: Optional[float] = None) -> Tuple[float, float]:
-    """Map a drag on the pad to a velocity command (paper §3, teleop_tools mouse_teleop signs).
+    """
+    Map a drag on the pad to a velocity command (paper §3, teleop_tools mouse_teleop signs).
 
     Parameters
     ----------
-    start, end : (2,) screen positions of the press and of the pointer now, in pixels, x to the
-        right and y down.
-    span : drag length in pixels that gives full speed; longer drags are clamped.
-    max_linear_speed, max_angular_speed : m/s and rad/s at full deflection.
-    max_backward_speed : m/s at full downward deflection (the planner's own backward limit, so
-        the whole lower half of the pad is used); None: ``max_linear_speed``.
+    start, end : (2,) float
+        Screen positions of the press and of the pointer now, in pixels, x to the right and y
+        down.
+    span : float
+        Drag length in pixels that gives full speed; longer drags are clamped.
+    max_linear_speed, max_angular_speed : float
+        m/s and rad/s at full deflection.
+    max_backward_speed : float or None
+        m/s at full downward deflection (the planner's own backward limit, so the whole lower
+        half of the pad is used); None: ``max_linear_speed``.
 
     Returns
     -------
     (linear_x m/s, angular_z rad/s): dragging up walks forward, dragging left turns left.
+
     """
     if not (span > 0.0 and math.isfinite(span)):
         raise ValueError(f'drag span must be a positive number of pixels, got {span!r}')
@@ -116,7 +137,8 @@ class PlannerDiagnostics:
 
 
 def parse_planner_diagnostics(statuses, node_name: str) -> Optional[PlannerDiagnostics]:
-    """Pick the planner's status out of a DiagnosticArray's ``status`` list.
+    """
+    Pick the planner's status out of a DiagnosticArray's ``status`` list.
 
     A status belongs to the planner when its hardware id is ``node_name`` (fully qualified, as
     ``/ns/actor_planner``) or its name starts with it. The state
@@ -170,7 +192,7 @@ WARMING_UP_ADVICE = ('The planner is compiling its kernels (once per installatio
 
 
 def stuck_in_plain_words(reason: str) -> str:
-    """The planner's stuck ``reason`` as a person would say it (what is in the way)."""
+    """Return the planner's stuck ``reason`` as a person would say it (what is in the way)."""
     reason = reason.strip()
     if reason.startswith('no collision-free footstep window'):
         return 'no room for the next steps ahead (an obstacle, an edge or a drop)'
@@ -185,15 +207,22 @@ def stuck_in_plain_words(reason: str) -> str:
 
 def status_text(now: float, stream: StreamMonitor, diagnostics: Optional[PlannerDiagnostics],
                 planner_present: bool, silence_limit: float = 1.0) -> str:
-    """The status shown in the page (markdown: a status line, then advice when there is some).
+    """
+    Return the status shown in the page (markdown: a status line, then advice when there is some).
 
     Parameters
     ----------
-    now : s, the same monotonic clock as the stream's arrivals.
-    stream : the joint_states arrivals at this viewer.
-    diagnostics : what the planner last reported, or None.
-    planner_present : whether a joint_states publisher is known.
-    silence_limit : s without a frame after which the planner counts as silent.
+    now : float
+        s, the same monotonic clock as the stream's arrivals.
+    stream : StreamMonitor
+        The joint_states arrivals at this viewer.
+    diagnostics : PlannerDiagnostics or None
+        What the planner last reported, or None.
+    planner_present : bool
+        Whether a joint_states publisher is known.
+    silence_limit : float
+        s without a frame after which the planner counts as silent.
+
     """
     silent = stream.silent_for(now)
     warming = diagnostics is not None and diagnostics.state == 'warming up'
@@ -242,7 +271,7 @@ class Course:
 
     @property
     def label(self) -> str:
-        """The name in the course list; impassable ones say so."""
+        """Return the name in the course list; impassable ones say so."""
         return f'{self.name} (impassable)' if self.impassable else self.name
 
     def about(self) -> str:
@@ -255,7 +284,8 @@ class Course:
 
 
 def course_catalog(directory: Optional[str] = None) -> Dict[str, Course]:
-    """Every shipped course with its description: {name: Course}, sorted by name.
+    """
+    Every shipped course with its description: {name: Course}, sorted by name.
 
     A scene YAML that cannot be read is still offered, without a description: the planner
     reports what is wrong with it when it is chosen.
@@ -280,19 +310,27 @@ def course_catalog(directory: Optional[str] = None) -> Dict[str, Course]:
 def follow_target(actor_position: Sequence[float], camera_position: Sequence[float],
                   look_at: Sequence[float], fov: float, aspect: float,
                   screen_u: float) -> np.ndarray:
-    """Where the camera should look so the actor appears at ``screen_u`` across the view.
+    """
+    Return where the camera should look so the actor appears at ``screen_u`` across the view.
 
     Parameters
     ----------
-    actor_position : (3,) m, the pelvis.
-    camera_position, look_at : (3,) m, the camera now (z up).
-    fov : vertical field of view, rad. aspect : width / height.
-    screen_u : 0 left edge .. 1 right edge; below 0.5 puts the actor left of the centre, clear
-        of a control panel on the right.
+    actor_position : (3,) float
+        m, the pelvis.
+    camera_position, look_at : (3,) float
+        m, the camera now (z up).
+    fov : float
+        Vertical field of view, rad.
+    aspect : float
+        Width / height.
+    screen_u : float
+        0 left edge .. 1 right edge; below 0.5 puts the actor left of the centre, clear of a
+        control panel on the right.
 
     Returns
     -------
     (3,) m, the look-at point: beside the actor, along the view's horizontal right direction.
+
     """
     position = np.asarray(camera_position, dtype=np.float64)
     target = np.asarray(look_at, dtype=np.float64)
@@ -308,8 +346,11 @@ def follow_target(actor_position: Sequence[float], camera_position: Sequence[flo
 
 
 def along_view_plane(move: np.ndarray, view_direction: np.ndarray) -> np.ndarray:
-    """``move`` (3,) m without its part along ``view_direction`` (3,): a camera move that
-    keeps the camera's distance to every plane facing it.
+    """
+    Return ``move`` (3,) m without its part along ``view_direction`` (3,).
+
+    ``move`` (3,) m without its part along ``view_direction`` (3,): a camera move that keeps the
+    camera's distance to every plane facing it.
 
     viser follows a drag's pointer on a plane facing the camera through the grab point, which is
     the drag pad just in front of the camera: a camera moved forwards through that plane would
@@ -327,8 +368,12 @@ def along_view_plane(move: np.ndarray, view_direction: np.ndarray) -> np.ndarray
 
 def smooth_step(current: np.ndarray, target: np.ndarray, dt: float,
                 time_constant: float) -> np.ndarray:
-    """Move ``current`` towards ``target`` as a first-order lag with ``time_constant`` s over
-    ``dt`` s: a camera that glides after the actor instead of jumping a step at a time."""
+    """
+    Move ``current`` towards ``target`` as a first-order lag.
+
+    Move ``current`` towards ``target`` as a first-order lag with ``time_constant`` s over ``dt``
+    s: a camera that glides after the actor instead of jumping a step at a time.
+    """
     if not time_constant > 0.0:
         return np.asarray(target, dtype=np.float64).copy()
     fraction = 1.0 - math.exp(-max(dt, 0.0) / time_constant)
@@ -345,7 +390,7 @@ def shipped_scenes(directory: Optional[str] = None) -> Dict[str, str]:
 
 
 def scenes_directory() -> str:
-    """The package's config/scenes folder, in a source tree or an install."""
+    """Return the package's config/scenes folder, in a source tree or an install."""
     here = os.path.dirname(os.path.abspath(__file__))
     candidates = [os.path.join(here, '..', '..', 'config', 'scenes'),
                   os.path.join(sys.prefix, 'share', PACKAGE_NAME, 'config', 'scenes')]
@@ -360,7 +405,8 @@ def scenes_directory() -> str:
 
 
 def pick_port(host: str, port: int, attempts: int = 100) -> int:
-    """Return ``port`` if it is free on ``host``, else the next free one (raises if none).
+    """
+    Return ``port`` if it is free on ``host``, else the next free one (raises if none).
 
     A port left in TIME_WAIT by a viewer that just stopped counts as free (the page's server
     binds with SO_REUSEADDR too), so a restarted demo keeps its address and an open tab
@@ -380,7 +426,7 @@ def pick_port(host: str, port: int, attempts: int = 100) -> int:
 
 
 def triangle_list_mesh(points: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
-    """A TRIANGLE_LIST marker's points (3k, 3) as (vertices (3k, 3) float32, faces (k, 3))."""
+    """Return a TRIANGLE_LIST marker's points (3k, 3) as vertices (3k, 3) float32, faces (k, 3)."""
     points = np.asarray(points, dtype=np.float64)
     if points.ndim != 2 or points.shape[1] != 3 or points.shape[0] % 3:
         raise ValueError(f'TRIANGLE_LIST needs 3k points of (x, y, z), got shape {points.shape}')
@@ -389,7 +435,7 @@ def triangle_list_mesh(points: np.ndarray) -> Tuple[np.ndarray, np.ndarray]:
 
 
 def polyline_segments(points: np.ndarray) -> np.ndarray:
-    """A polyline (p, 3) as line segments (p - 1, 2, 3) for the page."""
+    """Return a polyline (p, 3) as line segments (p - 1, 2, 3) for the page."""
     points = np.asarray(points, dtype=np.float32)
     if points.ndim != 2 or points.shape[1] != 3:
         raise ValueError(f'polyline needs (p, 3) points, got shape {points.shape}')
@@ -409,8 +455,12 @@ def quaternion_xyzw_to_wxyz(q) -> Tuple[float, float, float, float]:
 
 def pad_pose(camera_position: np.ndarray, camera_wxyz: np.ndarray, fov: float, aspect: float,
              screen_uv: Tuple[float, float], depth: float) -> np.ndarray:
-    """World position of a point drawn at normalized screen position ``screen_uv`` (x right, y
-    down, 0..1) at ``depth`` m in front of a camera (OpenCV axes: z forward, y down)."""
+    """
+    Return the world position of a point drawn at a normalized screen position, m.
+
+    World position of a point drawn at normalized screen position ``screen_uv`` (x right, y down,
+    0..1) at ``depth`` m in front of a camera (OpenCV axes: z forward, y down).
+    """
     w, x, y, z = np.asarray(camera_wxyz, dtype=np.float64)
     rotation = np.array([
         [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
@@ -423,7 +473,7 @@ def pad_pose(camera_position: np.ndarray, camera_wxyz: np.ndarray, fov: float, a
 
 
 def disc_mesh(radius: float, segments: int = 40) -> Tuple[np.ndarray, np.ndarray]:
-    """A flat disc in the xy plane: vertices (segments + 1, 3) float32, faces (segments, 3)."""
+    """Return a disc in the xy plane: vertices (segments + 1, 3) float32, faces (segments, 3)."""
     angles = np.linspace(0.0, 2.0 * math.pi, segments, endpoint=False)
     rim = np.stack([radius * np.cos(angles), radius * np.sin(angles), np.zeros(segments)], 1)
     vertices = np.vstack([np.zeros((1, 3)), rim]).astype(np.float32)
@@ -433,7 +483,7 @@ def disc_mesh(radius: float, segments: int = 40) -> Tuple[np.ndarray, np.ndarray
 
 
 def marker_color(marker) -> Tuple[Tuple[int, int, int], Optional[float]]:
-    """A marker's colour as 0-255 RGB and an opacity (None when opaque)."""
+    """Return a marker's colour as 0-255 RGB and an opacity (None when opaque)."""
     c = marker.color
     if c.a == 0.0 and c.r == 0.0 and c.g == 0.0 and c.b == 0.0 and marker.colors:
         c = marker.colors[0]
@@ -649,7 +699,8 @@ def _build_node_class():
             self._replace_software_notice(client)
 
         def _replace_software_notice(self, client) -> None:
-            """Make the software-WebGL notice close by itself (a no-op where there is none).
+            """
+            Make the software-WebGL notice close by itself (a no-op where there is none).
 
             Sent when the page connects and again with its first camera report, whichever
             comes after the page showed the notice.
@@ -781,8 +832,12 @@ def _build_node_class():
                     self._set_course_value(self._courses[self._course_shown].label)
 
         def _show_course(self, name: Optional[str], path: str) -> None:
-            """The page shows ``name`` (a shipped course, or None for another scene file) as
-            the planner's course, with its description."""
+            """
+            Show ``name`` on the page as the planner's course, with its description.
+
+            The page shows ``name`` (a shipped course, or None for another scene file) as the
+            planner's course, with its description.
+            """
             self._scene_path = path
             self._course_shown = name
             labels = [c.label for c in self._courses.values()]
@@ -1053,7 +1108,8 @@ def _build_node_class():
 
 
 def _update_urdf_pose(urdf, positions: Dict[str, float], sent: Dict[int, tuple]) -> None:
-    """Move a ViserUrdf's joint frames to ``positions`` (rad or m by joint name).
+    """
+    Move a ViserUrdf's joint frames to ``positions`` (rad or m by joint name).
 
     yourdfpy's ``update_cfg`` rebuilds its whole scene graph (about 5 ms a frame); the joint
     frames only need each joint's own parent->child transform, computed here directly. Frames
@@ -1111,9 +1167,9 @@ def build_parser(prog: str = 'digital-actor view') -> argparse.ArgumentParser:
     parser.add_argument('--twist', action='store_true',
                         help='publish geometry_msgs/Twist on cmd_vel (default TwistStamped)')
     parser.add_argument('--max-linear-speed', type=float, default=0.8,
-                        help='m/s at a full drag (the planner\'s own limit is used when found)')
+                        help="m/s at a full drag (the planner's own limit is used when found)")
     parser.add_argument('--max-angular-speed', type=float, default=1.0,
-                        help='rad/s at a full drag (the planner\'s own limit is used when found)')
+                        help="rad/s at a full drag (the planner's own limit is used when found)")
     parser.add_argument('--render-rate', type=float, default=20.0,
                         help='how often the page is updated with the latest pose (Hz)')
     parser.add_argument('--no-follow', action='store_true',
@@ -1122,7 +1178,7 @@ def build_parser(prog: str = 'digital-actor view') -> argparse.ArgumentParser:
 
 
 def config_from_args(args: argparse.Namespace) -> ViewerConfig:
-    """The validated ViewerConfig for parsed command-line options."""
+    """Return the validated ViewerConfig for parsed command-line options."""
     config = ViewerConfig(host=args.host, port=args.port, cmd_vel_stamped=not args.twist,
                           max_linear_speed=args.max_linear_speed,
                           max_angular_speed=args.max_angular_speed,

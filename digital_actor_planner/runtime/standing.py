@@ -1,4 +1,19 @@
-"""The pose the node streams before its planning process is ready.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The pose the node streams before its planning process is ready.
 
 The planning process compiles the core's kernels when it starts from an empty cache (a minute
 or more on a loaded machine). The node streams from its first second meanwhile: the neutral
@@ -21,7 +36,8 @@ MAX_SCENE_BYTES = 5_000_000
 
 
 def scene_start(scene_path: str) -> Tuple[float, float, float]:
-    """Return the start pose ``(x m, y m, yaw rad)`` a scene file names ((0, 0, 0) if none).
+    """
+    Return the start pose ``(x m, y m, yaw rad)`` a scene file names ((0, 0, 0) if none).
 
     Raises
     ------
@@ -65,8 +81,12 @@ def _stl_triangles(path: str) -> np.ndarray:
 
 
 def _scene_meshes(scene_path: str) -> list:
-    """(f, 3, 3) triangle arrays (m, world frame) of a scene's STL meshes (the formats read
-    here without a mesh library, whose import alone takes seconds); [] when too large."""
+    """
+    Return the (f, 3, 3) triangle arrays of a scene's STL meshes, m; [] when too large.
+
+    (f, 3, 3) triangle arrays (m, world frame) of a scene's STL meshes (the formats read here
+    without a mesh library, whose import alone takes seconds); [] when too large.
+    """
     if scene_path.lower().endswith(('.yaml', '.yml')):
         with open(scene_path) as stream:
             data = yaml.safe_load(stream)
@@ -89,8 +109,12 @@ def _scene_meshes(scene_path: str) -> list:
 
 
 def _rotation(roll: float, pitch: float, yaw: float) -> np.ndarray:
-    """(3, 3) rotation of URDF fixed axes (roll about x, then pitch about y, then yaw about z),
-    as the scene format defines a mesh's pose."""
+    """
+    Return the (3, 3) rotation of URDF fixed axes roll, pitch, yaw (rad).
+
+    (3, 3) rotation of URDF fixed axes (roll about x, then pitch about y, then yaw about z), as the
+    scene format defines a mesh's pose.
+    """
     cr, sr, cp, sp, cy, sy = (math.cos(roll), math.sin(roll), math.cos(pitch),
                               math.sin(pitch), math.cos(yaw), math.sin(yaw))
     about_x = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
@@ -100,7 +124,8 @@ def _rotation(roll: float, pitch: float, yaw: float) -> np.ndarray:
 
 
 def lowest_surface(triangles: Sequence[np.ndarray], x: float, y: float) -> Optional[float]:
-    """Height (m) of the lowest upward-facing triangle over the point (x, y); None if none.
+    """
+    Height (m) of the lowest upward-facing triangle over the point (x, y); None if none.
 
     Parameters
     ----------
@@ -132,7 +157,8 @@ def lowest_surface(triangles: Sequence[np.ndarray], x: float, y: float) -> Optio
 
 def stand_in_configuration(skeleton, scene_path: str,
                            start_pose: Optional[Tuple[float, float, float]]) -> np.ndarray:
-    """The neutral standing configuration at the start, on the ground under the pelvis.
+    """
+    Return the neutral standing configuration at the start, on the ground under the pelvis.
 
     Parameters
     ----------

@@ -1,3 +1,17 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """Python side of driver.js: one headless Debian chromium page, driven by JSON lines."""
 import json
 import os
@@ -58,7 +72,8 @@ class ChromiumPage:
             raise RuntimeError(f'browser command {command} failed: {reply.get("error")}')
         return reply
 
-    def open(self, url):
+    # Named after the driver's command it sends.
+    def open(self, url):  # noqa: A003
         self.send(cmd='open', url=url, timeout=240.0)
 
     def text(self):
@@ -104,9 +119,13 @@ class ChromiumPage:
         self.send(cmd='click', name=name)
 
     def camera_reports(self):
-        """The camera poses the page reported to the viewer since the last call, oldest first:
-        viser's ViewerCameraMessage as a dict (position, look_at in world metres, wxyz from the
-        camera's OpenCV frame to the world, fov (vertical, rad), image_width, image_height)."""
+        """
+        Return the camera poses the page reported to the viewer since the last call.
+
+        The camera poses the page reported to the viewer since the last call, oldest first: viser's
+        ViewerCameraMessage as a dict (position, look_at in world metres, wxyz from the camera's
+        OpenCV frame to the world, fov (vertical, rad), image_width, image_height).
+        """
         import base64
         import msgspec
         reports = []
@@ -146,7 +165,7 @@ class ChromiumPage:
 
 
 def not_blank(png_path):
-    """True when a screenshot shows a rendered scene: many distinct colours, not one flat fill."""
+    """Return true when a screenshot shows a rendered scene: many colours, not one flat fill."""
     from PIL import Image
     import numpy as np
     image = np.asarray(Image.open(png_path).convert('RGB'), dtype=np.int32)

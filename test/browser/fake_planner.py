@@ -1,4 +1,19 @@
-"""A stand-in actor_planner for viewer tests: JointState at 100 Hz that follows cmd_vel.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+A stand-in actor_planner for viewer tests: JointState at 100 Hz that follows cmd_vel.
 
 It is not the planner: it integrates root_x/root_y/root_yaw from the last command, publishes a wall
 (TRIANGLE_LIST) when the scene's file name contains 'wall', stops there and reports 'stuck' on
@@ -12,17 +27,17 @@ import os
 import sys
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
-from geometry_msgs.msg import Point, TwistStamped
-import rclpy
-from rclpy.executors import ExternalShutdownException
-from rclpy.node import Node
-from rcl_interfaces.msg import SetParametersResult
-from rclpy.qos import DurabilityPolicy, QoSProfile
-from sensor_msgs.msg import JointState
-from visualization_msgs.msg import Marker, MarkerArray
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), '..', '..'))
 from digital_actor_planner.core.skeleton import Skeleton  # noqa: E402
+from geometry_msgs.msg import Point, TwistStamped  # noqa: E402
+from rcl_interfaces.msg import SetParametersResult  # noqa: E402
+import rclpy  # noqa: E402
+from rclpy.executors import ExternalShutdownException  # noqa: E402
+from rclpy.node import Node  # noqa: E402
+from rclpy.qos import DurabilityPolicy, QoSProfile  # noqa: E402
+from sensor_msgs.msg import JointState  # noqa: E402
+from visualization_msgs.msg import Marker, MarkerArray  # noqa: E402
 
 WALL_X = 1.0
 
