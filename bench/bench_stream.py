@@ -200,6 +200,31 @@ def _moved(q, reference, tolerance=1e-3) -> bool:
                               reference[[ROOT_X, ROOT_Y, ROOT_YAW]]) > tolerance))
 
 
+def stop_trial(probe: Probe, before: dict, stopped: float, still: float) -> str:
+    """One stop's account: where in the step the command landed and what followed it.
+
+    The step in progress is read off the root's speed: it ends where the speed first falls
+    under half its walking value (the settling or closing step that follows starts slower).
+    """
+    times, frames = probe.positions_since(stopped - 1.5)
+    speed = np.hypot(*np.diff(frames[:, [ROOT_X, ROOT_Y]], axis=0).T) / np.maximum(
+        np.diff(times), 1e-3)
+    walking = float(np.median(speed[times[1:] < stopped])) if np.any(times[1:] < stopped) \
+        else 0.0
+    slow = np.nonzero((times[1:] >= stopped) & (speed < 0.5 * walking))[0]
+    step_end = float(times[1:][slow[0]]) - stopped if slow.size else math.nan
+    after = probe.diagnostic_values()
+
+    def delta(key):
+        try:
+            return int(after[key]) - int(before[key])
+        except (KeyError, ValueError):
+            return 'n/a'
+    return (f'stop trial: still after {1e3 * (still - stopped):.0f} ms; walking speed until '
+            f'{1e3 * step_end:.0f} ms after the command; blocks planned again '
+            f'{delta("blocks_planned_again")}, blocks planned {delta("steps")}')
+
+
 def bench_latency(domain: int, folder: str, trials: int) -> None:
     from std_msgs.msg import Header
     env = ros_env(domain)
@@ -236,10 +261,12 @@ def bench_latency(domain: int, folder: str, trials: int) -> None:
             if probe.spin_until(lambda: _moved(probe.latest(), reference), 10.0):
                 start_latency.append(probe.joint_states[-1][0] - sent)
             probe.spin(1.5)
+            before = probe.diagnostic_values()
             stopped = probe.drive(0.0, 0.0, 0.0)
             still = probe.wait_until_still(timeout=15.0, still_for=0.5, tolerance=1e-4)
             if still < math.inf:
                 stop_latency.append(still - stopped)
+                print('  ' + stop_trial(probe, before, stopped, still))
 
         def summary(values):
             if not values:

@@ -101,7 +101,7 @@ ADD_TIMEOUT = 900.0
 BLEND_TIME = 0.5
 # Blocks planned but not yet begun are planned again when the command changes this much
 # (m/s, rad/s) or to a stop, instead of being played out: a released drag stills the actor
-# within the step in progress and the closing step.
+# at the end of the step in progress (docs/stopping.md).
 REPLAN_LINEAR = 0.15
 REPLAN_ANGULAR = 0.3
 # A block starting sooner than this (s) after the frame on show is played as planned.
