@@ -18,7 +18,8 @@ script), with localhost discovery in ROS_DOMAIN_ID 40-59 by default.
   the probe's own scheduling).
 * Command latency: from publishing a forward command to the first frame whose root moved, and from
   publishing a zero command to the first frame of a still actor; beside a bare rclpy
-  publish -> echo -> receive round trip measured in the same run.
+  publish -> echo -> receive round trip measured in the same run. Each stop is accounted for
+  (the walking steps planned after the command, the blocks planned again).
 * Actors per core: N actors pinned to CPU 0 (the probe on the other CPU) all walking; the
   stream rate and missed frames of the worst one. By default all N are hosted by one
   actor_planner process (``--actors NS ...``: one DDS participant, one stream thread, a planning
@@ -200,29 +201,30 @@ def _moved(q, reference, tolerance=1e-3) -> bool:
                               reference[[ROOT_X, ROOT_Y, ROOT_YAW]]) > tolerance))
 
 
-def stop_trial(probe: Probe, before: dict, stopped: float, still: float) -> str:
-    """One stop's account: where in the step the command landed and what followed it.
+def fresh_diagnostics(probe: Probe, timeout: float = 3.0) -> dict:
+    """The node's diagnostic values from a message received after this call (it publishes
+    about once a second), or the latest ones after ``timeout`` s."""
+    last = probe.diagnostics[-1] if probe.diagnostics else None
+    probe.spin_until(lambda: probe.diagnostics and probe.diagnostics[-1] is not last, timeout)
+    return probe.diagnostic_values()
 
-    The step in progress is read off the root's speed: it ends where the speed first falls
-    under half its walking value (the settling or closing step that follows starts slower).
+
+def stop_trial(before: dict, after: dict, stopped: float, still: float) -> str:
+    """One stop's account: how long it took and what the node planned meanwhile.
+
+    A stop takes the command's trip to the node, the rest of the step in progress (at most
+    one step time), the settling (``actor.SETTLE_TIME``) or a closing step, and a further
+    step where one was due within ``REPLAN_GUARD`` of the frame on show (then no block was
+    planned again).
     """
-    times, frames = probe.positions_since(stopped - 1.5)
-    speed = np.hypot(*np.diff(frames[:, [ROOT_X, ROOT_Y]], axis=0).T) / np.maximum(
-        np.diff(times), 1e-3)
-    walking = float(np.median(speed[times[1:] < stopped])) if np.any(times[1:] < stopped) \
-        else 0.0
-    slow = np.nonzero((times[1:] >= stopped) & (speed < 0.5 * walking))[0]
-    step_end = float(times[1:][slow[0]]) - stopped if slow.size else math.nan
-    after = probe.diagnostic_values()
-
     def delta(key):
         try:
             return int(after[key]) - int(before[key])
         except (KeyError, ValueError):
             return 'n/a'
-    return (f'stop trial: still after {1e3 * (still - stopped):.0f} ms; walking speed until '
-            f'{1e3 * step_end:.0f} ms after the command; blocks planned again '
-            f'{delta("blocks_planned_again")}, blocks planned {delta("steps")}')
+    return (f'stop trial: still after {1e3 * (still - stopped):.0f} ms; walking steps planned '
+            f'after the command {delta("steps")}, blocks planned again '
+            f'{delta("blocks_planned_again")}')
 
 
 def bench_latency(domain: int, folder: str, trials: int) -> None:
@@ -261,12 +263,12 @@ def bench_latency(domain: int, folder: str, trials: int) -> None:
             if probe.spin_until(lambda: _moved(probe.latest(), reference), 10.0):
                 start_latency.append(probe.joint_states[-1][0] - sent)
             probe.spin(1.5)
-            before = probe.diagnostic_values()
+            before = fresh_diagnostics(probe)
             stopped = probe.drive(0.0, 0.0, 0.0)
             still = probe.wait_until_still(timeout=15.0, still_for=0.5, tolerance=1e-4)
             if still < math.inf:
                 stop_latency.append(still - stopped)
-                print('  ' + stop_trial(probe, before, stopped, still))
+                print('  ' + stop_trial(before, fresh_diagnostics(probe), stopped, still))
 
         def summary(values):
             if not values:
