@@ -42,6 +42,9 @@ from ros_harness import NodeProcess, ros_env  # noqa: E402
 from test_node_helpers import node_command, Probe, ROOT_X, ROOT_Y, ROOT_YAW, scene  # noqa: E402
 
 PERIOD = 0.01
+# Latency trials walk on from where the last one stopped; after this many the course is
+# loaded again (the actor back at its start) before the walks reach its end.
+TRIALS_PER_VISIT = 3
 ECHO = '''
 import sys, rclpy
 from std_msgs.msg import Header
@@ -227,10 +230,10 @@ def stop_trial(before: dict, after: dict, stopped: float, still: float) -> str:
             f'{delta("blocks_planned_again")}')
 
 
-def bench_latency(domain: int, folder: str, trials: int) -> None:
+def bench_latency(domain: int, folder: str, trials: int, course: str = 'slope') -> None:
     from std_msgs.msg import Header
     env = ros_env(domain)
-    process = NodeProcess(node_command('-p', f'scene:={scene("slope")}'), env,
+    process = NodeProcess(node_command('-p', f'scene:={scene(course)}'), env,
                           log_path=os.path.join(folder, 'latency.log'))
     echo = NodeProcess([sys.executable, '-c', ECHO], env,
                        log_path=os.path.join(folder, 'echo.log'))
@@ -253,9 +256,13 @@ def bench_latency(domain: int, folder: str, trials: int) -> None:
             if probe.spin_until(lambda: len(pongs) > count, 2.0):
                 round_trips.append(pongs[-1] - sent)
             probe.spin(0.005)
-        start_latency, stop_latency = [], []
-        for _ in range(trials):
+        start_latency, stop_latency, not_walking = [], [], 0
+        for trial in range(trials):
             probe.command = (0.0, 0.0)
+            if trial > 0 and trial % TRIALS_PER_VISIT == 0:
+                # Back to the course's start before the walks run out of course.
+                probe.wait_until_still(timeout=15.0)
+                probe.set_scene(scene(course))
             if probe.wait_until_still(timeout=15.0) == math.inf:
                 continue
             reference = probe.latest()
@@ -264,6 +271,10 @@ def bench_latency(domain: int, folder: str, trials: int) -> None:
                 start_latency.append(probe.joint_states[-1][0] - sent)
             probe.spin(1.5)
             before = fresh_diagnostics(probe)
+            _, recent = probe.positions_since(time.monotonic() - 0.3)
+            if len(recent) < 2 or not _moved(recent[-1], recent[0]):
+                not_walking += 1  # stopped by the course (its end, an obstacle): no stop
+                continue
             stopped = probe.drive(0.0, 0.0, 0.0)
             still = probe.wait_until_still(timeout=15.0, still_for=0.5, tolerance=1e-4)
             if still < math.inf:
@@ -278,7 +289,8 @@ def bench_latency(domain: int, folder: str, trials: int) -> None:
                     f'max {v.max():.1f} ms (n={len(v)})')
         print(f'bare rclpy round trip (publish -> echo -> receive): {summary(round_trips)}')
         print(f'command -> first frame that moves: {summary(start_latency)}')
-        print(f'stop command -> still actor: {summary(stop_latency)}')
+        print(f'stop command -> still actor: {summary(stop_latency)}' +
+              (f'; {not_walking} trials not walking at the stop' if not_walking else ''))
     finally:
         probe.close()
         echo.stop()
@@ -373,6 +385,8 @@ def main() -> None:
     parser.add_argument('--one-process-per-actor', action='store_true',
                         help='actors per core: a node process per actor (default: one process)')
     parser.add_argument('--trials', type=int, default=5)
+    parser.add_argument('--latency-course', default='slope',
+                        help='course of the command latency trials')
     parser.add_argument('--domain', type=int, default=40)
     parser.add_argument('--skip-latency', action='store_true')
     parser.add_argument('--skip-stream', action='store_true')
@@ -382,7 +396,7 @@ def main() -> None:
     if not args.skip_stream:
         bench_stream(args.domain, args.courses.split(','), args.duration, folder)
     if not args.skip_latency:
-        bench_latency(args.domain + 1, folder, args.trials)
+        bench_latency(args.domain + 1, folder, args.trials, args.latency_course)
     counts = [int(c) for c in args.actors.split(',') if c]
     if counts:
         bench_actors(args.domain + 2, counts, args.actors_duration, args.course, folder,
