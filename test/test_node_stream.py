@@ -302,5 +302,5 @@ def test_an_actor_at_rest_is_not_planned_for_and_its_stream_does_not_run_dry(act
     assert len(stamps) >= 0.9 * 100 * (stamps[-1] - stamps[0]), 'the stream slowed at rest'
     probe.drive(0.5, 0.0, 1.5)
     assert probe.spin_until(lambda: counts()[0] > rested_blocks + 1, 10.0), \
-        'no planning after a forward command'
+        f'no planning after a forward command: {probe.diagnostic_values()}'
     _stop(probe)

@@ -196,8 +196,9 @@ SETTLE_TIME = 0.05
 #: joining them) the settled pelvis must stand for the split stance to be held.
 SPLIT_STANCE_RANGE = (0.2, 0.8)
 #: How far apart along the pelvis's heading the ankles must stand for a split stance, m
-#: (nearer, the closing step brings the feet side by side).
-SPLIT_STANCE_MIN_LENGTH = 0.1
+#: (nearer, or farther, the closing step brings the feet side by side: from a wider stance
+#: the rear foot's first step on would pass the joint speed limits).
+SPLIT_STANCE_LENGTHS = (0.1, 0.5)
 
 
 @dataclass(frozen=True)
@@ -995,8 +996,8 @@ class Actor:
         """Stop in the split stance the last step landed in, or None where it is not stable.
 
         The pelvis keeps its height and slows from its velocity at the step's end to rest over
-        ``SETTLE_TIME`` with both feet still; the stance is held when the ankles stand at
-        least ``SPLIT_STANCE_MIN_LENGTH`` apart along the heading and the settled pelvis
+        ``SETTLE_TIME`` with both feet still; the stance is held when the ankles stand
+        ``SPLIT_STANCE_LENGTHS`` apart along the heading and the settled pelvis
         stands within ``SPLIT_STANCE_RANGE`` of the way between them (its weight over the
         support of both feet). Each leg keeps its last frame's joints plus the change of its
         inverse kinematics as the hip moves, so the first frame follows on from the last.
@@ -1020,7 +1021,8 @@ class Actor:
         apart = front.xy - rear.xy
         length = float(np.hypot(*apart))
         heading = np.array([np.cos(yaw[-1]), np.sin(yaw[-1])])
-        if abs(float(apart @ heading)) < SPLIT_STANCE_MIN_LENGTH:
+        if not SPLIT_STANCE_LENGTHS[0] <= abs(float(apart @ heading)) <= \
+                SPLIT_STANCE_LENGTHS[1]:
             return None
         fraction = float((np.array([x[-1], y[-1]]) - rear.xy) @ apart) / length ** 2
         if not SPLIT_STANCE_RANGE[0] <= fraction <= SPLIT_STANCE_RANGE[1]:
