@@ -10,10 +10,10 @@ STOP_WITHIN = 0.7
 ROOT = [skeleton().index[name] for name in ('root_x', 'root_y', 'root_yaw')]
 
 
-def _walk_then_stop(stop_at: float, resume_at=None):
+def _walk_then_stop(stop_at: float, resume_at=None, speed: float = 0.6):
     sc = scene('flat')
     actor = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False), start=sc.start)
-    times, linear = [0.0, stop_at], [0.6, 0.0]
+    times, linear = [0.0, stop_at], [speed, 0.0]
     if resume_at is not None:
         times, linear = times + [resume_at], linear + [0.6]
     end = times[-1] + 2.0
@@ -48,11 +48,15 @@ def test_zero_command_at_any_phase_stills_the_root_within_0_7_s(stop_at):
         max(left.xy @ heading, right.xy @ heading)
 
 
-def test_the_actor_walks_on_from_a_split_stance_stop():
-    sc, actor, blocks = _walk_then_stop(2.2, resume_at=3.5)
+# From a walk of 0.6 m/s the actor stops in its split stance; from the long strides of one of
+# 1.2 m/s it brings the feet together first. Either way it walks on.
+@pytest.mark.parametrize('speed, stop', [(0.6, 'settling'), (1.2, 'closing')])
+def test_the_actor_walks_on_after_a_stop(speed, stop):
+    sc, actor, blocks = _walk_then_stop(1.6, resume_at=3.0, speed=speed)
     times, frames, report = judged(blocks, sc.environment)
     assert report.ok, report.failures()
-    stopped = [b for b in blocks if b.category == 'settling']
-    assert stopped, 'the walk did not stop in its split stance'
+    assert not [b.reason for b in blocks if b.status == 'stuck']
+    stopped = [b for b in blocks if b.category == stop]
+    assert stopped, f'the walk did not stop with a {stop} step'
     x = skeleton().index['root_x']
     assert frames[-1, x] > stopped[0].frames[-1, x] + 0.3  # walked on after the stop
