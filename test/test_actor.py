@@ -42,7 +42,7 @@ def test_no_command_means_standing_still(actor):
 
 
 def test_zero_command_stops_the_actor_within_one_step(actor):
-    actor.set_command(1.0, 0.0)
+    actor.set_command(0.6, 0.0)
     for _ in range(5):
         actor.plan_next()
     actor.set_command(0.0, 0.0)
