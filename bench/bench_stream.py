@@ -33,7 +33,8 @@ script), with localhost discovery in ROS_DOMAIN_ID 40-59 by default.
   the probe's own scheduling).
 * Command latency: from publishing a forward command to the first frame whose root moved, and from
   publishing a zero command to the first frame of a still actor; beside a bare rclpy
-  publish -> echo -> receive round trip measured in the same run.
+  publish -> echo -> receive round trip measured in the same run. Each stop is accounted for
+  (the walking steps planned after the command, the blocks planned again).
 * Actors per core: N actors pinned to CPU 0 (the probe on the other CPU) all walking; the
   stream rate and missed frames of the worst one. By default all N are hosted by one
   actor_planner process (``--actors NS ...``: one DDS participant, one stream thread, a planning
@@ -56,6 +57,9 @@ from ros_harness import NodeProcess, ros_env  # noqa: E402
 from test_node_helpers import node_command, Probe, ROOT_X, ROOT_Y, ROOT_YAW, scene  # noqa: E402
 
 PERIOD = 0.01
+# Latency trials walk on from where the last one stopped; after this many the course is
+# loaded again (the actor back at its start) before the walks reach its end.
+TRIALS_PER_VISIT = 3
 ECHO = """
 import sys, rclpy
 from std_msgs.msg import Header
@@ -216,10 +220,36 @@ def _moved(q, reference, tolerance=1e-3) -> bool:
                               reference[[ROOT_X, ROOT_Y, ROOT_YAW]]) > tolerance))
 
 
-def bench_latency(domain: int, folder: str, trials: int) -> None:
+def fresh_diagnostics(probe: Probe, timeout: float = 3.0) -> dict:
+    """The node's diagnostic values from a message received after this call (it publishes
+    about once a second), or the latest ones after ``timeout`` s."""
+    last = probe.diagnostics[-1] if probe.diagnostics else None
+    probe.spin_until(lambda: probe.diagnostics and probe.diagnostics[-1] is not last, timeout)
+    return probe.diagnostic_values()
+
+
+def stop_trial(before: dict, after: dict, stopped: float, still: float) -> str:
+    """One stop's account: how long it took and what the node planned meanwhile.
+
+    A stop takes the command's trip to the node, the rest of the step in progress (at most
+    one step time), the settling (``actor.SETTLE_TIME``) or a closing step, and a further
+    step where one was due within ``REPLAN_GUARD`` of the frame on show (then no block was
+    planned again).
+    """
+    def delta(key):
+        try:
+            return int(after[key]) - int(before[key])
+        except (KeyError, ValueError):
+            return 'n/a'
+    return (f'stop trial: still after {1e3 * (still - stopped):.0f} ms; walking steps planned '
+            f'after the command {delta("steps")}, blocks planned again '
+            f'{delta("blocks_planned_again")}')
+
+
+def bench_latency(domain: int, folder: str, trials: int, course: str = 'slope') -> None:
     from std_msgs.msg import Header
     env = ros_env(domain)
-    process = NodeProcess(node_command('-p', f'scene:={scene("slope")}'), env,
+    process = NodeProcess(node_command('-p', f'scene:={scene(course)}'), env,
                           log_path=os.path.join(folder, 'latency.log'))
     echo = NodeProcess([sys.executable, '-c', ECHO], env,
                        log_path=os.path.join(folder, 'echo.log'))
@@ -242,9 +272,13 @@ def bench_latency(domain: int, folder: str, trials: int) -> None:
             if probe.spin_until(lambda: len(pongs) > count, 2.0):
                 round_trips.append(pongs[-1] - sent)
             probe.spin(0.005)
-        start_latency, stop_latency = [], []
-        for _ in range(trials):
+        start_latency, stop_latency, not_walking = [], [], 0
+        for trial in range(trials):
             probe.command = (0.0, 0.0)
+            if trial > 0 and trial % TRIALS_PER_VISIT == 0:
+                # Back to the course's start before the walks run out of course.
+                probe.wait_until_still(timeout=15.0)
+                probe.set_scene(scene(course))
             if probe.wait_until_still(timeout=15.0) == math.inf:
                 continue
             reference = probe.latest()
@@ -252,10 +286,16 @@ def bench_latency(domain: int, folder: str, trials: int) -> None:
             if probe.spin_until(lambda: _moved(probe.latest(), reference), 10.0):
                 start_latency.append(probe.joint_states[-1][0] - sent)
             probe.spin(1.5)
+            before = fresh_diagnostics(probe)
+            _, recent = probe.positions_since(time.monotonic() - 0.3)
+            if len(recent) < 2 or not _moved(recent[-1], recent[0]):
+                not_walking += 1  # stopped by the course (its end, an obstacle): no stop
+                continue
             stopped = probe.drive(0.0, 0.0, 0.0)
             still = probe.wait_until_still(timeout=15.0, still_for=0.5, tolerance=1e-4)
             if still < math.inf:
                 stop_latency.append(still - stopped)
+                print('  ' + stop_trial(before, fresh_diagnostics(probe), stopped, still))
 
         def summary(values):
             if not values:
@@ -265,7 +305,8 @@ def bench_latency(domain: int, folder: str, trials: int) -> None:
                     f'max {v.max():.1f} ms (n={len(v)})')
         print(f'bare rclpy round trip (publish -> echo -> receive): {summary(round_trips)}')
         print(f'command -> first frame that moves: {summary(start_latency)}')
-        print(f'stop command -> still actor: {summary(stop_latency)}')
+        print(f'stop command -> still actor: {summary(stop_latency)}' +
+              (f'; {not_walking} trials not walking at the stop' if not_walking else ''))
     finally:
         probe.close()
         echo.stop()
@@ -360,6 +401,8 @@ def main() -> None:
     parser.add_argument('--one-process-per-actor', action='store_true',
                         help='actors per core: a node process per actor (default: one process)')
     parser.add_argument('--trials', type=int, default=5)
+    parser.add_argument('--latency-course', default='slope',
+                        help='course of the command latency trials')
     parser.add_argument('--domain', type=int, default=40)
     parser.add_argument('--skip-latency', action='store_true')
     parser.add_argument('--skip-stream', action='store_true')
@@ -369,7 +412,7 @@ def main() -> None:
     if not args.skip_stream:
         bench_stream(args.domain, args.courses.split(','), args.duration, folder)
     if not args.skip_latency:
-        bench_latency(args.domain + 1, folder, args.trials)
+        bench_latency(args.domain + 1, folder, args.trials, args.latency_course)
     counts = [int(c) for c in args.actors.split(',') if c]
     if counts:
         bench_actors(args.domain + 2, counts, args.actors_duration, args.course, folder,

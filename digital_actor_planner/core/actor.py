@@ -189,6 +189,16 @@ PIVOT_EITHER_FOOT = True
 REVERSAL_STAGGER = 0.05
 #: How far a foot may land from its planned foothold before its support is judged again, m.
 LANDING_DRIFT = 0.02
+#: A zero command after a step that landed in a split stance stops there: the pelvis slows
+#: to rest over this long (s), the feet still, instead of a closing step (people stop so).
+SETTLE_TIME = 0.05
+#: Where between the ankles (the fraction of the way from the rear one, along the line
+#: joining them) the settled pelvis must stand for the split stance to be held.
+SPLIT_STANCE_RANGE = (0.2, 0.8)
+#: How far apart along the pelvis's heading the ankles must stand for a split stance, m
+#: (nearer, or farther, the closing step brings the feet side by side: from a wider stance
+#: the rear foot's first step on would pass the joint speed limits).
+SPLIT_STANCE_LENGTHS = (0.1, 0.5)
 
 
 @dataclass(frozen=True)
@@ -212,7 +222,8 @@ class StepBlock:
     planning_time
         Wall time spent planning this block, s.
     category
-        'level', 'uphill', 'downhill', 'closing', 'pivot' or '' for hold blocks.
+        'level', 'uphill', 'downhill', 'closing', 'settling' (the pelvis slowing to rest in
+        a split stance), 'pivot' or '' for hold blocks.
 
     """
 
@@ -306,6 +317,8 @@ class Actor:
         self._last_pivot = None
         # Whether the last step of a footstep window walked backward (None: none yet).
         self._walked_backward: Optional[bool] = None
+        # (22,) velocity of the last committed frame, rad/s or m/s.
+        self._velocity = np.zeros(len(skeleton.joint_names))
 
     # -- state ---------------------------------------------------------------------------
     @property
@@ -367,7 +380,9 @@ class Actor:
         v, w = self._command
         if abs(v) < 1e-3 and abs(w) < 1e-3:
             if not self._stance.at_rest:
-                block = self._closing_step(started)
+                block = self._settling_step(started)
+                if block is None:
+                    block = self._closing_step(started)
                 if block is not None:
                     return block
             return self._hold('idle', '', started)
@@ -427,6 +442,7 @@ class Actor:
         times, frames = hold_frames(self._configuration, self._time, cfg.hold_time,
                                     cfg.frame_rate)
         self._stance = with_at_rest(self._stance, True)
+        self._velocity = np.zeros_like(self._velocity)
         self._time = float(times[-1])
         self.status, self.reason = status, reason
         empty = np.zeros((0, 4)), np.zeros((0, 3))
@@ -442,6 +458,7 @@ class Actor:
         velocities = (previous[1:] - previous[:-1]) * self.config.frame_rate
         absolute = self._time + times
         self._configuration = frames[-1].copy()
+        self._velocity = velocities[-1].copy()
         self._stance = stance
         self._steps += 1
         self._time = float(absolute[-1])
@@ -974,6 +991,65 @@ class Actor:
         if not supported[ankle, 1] or supported.mean() < fcfg.min_support_fraction:
             raise GaitError('the landing foot would not rest on the ground where its hip '
                             'puts it')
+
+    def _settling_step(self, started: float) -> Optional[StepBlock]:
+        """Stop in the split stance the last step landed in, or None where it is not stable.
+
+        The pelvis keeps its height and slows from its velocity at the step's end to rest over
+        ``SETTLE_TIME`` with both feet still; the stance is held when the ankles stand
+        ``SPLIT_STANCE_LENGTHS`` apart along the heading and the settled pelvis
+        stands within ``SPLIT_STANCE_RANGE`` of the way between them (its weight over the
+        support of both feet). Each leg keeps its last frame's joints plus the change of its
+        inverse kinematics as the hip moves, so the first frame follows on from the last.
+        """
+        from .gait import leg_inverse_kinematics
+        stance, skeleton = self._stance, self.skeleton
+        cfg, leg, index = self.config, skeleton.leg, skeleton.index
+        q0 = self._configuration
+        x0, y0, z0, yaw0 = (float(q0[index[name]]) for name in
+                            ('root_x', 'root_y', 'root_z', 'root_yaw'))
+        velocity = self._velocity[[index['root_x'], index['root_y'], index['root_yaw']]]
+        k = max(1, int(round(SETTLE_TIME * cfg.frame_rate)))
+        tau = np.arange(1, k + 1) / k
+        # The velocity falls linearly to 0: the pelvis travels half as far as at full speed.
+        travel = k / cfg.frame_rate * (tau - 0.5 * tau ** 2)
+        x = x0 + velocity[0] * travel
+        y = y0 + velocity[1] * travel
+        yaw = yaw0 + velocity[2] * travel
+        rear, front = sorted(stance.feet, key=lambda foot: float(
+            foot.xy @ np.array([np.cos(yaw0), np.sin(yaw0)])))
+        apart = front.xy - rear.xy
+        length = float(np.hypot(*apart))
+        heading = np.array([np.cos(yaw[-1]), np.sin(yaw[-1])])
+        if not SPLIT_STANCE_LENGTHS[0] <= abs(float(apart @ heading)) <= \
+                SPLIT_STANCE_LENGTHS[1]:
+            return None
+        fraction = float((np.array([x[-1], y[-1]]) - rear.xy) @ apart) / length ** 2
+        if not SPLIT_STANCE_RANGE[0] <= fraction <= SPLIT_STANCE_RANGE[1]:
+            return None
+        frames = np.repeat(q0[None, :], k, axis=0)
+        frames[:, index['root_x']], frames[:, index['root_y']] = x, y
+        frames[:, index['root_yaw']] = yaw
+        for side, name in ((LEFT, 'left_leg'), (RIGHT, 'right_leg')):
+            foot = stance.feet[side]
+            offset = leg.hip_half_width if side == LEFT else -leg.hip_half_width
+            hips_x = np.concatenate([[x0], x]) - np.sin(np.concatenate([[yaw0], yaw])) * offset
+            hips_y = np.concatenate([[y0], y]) + np.cos(np.concatenate([[yaw0], yaw])) * offset
+            hips = np.column_stack([hips_x, hips_y, np.full(k + 1, z0)])
+            ankles = np.repeat([[foot.xy[0], foot.xy[1], foot.z]], k + 1, axis=0)
+            joints, _, reach = leg_inverse_kinematics(
+                leg, hips, ankles, np.full(k + 1, foot.yaw), np.concatenate([[yaw0], yaw]),
+                np.full(k + 1, foot.pitch))
+            if not np.isfinite(joints).all() or float(reach.max()) > 1.0:
+                return None
+            columns = skeleton.branch(name)
+            frames[:, columns] = q0[columns] + joints[1:] - joints[0]
+        if np.any(frames < skeleton.lower - 1e-9) or np.any(frames > skeleton.upper + 1e-9):
+            return None
+        settled = Stance(np.array([x[-1], y[-1], z0, yaw[-1]]), stance.feet, stance.stance_side,
+                         True)
+        motion = StepMotion(tau * k / cfg.frame_rate, frames, settled, 'settling', 0.0, 0.0)
+        return self._checked_step_to_rest(motion, started, 'idle', 'stopping', 'settling')
 
     def _closing_step(self, started: float, status: str = 'idle',
                       reason: str = 'stopping') -> Optional[StepBlock]:

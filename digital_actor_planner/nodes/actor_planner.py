@@ -101,11 +101,15 @@ ADD_TIMEOUT = 900.0
 BLEND_TIME = 0.5
 # Blocks planned but not yet begun are planned again when the command changes this much
 # (m/s, rad/s) or to a stop, instead of being played out: a released drag stills the actor
-# within the step in progress and the closing step.
+# at the end of the step in progress (docs/stopping.md).
 REPLAN_LINEAR = 0.15
 REPLAN_ANGULAR = 0.3
 # A block starting sooner than this (s) after the frame on show is played as planned.
 REPLAN_GUARD = 0.05
+# The same for a stop: any block not yet begun is dropped. Should the stream reach the cut
+# before the stop is planned, it holds the stance the step in progress landed in, which is
+# where the actor stops anyway; a step played out instead would delay the stop by a step.
+STOP_GUARD = 0.0
 # Planned blocks (per actor) that can be planned again; as many states kept to go back to.
 REPLAN_BLOCKS = 8
 # A planning process that fails this many times in a row while placing its actors is given
@@ -1471,9 +1475,10 @@ class ActorPlannerNode(Node):
         current one (a stop, or a change of REPLAN_LINEAR / REPLAN_ANGULAR); None if none."""
         linear, angular = self.command.current(now, self.cmd_timeout)
         stop = abs(linear) < 1e-3 and abs(angular) < 1e-3
+        guard = STOP_GUARD if stop else REPLAN_GUARD
         for block in self._blocks:
             number, start, (old_linear, old_angular) = block
-            if start <= self.playback_time + REPLAN_GUARD:
+            if start <= self.playback_time + guard:
                 continue
             if (stop and (abs(old_linear) >= 1e-3 or abs(old_angular) >= 1e-3)) or \
                     abs(linear - old_linear) >= REPLAN_LINEAR or \
