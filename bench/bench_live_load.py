@@ -1,4 +1,5 @@
-"""The obstacle courses walked live by the actor_planner node, idle and beside a CPU hog.
+"""
+Walk the obstacle courses live with the actor_planner node, idle and beside a CPU hog.
 
     .venv/bin/python bench/bench_live_load.py [--courses low_beam table ...] [--hogs N]
         [--domain 60] [--settle 2]
@@ -25,8 +26,6 @@ import sys
 import tempfile
 import time
 
-import yaml
-
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, os.path.join(HERE, '..', 'test'))
 
@@ -34,6 +33,7 @@ from bench_common import print_command  # noqa: E402
 from bench_stream import course_commands, walk_course  # noqa: E402
 from ros_harness import NodeProcess, ros_env  # noqa: E402
 from test_node_helpers import node_command, Probe, ROOT_X, ROOT_Y, scene  # noqa: E402
+import yaml  # noqa: E402
 
 #: The obstacle courses, the two meant to stop last.
 COURSES = ('low_beam', 'table', 'pillars', 'uneven_beam', 'blocks', 'stairs_up', 'stairs_down',
@@ -44,7 +44,7 @@ HOG = 'while True: pass'
 
 
 def expectation(course: str) -> dict:
-    """The ``expect:`` mapping of a shipped course."""
+    """Return the ``expect:`` mapping of a shipped course."""
     with open(scene(course)) as stream:
         return yaml.safe_load(stream).get('expect', {})
 
@@ -67,7 +67,8 @@ def stop_hogs(hogs: list) -> None:
 
 def walk_live(course: str, domain: int, folder: str, label: str, settle: float = 2.0,
               start_timeout: float = 300.0) -> dict:
-    """Walk ``course`` in a fresh node process; return where the actor stood still.
+    """
+    Walk ``course`` in a fresh node process; return where the actor stood still.
 
     Returns
     -------
@@ -128,7 +129,7 @@ def reached(course: str, run: dict, idle: dict = None) -> bool:
 
 
 def outcome(run: dict) -> str:
-    """A table cell: where the actor stood still, and why it stopped when stuck."""
+    """Return a table cell: where the actor stood still, and why it stopped when stuck."""
     if run['error'] and not math.isfinite(run['x']):
         return run['error']
     cell = f'x {run["x"]:.2f}, y {run["y"]:.2f}'

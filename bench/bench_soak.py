@@ -1,4 +1,5 @@
-"""Soak the actor_planner node: mouse-like steering for minutes, the scene switched now and then.
+"""
+Soak the actor_planner node: mouse-like steering for minutes, the scene switched now and then.
 
     .venv/bin/python bench/bench_soak.py [--duration 600] [--switch-every 60]
         [--scenes flat,stairs_up,...] [--seed 0]

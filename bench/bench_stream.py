@@ -221,15 +221,19 @@ def _moved(q, reference, tolerance=1e-3) -> bool:
 
 
 def fresh_diagnostics(probe: Probe, timeout: float = 3.0) -> dict:
-    """The node's diagnostic values from a message received after this call (it publishes
-    about once a second), or the latest ones after ``timeout`` s."""
+    """
+    Return the node's diagnostic values from a message received after this call.
+
+    The node publishes them about once a second; after ``timeout`` s the latest ones.
+    """
     last = probe.diagnostics[-1] if probe.diagnostics else None
     probe.spin_until(lambda: probe.diagnostics and probe.diagnostics[-1] is not last, timeout)
     return probe.diagnostic_values()
 
 
 def stop_trial(before: dict, after: dict, stopped: float, still: float) -> str:
-    """One stop's account: how long it took and what the node planned meanwhile.
+    """
+    Give one stop's account: how long it took and what the node planned meanwhile.
 
     A stop takes the command's trip to the node, the rest of the step in progress (at most
     one step time), the settling (``actor.SETTLE_TIME``) or a closing step, and a further

@@ -111,9 +111,12 @@ def test_nothing_to_switch_off_is_not_an_error():
 
 
 class UnreadBus(ScriptedBus):
-    """Servos left away from the centre; a sync read of both fails ``failed_group_reads``
-    times, and servo 2's own reads fail ``unread_2`` times. Every goal is kept, with what
-    torque was then."""
+    """
+    Servos left away from the centre, whose reads fail for a while.
+
+    A sync read of both fails ``failed_group_reads`` times, and servo 2's own reads fail
+    ``unread_2`` times. Every goal is kept, with what torque was then.
+    """
 
     PLACED = {1: 2048 + 600, 2: 2048 - 500}  # a knee bent, the mirrored knee bent
 

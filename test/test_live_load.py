@@ -1,4 +1,5 @@
-"""A live node beside a CPU hog on every core still walks its obstacle course to the end.
+"""
+A live node beside a CPU hog on every core still walks its obstacle course to the end.
 
 The actor_planner process walks the course's command file, sent over DDS as a mouse teleop
 would, while busy-looping processes take every CPU: a plan that takes longer may delay a step,
@@ -9,14 +10,13 @@ import math
 import os
 import sys
 
-import pytest
-from ros_harness import fresh_domain_id
-from test_node_helpers import scene
-
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'bench'))
 
 from bench_live_load import expectation, REACH_TOLERANCE, start_hogs, stop_hogs, \
     walk_live  # noqa: E402
+import pytest  # noqa: E402
+from ros_harness import fresh_domain_id  # noqa: E402
+from test_node_helpers import scene  # noqa: E402
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 

@@ -1,9 +1,8 @@
 """A zero command ends the walk at the earliest stable stance (the actor stops within a step)."""
-import numpy as np
-import pytest
-
 from course_runs import judged, scene, skeleton
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
+import numpy as np
+import pytest
 
 #: From the zero command to a root that stays still, s of actor time.
 STOP_WITHIN = 0.7

@@ -168,7 +168,8 @@ class BridgeController:
         return True
 
     def _present_positions(self) -> Dict[int, int]:
-        """Present positions (ticks) of the present servos; one not read counts as missing.
+        """
+        Read the present positions (ticks) of the present servos; one not read is missing.
 
         Torque must not come on before a servo's position is known: its first goal would be
         the last commanded position, a jump to wherever that is. One lost reply fails a whole
