@@ -435,7 +435,7 @@ def _write_atomically(path: str, write) -> None:
 
 def render_png(path: str, skeleton, meshes: Sequence, times, frames, *, footsteps=None,
                n_poses: int = 6, title: Optional[str] = None,
-               size: Tuple[int, int] = (1200, 800)) -> None:
+               size: Tuple[int, int] = (1200, 800), face_budget: int = _FACE_BUDGET) -> None:
     """
     Write a PNG of the course with the actor at ``n_poses`` key poses along the run.
 
@@ -459,15 +459,21 @@ def render_png(path: str, skeleton, meshes: Sequence, times, frames, *, footstep
         text in the top-left corner.
     size
         (width, height) of the image, pixels.
+    face_budget
+        faces of one course mesh near the run drawn as they are; a mesh with more is drawn
+        as a heightfield of its top surface (a detailed game level needs a larger budget to
+        keep its walls and steps).
 
     """
     times, frames, footsteps = _check_run(skeleton, meshes, times, frames, footsteps)
+    if int(face_budget) < 2:
+        raise ValueError(f'face_budget must be at least 2, got {face_budget}')
     if int(n_poses) < 1:
         raise ValueError(f'n_poses must be at least 1, got {n_poses}')
     size = _check_size(size)
     roots = frames[:, skeleton.indices('root_x', 'root_y', 'root_z', 'root_yaw')]
     region = (roots[:, :2].min(axis=0) - 2.0, roots[:, :2].max(axis=0) + 2.0)
-    terrain, terrain_colours = _course_triangles(meshes, region)
+    terrain, terrain_colours = _course_triangles(meshes, region, budget=int(face_budget))
 
     wanted = np.linspace(times[0], times[-1], int(n_poses))
     keys, spans = [], []
