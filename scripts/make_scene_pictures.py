@@ -25,8 +25,8 @@ Run: .venv/bin/python scripts/make_scene_pictures.py [--gif] [SCENE ...]
      docs/images/<scene>.png, and <scene>.gif with --gif)
 """
 import argparse
-import math
 from dataclasses import dataclass
+import math
 import os
 import sys
 import time
