@@ -140,7 +140,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('scenes', nargs='*', metavar='SCENE',
                         help=f'scenes to draw (default: all of {", ".join(WALKS)})')
-    parser.add_argument('--gif', action='store_true', help='also write an animation')
+    parser.add_argument('--gif', action='store_true',
+                        help='also write an animation (a few MB: too large for the README)')
     args = parser.parse_args(argv)
     unknown = [name for name in args.scenes if name not in WALKS]
     if unknown:
