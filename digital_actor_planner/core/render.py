@@ -435,7 +435,8 @@ def _write_atomically(path: str, write) -> None:
 
 def render_png(path: str, skeleton, meshes: Sequence, times, frames, *, footsteps=None,
                n_poses: int = 6, title: Optional[str] = None,
-               size: Tuple[int, int] = (1200, 800)) -> None:
+               size: Tuple[int, int] = (1200, 800), face_budget: int = _FACE_BUDGET,
+               azimuth: Optional[float] = None) -> None:
     """
     Write a PNG of the course with the actor at ``n_poses`` key poses along the run.
 
@@ -459,15 +460,25 @@ def render_png(path: str, skeleton, meshes: Sequence, times, frames, *, footstep
         text in the top-left corner.
     size
         (width, height) of the image, pixels.
+    face_budget
+        faces of one course mesh near the run drawn as they are; a mesh with more is drawn
+        as a heightfield of its top surface (a detailed game level needs a larger budget to
+        keep its walls and steps).
+    azimuth
+        direction from the poses to the camera, rad from +x about z; by default on the right
+        of the overall direction of travel, a little ahead (risers that face the actor are
+        seen from behind it).
 
     """
     times, frames, footsteps = _check_run(skeleton, meshes, times, frames, footsteps)
+    if int(face_budget) < 2:
+        raise ValueError(f'face_budget must be at least 2, got {face_budget}')
     if int(n_poses) < 1:
         raise ValueError(f'n_poses must be at least 1, got {n_poses}')
     size = _check_size(size)
     roots = frames[:, skeleton.indices('root_x', 'root_y', 'root_z', 'root_yaw')]
     region = (roots[:, :2].min(axis=0) - 2.0, roots[:, :2].max(axis=0) + 2.0)
-    terrain, terrain_colours = _course_triangles(meshes, region)
+    terrain, terrain_colours = _course_triangles(meshes, region, budget=int(face_budget))
 
     wanted = np.linspace(times[0], times[-1], int(n_poses))
     keys, spans = [], []
@@ -498,7 +509,11 @@ def render_png(path: str, skeleton, meshes: Sequence, times, frames, *, footstep
     low, high = body_points.min(axis=0), body_points.max(axis=0)
     target = (low + high) / 2
     extent = float(np.linalg.norm(high - low))
-    camera = _Camera.looking_at(target, _travel_azimuth(roots), math.radians(24.0),
+    if azimuth is None:
+        azimuth = _travel_azimuth(roots)
+    elif not math.isfinite(azimuth):
+        raise ValueError(f'azimuth must be finite, got {azimuth}')
+    camera = _Camera.looking_at(target, float(azimuth), math.radians(24.0),
                                 max(4.0, 1.6 * extent))
     canvas = _Canvas(size, title)
     flat, _ = camera.project(body_points)
