@@ -149,6 +149,8 @@ def test_gif_with_a_fixed_camera_shows_the_actor_moving(skeleton, tmp_path):
     {'meshes': ['not a mesh']},
     {'n_poses': 0},
     {'size': (10, 10)},
+    {'face_budget': 1},
+    {'azimuth': float('nan')},
 ])
 def test_bad_input_raises_and_writes_nothing(skeleton, tmp_path, bad):
     times, frames = standing_run(skeleton, 0.09, 0.1)
