@@ -213,9 +213,9 @@ def test_a_post_through_a_lifted_foot_is_found(skeleton):
 
     A thin post (2-3 cm square, 1 m tall) through a foot lifted 3-8 cm off the floor, at points of
     the sole away from its centre and its corners: the batched check finds the foot in collision,
-    with the height bound and without it. Its broad phase used to read the ground map at the centre
-    and the four corners of each footprint only, where the floor is clear, and let the foot go (a
-    swinging foot went 62 mm into a post of the low beam's frame).
+    with the height bound and without it. A broad phase that read the ground map only at the
+    centre and the four corners of each footprint, where the floor is clear, would let the foot go
+    (a swinging foot would pass 62 mm into a post of the low beam's frame).
     """
     floor = box((-3, -3, -0.2), (3, 3, 0.0))
     start = start_configuration(Environment([floor]), (0.0, 0.0, 0.0), skeleton)
