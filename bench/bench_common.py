@@ -70,6 +70,39 @@ def machine() -> str:
     return described
 
 
+def paired_walks(courses, rounds: int, walk, what: str):
+    """
+    Walk each course with the compiled and the readable version in turn, their order alternated.
+
+    ``walk(course, kind, times)`` walks one course with one version (``'compiled'`` or
+    ``'readable'``), appends the timed calls' CPU seconds to ``times`` and returns the blocks.
+    A first walk of each version is not counted (kernels compiled, course data read).
+
+    Returns
+    -------
+    (times, steps) : dicts by version of the timed calls' and the walking steps' seconds, or
+        None (after printing which course) where the two versions walked different frames.
+
+    """
+    import numpy as np
+    kinds = ('compiled', 'readable')
+    times = {kind: [] for kind in kinds}
+    steps = {kind: [] for kind in kinds}
+    for name in courses:
+        for kind in kinds:
+            walk(name, kind, [])
+        for round_ in range(rounds):
+            frames = {}
+            for kind in (kinds if round_ % 2 == 0 else kinds[::-1]):
+                blocks = walk(name, kind, times[kind])
+                steps[kind].extend(b.planning_time for b in blocks if b.status == 'walking')
+                frames[kind] = np.vstack([b.frames for b in blocks])
+            if not np.array_equal(frames['compiled'], frames['readable']):
+                print(f'{name}: the two {what} walked different frames')
+                return None
+    return times, steps
+
+
 def _first_line(path: str) -> str:
     with open(path) as f:
         return f.readline().strip()

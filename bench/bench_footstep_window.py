@@ -30,7 +30,7 @@ import time
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'test'))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from bench_common import machine  # noqa: E402
+from bench_common import machine, paired_walks  # noqa: E402
 from course_runs import scene, SCENES, skeleton  # noqa: E402
 from digital_actor_planner.cli import read_commands  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
@@ -72,20 +72,10 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     print(machine())
     kinds = ('compiled', 'readable')
-    searches = {kind: [] for kind in kinds}
-    steps = {kind: [] for kind in kinds}
-    for name in args.courses:
-        for kind in kinds:  # kernels compiled and course data read, not timed
-            walk(name, kind, [])
-        for round_ in range(args.rounds):
-            frames = {}
-            for kind in (kinds if round_ % 2 == 0 else kinds[::-1]):
-                blocks = walk(name, kind, searches[kind])
-                steps[kind].extend(b.planning_time for b in blocks if b.status == 'walking')
-                frames[kind] = np.vstack([b.frames for b in blocks])
-            if not np.array_equal(frames['compiled'], frames['readable']):
-                print(f'{name}: the two searches walked different frames')
-                return 1
+    walks = paired_walks(args.courses, args.rounds, walk, 'searches')
+    if walks is None:
+        return 1
+    searches, steps = walks
     print(f'{"search":<10} {"windows":>8} {"window CPU, ms":>15} {"step wall, ms":>14}')
     for kind in kinds:
         print(f'{kind:<10} {len(searches[kind]):>8} {1e3 * np.median(searches[kind]):>15.3f} '
