@@ -31,7 +31,7 @@ import time
 
 import numpy as np
 import pytest
-from ros_harness import fresh_domain_id, NodeProcess, ros_env
+from ros_harness import fresh_domain_id, NodeProcess, ros_env, wait_until_importing
 from test_node_helpers import node_command, Probe, ROOT_X, ROOT_Y, scene
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
@@ -235,11 +235,12 @@ def test_a_twist_publisher_on_a_stamped_cmd_vel_is_named_with_the_parameter_to_s
 
 
 def test_ctrl_c_right_after_start_exits_cleanly(tmp_path):
-    for delay in (0.5, 3.0):
+    for delay in (0.0, 0.5, 3.0):
         node = subprocess.Popen(node_command('-p', f'scene:={scene("flat")}'),
                                 env=ros_env(fresh_domain_id()), stdout=subprocess.PIPE,
                                 stderr=subprocess.STDOUT, text=True, start_new_session=True)
         try:
+            assert wait_until_importing(node, 120.0), 'the node never began its imports'
             time.sleep(delay)  # the point is the moment of the signal, not a wait for a state
             os.kill(node.pid, signal.SIGINT)
             output, _ = node.communicate(timeout=60)

@@ -70,7 +70,9 @@ try:
         scene_file_error, validate_node_config
     from digital_actor_planner.runtime.standing import stand_in_configuration
 except KeyboardInterrupt:  # pragma: no cover - depends on when the signal lands
-    sys.exit(0)
+    # Not sys.exit: after an import cut short by the signal, the interpreter's exit would end
+    # the process by SIGINT whatever status it was given.
+    os._exit(0)
 
 # Committed frames older than this (s of actor time) are dropped from the buffer.
 BUFFER_HISTORY = 1.0
@@ -1944,7 +1946,9 @@ def main(args=None) -> int:
         return _run(args)
     except KeyboardInterrupt:  # Ctrl-C while starting, before rclpy took it over
         rclpy.try_shutdown()
-        return 0
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(0)  # see the imports: a plain exit could end by SIGINT
 
 
 def _run(args) -> int:

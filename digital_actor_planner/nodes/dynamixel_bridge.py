@@ -22,6 +22,7 @@ torque could not be switched off on the way out (the servos named in the log may
 """
 from __future__ import annotations
 
+import os
 import signal
 import sys
 import time
@@ -46,7 +47,9 @@ try:
     from rclpy.signals import SignalHandlerOptions
     from sensor_msgs.msg import JointState
 except KeyboardInterrupt:  # pragma: no cover - depends on when the signal lands
-    sys.exit(0)
+    # Not sys.exit: after an import cut short by the signal, the interpreter's exit would end
+    # the process by SIGINT whatever status it was given.
+    os._exit(0)
 
 EXIT_BAD_CONFIG = 2
 EXIT_MISSING_SERVOS = 3
