@@ -1,6 +1,9 @@
 """A zero command ends the walk at the earliest stable stance (the actor stops within a step)."""
 from course_runs import judged, scene, skeleton
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
+from digital_actor_planner.core.trajectory_check import check_trajectory
+from digital_actor_planner.nodes.actor_planner import HURRY_MAX_RATE
+from digital_actor_planner.runtime.retiming import hurry
 import numpy as np
 import pytest
 
@@ -59,3 +62,68 @@ def test_the_actor_walks_on_after_a_stop(speed, stop):
     assert stopped, f'the walk did not stop with a {stop} step'
     x = skeleton().index['root_x']
     assert frames[-1, x] > stopped[0].frames[-1, x] + 0.3  # walked on after the stop
+
+
+def _hurried_walk(course: str, stop_at: float):
+    """A walk told to stop at ``stop_at`` with the step in progress hurried as the node plays
+    it: (scene, times, frames, velocities, blocks, the step in progress, its peak rate)."""
+    sc = scene(course)
+    limit = skeleton().velocity_limit
+    actor = Actor(skeleton(), sc.environment, ActorConfig(), start=sc.start)
+    blocks = run_commands(actor, [0.0, stop_at, stop_at + 2.5], [0.6, 0.0, 0.0], [0.0] * 3)
+    times, velocities, saved, hurried, peak = [], [], 0.0, None, 1.0
+    for block in blocks:
+        t, v = np.asarray(block.times) - saved, np.asarray(block.velocities)
+        if block.status == 'walking' and t[0] - 0.01 <= stop_at < t[-1]:
+            h = hurry(t, v, stop_at, limit, HURRY_MAX_RATE)
+            t, v, saved, hurried, peak = h.times, h.velocities, saved + h.saved, block, h.peak_rate
+        times.append(t)
+        velocities.append(v)
+    frames = np.vstack([b.frames for b in blocks])
+    return sc, np.concatenate(times), frames, np.vstack(velocities), blocks, hurried, peak
+
+
+# Stops at several phases of a level step and of steps up the stairs, upper body planned.
+@pytest.mark.parametrize('course, stop_at', [('flat', 2.0), ('flat', 2.55), ('flat', 3.3),
+                                             ('stairs_up', 2.2), ('stairs_up', 3.0)])
+def test_a_hurried_stop_keeps_every_check_and_stills_the_root_sooner(course, stop_at):
+    sc, times, frames, velocities, blocks, hurried, peak = _hurried_walk(course, stop_at)
+    assert hurried is not None, 'no walking step in progress at the stop'
+    report = check_trajectory(skeleton(), sc.environment, times, frames)
+    assert report.ok, report.failures()  # no contact, a foot down, no slip, within limits
+    assert np.all(np.diff(times) > 0)
+    planned = np.concatenate([b.times for b in blocks])
+    sooner = _still_since(planned, frames) - _still_since(times, frames)
+    remaining = hurried.times[-1] - stop_at
+    assert 1.0 < peak <= HURRY_MAX_RATE + 1e-9
+    # The rest of the step takes remaining / (1 + (peak - 1) / 2).
+    assert sooner == pytest.approx(remaining - remaining / (0.5 + 0.5 * peak), abs=0.011)
+    # Within the 0.7 s of actor time allowed for a stop, with room for the node's latency.
+    assert _still_since(times, frames) - stop_at <= STOP_WITHIN - 0.05
+
+
+def test_hurry_keeps_the_poses_and_joins_on_at_both_ends():
+    sc, actor, blocks = _walk_then_stop(2.55)
+    step = next(b for b in blocks if b.status == 'walking' and b.times[0] <= 2.55 < b.times[-1])
+    limit = skeleton().velocity_limit
+    h = hurry(step.times, step.velocities, 2.55, limit, HURRY_MAX_RATE)
+    before = step.times <= 2.55
+    assert np.array_equal(h.times[before], step.times[before])
+    assert h.saved > 0.05 and h.times[-1] == pytest.approx(step.times[-1] - h.saved)
+    # The speed is unchanged where the hurry begins and where the step ends.
+    assert np.allclose(h.velocities[-1], step.velocities[-1])
+    first = np.argmax(~before)
+    assert np.allclose(h.velocities[first], step.velocities[first], rtol=0.02, atol=1e-6)
+    # No joint driven above its velocity limit, measured between the frames.
+    speed = np.abs(np.diff(step.frames, axis=0)) / np.diff(h.times)[:, None]
+    assert np.all(speed <= 1.05 * limit)
+
+
+def test_hurry_changes_nothing_when_a_joint_is_already_at_its_limit():
+    sc, actor, blocks = _walk_then_stop(2.55)
+    step = next(b for b in blocks if b.status == 'walking' and b.times[0] <= 2.55 < b.times[-1])
+    fastest = np.abs(step.velocities[step.times > 2.55]).max(axis=0)
+    at_limit = np.where(fastest > 0.0, fastest, 1.0)  # every moving joint at its limit
+    h = hurry(step.times, step.velocities, 2.55, at_limit, HURRY_MAX_RATE)
+    assert h.saved == 0.0 and h.peak_rate == 1.0
+    assert np.array_equal(h.times, step.times)

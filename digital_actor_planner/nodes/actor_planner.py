@@ -68,6 +68,7 @@ try:
     from digital_actor_planner.nodes.planner_params import ConfigurationError, \
         parameter_declarations, PlannerNodeConfig, read_node_config, RUNTIME_PARAMETERS, \
         scene_file_error, validate_node_config
+    from digital_actor_planner.runtime.retiming import hurry
     from digital_actor_planner.runtime.standing import stand_in_configuration
 except KeyboardInterrupt:  # pragma: no cover - depends on when the signal lands
     # Not sys.exit: after an import cut short by the signal, the interpreter's exit would end
@@ -112,6 +113,12 @@ REPLAN_GUARD = 0.05
 # before the stop is planned, it holds the stance the step in progress landed in, which is
 # where the actor stops anyway; a step played out instead would delay the stop by a step.
 STOP_GUARD = 0.0
+# Told to stop, the actor lands the step in progress sooner: the rest of it is played at up to
+# this many times its planned speed, never a joint above its velocity limit (docs/stopping.md).
+HURRY_MAX_RATE = 1.5
+# Frames due within this long (s) after the frame on show keep their time when the step is
+# hurried: the stream may be showing them while the buffer changes.
+HURRY_GUARD = 0.02
 # Planned blocks (per actor) that can be planned again; as many states kept to go back to.
 REPLAN_BLOCKS = 8
 # A planning process that fails this many times in a row while placing its actors is given
@@ -218,6 +225,18 @@ class FrameBuffer:
             times, frames, velocities = self._data
             keep = max(1, int(np.searchsorted(times, before, side='left')))
             self._data = (times[:keep], frames[:keep], velocities[:keep])
+
+    def hurry(self, start: float, velocity_limit: np.ndarray, max_rate: float) -> float:
+        """Play the frames after ``start`` faster along the same poses (``runtime.retiming``).
+
+        Returns the time (s) by which the buffer now ends sooner: 0 when nothing changed.
+        """
+        with self._lock:
+            times, frames, velocities = self._data
+            hurried = hurry(times, velocities, start, velocity_limit, max_rate)
+            if hurried.saved > 0.0:
+                self._data = (hurried.times, frames, hurried.velocities)
+        return hurried.saved
 
     def sample(self, t: float) -> Tuple[np.ndarray, np.ndarray]:
         """Return the configuration (22,) and velocity (22,) at time ``t`` s, interpolated.
@@ -1268,6 +1287,7 @@ class ActorPlannerNode(Node):
         self._due_since = None
         # (number, buffer start time s, command) of the blocks committed lately.
         self._blocks = collections.deque(maxlen=REPLAN_BLOCKS)
+        self._hurried_block = None  # the step last hurried to a stop
         self.replanned_blocks = 0
 
         threads = threads or SharedThreads()
@@ -1429,7 +1449,7 @@ class ActorPlannerNode(Node):
             if self.command.current(now, self.cmd_timeout) == self._holding_for:
                 return None
             self._holding_for = None
-        if self._replan_target(now) is not None:
+        if self._replan_target(now) is not None or self._hurry_due(now):
             return -self._lead
         lead = self._lead = self._effective_lead()
         return self.buffer.end_time - self.playback_time - lead
@@ -1446,6 +1466,7 @@ class ActorPlannerNode(Node):
                     pending, self._pending_start = self._pending_start, None
                 if pending is not None:
                     self._blocks.clear()
+                    self._hurried_block = None
                     configuration, blend = pending
                     # A new actor: its clock starts at 0 from its start pose, right after
                     # the frame on show (a new scene) or after a blend from the pose held.
@@ -1460,6 +1481,8 @@ class ActorPlannerNode(Node):
                 try:
                     if pending is None:
                         self._replan_tail()
+                        if self._hurry_due(time.monotonic()):
+                            self._hurry_to_stop()
                     self._plan_block()
                 except Exception as error:  # noqa: B902 -- the thread serves every actor
                     # A fault in one block must not end the thread that plans for all the
@@ -1479,7 +1502,7 @@ class ActorPlannerNode(Node):
         stop = abs(linear) < 1e-3 and abs(angular) < 1e-3
         guard = STOP_GUARD if stop else REPLAN_GUARD
         for block in self._blocks:
-            number, start, (old_linear, old_angular) = block
+            number, start, (old_linear, old_angular), _ = block
             if start <= self.playback_time + guard:
                 continue
             if (stop and (abs(old_linear) >= 1e-3 or abs(old_angular) >= 1e-3)) or \
@@ -1495,7 +1518,7 @@ class ActorPlannerNode(Node):
         target = self._replan_target(time.monotonic())
         if target is None:
             return
-        number, start, _ = target
+        number, start, _, _ = target
         # The stream holds the last frame kept (a double-support stance at a step's end) if
         # it gets there before the new block is planned.
         self.buffer.truncate(start)
@@ -1508,6 +1531,24 @@ class ActorPlannerNode(Node):
         while self._blocks and self._blocks[-1][0] >= number:
             self._blocks.pop()
         self._at_rest = False
+
+    def _hurry_due(self, now: float) -> bool:
+        """True when told to stop during a walking step that can still land sooner: the step
+        has begun, is the last block committed (what is planned next starts where it ends)
+        and was not hurried yet."""
+        linear, angular = self.command.current(now, self.cmd_timeout)
+        if abs(linear) >= 1e-3 or abs(angular) >= 1e-3 or not self._blocks:
+            return False
+        number, start, _, status = self._blocks[-1]
+        return status == 'walking' and number != self._hurried_block and \
+            start <= self.playback_time
+
+    def _hurry_to_stop(self) -> None:
+        """Play the rest of the step in progress faster (``runtime.retiming``); the actor's
+        clock moves on by the time saved, so that the block planned next follows on."""
+        self._hurried_block = self._blocks[-1][0]
+        self.actor_offset -= self.buffer.hurry(self.playback_time + HURRY_GUARD,
+                                               self.skeleton.velocity_limit, HURRY_MAX_RATE)
 
     def _place(self) -> bool:
         """Place the actor in its planning process; True when placed.
@@ -1595,7 +1636,7 @@ class ActorPlannerNode(Node):
         times = np.asarray(block.times) + self.actor_offset
         self.buffer.append(times, block.frames, block.velocities, self.playback_time)
         if len(times):
-            self._blocks.append((number, float(times[0]), command))
+            self._blocks.append((number, float(times[0]), command, block.status))
         if self._restarted:  # the new actor's first block
             self._reloading = self._restarted = False
         self.stats.record(block.status, block.reason, block.planning_time)
@@ -1710,9 +1751,13 @@ class ActorPlannerNode(Node):
                 f'ignoring non-finite cmd_vel (linear.x={linear_x}, angular.z={angular_z})',
                 throttle_duration_sec=2.0)
             return
-        self.command.update(float(linear_x), float(angular_z), time.monotonic())
-        if self._holding_for is not None and (linear_x, angular_z) != self._holding_for:
-            self._scheduler.wake.set()
+        now = time.monotonic()
+        was_moving = any(abs(c) >= 1e-3 for c in self.command.current(now, self.cmd_timeout))
+        self.command.update(float(linear_x), float(angular_z), now)
+        stop = abs(linear_x) < 1e-3 and abs(angular_z) < 1e-3
+        if (self._holding_for is not None and (linear_x, angular_z) != self._holding_for) or \
+                (stop and was_moving):
+            self._scheduler.wake.set()  # a stop is planned at once (docs/stopping.md)
 
     def stream_timing(self) -> Tuple[float, float]:
         """Return the jitter p99 and the longest interval (ms) of the recent ticks (NaN when
