@@ -120,15 +120,25 @@ def _text(value):
 
 
 def _rviz_config_file(share, namespace):
-    """Return the shipped RViz config, or a copy of it with the namespace's frames."""
+    """Return the shipped RViz config, or a copy of it with the namespace's frames.
+
+    The copy is kept under ROS_HOME (``~/.ros``), one per namespace, written anew at each
+    launch: launches leave no file behind them but that one.
+    """
     path = os.path.join(share, 'config', 'actor.rviz')
     if not frame_prefix(namespace):
         return path
     with open(path) as source:
         text = rviz_config(source.read(), namespace)
-    descriptor, copy = tempfile.mkstemp(
-        prefix='actor_' + frame_prefix(namespace).rstrip('/').replace('/', '_') + '_',
-        suffix='.rviz')
+    folder = os.path.join(os.environ.get('ROS_HOME') or os.path.expanduser('~/.ros'),
+                          'digital_actor_planner')
+    os.makedirs(folder, exist_ok=True)
+    copy = os.path.join(folder,
+                        'actor_' + frame_prefix(namespace).rstrip('/').replace('/', '_') + '.rviz')
+    # Written beside and renamed over: an RViz of the same namespace starting meanwhile reads
+    # the old copy or the new one, never half of one.
+    descriptor, partial = tempfile.mkstemp(dir=folder, suffix='.rviz.partial')
     with os.fdopen(descriptor, 'w') as target:
         target.write(text)
+    os.replace(partial, copy)
     return copy

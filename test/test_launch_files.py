@@ -208,6 +208,18 @@ def test_two_namespaces_get_rviz_configs_of_their_own(launch):
     assert frames == {'actor1/world', 'actor2/world'}
 
 
+def test_launches_leave_one_rviz_config_per_namespace(launch, tmp_path, monkeypatch):
+    monkeypatch.setenv('ROS_HOME', str(tmp_path))
+    paths = set()
+    for _ in range(3):
+        arguments = list(nodes(launch(namespace='actor1'))['rviz2'].kwargs['arguments'])
+        paths.add(arguments[arguments.index('-d') + 1])
+    launch(namespace='actor2')
+    kept = sorted(p.name for p in (tmp_path / 'digital_actor_planner').iterdir())
+    assert kept == ['actor_actor1.rviz', 'actor_actor2.rviz']
+    assert paths == {str(tmp_path / 'digital_actor_planner' / 'actor_actor1.rviz')}
+
+
 @pytest.mark.parametrize('package, switch', [('mouse_teleop', 'use_teleop'),
                                              ('rviz2', 'use_rviz')])
 def test_a_missing_package_stops_the_launch_before_anything_starts(launch, package, switch):
