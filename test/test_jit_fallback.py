@@ -151,3 +151,26 @@ def test_the_shipped_kernels_all_compile():
     import digital_actor_planner.core.upper_body  # noqa: F401
     from digital_actor_planner.core import jit
     assert jit.compile_failures() == ()
+
+
+def test_a_numba_that_breaks_on_import_leaves_python_with_one_warning(tmp_path):
+    # A numba built against another NumPy can fail on import with any error, not only
+    # ImportError: the planner still imports, in plain Python, and says why once.
+    broken = tmp_path / 'numba'
+    broken.mkdir()
+    (broken / '__init__.py').write_text(
+        "raise AttributeError(\"module 'numpy' has no attribute 'long'\")\n")
+    code = ('import warnings\n'
+            'with warnings.catch_warnings(record=True) as caught:\n'
+            '    warnings.simplefilter("always")\n'
+            '    from digital_actor_planner.core import jit\n'
+            'print(jit.COMPILED, [str(w.message) for w in caught\n'
+            '                     if w.category is jit.KernelCompileWarning])\n')
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
+        [str(tmp_path), os.path.dirname(HERE), os.environ.get('PYTHONPATH', '')]))
+    result = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True,
+                            env=env, timeout=300)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.startswith('False '), result.stdout
+    assert result.stdout.count('could not be imported') == 1, result.stdout
+    assert "has no attribute 'long'" in result.stdout and 'plain Python' in result.stdout

@@ -24,7 +24,8 @@ A numba that is installed but cannot compile a kernel (a distribution's older re
 lacks a NumPy feature the kernel uses) must not stop the planner: that kernel, and any that
 calls it (numba cannot call Python from compiled code, so they fail likewise), runs as Python
 instead, and the first such failure is reported once as a :class:`KernelCompileWarning`.
-:func:`compile_failures` names them.
+:func:`compile_failures` names them. A numba that fails on import with any error (one built
+against another NumPy) leaves every kernel in Python, with one such warning.
 """
 from __future__ import annotations
 
@@ -33,10 +34,21 @@ import warnings
 
 import numpy as np
 
+
+class KernelCompileWarning(RuntimeWarning):
+    """numba is installed but could not import or compile a kernel: it runs as plain Python."""
+
+
 try:  # pragma: no cover - which branch runs depends on the installation
     import numba
 except ImportError:  # pragma: no cover
     numba = None
+except Exception as error:  # noqa: B902 - a numba that breaks on import leaves Python
+    # (one built against another NumPy can fail with any error): plan in Python, say so once.
+    numba = None
+    warnings.warn(f'numba could not be imported ({type(error).__name__}: {error}); the '
+                  'kernels run as plain Python: the same motion, planned more slowly. A numba '
+                  'release that works here: see requirements.txt.', KernelCompileWarning)
 
 #: Whether numba is installed (a kernel it failed to compile still runs as Python: see
 #: :func:`compile_failures`).
@@ -45,10 +57,6 @@ COMPILED = numba is not None
 # Kernels numba failed to compile, (qualified name, numba's first line), in import order: one
 # record for the process, since the warning is given once for all of them.
 _FAILURES: List[Tuple[str, str]] = []
-
-
-class KernelCompileWarning(RuntimeWarning):
-    """numba is installed but could not compile a kernel: it runs as plain Python."""
 
 
 def compile_failures() -> Tuple[Tuple[str, str], ...]:
