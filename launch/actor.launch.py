@@ -120,7 +120,8 @@ def _text(value):
 
 
 def _rviz_config_file(share, namespace):
-    """Return the shipped RViz config, or a copy of it with the namespace's frames.
+    """
+    Return the shipped RViz config, or a copy of it with the namespace's frames.
 
     The copy is kept under ROS_HOME (``~/.ros``), one per namespace, written anew at each
     launch: launches leave no file behind them but that one.

@@ -101,9 +101,13 @@ def wait_for(predicate, timeout: float, interval: float = 0.02, spin=None) -> bo
 
 
 def wait_until_importing(process, timeout: float) -> bool:
-    """Wait until ``process`` maps its first library from site-packages: the interpreter has
-    started and runs the program's imports. Before that, a SIGINT meets Python's own start-up
-    (it ends the process with the signal, whatever the program), which no program can change."""
+    """
+    Wait until ``process`` maps its first library from site-packages.
+
+    The interpreter has then started and runs the program's imports. Before that, a SIGINT
+    meets Python's own start-up (it ends the process with the signal, whatever the program),
+    which no program can change.
+    """
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline and process.poll() is None:
         try:

@@ -65,8 +65,11 @@ def test_the_actor_walks_on_after_a_stop(speed, stop):
 
 
 def _hurried_walk(course: str, stop_at: float):
-    """A walk told to stop at ``stop_at`` with the step in progress hurried as the node plays
-    it: (scene, times, frames, velocities, blocks, the step in progress, its peak rate)."""
+    """
+    Walk, told to stop at ``stop_at``, the step in progress hurried as the node plays it.
+
+    Returns (scene, times, frames, velocities, blocks, the step in progress, its peak rate).
+    """
     sc = scene(course)
     limit = skeleton().velocity_limit
     actor = Actor(skeleton(), sc.environment, ActorConfig(), start=sc.start)

@@ -44,7 +44,8 @@ _MAP_SAMPLES = 2001
 
 @dataclass(frozen=True)
 class Hurried:
-    """A block's frames with their rest played faster.
+    """
+    A block's frames with their rest played faster.
 
     Attributes
     ----------
@@ -67,7 +68,8 @@ class Hurried:
 
 def hurry(times: np.ndarray, velocities: np.ndarray, start: float, velocity_limit: np.ndarray,
           max_rate: float) -> Hurried:
-    """Play the frames after ``start`` faster, ending sooner, along the same poses.
+    """
+    Play the frames after ``start`` faster, ending sooner, along the same poses.
 
     Parameters
     ----------
