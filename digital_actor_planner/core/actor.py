@@ -1,4 +1,5 @@
-"""The actor pipeline: commands in, timed 22-DOF frames out, one step at a time (§3.2, Figure 2).
+"""
+The actor pipeline: commands in, timed 22-DOF frames out, one step at a time (§3.2, Figure 2).
 
 Data flows one way: command -> predicted path -> ground profile -> footstep window -> leg motion
 and pelvis trajectory -> upper body -> frames. If a planner fails the step is not taken: the
@@ -203,7 +204,8 @@ SPLIT_STANCE_LENGTHS = (0.1, 0.5)
 
 @dataclass(frozen=True)
 class StepBlock:
-    """A block of committed frames.
+    """
+    A block of committed frames.
 
     Attributes
     ----------
@@ -239,7 +241,8 @@ class StepBlock:
 
 
 class Actor:
-    """A digital actor walking where it is told (the whole planning system of the paper).
+    """
+    A digital actor walking where it is told (the whole planning system of the paper).
 
     Parameters
     ----------
@@ -323,31 +326,39 @@ class Actor:
     # -- state ---------------------------------------------------------------------------
     @property
     def time(self) -> float:
-        """End time of everything committed so far, s."""
+        """Return the end time of everything committed so far, s."""
         return self._time
 
     @property
     def configuration(self) -> np.ndarray:
-        """The last committed frame, (22,) rad or m."""
+        """Return the last committed frame, (22,) rad or m."""
         return self._configuration.copy()
 
     @property
     def command(self) -> Tuple[float, float]:
-        """The (clamped) command in force: linear m/s, angular rad/s."""
+        """Return the (clamped) command in force: linear m/s, angular rad/s."""
         return self._command
 
     @property
     def stance(self) -> Stance:
-        """The double-support state after the last committed step."""
+        """Return the double-support state after the last committed step."""
         return self._stance
 
     def set_command(self, linear: float, angular: float) -> Optional[str]:
-        """Set the velocity command (the mouse drag of §3.1).
+        """
+        Set the velocity command (the mouse drag of §3.1).
 
         A negative ``linear`` walks backward, up to ``max_backward_speed``, along the arc
         ``cmd_vel`` means (the actor keeps facing against its travel and turns at
         ``angular``). With ``allow_backward`` off (the paper's actor walks forward only) it
         becomes 0.
+
+        Parameters
+        ----------
+        linear
+            Forward speed, m/s (negative: backward); clamped to the config's limits.
+        angular
+            Turn rate, rad/s (positive: to the left); clamped to ``max_angular_speed``.
 
         Returns
         -------
@@ -375,7 +386,16 @@ class Actor:
 
     # -- planning ----------------------------------------------------------------------
     def plan_next(self) -> StepBlock:
-        """Plan and commit the next block of frames (one step, or a short hold)."""
+        """
+        Plan and commit the next block of frames (one step, or a short hold).
+
+        Returns
+        -------
+        StepBlock
+            The committed block on the actor's clock: a step, or a hold of ``hold_time`` s
+            when the command is zero or no step can be taken.
+
+        """
         started = _time.perf_counter()
         v, w = self._command
         if abs(v) < 1e-3 and abs(w) < 1e-3:
@@ -393,10 +413,13 @@ class Actor:
         return self._walk_step(v, w, started)
 
     def _start_stance(self, x: float, y: float, yaw: float, sole: float) -> Stance:
-        """Standing at (x, y, yaw): each foot resting on the ground under it, at its own
-        height and pitch (``_sole_rest``), where both can; else both level at sole height
-        ``sole`` (the lowest ground under them: a start in an obstacle collides there and
-        ``check_start`` says so)."""
+        """
+        Return the stance standing at (x, y, yaw), m and rad.
+
+        Each foot rests on the ground under it, at its own height and pitch (``_sole_rest``),
+        where both can; else both stand level at sole height ``sole``, m (the lowest ground
+        under them: a start in an obstacle collides there and ``check_start`` says so).
+        """
         level = standing_stance(self.skeleton, x, y, yaw, sole)
         leg = self.skeleton.leg
         feet = []
@@ -414,7 +437,12 @@ class Actor:
         return Stance(np.array([x, y, z, yaw]), (feet[0], feet[1]), level.stance_side, True)
 
     def _standing_configuration(self) -> np.ndarray:
-        """Configuration of the initial stance (neutral legs, arms in their pattern)."""
+        """
+        Return the configuration of the initial stance, (22,) rad or m.
+
+        The skeleton's neutral pose with the stance's pelvis, the legs reaching its feet and the
+        arms in their motion pattern.
+        """
         q = self.skeleton.neutral()
         q[self.skeleton.branch('root')] = self._stance.pelvis
         from .gait import leg_inverse_kinematics
@@ -519,7 +547,8 @@ class Actor:
         return plan.frames[1:k], True, ''
 
     def _seeds(self, times: np.ndarray) -> dict:
-        """The previous step's plan from where this step starts, where it still applies.
+        """
+        Return the previous step's plan from where this step starts, where it still applies.
 
         It applies when this step directly follows that one (nothing else was committed in
         between) with the same frame times.
@@ -540,8 +569,13 @@ class Actor:
         return {name: seed[:count] for name, seed in seeds.items()}
 
     def _preview(self, times: np.ndarray, frames: np.ndarray):
-        """Extend a step's frames by ``upper_body_preview`` s of the pelvis moving on (longer
-        when that covers less than ``upper_body_preview_distance``, up to three times as long).
+        """
+        Extend a step's frames by ``upper_body_preview`` s of the pelvis moving on.
+
+        The preview is longer when that covers less than ``upper_body_preview_distance``, up to
+        three times as long. Returns (times, frames), s and rad or m, with the preview's frames
+        after the step's; None where there is no preview (``upper_body_preview`` 0, or fewer
+        than three frames).
         """
         duration = self.config.upper_body_preview
         if duration <= 0 or frames.shape[0] < 3:
@@ -696,7 +730,8 @@ class Actor:
 
     def _pivot_step(self, stance: Stance, v: float, w: float,
                     started: float) -> Optional[StepBlock]:
-        """A step turning the actor about its stance hip (see ``ActorConfig.pivot_turn``).
+        """
+        Commit a step turning the actor about its stance hip (see ``ActorConfig.pivot_turn``).
 
         The swing foot lands under its hip, the stance hip stays over the stance ankle and the
         pelvis turns to halfway between the feet. A foot on the turn's side (the left one in a
@@ -764,8 +799,12 @@ class Actor:
 
     def _checked_step_to_rest(self, motion: StepMotion, started: float, status: str,
                               reason: str, category: str) -> Optional[StepBlock]:
-        """Commit a step that ends at rest off the footstep window (a pivot, a closing step)
-        once it is 3D-checked and its upper body planned; None when either fails."""
+        """
+        Commit a step that ends at rest off the footstep window (a pivot, a closing step).
+
+        The step is committed once it is 3D-checked and its upper body planned; None when
+        either fails.
+        """
         if self._verify(motion.frames) is not None:
             return None
         frames, ok, _ = self._upper_body(motion.times, motion.frames)
@@ -779,10 +818,14 @@ class Actor:
 
     def _pivot_motion(self, stance: Stance, foot, turn: float, offset: float,
                       duration: float, shift: Optional[float]) -> Optional[StepMotion]:
-        """The pivot's leg motion landing the swing foot ``turn`` rad from the stance foot's
-        heading and ``shift`` m ahead of it along the pelvis's new heading (None: as far ahead
-        as the swinging foot stands; the pelvis ends halfway), or None where the sole would not
-        rest (``_sole_rest``) or the step cannot be made."""
+        """
+        Generate the pivot's leg motion for one landing of the swing foot.
+
+        The swing foot lands ``turn`` rad from the stance foot's heading and ``shift`` m ahead
+        of it along the pelvis's new heading (None: as far ahead as the swinging foot stands);
+        the pelvis ends halfway. None where the sole would not rest (``_sole_rest``) or the
+        step cannot be made.
+        """
         landing_yaw = foot.yaw + turn
         pelvis_yaw = 0.5 * (foot.yaw + landing_yaw)
         across = np.array([-np.sin(pelvis_yaw), np.cos(pelvis_yaw)])
@@ -810,16 +853,23 @@ class Actor:
             return None
 
     def _sole_points(self, xy: np.ndarray, yaw: float, lengths: np.ndarray) -> np.ndarray:
-        """Points under a sole at ankle ``xy`` heading ``yaw``: at ``lengths`` (m, heel < 0)
-        along it, each at its two edges and on its centre line: (len(lengths), 3, 2), m."""
+        """
+        Return points under a sole at ankle ``xy`` heading ``yaw``, (len(lengths), 3, 2), m.
+
+        The points lie at ``lengths`` (m, heel < 0) along the sole, each at its two edges and
+        on its centre line.
+        """
         along = np.array([np.cos(yaw), np.sin(yaw)])
         side = np.array([-along[1], along[0]])
         return (xy + lengths[:, None, None] * along
                 + np.array([-0.5, 0.0, 0.5])[None, :, None] * self.skeleton.leg.foot_width * side)
 
     def _sole_rest(self, xy: np.ndarray, yaw: float, near: float):
-        """(sole height under the ankle m, pitch rad) of a foot put down at ankle ``xy``
-        heading ``yaw`` within 5 cm of sole height ``near``, or None where it cannot rest.
+        """
+        Return (sole height under the ankle m, pitch rad) of a foot put down at ``xy``.
+
+        The foot's ankle stands at ``xy`` heading ``yaw`` and its sole within 5 cm of sole
+        height ``near``; None where it cannot rest.
 
         The ground under the sole's centre line and edges (heel, middle, toe): across the foot
         it rests on the highest point and must be flat within the footstep planner's
@@ -849,7 +899,8 @@ class Actor:
 
     def _paused_step(self, stance: Stance, path, v: float, w: float, blocked, path_points,
                      started: float) -> Optional[StepBlock]:
-        """The footstep the upper body could not take, from a standstill after a pause.
+        """
+        Commit the footstep the upper body could not take, from a standstill after a pause.
 
         The step is generated again from rest (the pelvis eases in, as after a stop) and
         preceded by ``upper_body_pause`` s of the current configuration, during which the upper
@@ -885,7 +936,8 @@ class Actor:
 
     def _follow_failure(self, profile, stance: Stance, stance_s: float, path,
                         window: FootstepWindow, motion, v: float, leg) -> Optional[str]:
-        """Why the window's second footstep cannot follow this step, or None.
+        """
+        Return why the window's second footstep cannot follow this step, or None.
 
         Only where that footstep swings the other foot over ground (the profile's swing
         obstacle between the toe it lifts and the heel it lands) higher than its sole by
@@ -913,8 +965,12 @@ class Actor:
 
     def _generate(self, stance: Stance, path, window: FootstepWindow, v: float,
                   configuration: Optional[np.ndarray] = None):
-        """The leg motion of the window's first footstep from ``stance``; ``configuration``:
-        the frame it starts from (default: the actor's current one)."""
+        """
+        Generate the leg motion of the window's first footstep from ``stance``.
+
+        ``configuration`` is the frame it starts from, (22,) rad or m (default: the actor's
+        current one).
+        """
         leg = self.skeleton.leg
         s1 = float(window.arc_lengths[0])
         side = int(window.sides[0])
@@ -966,7 +1022,8 @@ class Actor:
         raise GaitError(f'step needs joint speeds {ratio:.2f} x the limits')
 
     def _check_landing(self, foot, planned_xy: np.ndarray) -> None:
-        """Raise GaitError if a foot that landed away from its planned foothold is not resting.
+        """
+        Raise GaitError if a foot that landed away from its planned foothold is not resting.
 
         Without hip roll a foot lands where its hip's plane allows: in a tight turn whose
         landing heading is bounded (``max_toe_in``) that can be tens of centimetres from the
@@ -993,7 +1050,8 @@ class Actor:
                             'puts it')
 
     def _settling_step(self, started: float) -> Optional[StepBlock]:
-        """Stop in the split stance the last step landed in, or None where it is not stable.
+        """
+        Stop in the split stance the last step landed in, or None where it is not stable.
 
         The pelvis keeps its height and slows from its velocity at the step's end to rest over
         ``SETTLE_TIME`` with both feet still; the stance is held when the ankles stand
@@ -1053,8 +1111,12 @@ class Actor:
 
     def _closing_step(self, started: float, status: str = 'idle',
                       reason: str = 'stopping') -> Optional[StepBlock]:
-        """Bring the feet side by side when the command stops (the actor stops within a step),
-        or before it walks the other way (``status`` and ``reason`` of the block)."""
+        """
+        Bring the feet side by side when the command stops, or before walking the other way.
+
+        So the actor stops within a step. ``status`` and ``reason`` are those of the committed
+        block; None where no closing step can be taken, or none is needed.
+        """
         leg = self.skeleton.leg
         stance = self._stance
         foot = stance.feet[stance.stance_side]
@@ -1110,7 +1172,8 @@ class Actor:
 
 
 def run_commands(actor: Actor, times, linear, angular, on_warning=None):
-    """Drive an actor with a timed command stream until the stream's end time.
+    """
+    Drive an actor with a timed command stream until the stream's end time.
 
     Each command holds from its time until the next one (as a mouse teleop's stream would);
     the last time is the end of the run. Blocks are planned back to back, each with the command
