@@ -15,8 +15,8 @@
 """check_trajectory: the independent judge, on hand-built trajectories."""
 import time
 
+from digital_actor_planner.core.actor import start_configuration
 from digital_actor_planner.core.environment import Environment
-from digital_actor_planner.core.scene import start_configuration
 from digital_actor_planner.evaluation.trajectory_check import check_trajectory
 import numpy as np
 import pytest

@@ -253,6 +253,26 @@ class SceneError(ValueError):
     """A scene file cannot be used: names the file and the field, line or value at fault."""
 
 
+def finite_numbers(value, count: int, what: str, source: str) -> Tuple[float, ...]:
+    """
+    Return ``value`` as a tuple of ``count`` floats, checking they are finite numbers.
+
+    Raises
+    ------
+    SceneError
+        ``value`` is not a list of ``count`` finite numbers; the message names ``source`` and
+        ``what``.
+
+    """
+    ok = isinstance(value, (list, tuple)) and len(value) == count and all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+        for v in value)
+    if not ok:
+        raise SceneError(f'{source}: {what} must be a list of {count} finite numbers, '
+                         f'got {value!r}')
+    return tuple(float(v) for v in value)
+
+
 # Memory a loaded triangle takes in all (trimesh, FCL's BVH, the triangles as the ground map's
 # tiles and the upper body's broad phase read them), with room for the peaks of construction,
 # bytes; measured on game levels, terrains and warehouses of 0.1 to 0.5 M triangles.
