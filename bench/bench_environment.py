@@ -23,11 +23,11 @@ import argparse
 import os
 import time
 
+from digital_actor_planner.core.actor import start_configuration
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment
-from digital_actor_planner.core.scene import start_configuration
 from digital_actor_planner.core.skeleton import Skeleton
-from digital_actor_planner.core.trajectory_check import check_trajectory
+from digital_actor_planner.evaluation.trajectory_check import check_trajectory
 import numpy as np
 import trimesh
 

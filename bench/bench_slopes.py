@@ -39,7 +39,7 @@ from digital_actor_planner.core.actor import (Actor, ActorConfig, LEG_LINKS,  # 
                                               run_commands)  # noqa: E402
 from digital_actor_planner.core.collision import BodyCollision  # noqa: E402
 from digital_actor_planner.core.environment import Environment  # noqa: E402
-from digital_actor_planner.core.trajectory_check import check_trajectory  # noqa: E402
+from digital_actor_planner.evaluation.trajectory_check import check_trajectory  # noqa: E402
 import numpy as np  # noqa: E402
 import trimesh  # noqa: E402
 

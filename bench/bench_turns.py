@@ -33,7 +33,7 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..'
 from bench_common import print_command  # noqa: E402
 from course_runs import scene, skeleton  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
-from digital_actor_planner.core.trajectory_check import check_trajectory  # noqa: E402
+from digital_actor_planner.evaluation.trajectory_check import check_trajectory  # noqa: E402
 import numpy as np  # noqa: E402
 
 

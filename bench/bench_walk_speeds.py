@@ -44,7 +44,7 @@ from bench_common import print_command, spread  # noqa: E402
 from course_runs import scene, skeleton  # noqa: E402
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands  # noqa: E402
 from digital_actor_planner.core.environment import Environment  # noqa: E402
-from digital_actor_planner.core.trajectory_check import check_trajectory  # noqa: E402
+from digital_actor_planner.evaluation.trajectory_check import check_trajectory  # noqa: E402
 import numpy as np  # noqa: E402
 from scene_helpers import box  # noqa: E402
 

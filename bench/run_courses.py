@@ -29,7 +29,7 @@ from digital_actor_planner.cli import read_commands
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
 from digital_actor_planner.core.scene import load_scene
 from digital_actor_planner.core.skeleton import Skeleton
-from digital_actor_planner.core.trajectory_check import check_trajectory
+from digital_actor_planner.evaluation.trajectory_check import check_trajectory
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

@@ -222,7 +222,7 @@ class _Outputs:
 
 
 def _render_partial(path: str) -> str:
-    # The renderer writes <base>.partial<extension> and renames it: see core.render.
+    # The renderer writes <base>.partial<extension> and renames it: see evaluation.render.
     base, extension = os.path.splitext(path)
     return f'{base}.partial{extension}'
 
@@ -321,7 +321,7 @@ def _simulate(args, outputs: '_Outputs') -> int:
             with open(summary_file, 'w') as f:
                 json.dump(summary, f, indent=2)
         if render_file:
-            from digital_actor_planner.core import render
+            from digital_actor_planner.evaluation import render
             footsteps = _landed_feet(skeleton, frames)
             if render_file.lower().endswith('.gif'):
                 render.render_gif(render_file, skeleton, scene.environment.meshes, times,

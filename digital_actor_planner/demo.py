@@ -30,7 +30,8 @@ import sys
 import threading
 from typing import List, Optional
 
-from digital_actor_planner.nodes.viewer import add_page_options
+from digital_actor_planner.nodes.viewer_page import (add_page_options, normalize_namespace,
+                                                     shipped_scenes)
 
 PR_SET_PDEATHSIG = 1
 URL_PATTERN = re.compile(r'open (http://\S+) in a browser')
@@ -52,7 +53,6 @@ def resolve_scene(scene: Optional[str]) -> Optional[str]:
     """Return a shipped course name or a file path as an absolute path (None keeps the default)."""
     if scene is None:
         return None
-    from digital_actor_planner.nodes.viewer import shipped_scenes
     shipped = shipped_scenes()
     if scene in shipped:
         return shipped[scene]
@@ -126,7 +126,6 @@ def main(argv: Optional[List[str]] = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         scene = resolve_scene(args.scene)
-        from digital_actor_planner.nodes.viewer import normalize_namespace
         namespace = normalize_namespace(args.namespace)
         if not 0 < args.port < 65536:
             raise ValueError(f'port must be in 1..65535, got {args.port!r}')

@@ -134,7 +134,7 @@ def _plan_one_step() -> None:
     from digital_actor_planner.core.actor import Actor, ActorConfig
     from digital_actor_planner.core.scene import load_scene
     from digital_actor_planner.core.skeleton import Skeleton
-    from digital_actor_planner.nodes.viewer import shipped_scenes
+    from digital_actor_planner.nodes.viewer_page import shipped_scenes
 
     course = shipped_scenes().get(os.path.splitext(WARM_UP_COURSE)[0])
     if course is None:

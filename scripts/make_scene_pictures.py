@@ -99,11 +99,11 @@ def landed_feet(skeleton, frames: np.ndarray) -> np.ndarray:
 
 def picture(name: str, walk: Walk, gif: bool) -> int:
     """Plan, judge and draw one walk: 0 when it is judged clean, 1 otherwise."""
-    from digital_actor_planner.core import render
+    from digital_actor_planner.evaluation import render
     from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
     from digital_actor_planner.core.scene import load_scene
     from digital_actor_planner.core.skeleton import Skeleton
-    from digital_actor_planner.core.trajectory_check import check_trajectory
+    from digital_actor_planner.evaluation.trajectory_check import check_trajectory
 
     skeleton = Skeleton()
     scene = load_scene(third_party_meshes.scene_path(name))

@@ -22,8 +22,8 @@ from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.footsteps import FootstepConfig
 from digital_actor_planner.core.scene import load_scene
 from digital_actor_planner.core.skeleton import Skeleton
-from digital_actor_planner.core.trajectory_check import check_trajectory
 from digital_actor_planner.core.upper_body import UpperBodyConfig, UpperBodyPlanner
+from digital_actor_planner.evaluation.trajectory_check import check_trajectory
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

@@ -26,7 +26,6 @@ TARGETS = ('digital_actor_planner', 'test', 'bench', 'launch', 'scripts', 'setup
 NOT_YET_CLEAN = (
     'digital_actor_planner/core/actor.py',
     'digital_actor_planner/nodes/actor_planner.py',
-    'test/test_node_stream.py',
 )
 
 

@@ -15,7 +15,7 @@
 """
 Backward walking: a downward mouse drag (negative linear speed) steps the actor backward.
 
-Every walk here is judged by the independent checker (core/trajectory_check.py): no link
+Every walk here is judged by the independent checker (evaluation/trajectory_check.py): no link
 penetrates, a foot is always down, a stance foot slides <= 1 cm, joint limits hold.
 """
 from course_runs import judged, scene, simulate, skeleton

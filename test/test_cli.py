@@ -249,7 +249,7 @@ def test_an_unwritable_out_is_refused_naming_it(tmp_path, capsys):
 
 def test_outputs_get_normal_modes_and_a_failed_render_replaces_nothing(
         tmp_path, capsys, monkeypatch):
-    from digital_actor_planner.core import render
+    from digital_actor_planner.evaluation import render
     args = _short_run(tmp_path)
     (tmp_path / 's.json').write_text('{}')
     os.chmod(tmp_path / 's.json', 0o640)  # a file replaced keeps its mode

@@ -15,9 +15,9 @@
 """BodyCollision: the URDF's collision shapes against meshes and against each other."""
 import time
 
+from digital_actor_planner.core.actor import start_configuration
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment
-from digital_actor_planner.core.scene import start_configuration
 import numpy as np
 import pytest
 from scene_helpers import box

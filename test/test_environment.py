@@ -16,10 +16,10 @@
 import math
 import os
 
+from digital_actor_planner.core.actor import start_configuration
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment
-from digital_actor_planner.core.scene import (check_start, load_scene, SceneError,
-                                              start_configuration)
+from digital_actor_planner.core.scene import check_start, load_scene, SceneError
 from digital_actor_planner.core.skeleton import Skeleton
 import numpy as np
 import pytest

@@ -21,7 +21,7 @@ from digital_actor_planner.core.gait import (
     GaitConfig, GaitError, leg_inverse_kinematics, standing_stance, validate_gait_config,
     WalkGenerator)
 from digital_actor_planner.core.skeleton import Skeleton
-from digital_actor_planner.core.trajectory_check import check_trajectory
+from digital_actor_planner.evaluation.trajectory_check import check_trajectory
 import numpy as np
 import pytest
 from scene_helpers import box as box_mesh

@@ -29,11 +29,11 @@ from digital_actor_planner import core as core_package
 from digital_actor_planner.core import (collision, ct_space, environment, footstep_search, gait,
                                         path as path_module)
 from digital_actor_planner.core import skeleton as skeleton_module, upper_body
+from digital_actor_planner.core.actor import start_configuration
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.footsteps import FootstepConfig
 from digital_actor_planner.core.jit import COMPILED, direct, float_array
-from digital_actor_planner.core.scene import start_configuration
 from digital_actor_planner.core.skeleton import Skeleton
 import numpy as np
 import pytest

@@ -29,9 +29,9 @@ import sys
 import textwrap
 
 from digital_actor_planner.core import environment
+from digital_actor_planner.core.actor import start_configuration
 from digital_actor_planner.core.environment import Environment
-from digital_actor_planner.core.scene import (check_start, load_scene, SceneError,
-                                              start_configuration)
+from digital_actor_planner.core.scene import check_start, load_scene, SceneError
 from digital_actor_planner.core.skeleton import Skeleton
 import numpy as np
 import pytest
@@ -196,7 +196,7 @@ def test_a_third_party_scene_loads_and_is_walked_within_a_gigabyte(name, seconds
     out = _in_fresh_process(f"""
         from digital_actor_planner.core.actor import Actor, ActorConfig
         from digital_actor_planner.core.skeleton import Skeleton
-        from digital_actor_planner.core.trajectory_check import check_trajectory
+        from digital_actor_planner.evaluation.trajectory_check import check_trajectory
         skeleton = Skeleton()
         start = time.perf_counter()
         scene = load_scene({os.path.join(THIRD_PARTY, name + '.yaml')!r}, skeleton)

@@ -1,4 +1,19 @@
-"""actor_planner as a real process: the joint stream, commands, diagnostics, scene reload.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The actor_planner node as a real process: the joint stream, commands, diagnostics, scene reload.
 
 One node process serves the whole module, in file order: it walks the stairs course, then the
 scene is reloaded at run time to the flat course, where the command tests run (each sets up the
@@ -91,9 +106,9 @@ def test_forward_command_walks_the_stairs_at_a_steady_100_hz(actor):
 
 
 def test_a_frozen_node_still_delivers_every_frame_late_not_lost(actor):
-    """The node process is frozen for 80 ms (SIGSTOP: as when the hypervisor takes every core
-    away). The subscriber still gets one frame per 10 ms tick, stamped on the tick grid and
-    moving smoothly; the frames of the freeze arrive late, together."""
+    # The node process is frozen for 80 ms (SIGSTOP: as when the hypervisor takes every core
+    # away). The subscriber still gets one frame per 10 ms tick, stamped on the tick grid and
+    # moving smoothly; the frames of the freeze arrive late, together.
     process, probe = actor
     probe.drive(0.5, 0.0, 1.5)
     os.kill(process.pid, signal.SIGSTOP)

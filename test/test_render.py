@@ -16,8 +16,8 @@
 import os
 import time
 
-from digital_actor_planner.core.render import render_gif, render_png
 from digital_actor_planner.core.skeleton import Skeleton
+from digital_actor_planner.evaluation.render import render_gif, render_png
 import numpy as np
 from PIL import Image
 import pytest

@@ -15,9 +15,9 @@
 """check_trajectory: the independent judge, on hand-built trajectories."""
 import time
 
+from digital_actor_planner.core.actor import start_configuration
 from digital_actor_planner.core.environment import Environment
-from digital_actor_planner.core.scene import start_configuration
-from digital_actor_planner.core.trajectory_check import check_trajectory
+from digital_actor_planner.evaluation.trajectory_check import check_trajectory
 import numpy as np
 import pytest
 from scene_helpers import box

@@ -27,9 +27,9 @@ from digital_actor_planner.cli import read_commands
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment
-from digital_actor_planner.core.trajectory_check import check_trajectory
 from digital_actor_planner.core.upper_body import (motion_patterns, UpperBodyConfig,
                                                    UpperBodyPlanner)
+from digital_actor_planner.evaluation.trajectory_check import check_trajectory
 import numpy as np
 import pytest
 from scene_helpers import furniture_scene, pillars_moved_sideways

@@ -22,15 +22,18 @@ import glob
 import math
 import os
 import socket
+import subprocess
+import sys
 
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
-from digital_actor_planner.nodes.viewer import (along_view_plane, build_parser, config_from_args,
-                                                course_catalog, drag_to_command, follow_target,
-                                                normalize_namespace, pad_pose,
-                                                parse_planner_diagnostics, pick_port,
-                                                shipped_scenes, smooth_step, status_text,
-                                                StreamMonitor, triangle_list_mesh, validate,
-                                                ViewerConfig)
+from digital_actor_planner.nodes.viewer_page import (along_view_plane, build_parser,
+                                                     config_from_args, course_catalog,
+                                                     drag_to_command, follow_target,
+                                                     normalize_namespace, pad_pose,
+                                                     parse_planner_diagnostics, pick_port,
+                                                     shipped_scenes, smooth_step, status_text,
+                                                     StreamMonitor, triangle_list_mesh, validate,
+                                                     ViewerConfig)
 import numpy as np
 import pytest
 
@@ -286,3 +289,17 @@ def test_options_and_namespace_are_checked():
     assert normalize_namespace('actor1/') == '/actor1'
     with pytest.raises(ValueError, match='a-b'):
         normalize_namespace('a-b')
+
+
+def test_the_page_logic_loads_without_ros_or_viser():
+    # The demo and the warm-up use it before any node runs: they must not wait for rclpy and
+    # viser to load, nor need them.
+    code = ('import sys\n'
+            "for name in ('rclpy', 'viser', 'diagnostic_msgs', 'geometry_msgs', 'nav_msgs',\n"
+            "             'rcl_interfaces', 'sensor_msgs', 'std_msgs', 'visualization_msgs'):\n"
+            '    sys.modules[name] = None\n'
+            'import digital_actor_planner.demo\n'
+            'import digital_actor_planner.nodes.viewer_page\n'
+            'import digital_actor_planner.warmup\n')
+    result = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr

@@ -21,7 +21,7 @@ limits hold, no NaN or jumps, a stance foot slides <= 1 cm.
 """
 from course_runs import course_names, judged, scene, simulate, skeleton
 from digital_actor_planner.core.gait import GaitConfig
-from digital_actor_planner.core.trajectory_check import check_trajectory
+from digital_actor_planner.evaluation.trajectory_check import check_trajectory
 import numpy as np
 import pytest
 

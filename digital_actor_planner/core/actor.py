@@ -9,17 +9,22 @@ steering away) makes a step feasible again.
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields, replace
+import math
 import time as _time
 from typing import Optional, Tuple
 
 import numpy as np
 
+from .collision import BodyCollision
+from .environment import Environment, finite_numbers, SceneError
 from .footsteps import (describe_ground_ahead, FootstepConfig, FootstepPlanner, FootstepWindow,
                         LEFT, RIGHT, sample_ground_profile, validate_footstep_config)
-from .gait import (foot_pose_on, GaitConfig, GaitError, hold_frames, Stance, standing_stance,
-                   StepMotion, validate_gait_config, WalkGenerator, with_at_rest)
+from .gait import (foot_pose_on, GaitConfig, GaitError, hold_frames, leg_inverse_kinematics,
+                   Stance, standing_stance, StepMotion, validate_gait_config, WalkGenerator,
+                   with_at_rest)
 from .path import predict_path
 from .skeleton import Skeleton
+from .upper_body import motion_patterns, UpperBodyConfig, UpperBodyPlanner
 
 LEG_LINKS = ('pelvis', 'left_hip', 'left_thigh', 'left_shank', 'left_foot', 'right_hip',
              'right_thigh', 'right_shank', 'right_foot')
@@ -240,6 +245,54 @@ class StepBlock:
     category: str = ''
 
 
+def start_configuration(environment: Environment, start, skeleton: Skeleton) -> np.ndarray:
+    """
+    Place the actor's neutral standing configuration at a start pose.
+
+    The actor stands on the lowest walkable surface under its soles and pelvis, so a start in
+    a wall, under a table or under a beam puts it at floor level (where it collides) rather
+    than on top: ``root_z`` = that ground + ``skeleton.leg.standing_height`` + 2 mm.
+
+    Parameters
+    ----------
+    environment
+        The world.
+    start
+        (x m, y m, yaw rad).
+    skeleton
+        The actor model.
+
+    Returns
+    -------
+    numpy.ndarray
+        (22,) float64 configuration, rad or m.
+
+    Raises
+    ------
+    SceneError
+        ``start`` is not 3 finite numbers, or there is no ground below it.
+
+    """
+    x, y, yaw = finite_numbers(list(start) if isinstance(start, (list, tuple, np.ndarray))
+                               else start, 3, 'start', 'start pose')
+    q = skeleton.neutral().copy()
+    q[skeleton.index['root_x']], q[skeleton.index['root_y']] = x, y
+    q[skeleton.index['root_yaw']] = yaw
+    leg = skeleton.leg
+    # Sole corners of both feet and the pelvis, in the pelvis frame (§4: feet under the hips).
+    points = np.array([[0.0, 0.0]] + [[dx, side * leg.hip_half_width + dy]
+                                      for side in (1.0, -1.0)
+                                      for dx in (-leg.heel, leg.toe)
+                                      for dy in (-leg.foot_width / 2, leg.foot_width / 2)])
+    c, s = math.cos(yaw), math.sin(yaw)
+    xy = points @ np.array([[c, s], [-s, c]]) + (x, y)
+    ground = environment.lowest_ground(xy)
+    if np.all(np.isnan(ground)):
+        raise SceneError(f'no ground below the start pose ({x:g}, {y:g}, yaw {yaw:g})')
+    q[skeleton.index['root_z']] = float(np.nanmin(ground)) + leg.standing_height + 0.002
+    return q
+
+
 class Actor:
     """
     A digital actor walking where it is told (the whole planning system of the paper).
@@ -266,8 +319,6 @@ class Actor:
                  start: Tuple[float, float, float] = (0.0, 0.0, 0.0),
                  upper_body_planner=None, body_collision=None):
         validate(config)
-        from .collision import BodyCollision
-        from .scene import start_configuration
         self.skeleton = skeleton
         self.environment = environment
         self.config = config
@@ -289,8 +340,6 @@ class Actor:
                                            ('root', 'left_leg', 'right_leg')])
         self._lower_velocity_limit = skeleton.velocity_limit[self._lower_body]
         if upper_body_planner is None and config.plan_upper_body:
-            from .upper_body import UpperBodyPlanner
-            from .upper_body import UpperBodyConfig
             upper_body_planner = UpperBodyPlanner(
                 skeleton, self._collision,
                 UpperBodyConfig(check_budget=int(config.upper_body_check_budget)),
@@ -445,7 +494,6 @@ class Actor:
         """
         q = self.skeleton.neutral()
         q[self.skeleton.branch('root')] = self._stance.pelvis
-        from .gait import leg_inverse_kinematics
         leg = self.skeleton.leg
         for side, name in ((LEFT, 'left_leg'), (RIGHT, 'right_leg')):
             foot = self._stance.feet[side]
@@ -461,7 +509,6 @@ class Actor:
         return self._with_patterns(q[None, :])[0]
 
     def _with_patterns(self, frames: np.ndarray) -> np.ndarray:
-        from .upper_body import motion_patterns
         return motion_patterns(self.skeleton, frames)
 
     def _hold(self, status: str, reason: str, started: float, footsteps=None,
@@ -1060,7 +1107,6 @@ class Actor:
         support of both feet). Each leg keeps its last frame's joints plus the change of its
         inverse kinematics as the hip moves, so the first frame follows on from the last.
         """
-        from .gait import leg_inverse_kinematics
         stance, skeleton = self._stance, self.skeleton
         cfg, leg, index = self.config, skeleton.leg, skeleton.index
         q0 = self._configuration

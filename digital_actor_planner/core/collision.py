@@ -27,7 +27,7 @@ from typing import Dict, Iterable, List, Optional, Sequence, Tuple
 import fcl
 import numpy as np
 
-from .environment import _top_near
+from .environment import top_near
 from .jit import float_array, kernel
 
 # Contacts asked of FCL per shape when measuring penetration.
@@ -93,7 +93,7 @@ def _suspects(transforms, kinds, halves, top_bound, pyramid, slot_of, stamp, clo
 
     ``transforms``: (k, S, 4, 4) shape poses over a motion. A shape is a suspect at a frame
     unless ``top_bound`` and its lowest point lies above the environment's height bound over
-    its footprint (:func:`environment._top_near`, the tiled top map's layout in ``pyramid``
+    its footprint (:func:`environment.top_near`, the tiled top map's layout in ``pyramid``
     to ``inverse``; where a tile is not cached yet the shape is a suspect). A suspect that
     has not moved since the frame before, where it was a suspect too (or, with
     ``after_free_end``, at the first frame since ``free_end``, the poses the last motion found
@@ -110,8 +110,8 @@ def _suspects(transforms, kinds, halves, top_bound, pyramid, slot_of, stamp, clo
                 width = max(_extent(kinds[c], halves[c], pose, 0),
                             _extent(kinds[c], halves[c], pose, 1))
                 bottom = pose[2, 3] - _extent(kinds[c], halves[c], pose, 2)
-                top = _top_near(pyramid, slot_of, stamp, clock, wanted, missed, tiles_x, nx,
-                                ny, x0, y0, inverse, pose[0, 3], pose[1, 3], width)
+                top = top_near(pyramid, slot_of, stamp, clock, wanted, missed, tiles_x, nx,
+                               ny, x0, y0, inverse, pose[0, 3], pose[1, 3], width)
                 suspect[f, c] = not bottom > top
     pairs = np.empty((k * count, 2), dtype=np.int64)
     found = 0

@@ -33,9 +33,9 @@ import yaml
 
 from .actor import Actor, ActorConfig
 from .collision import BodyCollision
-from .environment import Environment, load_mesh, SceneError
+from .environment import Environment, finite_numbers, load_mesh, SceneError
 
-__all__ = ['check_start', 'load_scene', 'Scene', 'SceneError', 'start_configuration']
+__all__ = ['check_start', 'load_scene', 'Scene', 'SceneError']
 
 SCENE_KEYS = ('meshes', 'start', 'description', 'expect')
 MESH_KEYS = ('file', 'pose')
@@ -70,17 +70,6 @@ def _pose_matrix(pose: Sequence[float]) -> np.ndarray:
                          [-sp, cp * sr, cp * cr]]
     transform[:3, 3] = (x, y, z)
     return transform
-
-
-def _finite_numbers(value, count: int, what: str, source: str) -> Tuple[float, ...]:
-    """Check that ``value`` is a list of ``count`` finite numbers, else raise SceneError."""
-    ok = isinstance(value, (list, tuple)) and len(value) == count and all(
-        isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-        for v in value)
-    if not ok:
-        raise SceneError(f'{source}: {what} must be a list of {count} finite numbers, '
-                         f'got {value!r}')
-    return tuple(float(v) for v in value)
 
 
 def _read_yaml(path: str) -> dict:
@@ -150,7 +139,7 @@ def load_scene(path: str, skeleton=None) -> Scene:
         if not isinstance(entries, list) or not entries:
             raise SceneError(f'{path}: meshes must be a non-empty list, got {entries!r}')
         if 'start' in data:
-            start = _finite_numbers(data['start'], 3, 'start', path)
+            start = finite_numbers(data['start'], 3, 'start', path)
         if 'description' in data:
             if not isinstance(data['description'], str):
                 raise SceneError(f'{path}: description must be a string, '
@@ -179,7 +168,7 @@ def load_scene(path: str, skeleton=None) -> Scene:
                 read[mesh_path] = load_mesh(mesh_path)
             mesh = read[mesh_path]
             if 'pose' in entry:
-                pose = _finite_numbers(entry['pose'], 6, f'meshes[{i}].pose', path)
+                pose = finite_numbers(entry['pose'], 6, f'meshes[{i}].pose', path)
                 mesh = mesh.copy()
                 mesh.apply_transform(_pose_matrix(pose))
             meshes.append(mesh)
@@ -204,61 +193,13 @@ def load_scene(path: str, skeleton=None) -> Scene:
     return scene
 
 
-def start_configuration(environment: 'Environment', start, skeleton) -> np.ndarray:
-    """
-    Place the actor's neutral standing configuration at a start pose.
-
-    The actor stands on the lowest walkable surface under its soles and pelvis, so a start in
-    a wall, under a table or under a beam puts it at floor level (where it collides) rather
-    than on top: ``root_z`` = that ground + ``skeleton.leg.standing_height`` + 2 mm.
-
-    Parameters
-    ----------
-    environment
-        The world.
-    start
-        (x m, y m, yaw rad).
-    skeleton
-        The actor model.
-
-    Returns
-    -------
-    numpy.ndarray
-        (22,) float64 configuration, rad or m.
-
-    Raises
-    ------
-    SceneError
-        ``start`` is not 3 finite numbers, or there is no ground below it.
-
-    """
-    x, y, yaw = _finite_numbers(list(start) if isinstance(start, (list, tuple, np.ndarray))
-                                else start, 3, 'start', 'start pose')
-    q = skeleton.neutral().copy()
-    q[skeleton.index['root_x']], q[skeleton.index['root_y']] = x, y
-    q[skeleton.index['root_yaw']] = yaw
-    leg = skeleton.leg
-    # Sole corners of both feet and the pelvis, in the pelvis frame (§4: feet under the hips).
-    points = np.array([[0.0, 0.0]] + [[dx, side * leg.hip_half_width + dy]
-                                      for side in (1.0, -1.0)
-                                      for dx in (-leg.heel, leg.toe)
-                                      for dy in (-leg.foot_width / 2, leg.foot_width / 2)])
-    c, s = math.cos(yaw), math.sin(yaw)
-    xy = points @ np.array([[c, s], [-s, c]]) + (x, y)
-    ground = environment.lowest_ground(xy)
-    if np.all(np.isnan(ground)):
-        raise SceneError(f'no ground below the start pose ({x:g}, {y:g}, yaw {yaw:g})')
-    q[skeleton.index['root_z']] = float(np.nanmin(ground)) + leg.standing_height + 0.002
-    return q
-
-
 def check_start(environment: Environment, start, skeleton) -> None:
     """
     Check the actor can stand at a start pose.
 
     Places the configuration an :class:`actor.Actor` starts in there (each foot resting on the
     ground under it, at its own height and pitch, where it can; else both level on the lowest
-    ground under them, as :func:`start_configuration`) 2 mm up, so that a foot resting on a
+    ground under them, as :func:`actor.start_configuration`) 2 mm up, so that a foot resting on a
     surface does not touch it, and tests it against the environment with
     :class:`collision.BodyCollision`. Where it cannot stand, the message says why and names
     the nearest start, within ``_SEARCH_RADII[-1]`` m and at the same heading, where it can.
@@ -270,8 +211,8 @@ def check_start(environment: Environment, start, skeleton) -> None:
         the standing actor inside an obstacle.
 
     """
-    x, y, yaw = _finite_numbers(list(start) if isinstance(start, (list, tuple, np.ndarray))
-                                else start, 3, 'start', 'start pose')
+    x, y, yaw = finite_numbers(list(start) if isinstance(start, (list, tuple, np.ndarray))
+                               else start, 3, 'start', 'start pose')
     body = BodyCollision(skeleton, environment)
     problem = _start_problem(environment, (x, y, yaw), skeleton, body)
     if problem is None:

@@ -142,8 +142,6 @@ def _write_patterns(out, swing, waist, arms, lower, upper):
 # -- prioritized planning (§5) ------------------------------------------------------------
 #: Planning order of the branches (§5: the waist first, then the arms).
 BRANCH_ORDER = ('waist', 'left_arm', 'right_arm')
-# Whether a planner of this process has warmed the search's kernels up (_warm_up).
-_WARMED = False
 _LEG_LINKS = ('pelvis', 'left_hip', 'right_hip', 'left_thigh', 'right_thigh', 'left_shank',
               'right_shank', 'left_foot', 'right_foot')
 _TRUNK_LINKS = ('waist', 'torso', 'head', 'left_shoulder', 'right_shoulder')
@@ -422,18 +420,18 @@ class UpperBodyPlanner:
         first = np.cumsum([0] + [len(self.indices[name]) for name in BRANCH_ORDER])
         self._pattern_limits = (self._upper_lower, self._upper_upper, speed[upper],
                                 first.astype(np.int64))
-        if not _WARMED:
-            self._warm_up()
+        self._warm_up()
 
     def _warm_up(self) -> None:
         """
-        Call a search's kernels once per process on a small CT-space of an arm.
+        Call a search's kernels once on a small CT-space of an arm.
 
-        Once per process: a search's kernels called on a small CT-space of an arm (the actor at the
-        origin over three frames, in this environment), so that numba's first look at their
-        arguments does not fall on the first step that searches (:func:`ct_roadmap.warm_up`).
+        A search's kernels called on a small CT-space of an arm (the actor at the origin over
+        three frames, in this environment), so that numba's first look at their arguments in
+        this process does not fall on the first step that searches (:func:`ct_roadmap.warm_up`).
+        Every planner does it: after the first of a process it costs under a millisecond, less
+        than keeping track of whether one has.
         """
-        global _WARMED
         frames = np.zeros((3, len(self.skeleton.joint_names)))
         body = TimedBody(self.kinematics, self.shapes, self.environment, frames)
         columns = self._columns['left_arm']
@@ -441,7 +439,6 @@ class UpperBodyPlanner:
                         self._checked['left_arm'], self._obstacles['left_arm'],
                         self.config.time_weight)
         warm_up(space, _arm_patterns(), np.array(self.config.arm_weights))
-        _WARMED = True
 
     def _check_input(self, times: np.ndarray, frames: np.ndarray) -> None:
         skeleton = self.skeleton

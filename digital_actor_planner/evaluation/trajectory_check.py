@@ -29,11 +29,10 @@ from dataclasses import dataclass, field
 import math
 from typing import Dict, Iterable, List, Optional, Tuple
 
+from digital_actor_planner.core.collision import BodyCollision, shape_geometry, shape_reach
 import fcl
 import numpy as np
 import trimesh
-
-from .collision import BodyCollision, shape_geometry, shape_reach
 
 FEET = ('left_foot', 'right_foot')
 # The links of each leg judged against the other leg's (a hip width apart, the hips' own
