@@ -1,7 +1,7 @@
 """A zero command ends the walk at the earliest stable stance (the actor stops within a step)."""
 from course_runs import judged, scene, skeleton
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
-from digital_actor_planner.core.trajectory_check import check_trajectory
+from digital_actor_planner.evaluation.trajectory_check import check_trajectory
 from digital_actor_planner.nodes.actor_planner import HURRY_MAX_RATE
 from digital_actor_planner.runtime.retiming import hurry
 import numpy as np
