@@ -24,7 +24,9 @@ starts consistent again.
 
 Key frames differ by the level of the next step (Figure 4): on level ground the pelvis moves
 evenly; uphill the front leg is bent first (the pelvis rises late, after the foot is up);
-downhill the rear leg is bent first (the pelvis lowers early, before the foot lands).
+downhill the rear leg is bent first (the pelvis lowers early, before the foot lands). The key
+frames and the Bezier swing are written out in core/key_frames.py, which :meth:`WalkGenerator.step`
+runs as they are.
 """
 from __future__ import annotations
 
