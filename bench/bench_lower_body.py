@@ -271,7 +271,54 @@ def compare(courses, other_root, rounds, upper=False):
           f'frames identical on every course')
 
 
+@dataclasses.dataclass(frozen=True)
+class FootstepTargets:
+    """
+    The footstep targets judged on the default search's windows.
+
+    The effort ratio (ours over the exhaustive optimum's) on average and at p95, the time ratio
+    in the walk at p95 (the strictest of the readings) and its median, and every window's time
+    summed, ours and the exhaustive search's, ms.
+    """
+
+    windows: int
+    effort_mean: float
+    effort_p95: float
+    time_p95: float
+    time_median: float
+    ours_ms: float
+    exhaustive_ms: float
+
+    @property
+    def effort_met(self) -> bool:
+        """Return whether the effort target (<= 1.05 on average and at p95) is met."""
+        return max(self.effort_mean, self.effort_p95) <= 1.05
+
+    @property
+    def time_met(self) -> bool:
+        """Return whether the time target (<= 1/20 at p95) is met."""
+        return self.time_p95 <= 0.05
+
+    def sentence(self) -> str:
+        """Return the verdict as the benchmark prints it last."""
+        return (f'footstep targets (default search, {self.windows} windows): effort ratio mean '
+                f'{self.effort_mean:.3f}, p95 {self.effort_p95:.3f} (target <= 1.05: '
+                f'{"met" if self.effort_met else "NOT met"}); time ratio in the walk p95 '
+                f'{self.time_p95:.4f} (target <= 1/20: {"met" if self.time_met else "NOT met"}'
+                f'), median {self.time_median:.4f}, every window together '
+                f'{self.ours_ms:.2f} ms against {self.exhaustive_ms:.1f} ms = '
+                f'{self.ours_ms / self.exhaustive_ms:.4f}')
+
+
 def main(argv=None):
+    """
+    Run the benchmark; return the footstep targets' verdict (None with --against or --whole-body).
+
+    Returns
+    -------
+    FootstepTargets or None
+
+    """
     parser = argparse.ArgumentParser(description=__doc__.strip().splitlines()[0])
     parser.add_argument('--courses', nargs='*')
     parser.add_argument('--whole-body', action='store_true',
@@ -287,7 +334,7 @@ def main(argv=None):
     courses = args.courses or (OBSTACLE_COURSES if args.whole_body else COURSES)
     if args.against:
         compare(courses, args.against, args.rounds, args.whole_body)
-        return
+        return None
     upper = args.whole_body
     wall_all, cpu_all, slowest = [], [], []
     ratios, speed, warm, judged, firsts, spent = ({False: [], True: []} for _ in range(6))
@@ -339,7 +386,7 @@ def main(argv=None):
         f'{1e3 * seconds:.1f} {name} {step}'
         for seconds, name, step in sorted(slowest)[-5:][::-1]))
     if upper:
-        return
+        return None
     print()
     print('footstep windows compared with the exhaustive optimum '
           '(each course walked again with each search):')
@@ -378,17 +425,15 @@ def main(argv=None):
     # The footstep targets, judged on the default search: the effort ratio on average
     # and at p95, the time ratio at p95 of the first calls in the walk (the strictest of the
     # readings above; the median and the sum of all windows' times are printed beside it).
-    ours_total = sum(o for o, _ in spent[True])
-    exhaustive_total = sum(e for _, e in spent[True])
-    effort_mean, effort_p95 = np.mean(ratios[True]), np.percentile(ratios[True], 95)
-    time_p95 = np.percentile(speed[True], 95)
-    print(f'footstep targets (default search, {len(speed[True])} windows): effort ratio mean '
-          f'{effort_mean:.3f}, p95 {effort_p95:.3f} (target <= 1.05: '
-          f'{"met" if max(effort_mean, effort_p95) <= 1.05 else "NOT met"}); time ratio in the '
-          f'walk p95 {time_p95:.4f} (target <= 1/20: {"met" if time_p95 <= 0.05 else "NOT met"}'
-          f'), median {np.median(speed[True]):.4f}, every window together '
-          f'{1e3 * ours_total:.2f} ms against {1e3 * exhaustive_total:.1f} ms = '
-          f'{ours_total / exhaustive_total:.4f}')
+    targets = FootstepTargets(
+        windows=len(speed[True]), effort_mean=float(np.mean(ratios[True])),
+        effort_p95=float(np.percentile(ratios[True], 95)),
+        time_p95=float(np.percentile(speed[True], 95)),
+        time_median=float(np.median(speed[True])),
+        ours_ms=1e3 * sum(o for o, _ in spent[True]),
+        exhaustive_ms=1e3 * sum(e for _, e in spent[True]))
+    print(targets.sentence())
+    return targets
 
 
 if __name__ == '__main__':

@@ -264,7 +264,6 @@ def test_time_shapes_shared_by_steps_of_one_length_match_the_formulas(skeleton):
     with pytest.raises(ValueError):
         timing.ease_in[0] = 1.0
     np.testing.assert_array_equal(timing.lift[0.12], smoothstep((bezier - 0.12) / (0.88 - 0.12)))
-    np.testing.assert_array_equal(timing.weight['downhill'], smoothstep((tau - 0.3) / 0.65))
     np.testing.assert_array_equal(timing.fade, np.minimum(1.0, 6.0 * (1 - tau)))
     assert timing.samples[-1] == k - 1 and np.all(np.diff(timing.samples) > 0)
     with pytest.raises(ValueError):

@@ -24,7 +24,9 @@ starts consistent again.
 
 Key frames differ by the level of the next step (Figure 4): on level ground the pelvis moves
 evenly; uphill the front leg is bent first (the pelvis rises late, after the foot is up);
-downhill the rear leg is bent first (the pelvis lowers early, before the foot lands).
+downhill the rear leg is bent first (the pelvis lowers early, before the foot lands). The key
+frames and the Bezier swing are written out in core/key_frames.py, which :meth:`WalkGenerator.step`
+runs as they are.
 """
 from __future__ import annotations
 
@@ -37,6 +39,8 @@ import numpy as np
 
 from .footsteps import FootstepConfig, LEFT, RIGHT, SOLE_LINES
 from .jit import kernel
+from .key_frames import (bezier_swing, GaitError, smoothstep, step_key_frames, SwingFootprint,
+                         SwingLimits)
 from .skeleton import LegGeometry, Skeleton
 
 SOLE_CLEARANCE = 0.002  # a resting sole floats this far above the surface, m
@@ -62,10 +66,6 @@ _TOE_SUPPORT_TOLERANCE = 0.015
 #: WalkGenerator._seated_sole): a landing 14 cm downhill of it on a 10-degree slope, a foot
 #: pointing across it (1.8 cm from edge to edge) turned from the path.
 SEAT_SHIFT = 0.03
-
-
-class GaitError(Exception):
-    """A step cannot be realised (out of reach, joint limit, swing cannot clear the ground)."""
 
 
 @dataclass(frozen=True)
@@ -159,18 +159,12 @@ class StepMotion:
     lateral_error: float
 
 
-def smoothstep(t: np.ndarray) -> np.ndarray:
-    """Cubic ease 3t^2 - 2t^3 on [0, 1] (also the horizontal part of the swing Bezier)."""
-    # minimum/maximum rather than clip: the same values for a fraction of the call overhead.
-    t = np.minimum(np.maximum(t, 0.0), 1.0)
-    return t * t * (3.0 - 2.0 * t)
-
-
 # (start, length) of the ramps in a step's time shapes (see WalkGenerator._timing): over the
-# normalised time (the plain smoothstep, the pelvis turn, the uphill and downhill weights) and
-# over the swing curve's parameter (lift-off without and with delay, the swing foot's turn, the
-# release of the lift-off pitch, the take-up of the landing pitch).
-_TIME_RAMPS = np.array([[0.0, 1.0], [0.2, 0.8], [0.35, 0.65], [0.3, 0.65]])
+# normalised time (the plain smoothstep, the pelvis turn; the pelvis height's ramps are the key
+# frames', key_frames.PELVIS_RAMPS) and over the swing curve's parameter (lift-off without and
+# with delay, the swing foot's turn, the release of the lift-off pitch, the take-up of the
+# landing pitch).
+_TIME_RAMPS = np.array([[0.0, 1.0], [0.2, 0.8]])
 _SWING_RAMPS = np.array([[0.0, 0.88 - 0.0], [0.12, 0.88 - 0.12], [0.2, 0.55], [0.15, 0.35],
                          [0.65, 0.35]])
 
@@ -186,7 +180,7 @@ def _step_timing(k: int, swing_clearance: float) -> _StepTiming:
     tau = np.arange(1, k + 1) / k
     # The ramps over time through one smoothstep call, the ramps over the swing curve's
     # parameter through another (each row is the formula's own (x - start) / length).
-    level, turn, uphill, downhill = smoothstep(
+    level, turn = smoothstep(
         (tau - _TIME_RAMPS[:, :1]) / _TIME_RAMPS[:, 1:])
     bezier = 0.5 * (tau + level)
     lift_now, lift_late, plane_turn, release, take = smoothstep(
@@ -206,7 +200,6 @@ def _step_timing(k: int, swing_clearance: float) -> _StepTiming:
         plane_turn=plane_turn,
         pitch_release=1.0 - release,
         pitch_take=take,
-        weight={'uphill': uphill, 'downhill': downhill, 'level': level},
         fade=np.minimum(1.0, 6.0 * (1 - tau)),
         samples=samples,
         bezier_terms=_bezier_terms(bezier, samples, swing_clearance),
@@ -216,33 +209,24 @@ def _step_timing(k: int, swing_clearance: float) -> _StepTiming:
     # Shared by every step of k frames: nothing may change them in place.
     _read_only((timing.tau, timing.ease, timing.ease_in, timing.ease_out, timing.turn,
                 timing.bezier, timing.lift, timing.plane_turn, timing.pitch_release,
-                timing.pitch_take, timing.weight, timing.fade, timing.samples,
+                timing.pitch_take, timing.fade, timing.samples,
                 timing.bezier_terms, timing.pinned, timing.hump))
     return timing
 
 
 def _bezier_terms(tau, samples, swing_clearance: float):
     """
-    Return the Bernstein weights of the swing Bezier and the clearance terms per frame.
+    Return the swing curve's parameter, clearance and slack at the sampled frames, each (s,).
 
-    Per-frame Bernstein weights of the swing Bezier and the clearance terms at the sampled frames
-    (the parts of :meth:`WalkGenerator._swing_heights` fixed during one step).
+    The parts of :class:`key_frames.SwingFootprint` fixed by the number of frames alone.
     """
     b = tau[samples]
     ramp = np.minimum(1.0, 10.0 * np.minimum(b, 1.0 - b))
     # Near lift-off and touchdown the sole is by definition at its foothold: the
     # conservative map may read a few mm high there (the 3D check is exact).
     slack = 0.015 * (1.0 - ramp)
-    frames = np.empty((4, tau.size))
-    frames[0] = (1 - tau) ** 3
-    frames[1] = 3 * tau * (1 - tau) ** 2
-    frames[2] = 3 * tau * tau * (1 - tau)
-    frames[3] = tau ** 3
-    # The same formulas at the sampled frames give the same values: gathered, not redone.
-    sampled = tuple(frames[:, samples])
-    frames = tuple(frames)
     # The clearance the sole keeps at each sample (full away from lift-off and touchdown).
-    return b, swing_clearance * ramp, slack, sampled, frames
+    return b, swing_clearance * ramp, slack
 
 
 def _wrap(angle):
@@ -823,65 +807,6 @@ def _swing_pass(swing_z, z_bound, swing_reach, hip_over_ankle, hump, stance_boun
     return z, joints, reach, converged, next_pitch
 
 
-@kernel('f8[::1](f8[:, :], readonly(f8[::1]), f8[::1], f8[::1], f8, readonly(f8[:]))')
-def _swing_need(tops, along, sin_pitch, cos_pitch, ankle_height, clearance):
-    """
-    Return the height the swinging ankle must keep at each sampled frame (s,), m.
-
-    Height the swinging ankle must keep at each sampled frame (s,), m: the highest of the ground
-    ``tops`` (s, P) under P points ``along`` the sole (m from the ankle) relative to the sole
-    pitched as (sin, cos) of the frame's pitch, plus the ankle's height over the sole and the
-    ``clearance`` kept there.
-    """
-    out = np.empty(tops.shape[0])
-    for i in range(tops.shape[0]):
-        most = -np.inf
-        for j in range(tops.shape[1]):
-            value = tops[i, j] - along[j] * sin_pitch[i]
-            if value > most or value != value:
-                most = value
-        out[i] = most + ankle_height * cos_pitch[i] + clearance[i]
-    return out
-
-
-@kernel('Tuple((f8, f8, b1))(readonly(f8[:]), readonly(f8[:]), readonly(f8[:]), '
-        'readonly(f8[:]), readonly(f8[:]), f8[:], readonly(f8[:]), f8, f8, f8, f8, f8)')
-def _raise_swing(basis_0, basis_1, basis_2, basis_3, b, need, slack, z0, z1, h1, h2, cap):
-    """
-    Raise the swing Bezier's inner control heights until the curve clears (§4.1).
-
-    The Bezier adjustment of :meth:`WalkGenerator._swing_heights` (§4.1): raise the inner control
-    heights h1, h2 (above z0 and z1) at the worst sample until the curve clears ``need`` less
-    ``slack`` at every sample, at most 12 times and while neither passes ``cap``. ``basis_*`` are
-    the Bernstein weights and ``b`` the curve parameter at the samples. Returns (h1, h2, whether it
-    cleared).
-    """
-    for _ in range(12):
-        worst, most = 0, -np.inf
-        for i in range(need.shape[0]):
-            curve = basis_0[i] * z0 + basis_1[i] * (z0 + h1) + basis_2[i] * (z1 + h2) \
-                + basis_3[i] * z1
-            short = need[i] - curve - slack[i]
-            # The first largest, or the first NaN (as NumPy's argmax).
-            if short != short:
-                worst, most = i, short
-                break
-            if i == 0 or short > most:
-                worst, most = i, short
-        if most <= 1e-4:
-            return h1, h2, True
-        raise_by = min(most / max(basis_1[worst] + basis_2[worst], 0.05), 0.15) + 0.005
-        if b[worst] < 0.5:
-            h1 += raise_by
-            h2 += 0.5 * raise_by
-        else:
-            h2 += raise_by
-            h1 += 0.5 * raise_by
-        if max(h1, h2) > cap:
-            break
-    return h1, h2, False
-
-
 def _segment_gaps(a0: np.ndarray, a1: np.ndarray, b0: np.ndarray,
                   b1: np.ndarray) -> np.ndarray:
     """Shortest distances (n,) between segments a0-a1 and b0-b1, all (3, n) (x, y, z rows), m."""
@@ -965,13 +890,11 @@ class _StepTiming:
         Heading progress of the swing foot.
     pitch_release, pitch_take
         Weights of the lift-off pitch and of the landing pitch of the swinging sole.
-    weight
-        Pelvis height progress per step category ('level', 'uphill', 'downhill').
     fade
         Weight of the swing ankle's range correction (none at touchdown).
     samples, bezier_terms
-        Frames the swing clearance is tested at and their Bezier terms (see
-        :func:`_bezier_terms`).
+        Frames the swing clearance is tested at, and the swing curve's parameter, clearance
+        and slack there (see :func:`_bezier_terms`).
     pinned
         How fully the swing foot's plane turns through the foot instead of moving with the hip:
         1 near lift-off and touchdown, 0 in mid-swing.
@@ -990,7 +913,6 @@ class _StepTiming:
     plane_turn: np.ndarray
     pitch_release: np.ndarray
     pitch_take: np.ndarray
-    weight: dict
     fade: np.ndarray
     samples: np.ndarray
     bezier_terms: tuple
@@ -1073,6 +995,8 @@ class WalkGenerator:
         # middle line and its two edges, m.
         self._seat_along = np.linspace(-self.leg.heel, self.leg.toe, 5)
         self._seat_across = np.array([-0.5, 0.0, 0.5]) * self.leg.foot_width
+        self._swing_limits = SwingLimits(float(config.swing_lift), float(config.max_swing_lift),
+                                         float(self.leg.ankle_height))
 
     def _timing(self, k: int) -> _StepTiming:
         """Return the time shapes of a k-frame step (:func:`_step_timing`)."""
@@ -1207,15 +1131,10 @@ class WalkGenerator:
             float(_wrap(landing.yaw - foot_w.yaw)), float(landing.xy[0]), float(landing.xy[1]),
             turning, 1.0 if swing_side == RIGHT else -1.0, float(foot_s.yaw),
             float(cfg.swing_toe_in), low, high, float(foot_w.pitch), float(landing.pitch))
-        # Pelvis height: key-frame shape by category, bounded by what both legs can reach.
-        rise = landing.sole - foot_s.sole
-        if rise > 0.03:
-            category = 'uphill'
-        elif rise < -0.03:
-            category = 'downhill'
-        else:
-            category = 'level'
-        nominal = 0.5 * (foot_s.z + landing.z) + leg.thigh + leg.shank - cfg.pelvis_height_drop
+        # Pelvis height: the key frames by category (§4.1, Figure 4), bounded by what both legs
+        # can reach.
+        key_frames = step_key_frames(foot_s, landing, float(z0), leg, cfg.pelvis_height_drop,
+                                     tau)
         r = cfg.reach_fraction * (leg.thigh + leg.shank)
         # The swinging knee bends at most to its limit (less a margin), so an ankle lifted
         # close under the hip holds the hip up, as far as the stance leg reaches: up steep
@@ -1230,7 +1149,8 @@ class WalkGenerator:
         (out_of_reach, stance_bound, z_bound, swing_reach, swing_forward, swing_hip_yaw,
          hip_over_ankle, swing_lateral) = _swing_bounds(
             lam, forward, swing_xy, swing_hip_xy, direction, plane_yaw, yaw,
-            timing.weight[category], float(z0), float(nominal), r, float(foot_s.z), closest)
+            key_frames.weight, key_frames.start_height, key_frames.touchdown_height, r,
+            float(foot_s.z), closest)
         if out_of_reach:
             raise GaitError('footstep out of leg reach')
         fade = timing.fade
@@ -1243,7 +1163,9 @@ class WalkGenerator:
         # The swing leg's IK of the last pass, when its inputs are final (the pass converged).
         swing_solution = None
         for _ in range(5):
-            swing_z, lift = self._swing_heights(bezier, foot_w, landing, swing_pitch, footprint)
+            # §4.1: the ankle's Bezier curve, raised until the sole clears the ground profile.
+            curve = bezier_swing(foot_w, landing, footprint, swing_pitch, self._swing_limits)
+            swing_z = curve.heights(bezier)
             z, joints, reach, converged, next_pitch = _swing_pass(
                 swing_z, z_bound, swing_reach, hip_over_ankle, timing.hump, stance_bound,
                 swing_hip_yaw, swing_forward, swing_pitch, fade, float(ankle_low),
@@ -1302,19 +1224,24 @@ class WalkGenerator:
                                    np.vstack([stance_hip_xy.T, z]), foot_s.yaw, stance_joints,
                                    np.vstack([swing_hip_xy.T, z]), plane_yaw, joints)
         frames[:, self._leg_columns[swing_side]] = joints
-        for side in (LEFT, RIGHT):
-            knee = float(frames[-1, self._leg_columns[side]][2])
-            if knee > self._leg_upper[side][2] - END_KNEE_MARGIN:
-                name = 'left' if side == LEFT else 'right'
-                raise GaitError(f'{name}_knee would end the step at {knee:.2f} rad, too bent '
-                                'for the next step')
+        self._check_end_knees(frames[-1])
         lateral_error = max(lateral_error, abs(swing_lateral))
         feet = foot_end
         feet[swing_side] = landing
         end = Stance(np.array([pelvis_xy[-1, 0], pelvis_xy[-1, 1], z[-1], yaw1]),
                      (feet[0], feet[1]), swing_side, to_rest)
-        return StepMotion(times=tau * duration, frames=frames, stance=end, category=category,
-                          swing_lift=lift, lateral_error=lateral_error)
+        return StepMotion(times=tau * duration, frames=frames, stance=end,
+                          category=key_frames.category, swing_lift=curve.lift,
+                          lateral_error=lateral_error)
+
+    def _check_end_knees(self, last_frame: np.ndarray) -> None:
+        """Raise GaitError if a step ending at ``last_frame`` (22,) leaves a knee too bent."""
+        for side in (LEFT, RIGHT):
+            knee = float(last_frame[self._leg_columns[side]][2])
+            if knee > self._leg_upper[side][2] - END_KNEE_MARGIN:
+                name = 'left' if side == LEFT else 'right'
+                raise GaitError(f'{name}_knee would end the step at {knee:.2f} rad, too bent '
+                                'for the next step')
 
     def _seated_sole(self, xy: np.ndarray, yaw: float, sole: float, pitch: float,
                      ground) -> float:
@@ -1501,21 +1428,13 @@ class WalkGenerator:
         return joints, end
 
     def _swing_footprint(self, timing: _StepTiming, lift_foot: FootPose, landing: FootPose,
-                         swing_xy, direction, swing_profile):
+                         swing_xy, direction, swing_profile) -> SwingFootprint:
         """
         Return the ground under the swinging sole at sampled frames (independent of its pitch).
 
-        ``direction`` is (k, 2), the cosine and sine of the swing foot's heading per frame.
-
-        Returns
-        -------
-        tuple
-            (samples (s,) frame indices, along (9,) sole offsets heel..toe in m,
-            tops (s, 9) highest obstacle across the sole at each point along it, m, -inf
-            over empty space,
-            bezier: the swing-height terms that do not depend on the pitch, see
-            :func:`_bezier_terms`).
-
+        ``swing_xy`` (k, 2) is the ankle's path over the ground, m, and ``direction`` (k, 2) the
+        cosine and sine of the swing foot's heading per frame; ``swing_profile`` as in
+        :meth:`step`.
         """
         along, across = self._sole_along, self._sole_across
         samples = timing.samples
@@ -1526,88 +1445,8 @@ class WalkGenerator:
         # not in every pass of the swing heights.
         tops = _across_sole(np.array(swing_profile(points, z_ref), dtype=np.float64),
                             along.size, across.size)
-        return samples, along, tops, timing.bezier_terms
-
-    def _swing_heights(self, tau, lift_foot: FootPose, landing: FootPose, swing_pitch,
-                       footprint):
-        # ``tau`` here is the Bezier parameter of each frame (k,), in [0, 1].
-        """
-        Ankle heights of the swinging foot: a cubic Bezier raised until it clears (§4.1).
-
-        The control points sit above the lift-off and touchdown points; when the sole would
-        touch the ground profile, both are raised ("the Bezier curve adjustment module") until
-        it is collision-free or the lift limit is reached. ``footprint`` is
-        :meth:`_swing_footprint` of the same swing.
-        """
-        cfg, leg = self.config, self.leg
-        z0, z1 = lift_foot.z, landing.z
-        samples, along, tops, (b, clearance, slack, sampled, frames) = footprint
-        # Ground relative to a sole pitched like the foot: what the ankle must stay above.
-        pitch = swing_pitch[samples]
-        need = _swing_need(tops, along, np.sin(pitch), np.cos(pitch), leg.ankle_height,
-                           clearance)
-        basis_0, basis_1, basis_2, basis_3 = sampled
-        # Off a heel-off the toe is on the ground: lift more briskly so it does not scuff.
-        h1 = cfg.swing_lift * (2.0 if lift_foot.pitch < -0.05 else 1.0) + max(0.0, z1 - z0)
-        h2 = cfg.swing_lift + 0.5 * max(0.0, z0 - z1)
-        cap = cfg.max_swing_lift + abs(z1 - z0)
-        first = (h1, h2)
-        h1, h2, cleared = _raise_swing(basis_0, basis_1, basis_2, basis_3, b, need, slack,
-                                       z0, z1, h1, h2, cap)
-        if not cleared:
-            # Raising the control points ran into the limit (or did not converge). Over a
-            # block whose face is close ahead of the lifting toe (or behind the landing heel)
-            # the foot must rise steeply and stay up: a Bezier of degree 5 whose inner control
-            # points are paired, (h1, h1, h2, h2), rises about half as fast again and is flat on
-            # top. The lowest pair that clears every sample, if any.
-            return self._flat_topped_swing(tau, b, z0, z1, need - slack, first, cap)
-        z = frames[0] * z0 + frames[1] * (z0 + h1) + frames[2] * (z1 + h2) + frames[3] * z1
-        return z, float(max(h1, h2))
-
-    @staticmethod
-    def _flat_topped_swing(tau: np.ndarray, sampled_tau: np.ndarray, z0: float, z1: float,
-                           need: np.ndarray, least: Tuple[float, float], cap: float):
-        """
-        Return the ankle heights of a swing over a degree-5 Bezier that clears ``need``.
-
-        Ankle heights of a swing over a degree-5 Bezier with control heights (z0, z0 + h1, z0 + h1,
-        z1 + h2, z1 + h2, z1), h1 and h2 the lowest pair (on a 5 mm grid, each at least ``least``
-        and at most ``cap``) whose curve is above ``need`` at the sampled curve parameters
-        ``sampled_tau``. Returns (heights (k,), the larger control height), like
-        :meth:`_swing_heights`.
-
-        Raises
-        ------
-        GaitError
-            When no such pair exists.
-
-        """
-        def weights(u):
-            # Bernstein polynomials of degree 5: the end points and the two inner pairs.
-            v = 1.0 - u
-            return (v ** 5, 5 * u * v ** 4 + 10 * u * u * v ** 3,
-                    10 * u ** 3 * v * v + 5 * u ** 4 * v, u ** 5)
-
-        w0, w1, w2, w3 = weights(sampled_tau)
-        required = need - 1e-4 - (w0 + w1) * z0 - (w2 + w3) * z1
-        h1 = np.arange(least[0], cap + 1e-9, 0.005)[:, None]
-        # Where the second pair's weight is ~0 (at lift-off) the first pair alone must do.
-        alone = w2 < 1e-9
-        h2 = np.where(alone, -np.inf, (required - w1 * h1) / np.where(alone, 1.0, w2))
-        h2 = np.maximum(h2.max(axis=1), least[1])
-        feasible = (h2 <= cap) & (w1[alone] * h1 >= required[alone]).all(axis=1)
-        if not feasible.any():
-            # In words a user reads: how far above the higher foothold the foot would have to
-            # lift, against the most it lifts; or that it would have to rise at once.
-            rise = max(float(np.max(need)) - max(z0, z1), 0.0)
-            raise GaitError(f'swing foot cannot clear the terrain: it would have to lift '
-                            f'{rise:.2f} m'
-                            + (f', at most {cap:.2f} m' if rise > cap else
-                               ' right after lift-off or just before touchdown'))
-        best = int(np.where(feasible, np.maximum(h1[:, 0], h2), np.inf).argmin())
-        h1, h2 = float(h1[best, 0]), float(h2[best])
-        w0, w1, w2, w3 = weights(tau)
-        return w0 * z0 + w1 * (z0 + h1) + w2 * (z1 + h2) + w3 * z1, max(h1, h2)
+        curve_parameter, clearance, slack = timing.bezier_terms
+        return SwingFootprint(samples, along, tops, curve_parameter, clearance, slack)
 
 
 def hold_frames(configuration: np.ndarray, start_time: float, duration: float,
