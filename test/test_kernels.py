@@ -26,8 +26,8 @@ import subprocess
 import sys
 
 from digital_actor_planner import core as core_package
-from digital_actor_planner.core import (collision, ct_space, environment, footstep_search, gait,
-                                        path as path_module)
+from digital_actor_planner.core import (body_model, collision, convex, ct_space, environment,
+                                        footstep_search, gait, path as path_module)
 from digital_actor_planner.core import skeleton as skeleton_module, upper_body
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment
@@ -215,9 +215,9 @@ def test_the_broad_phase_of_the_3d_check(skeleton, world):
         assert 0 < pairs.shape[0] < transforms.shape[0] * transforms.shape[1]
         assert near.any() and not near.all()
     rotations = float_array(transforms[..., :3, :3])
-    same(collision._half_extents(body._kind_codes[index], body._halves[index], rotations),
-         collision._half_extents.py_func(body._kind_codes[index], body._halves[index],
-                                         rotations))
+    same(collision.half_extents(body._kind_codes[index], body._halves[index], rotations),
+         collision.half_extents.py_func(body._kind_codes[index], body._halves[index],
+                                        rotations))
 
 
 def test_the_upper_body_kinematics_and_boxes(skeleton):
@@ -229,10 +229,10 @@ def test_the_upper_body_kinematics_and_boxes(skeleton):
     """
     rng = np.random.default_rng(6)
     q = rng.uniform(np.maximum(skeleton.lower, -3), np.minimum(skeleton.upper, 3), (25, 22))
-    kinematics = ct_space.BodyKinematics(skeleton)
-    shapes = ct_space.BodyShapes(skeleton)
+    kinematics = body_model.BodyKinematics(skeleton)
+    shapes = body_model.BodyShapes(skeleton)
     poses = []
-    for kernel in (ct_space._link_poses, ct_space._link_poses.py_func):
+    for kernel in (body_model.link_poses, body_model.link_poses.py_func):
         rotations = np.zeros((25, kinematics.link_count, 3, 3))
         positions = np.zeros((25, kinematics.link_count, 3))
         rotations[:, 0] = np.eye(3)
@@ -245,7 +245,7 @@ def test_the_upper_body_kinematics_and_boxes(skeleton):
     turns = np.array([np.linalg.qr(rng.normal(size=(3, 3)))[0] for _ in every])
     arguments = (*poses[0], every, shapes.origin_translation, turns, every % 2 == 0)
     placed = []
-    for kernel in (ct_space._place_shapes, ct_space._place_shapes.py_func):
+    for kernel in (body_model.place_shapes, body_model.place_shapes.py_func):
         rotation, centre = np.empty((25, every.size, 3, 3)), np.empty((25, every.size, 3))
         kernel(*arguments, every, rotation, centre)
         placed.append((rotation, centre))
@@ -253,10 +253,10 @@ def test_the_upper_body_kinematics_and_boxes(skeleton):
     # Written at other slots (a body's arrays hold every shape; a branch moves some of them).
     slots = every[::-1].copy()
     rotation, centre = np.empty((25, every.size, 3, 3)), np.empty((25, every.size, 3))
-    ct_space._place_shapes(*arguments, slots, rotation, centre)
+    body_model.place_shapes(*arguments, slots, rotation, centre)
     same((rotation[:, slots], centre[:, slots]), placed[0])
     extents = [kernel(shapes.kind_code, shapes.half, placed[0][0])
-               for kernel in (collision._half_extents, collision._half_extents.py_func)]
+               for kernel in (collision.half_extents, collision.half_extents.py_func)]
     same(extents[0], extents[1])
     lower, upper = shapes.bounds(*placed[0], every)
     assert (upper > lower).all()
@@ -290,15 +290,15 @@ def test_the_separating_axis_tests():
     for i in range(count):
         box = (rotation_a[i], centre_a[i], half_a[i], rotation_b[i], centre_b[i], half_b[i],
                1e-3)
-        apart.append(ct_space._boxes_apart(*box))
-        assert apart[-1] == ct_space._boxes_apart.py_func(*box)
+        apart.append(convex.boxes_apart(*box))
+        assert apart[-1] == convex.boxes_apart.py_func(*box)
     assert 0 < sum(apart) < count
     corners = rng.uniform(-0.6, 0.6, (count, 3, 3))
     apart = []
     for i in range(count):
         box = (rotation_a[i], centre_a[i], half_a[i], corners[i], 1e-3)
-        apart.append(ct_space._box_triangle_apart(*box))
-        assert apart[-1] == ct_space._box_triangle_apart.py_func(*box)
+        apart.append(convex.box_triangle_apart(*box))
+        assert apart[-1] == convex.box_triangle_apart.py_func(*box)
     assert 0 < sum(apart) < count
 
 

@@ -53,8 +53,8 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .ct_space import (_illegal_rows, _motion_path, CHECK_TABLES_TYPE, CTSpace,
-                       first_legal_goal, ROW_MEMO_TYPE)
+from .ct_space import (CHECK_TABLES_TYPE, CTSpace, first_legal_goal, illegal_rows, motion_path,
+                       ROW_MEMO_TYPE)
 from .jit import kernel
 
 
@@ -341,7 +341,7 @@ def _lasting_table(targets, ids, arrivals, begin, end, spacing, stride, free, he
     start if it arrives before it, every ``spacing``-th frame after its arrival, the end),
     first every ``stride``-th grid frame from the end (a coarse pass), then the rest; a
     target that does not move lasts where ``free`` (the objective legal) holds to the end.
-    The checks are :func:`_illegal_rows`' over the rows not known yet, in the order of the
+    The checks are :func:`illegal_rows`' over the rows not known yet, in the order of the
     targets and their grids, a later answer for the same posture and frame written over an
     earlier one.
     """
@@ -405,7 +405,7 @@ def _lasting_table(targets, ids, arrivals, begin, end, spacing, stride, free, he
             for r in range(count):
                 for j in range(d):
                     q[r, j] = objective[batch_frames[r], j] + targets[rows[r], j]
-            illegal = _illegal_rows(q, batch_frames, tables, memo)
+            illegal = illegal_rows(q, batch_frames, tables, memo)
             checks += count
             for r in range(count):
                 legal = not illegal[r]
@@ -709,9 +709,9 @@ def _expand(deviation, here, has_candidates, candidate_targets, candidate_frames
                     for j in range(d):
                         motion_goal[j] = objective[motion_arrival, j] + table_targets[i, j]
                     if motion_arrival > here:
-                        extra, motion_late = _motion_path(objective, times, frame_step,
-                                                          speed_cap, start, here, motion_goal,
-                                                          motion_arrival)
+                        extra, motion_late = motion_path(objective, times, frame_step,
+                                                         speed_cap, start, here, motion_goal,
+                                                         motion_arrival)
                     break
         total = m + extra.shape[0]
         batch = np.empty((total, d))
@@ -725,7 +725,7 @@ def _expand(deviation, here, has_candidates, candidate_targets, candidate_frames
                 batch[m + r, j] = extra[r, j]
             batch_frames[m + r] = here + 1 + r
         checks += total
-        illegal = _illegal_rows(batch, batch_frames, tables, memo)
+        illegal = illegal_rows(batch, batch_frames, tables, memo)
         if extra.shape[0] == 0:
             motion_arrival = -1  # nothing checked ahead
         else:

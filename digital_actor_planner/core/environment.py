@@ -127,8 +127,8 @@ def _ground_heights(xy, z_ref, x0, y0, inverse, last_x, last_y, tiles_x, slot_of
 
 @kernel('f8(f8[::1], i8[::1], i8[::1], i8, u1[::1], i8[::1], i8, i8, i8, f8, f8, f8, f8, f8, '
         'f8)', inline=True)
-def _top_near(pyramid, slot_of, stamp, clock, wanted, missed, tiles_x, nx, ny, x0, y0,
-              inverse, x, y, half):
+def top_near(pyramid, slot_of, stamp, clock, wanted, missed, tiles_x, nx, ny, x0, y0,
+             inverse, x, y, half):
     """
     Return :meth:`Environment.top_height_near` of one square, m.
 
@@ -166,11 +166,11 @@ def _top_near(pyramid, slot_of, stamp, clock, wanted, missed, tiles_x, nx, ny, x
         'f8[:, :], f8[::1])')
 def _tops_near(pyramid, slot_of, stamp, clock, wanted, missed, tiles_x, nx, ny, x0, y0,
                inverse, xy, half):
-    """:func:`_top_near` of each (N, 2) centre and (N,) half width."""
+    """:func:`top_near` of each (N, 2) centre and (N,) half width."""
     out = np.empty(xy.shape[0])
     for i in range(xy.shape[0]):
-        out[i] = _top_near(pyramid, slot_of, stamp, clock, wanted, missed, tiles_x, nx, ny,
-                           x0, y0, inverse, xy[i, 0], xy[i, 1], half[i])
+        out[i] = top_near(pyramid, slot_of, stamp, clock, wanted, missed, tiles_x, nx, ny,
+                          x0, y0, inverse, xy[i, 0], xy[i, 1], half[i])
     return out
 
 
@@ -981,9 +981,9 @@ class Environment:
 
     def top_near_grid(self) -> tuple:
         """
-        Return the tiled top map's layout for the compiled :func:`_top_near`.
+        Return the tiled top map's layout for the compiled :func:`top_near`.
 
-        The tiled top map's layout for the compiled :func:`_top_near`, from its first argument up
+        The tiled top map's layout for the compiled :func:`top_near`, from its first argument up
         to the query point: the dilations' pool, slot of each tile, stamps, clock, wanted tiles and
         missed count, tiles a row, columns and rows of cells, grid origin x and y (m), inverse
         resolution (1/m).
