@@ -168,7 +168,7 @@ def test_a_batch_is_illegal_where_its_pieces_say_so(skeleton, beam_world, kernel
             expected = contact | ~space.within_bounds(q)
             answers.setdefault(clear_until, expected)
             assert expected.tolist() == answers[clear_until].tolist()  # the cut changes nothing
-        tables = list(space.check_tables)
+        tables = list(space._check_tables)
         tables[2] = clear_until
         tables = tuple(tables)
         # The whole batch (its pairs cut by the swept boxes: many rows) and each row alone.
@@ -432,6 +432,40 @@ def test_first_legal_motion_agrees_with_goals_checked_one_by_one(beam_world):
     assert spent < sum(rows), 'motions blocked early are not boxed to their ends'
 
 
+def test_a_planner_kernel_run_by_the_space_checks_as_its_methods_do(beam_world):
+    # A planner's compiled kernel sees the space only through what run_checks hands it, passed
+    # on to the space's compiled checks: the same answers as the space's methods, and the
+    # configurations it checked counted as theirs are.
+    space, _, _ = beam_world
+    start = (np.array([0.0, 0.0]), 100)
+    goals = [(np.array([0.0, 0.0]), 170), (np.array([0.0, 1.3]), 120),
+             (np.array([0.0, 0.9]), 101), (np.array([0.0, 0.9]), 150),
+             (np.array([0.0, 0.2]), 125), (np.array([0.0, 0.0]), 130)]
+    rows = np.array([[0.0, 0.0], [0.0, 1.3], [0.0, 0.9]])
+    frames = np.array([110, 120, 150], dtype=np.int64)
+
+    def planner_kernel(targets, arrivals, q, rows_frames, objective, times, frame_step,
+                       speed_cap, tables, memo):
+        chosen, failures, checks = ct_space.first_legal_goal(
+            objective, times, frame_step, speed_cap, start[0], start[1], targets, arrivals,
+            -2, tables, memo)
+        illegal = ct_space.illegal_rows(q, rows_frames, tables, memo)
+        return chosen, failures.tolist(), ~illegal, checks + len(q)
+
+    before = space.checks
+    expected = space.first_legal_motion(start, goals)
+    expected_rows = space.valid_rows(rows, frames)
+    by_methods = space.checks - before
+    targets = np.array([q for q, _ in goals])
+    arrivals = np.array([frame for _, frame in goals], dtype=np.int64)
+    before = space.checks
+    chosen, failures, legal = space.run_checks(planner_kernel, targets, arrivals, rows, frames)
+    assert (chosen, failures) == expected
+    assert legal.tolist() == expected_rows.tolist()
+    assert space.checks - before == by_methods
+    assert min(failures) < 0 < max(failures) and not legal.all() and legal.any()
+
+
 def _failures_written_out(space, motions, stop_at_legal, first):
     """
     Return each motion's first illegal frame, checked row by row and in waves.
@@ -493,7 +527,7 @@ def test_motions_fail_where_their_rows_checked_one_by_one_do(beam_world, kernel)
             for first in (0, 1, 8):
                 answers, checks = kernel(space.objective, space.times, space.frame_step,
                                          space.speed_cap, qa, ia, qb, ib, stop_at_legal,
-                                         first, space.check_tables,
+                                         first, space._check_tables,
                                          ct_space._empty_row_memo())
                 expected = _failures_written_out(space, motions, stop_at_legal, first)
                 assert (answers.tolist(), checks) == expected, (trial, stop_at_legal, first)

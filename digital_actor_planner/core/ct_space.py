@@ -22,7 +22,10 @@ pair ``(q, i)``: the branch configuration ``q`` (d,) rad at frame index ``i`` of
 
 The interface is shaped like OMPL's space-time planning (``SpaceTimeStateSpace``): ``bounds``,
 ``distance``, ``interpolate``, ``is_valid(q, i)`` and ``check_motion(a, b)``, where a motion is
-legal only forward in time, within the joint speed limits and collision-free at every frame.
+legal only forward in time, within the joint speed limits and collision-free at every frame,
+and their batch forms (``valid_rows``, ``first_invalid``, ``first_legal_motion``,
+``first_invalid_path``). A planner checks states only through these methods; its compiled
+kernels are run by ``run_checks``, which hands them the space's compiled checks.
 
 Motions are interpolated in deviation from the objective O(t) (§5.1) rather than in absolute
 joint values, so a motion between two states on the objective follows the objective exactly and
@@ -39,7 +42,7 @@ provides them.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import List, Optional, Sequence, Tuple
+from typing import Callable, List, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -273,7 +276,7 @@ def _sweeps(rows, shapes, triangles):
 ROW_MEMO_TYPE = 'DictType(UniTuple(i8, 5), i8)'
 #: Widest branch whose rows are remembered (the key holds the frame and this many joints).
 MEMO_WIDTH = 4
-# numba type of CTSpace.check_tables, the tuple illegal_rows takes: the joint limits,
+# numba type of CTSpace._check_tables, the tuple illegal_rows takes: the joint limits,
 # clear_until, _branch_boxes' tables, the step table, _row_collisions' tables.
 CHECK_TABLES_TYPE = (
     'Tuple((f8[::1], f8[::1], i8, '
@@ -282,6 +285,11 @@ CHECK_TABLES_TYPE = (
     'f8[:, :, ::1], b1[::1], i8[::1], f8[:, ::1], ' + STEP_TABLE_TYPES + ', '
     'f8[:, ::1], f8[:, ::1], i8[::1], f8[:, ::1], f8[:, :, :], f8[:, :], f8, i8[::1], '
     'f8[:, :], i8[::1], f8[:, :], i8[::1]))')
+#: numba types of what :meth:`CTSpace.run_checks` hands a planner's kernel after the kernel's
+#: own arguments: the objective (k, d), the time grid (k,), ``frame_step`` (k - 1, 1),
+#: ``speed_cap`` (d,), the check tables and the row memo.
+SPACE_ARGUMENTS_TYPE = ('f8[:, :], f8[:], f8[:, :], f8[:], ' + CHECK_TABLES_TYPE + ', '
+                        + ROW_MEMO_TYPE)
 
 
 @kernel(ROW_MEMO_TYPE + '()')
@@ -357,7 +365,7 @@ def illegal_rows(q, frames, tables, memo):
 
     :meth:`CTSpace._illegal`: whether each row of a batch (``q`` (m, d) at ``frames``) is illegal,
     outside the joint limits or touching the environment or the body: (m,) bool. ``tables``:
-    :attr:`CTSpace.check_tables`; ``memo``: :attr:`CTSpace.row_memo`.
+    the space's check tables; ``memo``: its row memo (:meth:`CTSpace.run_checks`).
 
     A row's answer depends on the row alone (its configuration, its frame) while the body
     holds still, and searches check the same rows again (backtracking, motions sharing their
@@ -832,17 +840,17 @@ class CTSpace:
         self._prepare_environment()
         # Frames [0, clear_until) where the branch, where the body holds it, touches nothing.
         self._clear_until = body.clear_until.get(branch, 0)
-        #: illegal_rows' arguments after the batch's own, the same while the branch is planned
-        #: (the roadmap's kernels that check rows take them too; CHECK_TABLES_TYPE).
-        self.check_tables = (
+        # illegal_rows' arguments after the batch's own, the same while the branch is planned
+        # (handed to a planner's compiled kernels by run_checks; CHECK_TABLES_TYPE).
+        self._check_tables = (
             self._lower_tolerant, self._upper_tolerant, int(self._clear_until),
             *self._box_tables, *self._chain.step_table, self._triangle_lower,
             self._triangle_upper, self._pair_column, self._checked_box_half,
             self._triangle_corners, self._pair_box_half, SAT_MARGIN, self._checked_kinds,
             self._checked_half, self._pair_kinds, self._pair_half, self._pair_other)
-        #: The answers of the rows checked so far (illegal_rows): valid as long as the tables,
-        #: while the body holds still.
-        self.row_memo = _empty_row_memo()
+        # The answers of the rows checked so far (illegal_rows): valid as long as the tables,
+        # while the body holds still.
+        self._row_memo = _empty_row_memo()
         self.checks = 0
 
     def _prepare_environment(self) -> None:
@@ -959,10 +967,34 @@ class CTSpace:
         chosen, failures, checks = first_legal_goal(
             self.objective, self.times, self.frame_step, self.speed_cap,
             np.array(qa, dtype=float), int(ia), targets, arrivals,
-            -2 if first_failure is None else int(first_failure), self.check_tables,
-            self.row_memo)
+            -2 if first_failure is None else int(first_failure), self._check_tables,
+            self._row_memo)
         self.checks += checks
         return int(chosen), failures.tolist()
+
+    def run_checks(self, kernel: Callable, *arguments) -> tuple:
+        """
+        Run a planner's compiled kernel that checks states of this space; return its answers.
+
+        Compiled code cannot call this object's methods, so a planner's compiled twin (the
+        CT-roadmap's expansion) is handed, after its own ``arguments``, what this space's
+        compiled checks take (:data:`SPACE_ARGUMENTS_TYPE`: the objective, the time grid, the
+        frame steps, the speed caps, the check tables and the row memo), and checks states
+        only by passing them on to :func:`illegal_rows`, :func:`motion_path` and
+        :func:`first_legal_goal`, the compiled forms of :meth:`valid_rows` and
+        :meth:`first_legal_motion`. The kernel returns the number of configurations it checked
+        last; they are counted in :attr:`checks`.
+
+        Returns
+        -------
+        tuple
+            The kernel's answers, without the count of configurations checked.
+
+        """
+        *answers, checks = kernel(*arguments, self.objective, self.times, self.frame_step,
+                                  self.speed_cap, self._check_tables, self._row_memo)
+        self.checks += int(checks)
+        return tuple(answers)
 
     def first_invalid_path(self, waypoints: Sequence[Tuple[np.ndarray, int]]) -> int:
         """
@@ -1033,8 +1065,8 @@ class CTSpace:
         """
         answers, checks = _motion_failures(self.objective, self.times, self.frame_step,
                                            self.speed_cap, *self._motion_ends(motions),
-                                           stop_at_legal, first, self.check_tables,
-                                           self.row_memo)
+                                           stop_at_legal, first, self._check_tables,
+                                           self._row_memo)
         self.checks += checks
         return answers.tolist()
 
@@ -1164,4 +1196,4 @@ class CTSpace:
         (the same poses; the pairs and triangles here are among those checked there).
         """
         frames = np.ascontiguousarray(frames, dtype=np.int64)  # the kernels' index type
-        return illegal_rows(q, frames, self.check_tables, self.row_memo)
+        return illegal_rows(q, frames, self._check_tables, self._row_memo)
