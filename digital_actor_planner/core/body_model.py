@@ -272,11 +272,12 @@ def _first_contacts(frames, checked, group, count, shape_lower, shape_upper, sha
     ``triangle_lower`` ... ``corners``) or the other shape of one of its ``pairs`` (P, 2) of body
     shapes, or -1.
 
-    The tests of :func:`_row_collisions` (boxes, cut first by each shape's box swept over the
-    frames, and a pair by the boxes ``swept_lower``/``swept_upper`` (S, 3) its shapes sweep
-    over every frame; the separating axis test ``margin`` apart; then the shapes themselves,
-    ``kinds`` and padded ``halves`` (S, 3), :func:`convex.touching`), frame by frame, a group
-    left out once it has touched, stopping when every group has.
+    The tests a branch's CT-space makes of its rows (boxes, cut first by each shape's box swept
+    over the frames, and a pair by the boxes ``swept_lower``/``swept_upper`` (S, 3) its shapes
+    sweep over every frame; the separating axis test ``margin`` apart; then the shapes
+    themselves, ``kinds`` and padded ``halves`` (S, 3): :func:`convex.touches_triangle`,
+    :func:`convex.touches_shape`), frame by frame, a group left out once it has touched,
+    stopping when every group has.
     """
     m, n, count_pairs = frames.shape[0], checked.shape[0], pairs.shape[0]
     found = np.full(count, -1, dtype=np.int64)
@@ -360,6 +361,15 @@ def _box_within(lower, upper, outer_lower, outer_upper):
 
 @dataclass(frozen=True)
 class JointStep:
+    """
+    One joint of the model as :func:`link_poses` evaluates it.
+
+    Its ``parent`` and ``child`` link rows, its origin (``origin_rotation``, None where the
+    origin does not turn, and ``origin_translation``, m), its configuration index ``joint``
+    (-1: fixed), ``kind`` (its URDF type), unit ``axis`` and, where the axis is a
+    coordinate axis, its ``axis_coordinate`` (-1 otherwise) and ``axis_sign``.
+    """
+
     parent: int
     child: int
     origin_rotation: Optional[np.ndarray]
