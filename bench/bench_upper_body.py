@@ -41,8 +41,9 @@ import os
 import sys
 import time
 
+from digital_actor_planner.core.body_model import TimedBody
 from digital_actor_planner.core.collision import BodyCollision
-from digital_actor_planner.core.ct_space import CTSpace, TimedBody
+from digital_actor_planner.core.ct_space import CTSpace
 from digital_actor_planner.core.environment import Environment
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.core.upper_body import (

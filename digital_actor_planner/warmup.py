@@ -38,7 +38,8 @@ from typing import Callable, List, Optional
 #: Core modules with compiled kernels, in import order (each imports only modules before it),
 #: so every line of progress times one module's own kernels.
 KERNEL_MODULES = ('skeleton', 'environment', 'convex', 'collision', 'path', 'footstep_search',
-                  'footsteps', 'gait', 'ct_space', 'ct_roadmap', 'upper_body', 'actor')
+                  'footsteps', 'gait', 'body_model', 'ct_space', 'ct_roadmap', 'upper_body',
+                  'actor')
 #: The course one step is planned on: flat ground compiles what only runs while walking.
 WARM_UP_COURSE = 'flat.yaml'
 STAMP_NAME = 'digital-actor-warm-up.stamp'

@@ -15,7 +15,7 @@
 """Small builders shared by the planner tests."""
 import os
 
-from digital_actor_planner.core.ct_space import (
+from digital_actor_planner.core.body_model import (
     BodyKinematics, BodyShapes, EnvironmentIndex, TimedBody)
 from digital_actor_planner.core.scene import load_scene
 from digital_actor_planner.core.upper_body import motion_patterns

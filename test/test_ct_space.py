@@ -13,10 +13,11 @@
 # limitations under the License.
 
 """Configuration-time space of a branch (paper §5.2): kinematics, validity, forward-only motion."""
-from digital_actor_planner.core import ct_space
+from digital_actor_planner.core import body_model, convex, ct_space
+from digital_actor_planner.core.body_model import (
+    BodyKinematics, BodyShapes, EnvironmentIndex, TimedBody)
 from digital_actor_planner.core.collision import BodyCollision
-from digital_actor_planner.core.ct_space import (
-    BodyKinematics, BodyShapes, CTSpace, EnvironmentIndex, TimedBody)
+from digital_actor_planner.core.ct_space import CTSpace
 from digital_actor_planner.core.environment import Environment
 import fcl
 import numpy as np
@@ -142,7 +143,7 @@ def test_validity_agrees_with_body_collision(skeleton, beam_world):
     assert space.is_valid(np.array([0.0, 0.9]), 160)
 
 
-@pytest.mark.parametrize('kernel', [ct_space._illegal_rows, ct_space._illegal_rows.py_func])
+@pytest.mark.parametrize('kernel', [ct_space.illegal_rows, ct_space.illegal_rows.py_func])
 def test_a_batch_is_illegal_where_its_pieces_say_so(skeleton, beam_world, kernel):
     # The one-kernel check of a batch against the kernels it stands for, called one by one:
     # the branch's boxes, the contacts (rows where the body holds the branch, before
@@ -162,12 +163,12 @@ def test_a_batch_is_illegal_where_its_pieces_say_so(skeleton, beam_world, kernel
                 space._pair_column, space.body.shape_lower, space.body.shape_upper, rotation,
                 centre, space._checked_box_half, space._triangle_corners,
                 space.body.shape_rotation, space.body.shape_centre, space._pair_box_half,
-                ct_space.SAT_MARGIN, space._checked_kinds, space._checked_half,
+                convex.SAT_MARGIN, space._checked_kinds, space._checked_half,
                 space._pair_kinds, space._pair_half, space._pair_other, known)
             expected = contact | ~space.within_bounds(q)
             answers.setdefault(clear_until, expected)
             assert expected.tolist() == answers[clear_until].tolist()  # the cut changes nothing
-        tables = list(space.check_tables)
+        tables = list(space._check_tables)
         tables[2] = clear_until
         tables = tuple(tables)
         # The whole batch (its pairs cut by the swept boxes: many rows) and each row alone.
@@ -199,7 +200,7 @@ def test_a_batch_is_illegal_where_its_pieces_say_so(skeleton, beam_world, kernel
         low, high, space._triangle_lower, space._triangle_upper, True, rows,
         space._pair_column, space.body.shape_lower, space.body.shape_upper, rotation, centre,
         space._checked_box_half, space._triangle_corners, space.body.shape_rotation,
-        space.body.shape_centre, space._pair_box_half, ct_space.SAT_MARGIN,
+        space.body.shape_centre, space._pair_box_half, convex.SAT_MARGIN,
         space._checked_kinds, space._checked_half, space._pair_kinds, space._pair_half,
         space._pair_other, known)
     assert space.valid_rows(q, rows).tolist() == (~contact & space.within_bounds(q)).tolist()
@@ -258,9 +259,9 @@ def test_motion_rows_are_the_interpolated_motion_up_to_its_first_speed_violation
         assert rows.tobytes() == path[1:end - ia].tobytes(), trial
         assert late == (end if len(fast) else -1), trial
         if trial % 20 == 0:  # the kernel's own Python source gives the same
-            plain = ct_space._motion_path.py_func(space.objective, space.times,
-                                                  space.frame_step, space.speed_cap, qa,
-                                                  ia, qb, ib)
+            plain = ct_space.motion_path.py_func(space.objective, space.times,
+                                                 space.frame_step, space.speed_cap, qa,
+                                                 ia, qb, ib)
             assert plain[0].tobytes() == rows.tobytes() and plain[1] == late
         late_seen.add(late < 0)
     assert late_seen == {True, False}  # motions within the limits and too fast ones
@@ -431,6 +432,40 @@ def test_first_legal_motion_agrees_with_goals_checked_one_by_one(beam_world):
     assert spent < sum(rows), 'motions blocked early are not boxed to their ends'
 
 
+def test_a_planner_kernel_run_by_the_space_checks_as_its_methods_do(beam_world):
+    # A planner's compiled kernel sees the space only through what run_checks hands it, passed
+    # on to the space's compiled checks: the same answers as the space's methods, and the
+    # configurations it checked counted as theirs are.
+    space, _, _ = beam_world
+    start = (np.array([0.0, 0.0]), 100)
+    goals = [(np.array([0.0, 0.0]), 170), (np.array([0.0, 1.3]), 120),
+             (np.array([0.0, 0.9]), 101), (np.array([0.0, 0.9]), 150),
+             (np.array([0.0, 0.2]), 125), (np.array([0.0, 0.0]), 130)]
+    rows = np.array([[0.0, 0.0], [0.0, 1.3], [0.0, 0.9]])
+    frames = np.array([110, 120, 150], dtype=np.int64)
+
+    def planner_kernel(targets, arrivals, q, rows_frames, objective, times, frame_step,
+                       speed_cap, tables, memo):
+        chosen, failures, checks = ct_space.first_legal_goal(
+            objective, times, frame_step, speed_cap, start[0], start[1], targets, arrivals,
+            -2, tables, memo)
+        illegal = ct_space.illegal_rows(q, rows_frames, tables, memo)
+        return chosen, failures.tolist(), ~illegal, checks + len(q)
+
+    before = space.checks
+    expected = space.first_legal_motion(start, goals)
+    expected_rows = space.valid_rows(rows, frames)
+    by_methods = space.checks - before
+    targets = np.array([q for q, _ in goals])
+    arrivals = np.array([frame for _, frame in goals], dtype=np.int64)
+    before = space.checks
+    chosen, failures, legal = space.run_checks(planner_kernel, targets, arrivals, rows, frames)
+    assert (chosen, failures) == expected
+    assert legal.tolist() == expected_rows.tolist()
+    assert space.checks - before == by_methods
+    assert min(failures) < 0 < max(failures) and not legal.all() and legal.any()
+
+
 def _failures_written_out(space, motions, stop_at_legal, first):
     """
     Return each motion's first illegal frame, checked row by row and in waves.
@@ -492,7 +527,7 @@ def test_motions_fail_where_their_rows_checked_one_by_one_do(beam_world, kernel)
             for first in (0, 1, 8):
                 answers, checks = kernel(space.objective, space.times, space.frame_step,
                                          space.speed_cap, qa, ia, qb, ib, stop_at_legal,
-                                         first, space.check_tables,
+                                         first, space._check_tables,
                                          ct_space._empty_row_memo())
                 expected = _failures_written_out(space, motions, stop_at_legal, first)
                 assert (answers.tolist(), checks) == expected, (trial, stop_at_legal, first)
@@ -559,8 +594,8 @@ def test_separating_axis_tests_never_part_shapes_that_fcl_finds_touching(skeleto
         shape_a, shape_b = shapes.objects[a], shapes.objects[b]
         shape_a.setTransform(fcl.Transform(*pose_a))
         shape_b.setTransform(fcl.Transform(*pose_b))
-        apart = ct_space._boxes_apart(pose_a[0], pose_a[1], shapes.box_half[a], pose_b[0],
-                                      pose_b[1], shapes.box_half[b], ct_space.SAT_MARGIN)
+        apart = convex.boxes_apart(pose_a[0], pose_a[1], shapes.box_half[a], pose_b[0],
+                                   pose_b[1], shapes.box_half[b], convex.SAT_MARGIN)
         touching = touch(shape_a, shape_b)
         assert not (apart and touching), (trial, shapes.kind[a], shapes.kind[b])
         parted['pairs'][0] += apart
@@ -570,8 +605,8 @@ def test_separating_axis_tests_never_part_shapes_that_fcl_finds_touching(skeleto
         model.beginModel(3, 1)
         model.addSubModel(corners, np.array([[0, 1, 2]]))
         model.endModel()
-        apart = ct_space._box_triangle_apart(pose_a[0], pose_a[1], shapes.box_half[a],
-                                             corners, ct_space.SAT_MARGIN)
+        apart = convex.box_triangle_apart(pose_a[0], pose_a[1], shapes.box_half[a],
+                                          corners, convex.SAT_MARGIN)
         touching = touch(shape_a, fcl.CollisionObject(model, fcl.Transform()))
         assert not (apart and touching), (trial, shapes.kind[a])
         parted['triangles'][0] += apart
@@ -629,7 +664,7 @@ def test_the_body_poses_every_shape_as_the_shape_model_does(skeleton):
         assert getattr(body, name).tobytes() == expected.tobytes(), name
 
 
-@pytest.mark.parametrize('kernel', [ct_space._write_columns, ct_space._write_columns.py_func])
+@pytest.mark.parametrize('kernel', [body_model._write_columns, body_model._write_columns.py_func])
 def test_writing_a_branch_into_the_frames_says_what_changed(kernel):
     frames = np.arange(12.0).reshape(4, 3)
     columns = np.array([2, 0])

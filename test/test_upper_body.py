@@ -322,7 +322,8 @@ def _objective_is_legal(space, start) -> bool:
 def test_one_batch_pattern_check_agrees_with_the_branch_fast_paths(skeleton):
     # Offset postures held over 0.6 s windows walking past a low beam and a table: the one-batch
     # check of the whole pattern must give each branch the answer its own check gives.
-    from digital_actor_planner.core.ct_space import CTSpace, TimedBody
+    from digital_actor_planner.core.body_model import TimedBody
+    from digital_actor_planner.core.ct_space import CTSpace
     from digital_actor_planner.core.upper_body import BRANCH_ORDER
     planner, _ = planner_for(skeleton, box([0.6, -1.0, 1.55], [0.8, 1.0, 1.75]),
                              box([1.3, 0.2, 0.0], [2.0, 1.0, 0.8]))
@@ -369,7 +370,8 @@ def test_rechecking_a_branch_after_others_moved_agrees_with_a_fresh_check(skelet
     # the step changes the other branches' surroundings only there: their re-check looks at
     # those frames and the ones from their first contact on, and must answer what a full
     # check of a body built with the new frames answers (and know the same clear frames).
-    from digital_actor_planner.core.ct_space import CTSpace, TimedBody
+    from digital_actor_planner.core.body_model import TimedBody
+    from digital_actor_planner.core.ct_space import CTSpace
     from digital_actor_planner.core.upper_body import BRANCH_ORDER
     planner, _ = planner_for(skeleton, box([0.6, -1.0, 1.55], [0.8, 1.0, 1.75]),
                              box([1.3, 0.2, 0.0], [2.0, 1.0, 0.8]))
@@ -409,7 +411,8 @@ def test_rechecking_a_branch_after_others_moved_agrees_with_a_fresh_check(skelet
 def test_a_branch_space_answers_the_same_with_the_pattern_checks_clear_frames(skeleton):
     # The CT-spaces do not test again the rows where the body holds a branch at frames the
     # pattern check found clear: every batch must answer as a space that knows nothing.
-    from digital_actor_planner.core.ct_space import CTSpace, TimedBody
+    from digital_actor_planner.core.body_model import TimedBody
+    from digital_actor_planner.core.ct_space import CTSpace
     from digital_actor_planner.core.upper_body import BRANCH_ORDER
     planner, _ = planner_for(skeleton, box([0.6, -1.0, 1.55], [0.8, 1.0, 1.75]),
                              box([1.3, 0.2, 0.0], [2.0, 1.0, 0.8]))

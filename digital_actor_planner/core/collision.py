@@ -38,13 +38,13 @@ _IDENTITY = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
 
 
 # Shape kinds as the compiled kernels know them (their half extents padded to 3 values).
-_KIND_CODES = {'box': 0, 'cylinder': 1, 'sphere': 2}
+KIND_CODES = {'box': 0, 'cylinder': 1, 'sphere': 2}
 # No poses (first_collision with no free end to compare the first frame with).
 _NO_POSES = np.zeros((0, 3, 4))
 
 
 @kernel('f8(i8, f8[::1], f8[:, :], i8)')
-def _extent(kind, half, rotation, axis):
+def axis_extent(kind, half, rotation, axis):
     """
     Return a turned shape's world axis-aligned half extent along ``axis``, m.
 
@@ -61,14 +61,14 @@ def _extent(kind, half, rotation, axis):
 
 
 @kernel('f8[:, :, ::1](i8[::1], f8[:, ::1], f8[:, :, :, :])')
-def _half_extents(kinds, halves, rotations):
-    """:func:`_extent` of (k, S) rotations for S shapes: (k, S, 3), m."""
+def half_extents(kinds, halves, rotations):
+    """:func:`axis_extent` of (k, S) rotations for S shapes: (k, S, 3), m."""
     k, count = rotations.shape[0], rotations.shape[1]
     out = np.empty((k, count, 3))
     for f in range(k):
         for c in range(count):
             for axis in range(3):
-                out[f, c, axis] = _extent(kinds[c], halves[c], rotations[f, c], axis)
+                out[f, c, axis] = axis_extent(kinds[c], halves[c], rotations[f, c], axis)
     return out
 
 
@@ -107,9 +107,9 @@ def _suspects(transforms, kinds, halves, top_bound, pyramid, slot_of, stamp, clo
         for f in range(k):
             for c in range(count):
                 pose = transforms[f, c]
-                width = max(_extent(kinds[c], halves[c], pose, 0),
-                            _extent(kinds[c], halves[c], pose, 1))
-                bottom = pose[2, 3] - _extent(kinds[c], halves[c], pose, 2)
+                width = max(axis_extent(kinds[c], halves[c], pose, 0),
+                            axis_extent(kinds[c], halves[c], pose, 1))
+                bottom = pose[2, 3] - axis_extent(kinds[c], halves[c], pose, 2)
                 top = top_near(pyramid, slot_of, stamp, clock, wanted, missed, tiles_x, nx,
                                ny, x0, y0, inverse, pose[0, 3], pose[1, 3], width)
                 suspect[f, c] = not bottom > top
@@ -311,7 +311,7 @@ class BodyCollision:
         self._mesh_high = np.array([m.bounds[1] for m in environment.meshes], dtype=float)
         self._reach_array = np.array(self._reach, dtype=float)
         # Each shape's kind code and half extents padded to three values, for the kernels.
-        self._kind_codes = np.array([_KIND_CODES[kind] for kind, _ in self._half_extent],
+        self._kind_codes = np.array([KIND_CODES[kind] for kind, _ in self._half_extent],
                                     dtype=np.int64)
         self._halves = np.zeros((len(self.shapes), 3))
         for i, (_, half) in enumerate(self._half_extent):
@@ -554,8 +554,8 @@ class BodyCollision:
     def _aabb_half_extents(self, shapes: Sequence[int], rotations: np.ndarray) -> np.ndarray:
         """World axis-aligned half extents of shapes: rotations (k, S, 3, 3) -> (k, S, 3), m."""
         index = np.asarray(shapes, dtype=np.int64)
-        return _half_extents(self._kind_codes[index], self._halves[index],
-                             float_array(rotations))
+        return half_extents(self._kind_codes[index], self._halves[index],
+                            float_array(rotations))
 
     def links_in_collision(self, q, links: Optional[Iterable[str]] = None) -> List[str]:
         """Names of the given links that touch the environment, in ``links`` order."""

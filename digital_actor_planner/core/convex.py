@@ -13,9 +13,12 @@
 # limitations under the License.
 
 """
-Exact contact tests of convex shapes, compiled: whether two shapes touch.
+Contact tests of convex shapes, compiled: whether two shapes touch.
 
-The upper-body planner's narrow phase (see :mod:`.ct_space`). The shapes are those of the
+The upper-body planner's contact tests (see :mod:`.ct_space`): a conservative separating axis
+test of the oriented boxes holding two shapes (:func:`boxes_apart`, :func:`box_triangle_apart`),
+then the exact test (:func:`touching`) of the pairs it cannot part (:func:`touches_shape`,
+:func:`touches_triangle`). The shapes are those of the
 actor's collision model, a box, a cylinder (its axis the shape's z axis, as in FCL and URDF) or
 a sphere, posed by a rotation and a centre, and the triangles of the environment's meshes. Each
 is given by its support mapping (its farthest point along a direction), and the
@@ -37,10 +40,15 @@ import numpy as np
 
 from .jit import kernel
 
-#: Shape kinds, as in ``collision._KIND_CODES``, and a triangle.
+#: Shape kinds, as in ``collision.KIND_CODES``, and a triangle.
 BOX, CYLINDER, SPHERE, TRIANGLE = 0, 1, 2, 3
 #: Iterations after which GJK gives up and reports a contact.
 MAX_ITERATIONS = 64
+#: Gap, m, beyond which the separating axis test of oriented boxes lets a pair that the boxes
+#: along the world axes could not tell apart skip the exact test: far more than its
+#: tolerances, so a pair it skips is one the exact test would find apart (the same plans,
+#: fewer exact tests).
+SAT_MARGIN = 1e-3
 # Squared length below which a search direction means the origin is on the simplex.
 _TINY = 1e-24
 
@@ -209,3 +217,168 @@ def touching(kind_a, half_a, rotation_a, centre_a, corners_a, kind_b, half_b, ro
         if dx * dx + dy * dy + dz * dz < _TINY:
             return True  # the origin lies on the simplex
     return True
+
+
+@kernel('UniTuple(f8, 3)(f8[:, :], f8[:, :], i8)')
+def _column_dots(rotation_a, rotation_b, i):
+    """Column i of A's rotation dotted with each column of B's."""
+    return ((rotation_a[0, i] * rotation_b[0, 0] + rotation_a[1, i] * rotation_b[1, 0]
+             + rotation_a[2, i] * rotation_b[2, 0]),
+            (rotation_a[0, i] * rotation_b[0, 1] + rotation_a[1, i] * rotation_b[1, 1]
+             + rotation_a[2, i] * rotation_b[2, 1]),
+            (rotation_a[0, i] * rotation_b[0, 2] + rotation_a[1, i] * rotation_b[1, 2]
+             + rotation_a[2, i] * rotation_b[2, 2]))
+
+
+@kernel('b1(f8[:, :], f8[:], f8[:], f8[:, :], f8[:], f8[:], f8)')
+def boxes_apart(rotation_a, centre_a, half_a, rotation_b, centre_b, half_b, margin):
+    """
+    Return whether two oriented boxes are more than ``margin`` apart (separating axes).
+
+    Whether two oriented boxes are more than ``margin`` apart along one of the 15 axes of the
+    separating axis test (box axes are the rotations' columns, half extents in them).
+
+    True only for boxes that do not touch: a conservative test, never True for boxes whose
+    gap is less than ``margin`` (m). Near-parallel edge axes are skipped (their face axes
+    decide).
+    """
+    # The centre offset and the axes of B in A's frame, as tuples (no arrays to allocate:
+    # this runs for every pair of boxes that meet).
+    dx, dy, dz = (centre_b[0] - centre_a[0], centre_b[1] - centre_a[1],
+                  centre_b[2] - centre_a[2])
+    offset = (dx * rotation_a[0, 0] + dy * rotation_a[1, 0] + dz * rotation_a[2, 0],
+              dx * rotation_a[0, 1] + dy * rotation_a[1, 1] + dz * rotation_a[2, 1],
+              dx * rotation_a[0, 2] + dy * rotation_a[1, 2] + dz * rotation_a[2, 2])
+    turn = (_column_dots(rotation_a, rotation_b, 0), _column_dots(rotation_a, rotation_b, 1),
+            _column_dots(rotation_a, rotation_b, 2))
+    size = ((abs(turn[0][0]), abs(turn[0][1]), abs(turn[0][2])),
+            (abs(turn[1][0]), abs(turn[1][1]), abs(turn[1][2])),
+            (abs(turn[2][0]), abs(turn[2][1]), abs(turn[2][2])))
+    for i in range(3):  # A's axes
+        reach = (half_a[i] + half_b[0] * size[i][0] + half_b[1] * size[i][1]
+                 + half_b[2] * size[i][2])
+        if abs(offset[i]) > reach + margin:
+            return True
+    for j in range(3):  # B's axes
+        reach = (half_b[j] + half_a[0] * size[0][j] + half_a[1] * size[1][j]
+                 + half_a[2] * size[2][j])
+        distance = offset[0] * turn[0][j] + offset[1] * turn[1][j] + offset[2] * turn[2][j]
+        if abs(distance) > reach + margin:
+            return True
+    for i in range(3):  # A's axis i x B's axis j, in A's frame
+        i1, i2 = (i + 1) % 3, (i + 2) % 3
+        for j in range(3):
+            j1, j2 = (j + 1) % 3, (j + 2) % 3
+            length = np.sqrt(max(1.0 - size[i][j] * size[i][j], 0.0))
+            if length < 1e-6:
+                continue
+            reach = (half_a[i1] * size[i2][j] + half_a[i2] * size[i1][j]
+                     + half_b[j1] * size[i][j2] + half_b[j2] * size[i][j1])
+            distance = offset[i2] * turn[i1][j] - offset[i1] * turn[i2][j]
+            if abs(distance) > reach + margin * length:
+                return True
+    return False
+
+
+@kernel('b1(f8, f8, f8, f8, f8, f8, f8, f8, f8, f8, f8, f8, f8[:], f8)')
+def _triangle_apart_along(x, y, z, a0, a1, a2, b0, b1, b2, d0, d1, d2, half, margin):
+    """
+    Return whether a box and a triangle are more than ``margin`` apart along one axis.
+
+    Whether a box (half extents ``half``, centred at the origin of its frame) and a triangle
+    (corners a, b, d in that frame) are more than ``margin`` apart along the axis (x, y, z), which
+    need not be a unit vector (a near-zero one parts nothing).
+    """
+    length = np.sqrt(x * x + y * y + z * z)
+    if length < 1e-12:
+        return False
+    reach = half[0] * abs(x) + half[1] * abs(y) + half[2] * abs(z)
+    p0 = a0 * x + a1 * y + a2 * z
+    p1 = b0 * x + b1 * y + b2 * z
+    p2 = d0 * x + d1 * y + d2 * z
+    return (min(p0, p1, p2) > reach + margin * length
+            or max(p0, p1, p2) < -reach - margin * length)
+
+
+@kernel('b1(f8[:, :], f8[:], f8[:], f8[:, :], f8)')
+def box_triangle_apart(rotation, centre, half, corners, margin):
+    """
+    Return whether an oriented box and a triangle are more than ``margin`` apart.
+
+    Whether an oriented box and a triangle (corners (3, 3), m) are more than ``margin`` apart along
+    one of the 13 axes of the separating axis test (a conservative test, as in
+    :func:`boxes_apart`). Scalars only: it runs for every box and triangle that meet.
+    """
+    # The corners in the box's frame: a, b, d.
+    x, y, z = corners[0, 0] - centre[0], corners[0, 1] - centre[1], corners[0, 2] - centre[2]
+    a0 = x * rotation[0, 0] + y * rotation[1, 0] + z * rotation[2, 0]
+    a1 = x * rotation[0, 1] + y * rotation[1, 1] + z * rotation[2, 1]
+    a2 = x * rotation[0, 2] + y * rotation[1, 2] + z * rotation[2, 2]
+    x, y, z = corners[1, 0] - centre[0], corners[1, 1] - centre[1], corners[1, 2] - centre[2]
+    b0 = x * rotation[0, 0] + y * rotation[1, 0] + z * rotation[2, 0]
+    b1 = x * rotation[0, 1] + y * rotation[1, 1] + z * rotation[2, 1]
+    b2 = x * rotation[0, 2] + y * rotation[1, 2] + z * rotation[2, 2]
+    x, y, z = corners[2, 0] - centre[0], corners[2, 1] - centre[1], corners[2, 2] - centre[2]
+    d0 = x * rotation[0, 0] + y * rotation[1, 0] + z * rotation[2, 0]
+    d1 = x * rotation[0, 1] + y * rotation[1, 1] + z * rotation[2, 1]
+    d2 = x * rotation[0, 2] + y * rotation[1, 2] + z * rotation[2, 2]
+    # The box's axes.
+    if (min(a0, b0, d0) > half[0] + margin or max(a0, b0, d0) < -half[0] - margin
+            or min(a1, b1, d1) > half[1] + margin or max(a1, b1, d1) < -half[1] - margin
+            or min(a2, b2, d2) > half[2] + margin or max(a2, b2, d2) < -half[2] - margin):
+        return True
+    # The edges a -> b, b -> d, d -> a.
+    e0, e1, e2 = b0 - a0, b1 - a1, b2 - a2
+    f0, f1, f2 = d0 - b0, d1 - b1, d2 - b2
+    g0, g1, g2 = a0 - d0, a1 - d1, a2 - d2
+    # The triangle's normal, then each box axis crossed with each edge.
+    return (_triangle_apart_along(e1 * f2 - e2 * f1, e2 * f0 - e0 * f2, e0 * f1 - e1 * f0,
+                                  a0, a1, a2, b0, b1, b2, d0, d1, d2, half, margin)
+            or _triangle_apart_along(0.0, -e2, e1, a0, a1, a2, b0, b1, b2, d0, d1, d2, half,
+                                     margin)
+            or _triangle_apart_along(0.0, -f2, f1, a0, a1, a2, b0, b1, b2, d0, d1, d2, half,
+                                     margin)
+            or _triangle_apart_along(0.0, -g2, g1, a0, a1, a2, b0, b1, b2, d0, d1, d2, half,
+                                     margin)
+            or _triangle_apart_along(e2, 0.0, -e0, a0, a1, a2, b0, b1, b2, d0, d1, d2, half,
+                                     margin)
+            or _triangle_apart_along(f2, 0.0, -f0, a0, a1, a2, b0, b1, b2, d0, d1, d2, half,
+                                     margin)
+            or _triangle_apart_along(g2, 0.0, -g0, a0, a1, a2, b0, b1, b2, d0, d1, d2, half,
+                                     margin)
+            or _triangle_apart_along(-e1, e0, 0.0, a0, a1, a2, b0, b1, b2, d0, d1, d2, half,
+                                     margin)
+            or _triangle_apart_along(-f1, f0, 0.0, a0, a1, a2, b0, b1, b2, d0, d1, d2, half,
+                                     margin)
+            or _triangle_apart_along(-g1, g0, 0.0, a0, a1, a2, b0, b1, b2, d0, d1, d2, half,
+                                     margin))
+
+
+@kernel('b1(i8, f8[:], f8[:], f8[:, :], f8[:], f8[:, :], f8)')
+def touches_triangle(kind, half, box_half, rotation, centre, corners, margin):
+    """
+    Return whether a shape touches a triangle (``corners`` (3, 3)).
+
+    Whether a shape (kind code, padded ``half`` extents, its box's ``box_half``, posed at
+    ``rotation``, ``centre``) touches a triangle (``corners`` (3, 3)): the separating axis test of
+    the box holding the shape (``margin`` apart), then the exact test.
+    """
+    # A shape's corners are not read: the triangle's stand in for them.
+    return (not box_triangle_apart(rotation, centre, box_half, corners, margin)
+            and touching(kind, half, rotation, centre, corners, TRIANGLE, half, rotation,
+                         centre, corners))
+
+
+@kernel('b1(i8, f8[:], f8[:], f8[:, :], f8[:], i8, f8[:], f8[:], f8[:, :], f8[:], f8)')
+def touches_shape(kind_a, half_a, box_a, rotation_a, centre_a, kind_b, half_b, box_b,
+                  rotation_b, centre_b, margin):
+    """
+    Return whether two shapes (as in :func:`touches_triangle`) touch.
+
+    Whether two shapes (as in :func:`touches_triangle`) touch: the separating axis test of their
+    boxes, then the exact test.
+    """
+    # A shape's corners are not read: its rotation stands in for them.
+    return (not boxes_apart(rotation_a, centre_a, box_a, rotation_b, centre_b, box_b, margin)
+            and touching(kind_a, half_a, rotation_a, centre_a, rotation_a, kind_b, half_b,
+                         rotation_b, centre_b, rotation_b))

@@ -53,8 +53,8 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
-from .ct_space import (_illegal_rows, _motion_path, CHECK_TABLES_TYPE, CTSpace,
-                       first_legal_goal, ROW_MEMO_TYPE)
+from .ct_space import (CHECK_TABLES_TYPE, CTSpace, first_legal_goal, illegal_rows, motion_path,
+                       ROW_MEMO_TYPE, SPACE_ARGUMENTS_TYPE)
 from .jit import kernel
 
 
@@ -341,7 +341,7 @@ def _lasting_table(targets, ids, arrivals, begin, end, spacing, stride, free, he
     start if it arrives before it, every ``spacing``-th frame after its arrival, the end),
     first every ``stride``-th grid frame from the end (a coarse pass), then the rest; a
     target that does not move lasts where ``free`` (the objective legal) holds to the end.
-    The checks are :func:`_illegal_rows`' over the rows not known yet, in the order of the
+    The checks are :func:`illegal_rows`' over the rows not known yet, in the order of the
     targets and their grids, a later answer for the same posture and frame written over an
     earlier one.
     """
@@ -405,7 +405,7 @@ def _lasting_table(targets, ids, arrivals, begin, end, spacing, stride, free, he
             for r in range(count):
                 for j in range(d):
                     q[r, j] = objective[batch_frames[r], j] + targets[rows[r], j]
-            illegal = _illegal_rows(q, batch_frames, tables, memo)
+            illegal = illegal_rows(q, batch_frames, tables, memo)
             checks += count
             for r in range(count):
                 legal = not illegal[r]
@@ -507,20 +507,20 @@ def _visited_key(arrival, rounded, i):
     return (float(arrival), padded[0], padded[1], padded[2], padded[3])
 
 
-@kernel('Tuple((b1[::1], i8, i1[:, ::1]))(f8[:, ::1], i8[::1], i8, i8, b1[::1], i8[::1], '
-        'i1[:, ::1], ' + POSTURES_TYPE + ', f8[:, :], ' + CHECK_TABLES_TYPE + ', '
-        + ROW_MEMO_TYPE + ')')
+@kernel('Tuple((b1[::1], i1[:, ::1], i8))(f8[:, ::1], i8[::1], i8, i8, b1[::1], i8[::1], '
+        'i1[:, ::1], ' + POSTURES_TYPE + ', ' + SPACE_ARGUMENTS_TYPE + ')')
 def _lasting_from(targets, arrivals, here, hold_frames, free, next_free, held, postures,
-                  objective, tables, memo):
+                  objective, times, frame_step, speed_cap, tables, memo):
     """
     Return :meth:`CTRoadmap._lasting`: whether each held target lasts through the blockage.
 
     :meth:`CTRoadmap._lasting`: whether each of ``targets`` (m, d), held from its ``arrivals``
     (m,), lasts through the first blocked stretch from ``here`` on (all True where there is none),
-    the configurations checked, and ``held`` (a larger copy where new postures outgrew it).
+    ``held`` (a larger copy where new postures outgrew it), and the configurations checked.
 
     Each posture (a target rounded to 1e-4 rad) is numbered in ``postures`` as it first
-    appears (its row of ``held``), then :func:`_lasting_table` answers.
+    appears (its row of ``held``), then :func:`_lasting_table` answers. The arguments from
+    ``objective`` on are the space's (:meth:`CTSpace.run_checks`).
     """
     m = targets.shape[0]
     begin = -1
@@ -529,7 +529,7 @@ def _lasting_from(targets, arrivals, here, hold_frames, free, next_free, held, p
             begin = f
             break
     if begin < 0:
-        return np.ones(m, dtype=np.bool_), 0, held
+        return np.ones(m, dtype=np.bool_), held, 0
     rounded = np.round(targets, 4, np.empty_like(targets))  # ``out``: as in _neighbour_table
     ids = np.empty(m, dtype=np.int64)
     for i in range(m):
@@ -546,7 +546,7 @@ def _lasting_from(targets, arrivals, here, hold_frames, free, next_free, held, p
     lasting, checks = _lasting_table(targets, ids, arrivals, begin, next_free[begin],
                                      hold_frames, COARSE_STRIDE, free, held, objective,
                                      tables, memo)
-    return lasting, checks, held
+    return lasting, held, checks
 
 
 @kernel('i8[::1](i8[::1], f8[::1], b1, b1[::1])')
@@ -604,13 +604,13 @@ def _longest_hold(deviation, arrival, before, before_arrivals, failures):
 @kernel('Tuple((i8, f8[::1], i8, b1, f8[:, ::1], i8[::1], f8[:, ::1], i8[::1], b1, '
         'i1[:, ::1], i8))(f8[::1], i8, b1, f8[:, ::1], i8[::1], f8[:, ::1], b1, b1, b1, i8, '
         'readonly(f8[:, :]), b1, readonly(f8[:, :]), f8[:], i8, b1, i8, b1[::1], i8[::1], '
-        'i1[:, ::1], ' + POSTURES_TYPE + ', f8[:, :], f8[:], f8[:], f8[:, :], f8[:], '
-        + CHECK_TABLES_TYPE + ', ' + ROW_MEMO_TYPE + ', ' + VISITED_TYPE + ')')
+        'i1[:, ::1], ' + POSTURES_TYPE + ', ' + VISITED_TYPE + ', f8[:], '
+        + SPACE_ARGUMENTS_TYPE + ')')
 def _expand(deviation, here, has_candidates, candidate_targets, candidate_frames,
             candidate_keys, followed, tried_objective, relaxed, until, allowed, sub_goal,
             nodes, weights, max_candidates, prefer_lasting, hold_frames, free, next_free,
-            held, postures, objective, times, rate, frame_step, speed_cap, tables, memo,
-            visited):
+            held, postures, visited, rate, objective, times, frame_step, speed_cap, tables,
+            memo):
     """
     Advance from a state at ``here`` as :meth:`CTRoadmap._advance` does.
 
@@ -622,9 +622,10 @@ def _expand(deviation, here, has_candidates, candidate_targets, candidate_frames
     The state's other fields: ``followed``, ``tried_objective``, ``relaxed``, ``until``, and
     ``allowed`` (the nodes of a sub-goal, used while ``sub_goal``); the roadmap's ``nodes``,
     ``weights``, ``max_candidates`` and ``prefer_lasting``; the horizon's ``hold_frames``,
-    ``free``, ``next_free``, ``held`` and ``postures``; the space's ``objective``, ``times``,
-    ``frame_step``, ``speed_cap``, check ``tables`` and row ``memo``, the joint speeds ``rate``
-    of the search; ``visited``, the search's tried neighbours (added to here).
+    ``free``, ``next_free``, ``held`` and ``postures``; ``visited``, the search's tried
+    neighbours (added to here); the joint speeds ``rate`` of the search; then the space's
+    arguments (``objective`` to ``memo``, handed over by :meth:`CTSpace.run_checks`), read
+    only by the space's compiled checks but for the objective and the time grid.
 
     The ranking is :func:`_neighbour_table`'s, lasting postures first where the roadmap
     prefers them (:func:`_lasting_from`), the neighbours' end points checked in one batch with
@@ -685,9 +686,10 @@ def _expand(deviation, here, has_candidates, candidate_targets, candidate_frames
         m = table_frames.shape[0]
         lasting = np.ones(m, dtype=np.bool_)
         if approach_first:
-            lasting, more, held = _lasting_from(table_targets, table_frames, here,
+            lasting, held, more = _lasting_from(table_targets, table_frames, here,
                                                 hold_frames, free, next_free, held, postures,
-                                                objective, tables, memo)
+                                                objective, times, frame_step, speed_cap,
+                                                tables, memo)
             checks += more
         order = _ranking(ranked_frames, ranked_closeness, approach_first, lasting)
         if approach >= 0 and not lasting[m - 1]:
@@ -709,9 +711,9 @@ def _expand(deviation, here, has_candidates, candidate_targets, candidate_frames
                     for j in range(d):
                         motion_goal[j] = objective[motion_arrival, j] + table_targets[i, j]
                     if motion_arrival > here:
-                        extra, motion_late = _motion_path(objective, times, frame_step,
-                                                          speed_cap, start, here, motion_goal,
-                                                          motion_arrival)
+                        extra, motion_late = motion_path(objective, times, frame_step,
+                                                         speed_cap, start, here, motion_goal,
+                                                         motion_arrival)
                     break
         total = m + extra.shape[0]
         batch = np.empty((total, d))
@@ -725,7 +727,7 @@ def _expand(deviation, here, has_candidates, candidate_targets, candidate_frames
                 batch[m + r, j] = extra[r, j]
             batch_frames[m + r] = here + 1 + r
         checks += total
-        illegal = _illegal_rows(batch, batch_frames, tables, memo)
+        illegal = illegal_rows(batch, batch_frames, tables, memo)
         if extra.shape[0] == 0:
             motion_arrival = -1  # nothing checked ahead
         else:
@@ -1777,11 +1779,9 @@ class CTRoadmap:
         """
         # A coarse pass first (most postures that do not last fail it), then the rest of the
         # grid for the postures left; one kernel (_lasting_from).
-        lasting, checks, horizon.held = _lasting_from(
-            targets, arrivals, here, horizon.hold_frames, horizon.free, horizon.next_free,
-            horizon.held, horizon.postures, space.objective, space.check_tables,
-            space.row_memo)
-        space.checks += checks
+        lasting, horizon.held = space.run_checks(
+            _lasting_from, targets, arrivals, here, horizon.hold_frames, horizon.free,
+            horizon.next_free, horizon.held, horizon.postures)
         return lasting
 
     def _advance(self, space: CTSpace, state: _State, visited: set, horizon: _Horizon,
@@ -1821,17 +1821,15 @@ class CTRoadmap:
         ranked = state.candidates is not None
         allowed = state.allowed
         (outcome, deviation, arrival, inherit, targets, arrivals, keys, failures, lasting_only,
-         horizon.held, checks) = _expand(
-            state.deviation, state.frame, ranked,
+         horizon.held) = space.run_checks(
+            _expand, state.deviation, state.frame, ranked,
             *(state.candidates if ranked else self._no_candidates), state.followed,
             state.tried_objective, state.relaxed, state.until,
             self._no_nodes if allowed is None else allowed, allowed is not None, self.nodes,
             self.weights, self.max_candidates, self.prefer_lasting, horizon.hold_frames,
-            horizon.free, horizon.next_free, horizon.held, horizon.postures, space.objective,
-            space.times, speed_fraction * space.speed_limit, space.frame_step, space.speed_cap,
-            space.check_tables, space.row_memo, visited)
+            horizon.free, horizon.next_free, horizon.held, horizon.postures, visited,
+            speed_fraction * space.speed_limit)
         state.candidates = (targets, arrivals, keys)
-        space.checks += checks
         state.lasting_only |= lasting_only
         state.failures.extend(failures.tolist())
         if not outcome:

@@ -30,10 +30,9 @@ import weakref
 
 import numpy as np
 
+from .body_model import BodyKinematics, BodyShapes, EnvironmentIndex, TimedBody
 from .ct_roadmap import CTRoadmap, direct_return, objective_grid, ROADMAP_SEARCHES, warm_up
-from .ct_space import (
-    BodyKinematics, BodyShapes, branch_layout, branch_model, CTSpace, EnvironmentIndex,
-    TimedBody)
+from .ct_space import branch_layout, branch_model, CTSpace
 from .jit import kernel
 from .skeleton import Skeleton
 
