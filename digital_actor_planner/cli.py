@@ -240,6 +240,7 @@ def _simulate(args, outputs: '_Outputs') -> int:
     from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands, validate
     from digital_actor_planner.core.scene import load_scene, SceneError
     from digital_actor_planner.core.footsteps import FootstepConfig
+    from digital_actor_planner.core.gait import GaitConfig
     from digital_actor_planner.core.skeleton import Skeleton
 
     skeleton = Skeleton()
@@ -255,11 +256,13 @@ def _simulate(args, outputs: '_Outputs') -> int:
                        if args.render else None)
         commands = read_commands(args.commands)
         scene = load_scene(args.scene, skeleton)
-        config = ActorConfig(window_steps=args.window_steps, step_intervals=args.step_intervals,
-                             step_length_min=args.step_length_min,
-                             step_length_max=args.step_length_max, frame_rate=args.rate,
-                             plan_upper_body=not args.no_upper_body,
-                             footsteps=FootstepConfig(greedy_restart=not args.paper_search))
+        config = ActorConfig(plan_upper_body=not args.no_upper_body,
+                             footsteps=FootstepConfig(window_steps=args.window_steps,
+                                                      step_intervals=args.step_intervals,
+                                                      step_length_min=args.step_length_min,
+                                                      step_length_max=args.step_length_max,
+                                                      greedy_restart=not args.paper_search),
+                             gait=GaitConfig(frame_rate=args.rate))
         validate(config)
     except (InputError, SceneError, ValueError) as error:
         print(f'digital-actor simulate: error: {error}', file=sys.stderr)
@@ -305,7 +308,8 @@ def _simulate(args, outputs: '_Outputs') -> int:
         'final_status': actor.status, 'final_reason': actor.reason,
         'final_pose': {n: float(v) for n, v in zip(skeleton.joint_names[:4],
                                                    actor.configuration[:4])},
-        'window_steps': config.window_steps, 'step_intervals': config.step_intervals,
+        'window_steps': config.footsteps.window_steps,
+        'step_intervals': config.footsteps.step_intervals,
         'greedy_restart': config.footsteps.greedy_restart,
     }
     try:
