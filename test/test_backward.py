@@ -110,7 +110,7 @@ def test_backward_walk_on_the_flat_course():
         assert np.all(np.diff(window[:, 0]) < 0)
         assert np.abs(np.diff(window[:, 0])).max() <= LEGS_ONLY.backward_step_length_max + 1e-9
         assert np.all(np.abs(window[:, 3]) < 0.05), 'the feet face forward'
-    assert LEGS_ONLY.backward_step_length_max < LEGS_ONLY.step_length_max
+    assert LEGS_ONLY.backward_step_length_max < LEGS_ONLY.footsteps.step_length_max
     # The arms swing in counter-phase to the legs: each shoulder against its own hip.
     index = skeleton().index
     for side in ('left', 'right'):
