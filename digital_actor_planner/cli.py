@@ -256,8 +256,8 @@ def _simulate(args, outputs: '_Outputs') -> int:
                        if args.render else None)
         commands = read_commands(args.commands)
         scene = load_scene(args.scene, skeleton)
-        given = {name: getattr(args, name) for name in ('window_steps', 'step_intervals',
-                                                         'step_length_min', 'step_length_max')
+        options = ('window_steps', 'step_intervals', 'step_length_min', 'step_length_max')
+        given = {name: getattr(args, name) for name in options
                  if getattr(args, name) is not None}
         rate = {} if args.rate is None else {'frame_rate': args.rate}
         config = ActorConfig(plan_upper_body=not args.no_upper_body,
