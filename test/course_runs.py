@@ -89,8 +89,7 @@ def actor_with_lasting_branches(environment, start, lasting_branches, config=Act
     """
     collision = BodyCollision(skeleton(), environment)
     upper = UpperBodyPlanner(skeleton(), collision,
-                             UpperBodyConfig(check_budget=int(config.upper_body_check_budget),
-                                             lasting_branches=tuple(lasting_branches)),
+                             UpperBodyConfig(lasting_branches=tuple(lasting_branches)),
                              rng=np.random.default_rng(planner_seed))
     return Actor(skeleton(), environment, config, start=start, upper_body_planner=upper,
                  body_collision=collision)

@@ -103,7 +103,7 @@ def test_speed_follows_the_command(actor):
 @pytest.mark.parametrize('field, value', [
     ('window_steps', 0), ('step_intervals', 0), ('max_linear_speed', 0.0),
     ('frame_rate', 5.0), ('step_length_min', 0.9), ('hold_time', float('nan')),
-    ('upper_body_check_budget', 0), ('follow_check_rise', -0.1), ('pivot_either_foot', 1),
+    ('check_budget', 0), ('follow_check_rise', -0.1), ('pivot_either_foot', 1),
 ])
 def test_bad_configuration_names_the_field(field, value):
     with pytest.raises(ConfigError, match=field) as caught:

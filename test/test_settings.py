@@ -40,7 +40,7 @@ def _outside(declaration):
 def test_every_field_is_declared_and_refused_past_its_range_by_name(config_class):
     declared = declared_settings(config_class)
     default = config_class()
-    nested = {'footsteps', 'gait', 'actor'}
+    nested = {'footsteps', 'gait', 'upper_body', 'actor'}
     for name in default.__dataclass_fields__:
         assert name in declared or name in nested, f'{config_class.__name__}.{name} undeclared'
     for name, declaration in declared.items():

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
 import time as _time
-from typing import Optional, Tuple
+from typing import Optional, Tuple, TYPE_CHECKING
 
 import numpy as np
 
@@ -20,6 +20,9 @@ from .gait import (foot_pose_on, GaitConfig, GaitError, hold_frames, Stance, sta
 from .path import predict_path
 from .settings import check_settings, ConfigError, declared_settings, require, setting
 from .skeleton import Skeleton
+
+if TYPE_CHECKING:
+    from .upper_body import UpperBodyConfig
 
 LEG_LINKS = ('pelvis', 'left_hip', 'left_thigh', 'left_shank', 'left_foot', 'right_hip',
              'right_thigh', 'right_shank', 'right_foot')
@@ -103,8 +106,6 @@ class ActorConfig:
         True, doc="Generate the window's next footstep too where it swings over high ground.")
     follow_check_rise: float = setting(
         0.03, 0.0, 1.0, 'How high above the sole ground must rise for check_follow.', 'm')
-    upper_body_check_budget: int = setting(
-        15000, 1, None, 'Configurations a branch search of the upper body may check per plan.')
     upper_body_attempts: int = setting(
         6, 0, None, 'Footsteps tried for the upper body before the step is refused.')
     # Backward walking (a mouse drag downwards, negative linear speed; see docs/backward.md).
@@ -133,6 +134,9 @@ class ActorConfig:
         0.20, 0.0, None, 'Deepest backward step down.', 'm')
     footsteps: FootstepConfig = field(default_factory=FootstepConfig)
     gait: GaitConfig = field(default_factory=GaitConfig)
+    # The upper-body planner's settings (upper_body.UpperBodyConfig); None: its defaults. Not
+    # built here: the upper-body planner's module is loaded only where it plans.
+    upper_body: Optional[UpperBodyConfig] = None
 
     def __post_init__(self):
         """Check every field against its declaration and the cross-field rules."""
@@ -141,6 +145,10 @@ class ActorConfig:
                 f'footsteps must be a FootstepConfig, got {self.footsteps!r}')
         require(isinstance(self.gait, GaitConfig), 'gait', self.gait,
                 f'gait must be a GaitConfig, got {self.gait!r}')
+        if self.upper_body is not None:
+            from .upper_body import UpperBodyConfig
+            require(isinstance(self.upper_body, UpperBodyConfig), 'upper_body', self.upper_body,
+                    f'upper_body must be an UpperBodyConfig or None, got {self.upper_body!r}')
         require(self.max_backward_speed <= self.max_linear_speed, 'max_backward_speed',
                 self.max_backward_speed, f'max_backward_speed {self.max_backward_speed} must '
                 f'not exceed max_linear_speed {self.max_linear_speed} m/s')
@@ -152,13 +160,13 @@ class ActorConfig:
     @classmethod
     def from_settings(cls, **values) -> 'ActorConfig':
         """
-        Return the config with the given settings of its own, its footsteps' and its gait's.
+        Return the config with the given settings of its own and of its parts.
 
         Parameters
         ----------
         values
-            Settings by name: fields of :class:`FootstepConfig`, :class:`GaitConfig` or this
-            class (their names do not overlap).
+            Settings by name: fields of :class:`FootstepConfig`, :class:`GaitConfig`,
+            ``upper_body.UpperBodyConfig`` or this class (their names do not overlap).
 
         Raises
         ------
@@ -166,15 +174,20 @@ class ActorConfig:
             A bad value, or a name that is no setting (naming it).
 
         """
-        parts = {'footsteps': {}, 'gait': {}, 'own': {}}
-        owners = ((FootstepConfig, 'footsteps'), (GaitConfig, 'gait'), (cls, 'own'))
+        parts = {'footsteps': {}, 'gait': {}, 'upper_body': {}, 'own': {}}
+        owners = [(FootstepConfig, 'footsteps'), (GaitConfig, 'gait'), (cls, 'own')]
         for name, value in values.items():
             part = next((p for owner, p in owners if name in declared_settings(owner)), None)
+            if part is None and len(owners) == 3:
+                from .upper_body import UpperBodyConfig
+                owners.append((UpperBodyConfig, 'upper_body'))
+                part = 'upper_body' if name in declared_settings(UpperBodyConfig) else None
             if part is None:
                 raise ConfigError(name, value, f'{name} is no setting of the actor')
             parts[part][name] = value
+        upper_body = owners[3][0](**parts['upper_body']) if parts['upper_body'] else None
         return cls(footsteps=FootstepConfig(**parts['footsteps']),
-                   gait=GaitConfig(**parts['gait']), **parts['own'])
+                   gait=GaitConfig(**parts['gait']), upper_body=upper_body, **parts['own'])
 
     @property
     def frame_rate(self) -> float:
@@ -316,8 +329,7 @@ class Actor:
             from .upper_body import UpperBodyPlanner
             from .upper_body import UpperBodyConfig
             upper_body_planner = UpperBodyPlanner(
-                skeleton, self._collision,
-                UpperBodyConfig(check_budget=int(config.upper_body_check_budget)),
+                skeleton, self._collision, config.upper_body or UpperBodyConfig(),
                 rng=np.random.default_rng(0))
         self._upper = upper_body_planner
         q = start_configuration(environment, start, skeleton)
