@@ -110,8 +110,8 @@ def steps(heights):
 def escapes():
     print('\n| stuck at | reason | backward steps (4 s) | m back | checker | plan s |')
     print('|---|---|---:|---:|---|---:|')
-    one = ActorConfig(window_steps=1, plan_upper_body=False,
-                      footsteps=FootstepConfig(greedy_restart=False))
+    one = ActorConfig(plan_upper_body=False,
+                      footsteps=FootstepConfig(window_steps=1, greedy_restart=False))
     cases = (('wall', None, ActorConfig()), ('beam_too_low', None, ActorConfig()),
              ('flat', (13.0, 0.0, 0.0), LEGS), ('figure8_trap', None, one))
     for name, start, config in cases:

@@ -27,6 +27,7 @@ import time
 
 from digital_actor_planner.cli import read_commands
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
+from digital_actor_planner.core.footsteps import FootstepConfig
 from digital_actor_planner.core.scene import load_scene
 from digital_actor_planner.core.skeleton import Skeleton
 from digital_actor_planner.evaluation.trajectory_check import check_trajectory
@@ -40,7 +41,8 @@ def run(name, skeleton, upper_body=True, window_steps=3, check=True):
     scene = load_scene(os.path.join(ROOT, 'config', 'scenes', name + '.yaml'), skeleton)
     commands = read_commands(os.path.join(ROOT, 'config', 'scenes', name + '.csv'))
     actor = Actor(skeleton, scene.environment,
-                  ActorConfig(plan_upper_body=upper_body, window_steps=window_steps),
+                  ActorConfig(plan_upper_body=upper_body,
+                              footsteps=FootstepConfig(window_steps=window_steps)),
                   start=scene.start)
     started = time.perf_counter()
     blocks = run_commands(actor, [c.time for c in commands], [c.linear_x for c in commands],

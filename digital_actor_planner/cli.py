@@ -240,6 +240,7 @@ def _simulate(args, outputs: '_Outputs') -> int:
     from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands, validate
     from digital_actor_planner.core.scene import load_scene, SceneError
     from digital_actor_planner.core.footsteps import FootstepConfig
+    from digital_actor_planner.core.gait import GaitConfig
     from digital_actor_planner.core.skeleton import Skeleton
 
     skeleton = Skeleton()
@@ -255,11 +256,14 @@ def _simulate(args, outputs: '_Outputs') -> int:
                        if args.render else None)
         commands = read_commands(args.commands)
         scene = load_scene(args.scene, skeleton)
-        config = ActorConfig(window_steps=args.window_steps, step_intervals=args.step_intervals,
-                             step_length_min=args.step_length_min,
-                             step_length_max=args.step_length_max, frame_rate=args.rate,
-                             plan_upper_body=not args.no_upper_body,
-                             footsteps=FootstepConfig(greedy_restart=not args.paper_search))
+        options = ('window_steps', 'step_intervals', 'step_length_min', 'step_length_max')
+        given = {name: getattr(args, name) for name in options
+                 if getattr(args, name) is not None}
+        rate = {} if args.rate is None else {'frame_rate': args.rate}
+        config = ActorConfig(plan_upper_body=not args.no_upper_body,
+                             footsteps=FootstepConfig(greedy_restart=not args.paper_search,
+                                                      **given),
+                             gait=GaitConfig(**rate))
         validate(config)
     except (InputError, SceneError, ValueError) as error:
         print(f'digital-actor simulate: error: {error}', file=sys.stderr)
@@ -305,7 +309,8 @@ def _simulate(args, outputs: '_Outputs') -> int:
         'final_status': actor.status, 'final_reason': actor.reason,
         'final_pose': {n: float(v) for n, v in zip(skeleton.joint_names[:4],
                                                    actor.configuration[:4])},
-        'window_steps': config.window_steps, 'step_intervals': config.step_intervals,
+        'window_steps': config.footsteps.window_steps,
+        'step_intervals': config.footsteps.step_intervals,
         'greedy_restart': config.footsteps.greedy_restart,
     }
     try:
@@ -397,11 +402,12 @@ def build_parser() -> argparse.ArgumentParser:
                           '(MCAP storage) of /joint_states, the markers and the path instead')
     sim.add_argument('--summary', help='JSON summary to write')
     sim.add_argument('--render', help='PNG (key poses) or GIF (animation) to write')
-    sim.add_argument('--window-steps', type=int, default=3, help='n, footsteps per window')
-    sim.add_argument('--step-intervals', type=int, default=13, help='m, step length intervals')
-    sim.add_argument('--step-length-min', type=float, default=0.15, help='m')
-    sim.add_argument('--step-length-max', type=float, default=0.80, help='m')
-    sim.add_argument('--rate', type=float, default=100.0, help='frames per second')
+    # No defaults here: unset, the settings' declared defaults (FootstepConfig, GaitConfig).
+    sim.add_argument('--window-steps', type=int, help='n, footsteps per window')
+    sim.add_argument('--step-intervals', type=int, help='m, step length intervals')
+    sim.add_argument('--step-length-min', type=float, help='m')
+    sim.add_argument('--step-length-max', type=float, help='m')
+    sim.add_argument('--rate', type=float, help='frames per second')
     sim.add_argument('--no-upper-body', action='store_true',
                      help='keep the motion patterns, skip upper-body planning')
     sim.add_argument('--paper-search', action='store_true',

@@ -16,7 +16,8 @@
 Write the README's table of the planner node's parameters from their one declaration.
 
 The table is generated from ``nodes/planner_params.parameter_declarations()`` (name, default,
-descriptor), so the README cannot drift from what the node declares; ``test/test_readme.py``
+descriptor) and the units of ``parameter_settings()``, both built from each parameter's one
+declaration, so the README cannot drift from what the node declares; ``test/test_readme.py``
 fails when they differ. Run from the repository root::
 
     python scripts/parameter_table.py            # print the table
@@ -27,7 +28,7 @@ import argparse
 import enum
 import os
 import sys
-from typing import Any, List, Sequence, Tuple
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 README = os.path.join(ROOT, 'README.md')
@@ -39,6 +40,12 @@ def _declarations() -> List[Tuple[str, Any, Any]]:
     sys.path.insert(0, ROOT)
     from digital_actor_planner.nodes.planner_params import parameter_declarations
     return parameter_declarations()
+
+
+def _units() -> Dict[str, str]:
+    sys.path.insert(0, ROOT)
+    from digital_actor_planner.nodes.planner_params import parameter_settings
+    return {name: declaration.unit for name, declaration in parameter_settings()}
 
 
 def _cell(text: str) -> str:
@@ -73,7 +80,8 @@ def _range(descriptor: Any) -> str:
     return '; '.join(parts)
 
 
-def render_table(declarations: Sequence[Tuple[str, Any, Any]]) -> str:
+def render_table(declarations: Sequence[Tuple[str, Any, Any]],
+                 units: Optional[Mapping[str, str]] = None) -> str:
     """
     Return the Markdown table of the given parameter declarations.
 
@@ -82,6 +90,8 @@ def render_table(declarations: Sequence[Tuple[str, Any, Any]]) -> str:
     declarations
         ``(name, default or Parameter.Type, ParameterDescriptor)`` per parameter, as
         ``parameter_declarations()`` returns them.
+    units
+        The unit of each parameter by name ('' or absent: none); None: the node's own.
 
     Returns
     -------
@@ -89,13 +99,15 @@ def render_table(declarations: Sequence[Tuple[str, Any, Any]]) -> str:
         The table, one row per parameter in declaration order, ending with a newline.
 
     """
-    lines = ['| name | type | default | range | set at run time | description |',
-             '|---|---|---|---|---|---|']
+    units = _units() if units is None else units
+    lines = ['| name | type | default | range | unit | set at run time | description |',
+             '|---|---|---|---|---|---|---|']
     for name, default, descriptor in declarations:
         kind, shown = _type_and_default(default)
         run_time = 'no' if descriptor.read_only else 'yes'
         lines.append(f'| `{name}` | {kind} | {shown} | {_cell(_range(descriptor))} | '
-                     f'{run_time} | {_cell(descriptor.description)} |')
+                     f'{_cell(units.get(name, ""))} | {run_time} | '
+                     f'{_cell(descriptor.description)} |')
     return '\n'.join(lines) + '\n'
 
 

@@ -63,8 +63,9 @@ def simulate(name, window_steps=3, upper_body=True, greedy_restart=True, lasting
     """
     sc = scene(name)
     commands = read_commands(os.path.join(SCENES, name + '.csv'))
-    config = ActorConfig(window_steps=window_steps, plan_upper_body=upper_body,
-                         footsteps=FootstepConfig(greedy_restart=greedy_restart),
+    config = ActorConfig(plan_upper_body=upper_body,
+                         footsteps=FootstepConfig(window_steps=window_steps,
+                                                  greedy_restart=greedy_restart),
                          upper_body_seed=upper_body_seed)
     if lasting_branches is None:
         actor = Actor(skeleton(), sc.environment, config, start=sc.start)
@@ -88,8 +89,7 @@ def actor_with_lasting_branches(environment, start, lasting_branches, config=Act
     """
     collision = BodyCollision(skeleton(), environment)
     upper = UpperBodyPlanner(skeleton(), collision,
-                             UpperBodyConfig(check_budget=int(config.upper_body_check_budget),
-                                             lasting_branches=tuple(lasting_branches)),
+                             UpperBodyConfig(lasting_branches=tuple(lasting_branches)),
                              rng=np.random.default_rng(planner_seed))
     return Actor(skeleton(), environment, config, start=start, upper_body_planner=upper,
                  body_collision=collision)

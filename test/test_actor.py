@@ -18,6 +18,9 @@ from digital_actor_planner.core import actor as actor_module
 from digital_actor_planner.core import gait as gait_module
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands, validate
 from digital_actor_planner.core.environment import Environment
+from digital_actor_planner.core.footsteps import FootstepConfig
+from digital_actor_planner.core.gait import GaitConfig
+from digital_actor_planner.core.settings import ConfigError
 from digital_actor_planner.core.upper_body import UpperBodyPlan
 import numpy as np
 import pytest
@@ -100,11 +103,37 @@ def test_speed_follows_the_command(actor):
 @pytest.mark.parametrize('field, value', [
     ('window_steps', 0), ('step_intervals', 0), ('max_linear_speed', 0.0),
     ('frame_rate', 5.0), ('step_length_min', 0.9), ('hold_time', float('nan')),
-    ('upper_body_check_budget', 0), ('follow_check_rise', -0.1),
+    ('check_budget', 0), ('follow_check_rise', -0.1), ('pivot_either_foot', 1),
 ])
 def test_bad_configuration_names_the_field(field, value):
-    with pytest.raises(ValueError, match=field if field != 'step_length_min' else 'step_length'):
-        validate(ActorConfig(**{field: value}))
+    with pytest.raises(ConfigError, match=field) as caught:
+        ActorConfig.from_settings(**{field: value})
+    assert caught.value.name == field
+    assert caught.value.value == value or value != value
+
+
+def test_the_footstep_window_asked_for_is_the_one_planned():
+    sc = scene('flat')
+    windows = {}
+    for n in (1, 5):
+        actor = Actor(skeleton(), sc.environment,
+                      ActorConfig(plan_upper_body=False, footsteps=FootstepConfig(window_steps=n)),
+                      start=sc.start)
+        blocks = run_commands(actor, [0.0, 2.0], [0.8, 0.0], [0.0, 0.0])
+        windows[n] = {len(b.footsteps) for b in blocks if b.status == 'walking' and b.category
+                      in ('level', 'uphill', 'downhill')}
+    assert windows == {1: {1}, 5: {5}}, windows
+
+
+def test_the_gaits_frame_rate_is_the_rate_of_the_frames():
+    sc = scene('flat')
+    actor = Actor(skeleton(), sc.environment,
+                  ActorConfig(plan_upper_body=False, gait=GaitConfig(frame_rate=50)),
+                  start=sc.start)
+    blocks = run_commands(actor, [0.0, 2.0], [0.6, 0.0], [0.0, 0.0])
+    steps = np.diff(np.concatenate([b.times for b in blocks]))
+    assert actor.config.frame_rate == 50
+    assert np.allclose(steps, 0.02), np.unique(np.round(steps, 4))
 
 
 class BlockedUpperBody:
@@ -362,8 +391,9 @@ def test_a_pivot_at_a_stair_nosing_lands_on_the_tread_and_never_steps_on_the_spo
     """
     sc = scene('stairs_up')
 
-    def turn():
-        actor = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False),
+    def turn(either=True):
+        actor = Actor(skeleton(), sc.environment,
+                      ActorConfig(plan_upper_body=False, pivot_either_foot=either),
                       start=(1.55, 0.0, 0.0))
         return run_commands(actor, [0.0, 4.0], [0.0, 0.0], [1.0, 0.0])
 
@@ -378,8 +408,7 @@ def test_a_pivot_at_a_stair_nosing_lands_on_the_tread_and_never_steps_on_the_spo
     assert blocks[-1].status == 'stuck'
     # Landing only beside the stance foot, with the foot due to swing, it does not turn at all.
     monkeypatch.setattr(actor_module, 'PIVOT_SHIFTS', (0.0,))
-    monkeypatch.setattr(actor_module, 'PIVOT_EITHER_FOOT', False)
-    plain = turn()
+    plain = turn(either=False)
     assert not any(b.category for b in plain)
 
 
@@ -397,9 +426,9 @@ def test_beside_the_tables_corner_the_foot_that_landed_last_pivots(monkeypatch):
     commands = [(0.0, 1.07, 0.179), (1.669, 0.427, -0.838), (3.342, 1.095, 0.538),
                 (3.65, 0.0, -1.0), (7.65, 0.0, 0.0)]
 
-    def walk():
-        actor = Actor(skeleton(), sc.environment, ActorConfig(**RECORDED_STRIDES),
-                      start=sc.start)
+    def walk(either=True):
+        actor = Actor(skeleton(), sc.environment,
+                      ActorConfig(pivot_either_foot=either, **RECORDED_STRIDES), start=sc.start)
         return run_commands(actor, *zip(*commands))
 
     blocks = walk()
@@ -415,8 +444,7 @@ def test_beside_the_tables_corner_the_foot_that_landed_last_pivots(monkeypatch):
     assert away[-1].frames[-1, 3] < stop.frames[-1, 3] - 1.5
     _, _, report = judged(blocks, sc.environment)
     assert report.ok, report.failures()
-    monkeypatch.setattr(actor_module, 'PIVOT_EITHER_FOOT', False)
-    assert not any(b.times[0] > 3.65 and b.category for b in walk())
+    assert not any(b.times[0] > 3.65 and b.category for b in walk(either=False))
 
 
 def test_a_foot_behind_the_other_beside_the_table_turns_where_it_stands(monkeypatch):
@@ -435,8 +463,9 @@ def test_a_foot_behind_the_other_beside_the_table_turns_where_it_stands(monkeypa
                 (8.085, 1.117, 0.996), (8.394, 0.829, -0.185), (8.6, 0.0, -1.0),
                 (12.6, 0.0, 0.0)]
 
-    def walk():
-        actor = Actor(skeleton(), sc.environment, ActorConfig(), start=sc.start)
+    def walk(either=True):
+        actor = Actor(skeleton(), sc.environment, ActorConfig(pivot_either_foot=either),
+                      start=sc.start)
         return run_commands(actor, *zip(*commands))
 
     blocks = walk()
@@ -452,8 +481,7 @@ def test_a_foot_behind_the_other_beside_the_table_turns_where_it_stands(monkeypa
     _, _, report = judged(blocks, sc.environment)
     assert report.ok, report.failures()
     monkeypatch.setattr(actor_module, 'PIVOT_SHIFTS', actor_module.PIVOT_SHIFTS[:-1])
-    monkeypatch.setattr(actor_module, 'PIVOT_EITHER_FOOT', False)
-    assert not any(b.times[0] > 8.6 and b.category for b in walk())
+    assert not any(b.times[0] > 8.6 and b.category for b in walk(either=False))
 
 
 def test_a_foot_that_lands_away_from_its_foothold_must_rest_where_it_lands():
@@ -714,24 +742,25 @@ def test_weaving_to_the_floors_edge_ends_where_turning_away_frees_the_actor(monk
                 (7.108, 0.0, 0.917), (8.694, 1.029, -0.231), (9.917, 1.008, 1.174),
                 (10.561, 0.466, -0.646), (11.738, 0.0, 0.763), (12.45, 0.0, 0.0)]
 
-    def walk(commands):
-        actor = Actor(skeleton(), sc.environment, ActorConfig(plan_upper_body=False),
+    def walk(commands, either=True):
+        actor = Actor(skeleton(), sc.environment,
+                      ActorConfig(plan_upper_body=False, pivot_either_foot=either),
                       start=sc.start)
         return run_commands(actor, *zip(*commands))
 
-    def steps_turning_away():
-        blocks = walk(commands)
+    def steps_turning_away(either=True):
+        blocks = walk(commands, either)
         _, _, report = judged(blocks, sc.environment)
         assert report.ok, report.failures()
         at = next(b for b in blocks if b.status == 'stuck').times[0] + 0.3
         kept = [c for c in commands if c[0] < at]
-        return [sum(b.status == 'walking' for b in walk(kept + [(at, 0.0, w), (at + 4, 0.0, 0.0)])
+        return [sum(b.status == 'walking'
+                    for b in walk(kept + [(at, 0.0, w), (at + 4, 0.0, 0.0)], either)
                     if b.times[0] > at) for w in (1.0, -1.0)]
 
     assert min(steps_turning_away()) >= 2
     monkeypatch.setattr(gait_module, 'LEGS_LANDING_MARGIN', 0.01)
-    monkeypatch.setattr(actor_module, 'PIVOT_EITHER_FOOT', False)
-    assert steps_turning_away() == [0, 0]
+    assert steps_turning_away(either=False) == [0, 0]
 
 
 @pytest.mark.parametrize('value', [-0.1, 1.5, float('nan')])

@@ -110,7 +110,7 @@ def test_backward_walk_on_the_flat_course():
         assert np.all(np.diff(window[:, 0]) < 0)
         assert np.abs(np.diff(window[:, 0])).max() <= LEGS_ONLY.backward_step_length_max + 1e-9
         assert np.all(np.abs(window[:, 3]) < 0.05), 'the feet face forward'
-    assert LEGS_ONLY.backward_step_length_max < LEGS_ONLY.step_length_max
+    assert LEGS_ONLY.backward_step_length_max < LEGS_ONLY.footsteps.step_length_max
     # The arms swing in counter-phase to the legs: each shoulder against its own hip.
     index = skeleton().index
     for side in ('left', 'right'):
@@ -324,8 +324,8 @@ def test_a_backward_drag_frees_the_one_step_window_stuck_in_figure8s_trap():
     """
     sc, _, _, blocks = simulate('figure8_trap', window_steps=1, greedy_restart=False)
     assert blocks[-1].status == 'stuck'
-    config = ActorConfig(window_steps=1, plan_upper_body=False,
-                         footsteps=FootstepConfig(greedy_restart=False))
+    config = ActorConfig(plan_upper_body=False,
+                         footsteps=FootstepConfig(window_steps=1, greedy_restart=False))
     stuck_at, after, frames, report = escape('figure8_trap', [(0.0, 0.8, 0.0), (10.0, 0.8, 0.0)],
                                              config)
     x0, x1 = sc.expect['trap_x']
@@ -345,7 +345,7 @@ def test_node_parameters_set_the_backward_limits_and_name_a_bad_one():
                   max_backward_speed=0.3, allow_backward=False)
     config = read_node_config(values.get)
     validate_node_config(config)
-    actor_config = ActorConfig(**config.actor_config_fields())
+    actor_config = ActorConfig.from_settings(**config.actor_config_fields())
     assert actor_config.max_backward_speed == 0.3 and not actor_config.allow_backward
     with pytest.raises(ConfigurationError, match='max_backward_speed') as caught:
         validate_node_config(read_node_config(dict(values, max_backward_speed=2.0).get))

@@ -93,8 +93,7 @@ def _walk(skeleton, name, roadmap_search):
     config = ActorConfig()
     collision = BodyCollision(skeleton, sc.environment)
     upper = UpperBodyPlanner(skeleton, collision,
-                             UpperBodyConfig(check_budget=int(config.upper_body_check_budget),
-                                             roadmap_search=roadmap_search),
+                             UpperBodyConfig(roadmap_search=roadmap_search),
                              rng=np.random.default_rng(0))
     actor = Actor(skeleton, sc.environment, config, start=sc.start, upper_body_planner=upper,
                   body_collision=collision)

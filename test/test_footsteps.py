@@ -336,11 +336,11 @@ def test_config_validation_names_the_field(leg):
         validate_footstep_config(FootstepConfig(step_length_min=0.9, step_length_max=0.8))
     with pytest.raises(ValueError, match='step_intervals'):
         FootstepPlanner(FootstepConfig(step_intervals=0), leg)
-    with pytest.raises(ValueError, match=r'lift_room must be finite and >= 0, got -0.01'):
+    with pytest.raises(ValueError, match=r'lift_room must be .*>= 0 m, got -0.01'):
         FootstepPlanner(FootstepConfig(lift_room=-0.01), leg)
-    with pytest.raises(ValueError, match=r'lift_rise must be finite and >= 0, got nan'):
+    with pytest.raises(ValueError, match=r'lift_rise must be .*>= 0 m, got nan'):
         FootstepPlanner(FootstepConfig(lift_rise=float('nan')), leg)
-    with pytest.raises(ValueError, match=r'lift_step_up must be finite and >= 0, got inf'):
+    with pytest.raises(ValueError, match=r'lift_step_up must be .*>= 0 m, got inf'):
         FootstepPlanner(FootstepConfig(lift_step_up=float('inf')), leg)
 
 

@@ -71,8 +71,7 @@ def test_a_cpu_budget_far_above_need_leaves_the_plan_unchanged(monkeypatch):
     collision = BodyCollision(skeleton(), sc.environment)
     config = ActorConfig()
     upper = UpperBodyPlanner(skeleton(), collision,
-                             UpperBodyConfig(check_budget=int(config.upper_body_check_budget),
-                                             time_budget=30.0),
+                             UpperBodyConfig(time_budget=30.0),
                              rng=np.random.default_rng(0))
     actor = Actor(skeleton(), sc.environment, config, start=sc.start,
                   upper_body_planner=upper, body_collision=collision)

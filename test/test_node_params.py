@@ -32,7 +32,7 @@ CASES = [
     ('publish_rate', ['-p', 'publish_rate:=0.5']),
     ('publish_rate', ['-p', 'publish_rate:=fast']),
     ('window_steps', ['-p', 'window_steps:=0']),
-    ('step_intervals', ['-p', 'step_intervals:=1']),
+    ('step_intervals', ['-p', 'step_intervals:=0']),
     ('step_length_min', ['-p', 'step_length_min:=0.9', '-p', 'step_length_max:=0.8']),
     ('max_linear_speed', ['-p', 'max_linear_speed:=-1.0']),
     ('cmd_timeout', ['-p', 'cmd_timeout:=0.0']),
@@ -43,6 +43,16 @@ CASES = [
     ('start_pose', ['-p', 'start_pose:=[500.0, 500.0, 0.0]']),  # no ground there
 ]
 
+# Values past the declared range or a rule between parameters: exit status 2, naming the
+# parameter and the value (the range the descriptor states is the one the core checks).
+VALUE_CASES = [
+    ('step_length_max', '1.5', ['-p', 'step_length_max:=1.5']),
+    ('window_steps', '9', ['-p', 'window_steps:=9']),
+    ('step_intervals', '61', ['-p', 'step_intervals:=61']),
+    ('max_angular_speed', '0.0', ['-p', 'max_angular_speed:=0.0']),
+    ('max_backward_speed', '1.5', ['-p', 'max_backward_speed:=1.5']),
+]
+
 
 @pytest.fixture(scope='module')
 def runs(tmp_path_factory):
@@ -51,7 +61,7 @@ def runs(tmp_path_factory):
     broken = folder / 'broken.yaml'
     broken.write_text('meshes: [{file: no_such_mesh.stl}]\n')
     processes = []
-    for _, arguments in CASES:
+    for _, arguments in CASES + [(name, arguments) for name, _, arguments in VALUE_CASES]:
         if arguments == 'broken':
             arguments = ['-p', f'scene:={broken}']
         processes.append(subprocess.Popen(node_command(*arguments), env=ros_env(DOMAIN_ID),
@@ -78,4 +88,16 @@ def test_bad_parameter_exits_non_zero_naming_it(case, runs):
     assert returncode != 0, output
     # The exit status too: under heavy load a run can exit non-zero with no output at all.
     assert f"parameter '{parameter}'" in output, (returncode, output)
+    assert 'Traceback' not in output, output
+
+
+@pytest.mark.parametrize('case', range(len(VALUE_CASES)),
+                         ids=[f'{name}-{value}' for name, value, _ in VALUE_CASES])
+def test_value_out_of_range_exits_2_naming_parameter_and_value(case, runs):
+    parameter, value, _ = VALUE_CASES[case]
+    returncode, output = runs[len(CASES) + case]
+    assert returncode == 2, output
+    message = next((line for line in output.splitlines() if 'invalid configuration' in line), '')
+    assert f"parameter '{parameter}'" in message, output
+    assert value in message.split(f"parameter '{parameter}'", 1)[1], output
     assert 'Traceback' not in output, output

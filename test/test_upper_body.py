@@ -16,8 +16,9 @@
 from digital_actor_planner.core import ct_roadmap
 from digital_actor_planner.core.collision import BodyCollision
 from digital_actor_planner.core.environment import Environment
+from digital_actor_planner.core.settings import ConfigError
 from digital_actor_planner.core.upper_body import (
-    motion_patterns, UpperBodyConfig, UpperBodyPlanner, validate_upper_body_config)
+    motion_patterns, UpperBodyConfig, UpperBodyPlanner)
 import numpy as np
 import pytest
 from scene_helpers import box, walk
@@ -271,12 +272,10 @@ def test_successive_steps_join_continuously_and_are_deterministic(skeleton):
     ('time_budget', -1.0), ('check_budget', 0), ('check_budget', 2.5),
     ('preview_backtracks', -1), ('lasting_branches', ('left_arm', 'torso')),
     ('lasting_branches', 'waist'), ('lasting_branches', None)])
-def test_bad_config_names_the_field(skeleton, field, value):
-    config = UpperBodyConfig(**{field: value})
-    with pytest.raises(ValueError, match=field):
-        validate_upper_body_config(config)
-    with pytest.raises(ValueError, match=field):
-        planner_for(skeleton, config=config)
+def test_bad_config_names_the_field(field, value):
+    with pytest.raises(ConfigError, match=field) as caught:
+        UpperBodyConfig(**{field: value})
+    assert caught.value.name == field
 
 
 def test_objective_outside_limits_names_the_joint(skeleton):

@@ -246,8 +246,7 @@ def test_what_the_preview_margin_and_the_pause_change_at_the_pillars(
     # pause too.
     collision = BodyCollision(sk, sc.environment)
     upper = UpperBodyPlanner(sk, collision,
-                             UpperBodyConfig(check_budget=config.upper_body_check_budget,
-                                             waist_back_lean=0.3),
+                             UpperBodyConfig(waist_back_lean=0.3),
                              rng=np.random.default_rng(0))
     actor = Actor(sk, sc.environment, config, start=sc.start, upper_body_planner=upper,
                   body_collision=collision)

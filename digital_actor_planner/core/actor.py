@@ -18,11 +18,11 @@ import numpy as np
 from .collision import BodyCollision
 from .environment import Environment, finite_numbers, SceneError
 from .footsteps import (describe_ground_ahead, FootstepConfig, FootstepPlanner, FootstepWindow,
-                        LEFT, RIGHT, sample_ground_profile, validate_footstep_config)
+                        LEFT, RIGHT, sample_ground_profile)
 from .gait import (foot_pose_on, GaitConfig, GaitError, hold_frames, leg_inverse_kinematics,
-                   Stance, standing_stance, StepMotion, validate_gait_config, WalkGenerator,
-                   with_at_rest)
+                   Stance, standing_stance, StepMotion, WalkGenerator, with_at_rest)
 from .path import predict_path
+from .settings import check_settings, ConfigError, declared_settings, require, setting
 from .skeleton import Skeleton
 from .upper_body import motion_patterns, UpperBodyConfig, UpperBodyPlanner
 
@@ -37,49 +37,63 @@ class ActorConfig:
     Why each rule and default is as it is: docs/LOWER_BODY.md and docs/UPPER_BODY.md.
     """
 
-    window_steps: int = 3
-    step_intervals: int = 13
-    step_length_min: float = 0.15
-    step_length_max: float = 0.80
     # The fastest the gait walks: steps of GaitConfig.fast_step_length at about its quickest
     # cadence the joints' speed limits allow (0.52 s); a faster command could only lengthen
     # the steps, and longer steps are slowed down further than they gain (see
     # bench/bench_walk_speeds.py --flat).
-    max_linear_speed: float = 1.0
-    max_angular_speed: float = 1.0
-    frame_rate: float = 100.0
-    hold_time: float = 0.1
-    nominal_step_time: float = 0.65
-    max_attempts: int = 6
-    verify_collisions: bool = True
-    plan_upper_body: bool = True
-    upper_body_preview: float = 0.5
+    max_linear_speed: float = setting(
+        1.0, 0.0, 3.0, 'Forward speed limit; commands beyond it are clamped. The default is the '
+        'fastest the gait walks: above it the steps would slow down.', 'm/s', low_open=True)
+    max_angular_speed: float = setting(
+        1.0, 0.0, 3.0, 'Turning speed limit; commands beyond it are clamped.', 'rad/s',
+        low_open=True)
+    hold_time: float = setting(0.1, 0.0, 1.0, 'Length of a block that holds a stance.', 's',
+                               low_open=True)
+    nominal_step_time: float = setting(
+        0.65, 0.0, None, 'Duration of a step at walking speed.', 's', low_open=True)
+    max_attempts: int = setting(6, 1, None, 'Footstep windows tried for one step.')
+    verify_collisions: bool = setting(True, doc='Check every step against the scene in 3D.')
+    plan_upper_body: bool = setting(True, doc='Plan the upper body (paper §5).')
+    upper_body_preview: float = setting(
+        0.5, 0.0, None, 'How far past a step the upper body is planned ahead.', 's')
     # The preview covers at least this distance of the pelvis moving on (m; see _preview).
-    upper_body_preview_distance: float = 0.5
+    upper_body_preview_distance: float = setting(
+        0.5, 0.0, None, 'Distance of the pelvis moving on the preview covers at least.', 'm')
     # A step whose upper body is blocked in the preview less than this after the step's end
     # is not taken: it would leave an arm or the waist where the next step cannot go on
     # (between two pillars, with the pelvis carrying it into one). Another footstep is tried,
     # or the actor stops before the obstacle instead of in it.
-    upper_body_preview_margin: float = 0.1
+    upper_body_preview_margin: float = setting(
+        0.1, 0.0, None, 'A step blocked in the preview less than this after its end is not '
+        'taken.', 's')
     # Receding horizon: a branch that left its motion pattern in the last step's plan starts
     # its search along that plan's preview, where it still applies (see _seeds): the steps
     # after the first one at an obstacle mostly find their way there at once.
-    upper_body_seed: bool = True
+    upper_body_seed: bool = setting(
+        True, doc="Start a branch's search along the last plan's preview.")
     # When every footstep tried failed for the upper body, the first of them is tried once more
     # from a standstill after a pause this long (s, 0: never): with the pelvis still, an arm can
     # get clear before the step moves the body (an arm between a pillar and the turned body).
-    upper_body_pause: float = 0.2
+    upper_body_pause: float = setting(
+        0.2, 0.0, 2.0, 'Pause before the last try of a step from a standstill (0: never).', 's')
     # When a tight turn (|w| >= 0.2 rad/s, radius v / |w| under PIVOT_RADIUS, a turn on the
     # spot too) finds no footstep along its arc (facing an edge the arc's footholds reach over
     # it; the inner foot would meet the outer one), the actor pivots instead: the swing foot
     # lands beside the stance foot, turned up to this far (rad) towards the turn, and the
     # pelvis turns half as far about the stance hip (0: never).
-    pivot_turn: float = 0.8
+    pivot_turn: float = setting(
+        0.8, 0.0, 1.0, 'Largest turn of a pivot where a tight turn finds no footstep (0: never).',
+        'rad')
+    # Where no pivot of the foot due to swing can be taken, the foot that landed last may pivot
+    # instead (both feet are down between steps).
+    pivot_either_foot: bool = setting(
+        True, doc='Where the foot due to swing cannot pivot, let the other one pivot.')
     # The landing foot may point at most this far (rad) towards the stance foot's side (toes
     # in), against hip_yaw_limit x 1.5 outwards: pigeon-toed feet turn both thighs in, and with
     # the hips flexed the knees meet (a turn reversed mid-walk made them pass through each
     # other). The path's heading is caught up by the next steps, whose feet may toe out.
-    max_toe_in: float = 0.35
+    max_toe_in: float = setting(
+        0.35, 0.0, 1.0, 'How far a landing foot may point towards the stance foot.', 'rad')
     # Where the window's next footstep swings the other foot over ground more than
     # follow_check_rise (m) above the foot's sole and higher than where it lands
     # (FOLLOW_OVER_LANDING), the leg motion of that footstep is generated too before this step
@@ -90,90 +104,115 @@ class ActorConfig:
     # crossed without the check, 60 with it. Asked from 3 cm: a rear foot lifted over a 3.5 cm
     # bump just before a 0.17 m step down passed the knee's limit too (bench_terrain random
     # course 38); at 0.1 m that was not asked.
-    check_follow: bool = True
-    follow_check_rise: float = 0.03
-    upper_body_check_budget: int = 15000
-    upper_body_attempts: int = 6
+    check_follow: bool = setting(
+        True, doc="Generate the window's next footstep too where it swings over high ground.")
+    follow_check_rise: float = setting(
+        0.03, 0.0, 1.0, 'How high above the sole ground must rise for check_follow.', 'm')
+    upper_body_attempts: int = setting(
+        6, 0, None, 'Footsteps tried for the upper body before the step is refused.')
     # Backward walking (a mouse drag downwards, negative linear speed; see docs/backward.md).
     # False: the paper's actor, which walks forward only (a backward command becomes 0).
-    allow_backward: bool = True
+    allow_backward: bool = setting(
+        True, doc="Walk backward on a negative linear speed; false: the paper's actor, which "
+        'walks forward only (a negative linear speed becomes 0).')
     # Fastest backward walk, m/s: people walk backward at about half their forward speed, with
     # shorter steps that the hip's extension range bounds.
-    max_backward_speed: float = 0.5
+    max_backward_speed: float = setting(
+        0.5, 0.0, 3.0, 'Backward speed limit: a negative linear speed is clamped to -this.',
+        'm/s', low_open=True, rule='max_backward_speed <= max_linear_speed')
     # The footstep lengths of a backward window, m (the forward ones: step_length_min/max).
-    backward_step_length_min: float = 0.10
-    backward_step_length_max: float = 0.40
+    backward_step_length_min: float = setting(
+        0.10, 0.05, 1.0, 'Shortest backward step.', 'm',
+        rule='backward_step_length_min < backward_step_length_max')
+    backward_step_length_max: float = setting(
+        0.40, 0.05, 1.0, 'Longest backward step.', 'm',
+        rule='backward_step_length_min < backward_step_length_max')
     # The largest step up and down a backward step takes, m. Up, the landing foot is behind
     # the hip and higher, its shank leaning forward over a flat sole: from 0.14 m the ankle
     # passes its dorsiflexion limit at touchdown (a backward flight of 0.15 m risers is
     # refused by the window, a clean stop, rather than by the legs).
-    backward_max_step_up: float = 0.12
-    backward_max_step_down: float = 0.20
+    backward_max_step_up: float = setting(0.12, 0.0, None, 'Highest backward step up.', 'm')
+    backward_max_step_down: float = setting(
+        0.20, 0.0, None, 'Deepest backward step down.', 'm')
     footsteps: FootstepConfig = field(default_factory=FootstepConfig)
     gait: GaitConfig = field(default_factory=GaitConfig)
+    # The upper-body planner's settings (upper_body.UpperBodyConfig); None: its defaults. Not
+    # built here: the upper-body planner's module is loaded only where it plans.
+    upper_body: Optional[UpperBodyConfig] = None
 
-    def footstep_config(self) -> FootstepConfig:
-        """The footstep settings with the window and length fields of this config."""
-        return replace(self.footsteps, window_steps=self.window_steps,
-                       step_intervals=self.step_intervals, step_length_min=self.step_length_min,
-                       step_length_max=self.step_length_max)
+    def __post_init__(self):
+        """Check every field against its declaration and the cross-field rules."""
+        check_settings(self)
+        require(isinstance(self.footsteps, FootstepConfig), 'footsteps', self.footsteps,
+                f'footsteps must be a FootstepConfig, got {self.footsteps!r}')
+        require(isinstance(self.gait, GaitConfig), 'gait', self.gait,
+                f'gait must be a GaitConfig, got {self.gait!r}')
+        if self.upper_body is not None:
+            from .upper_body import UpperBodyConfig
+            require(isinstance(self.upper_body, UpperBodyConfig), 'upper_body', self.upper_body,
+                    f'upper_body must be an UpperBodyConfig or None, got {self.upper_body!r}')
+        require(self.max_backward_speed <= self.max_linear_speed, 'max_backward_speed',
+                self.max_backward_speed, f'max_backward_speed {self.max_backward_speed} must '
+                f'not exceed max_linear_speed {self.max_linear_speed} m/s')
+        require(self.backward_step_length_min < self.backward_step_length_max,
+                'backward_step_length_min', self.backward_step_length_min,
+                f'backward_step_length_min {self.backward_step_length_min} must be below '
+                f'backward_step_length_max {self.backward_step_length_max}')
+
+    @classmethod
+    def from_settings(cls, **values) -> 'ActorConfig':
+        """
+        Return the config with the given settings of its own and of its parts.
+
+        Parameters
+        ----------
+        values
+            Settings by name: fields of :class:`FootstepConfig`, :class:`GaitConfig`,
+            ``upper_body.UpperBodyConfig`` or this class (their names do not overlap).
+
+        Raises
+        ------
+        ConfigError
+            A bad value, or a name that is no setting (naming it).
+
+        """
+        parts = {'footsteps': {}, 'gait': {}, 'upper_body': {}, 'own': {}}
+        owners = [(FootstepConfig, 'footsteps'), (GaitConfig, 'gait'), (cls, 'own')]
+        for name, value in values.items():
+            part = next((p for owner, p in owners if name in declared_settings(owner)), None)
+            if part is None and len(owners) == 3:
+                from .upper_body import UpperBodyConfig
+                owners.append((UpperBodyConfig, 'upper_body'))
+                part = 'upper_body' if name in declared_settings(UpperBodyConfig) else None
+            if part is None:
+                raise ConfigError(name, value, f'{name} is no setting of the actor')
+            parts[part][name] = value
+        upper_body = owners[3][0](**parts['upper_body']) if parts['upper_body'] else None
+        return cls(footsteps=FootstepConfig(**parts['footsteps']),
+                   gait=GaitConfig(**parts['gait']), upper_body=upper_body, **parts['own'])
+
+    @property
+    def frame_rate(self) -> float:
+        """Return the rate of the planned frames, Hz (``gait.frame_rate``)."""
+        return self.gait.frame_rate
 
     def backward_footstep_config(self) -> FootstepConfig:
-        """The footstep settings of a backward window: this config's backward lengths and
-        step heights in :meth:`footstep_config`."""
-        return replace(self.footstep_config(), step_length_min=self.backward_step_length_min,
+        """
+        Return the footstep settings of a backward window.
+
+        The footstep settings with this config's backward lengths and step heights.
+        """
+        return replace(self.footsteps, step_length_min=self.backward_step_length_min,
                        step_length_max=self.backward_step_length_max,
                        max_step_up=self.backward_max_step_up,
                        max_step_down=self.backward_max_step_down)
 
-    def gait_config(self) -> GaitConfig:
-        """The gait settings with this config's frame rate."""
-        return replace(self.gait, frame_rate=self.frame_rate)
-
 
 def validate(config: ActorConfig) -> None:
-    """Raise ValueError naming the first bad field of ``config`` (cross-field rules included)."""
-    for f in fields(config):
-        value = getattr(config, f.name)
-        if isinstance(value, (bool, FootstepConfig, GaitConfig)):
-            continue
-        if not isinstance(value, (int, float, np.integer, np.floating)) or not np.isfinite(value):
-            raise ValueError(f'{f.name} must be a finite number, got {value!r}')
-    if config.max_linear_speed <= 0 or config.max_linear_speed > 3.0:
-        raise ValueError(f'max_linear_speed must be in (0, 3] m/s, got {config.max_linear_speed}')
-    if not 0 < config.max_backward_speed <= config.max_linear_speed:
-        raise ValueError(f'max_backward_speed must be in (0, max_linear_speed = '
-                         f'{config.max_linear_speed}] m/s, got {config.max_backward_speed}')
-    if config.max_angular_speed <= 0 or config.max_angular_speed > 3.0:
-        raise ValueError(f'max_angular_speed must be in (0, 3] rad/s, got '
-                         f'{config.max_angular_speed}')
-    if not 0 < config.hold_time <= 1.0:
-        raise ValueError(f'hold_time must be in (0, 1] s, got {config.hold_time}')
-    if config.max_attempts < 1:
-        raise ValueError(f'max_attempts must be >= 1, got {config.max_attempts}')
-    if config.upper_body_preview_distance < 0:
-        raise ValueError(f'upper_body_preview_distance must be >= 0 m, got '
-                         f'{config.upper_body_preview_distance}')
-    if config.upper_body_preview_margin < 0:
-        raise ValueError(f'upper_body_preview_margin must be >= 0 s, got '
-                         f'{config.upper_body_preview_margin}')
-    if not 0 <= config.upper_body_pause <= 2.0:
-        raise ValueError(f'upper_body_pause must be in [0, 2] s, got {config.upper_body_pause}')
-    if not 0 <= config.pivot_turn <= 1.0:
-        raise ValueError(f'pivot_turn must be in [0, 1] rad, got {config.pivot_turn}')
-    if not 0 <= config.max_toe_in <= 1.0:
-        raise ValueError(f'max_toe_in must be in [0, 1] rad, got {config.max_toe_in}')
-    if not 0 <= config.follow_check_rise <= 1.0:
-        raise ValueError(f'follow_check_rise must be in [0, 1] m, got {config.follow_check_rise}')
-    if config.upper_body_check_budget < 1:
-        raise ValueError(f'upper_body_check_budget must be >= 1, got '
-                         f'{config.upper_body_check_budget}')
-    validate_footstep_config(config.footstep_config())
-    try:
-        validate_footstep_config(config.backward_footstep_config())
-    except ValueError as error:
-        raise ValueError(f'backward footsteps: {error}') from None
-    validate_gait_config(config.gait_config())
+    """Raise :class:`ConfigError` naming the first bad field of ``config`` or its parts."""
+    config.footsteps.__post_init__()
+    config.gait.__post_init__()
+    config.__post_init__()
 
 
 #: How far (m) the ground a swing passes over must rise above where it lands for the actor to
@@ -187,9 +226,6 @@ PIVOT_RADIUS = 0.5
 PIVOT_SHIFTS = (0.0, 0.1, -0.1, 0.2, None)
 #: How far two pivots in a row must turn the pelvis in the commanded direction, rad.
 PIVOT_MIN_TURN = 0.05
-#: Where no pivot of the foot due to swing can be taken, whether the foot that landed last may
-#: pivot instead (both feet are down between steps).
-PIVOT_EITHER_FOOT = True
 #: How far ahead along the new direction of travel the swinging foot must stand for the other
 #: to swing instead when the actor sets off the other way from a standstill, m.
 REVERSAL_STAGGER = 0.05
@@ -322,7 +358,7 @@ class Actor:
         self.skeleton = skeleton
         self.environment = environment
         self.config = config
-        self._footstep_config = config.footstep_config()
+        self._footstep_config = config.footsteps
         self._planner = FootstepPlanner(self._footstep_config, skeleton.leg)
         # Backward the window runs along the path behind the actor, where its heel leads: the
         # same search over that ground profile with the sole's ends exchanged (and the
@@ -331,7 +367,7 @@ class Actor:
         self._backward_footstep_config = config.backward_footstep_config()
         self._backward_planner = FootstepPlanner(self._backward_footstep_config,
                                                  self._backward_leg)
-        self._walk = WalkGenerator(skeleton, config.gait_config(), self._footstep_config)
+        self._walk = WalkGenerator(skeleton, config.gait, self._footstep_config)
         self._collision = body_collision or BodyCollision(skeleton, environment)
         self._leg_links = LEG_LINKS
         self._path_steps = np.arange(24.0)
@@ -341,8 +377,7 @@ class Actor:
         self._lower_velocity_limit = skeleton.velocity_limit[self._lower_body]
         if upper_body_planner is None and config.plan_upper_body:
             upper_body_planner = UpperBodyPlanner(
-                skeleton, self._collision,
-                UpperBodyConfig(check_budget=int(config.upper_body_check_budget)),
+                skeleton, self._collision, config.upper_body or UpperBodyConfig(),
                 rng=np.random.default_rng(0))
         self._upper = upper_body_planner
         q = start_configuration(environment, start, skeleton)
@@ -760,7 +795,7 @@ class Actor:
             if block is not None:
                 return block
         block = self._pivot_step(stance, v, w, started)
-        if block is None and PIVOT_EITHER_FOOT:
+        if block is None and self.config.pivot_either_foot:
             # Both feet are down: the foot that landed last may swing instead (beside a
             # table's corner every move of the other leg swings its thigh into the edge).
             block = self._pivot_step(replace(stance, stance_side=1 - stance.stance_side), v, w,

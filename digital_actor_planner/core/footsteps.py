@@ -38,6 +38,7 @@ from .footstep_search import (DENSE_CONFIGURATIONS, DOWN, exhaustive_search, foo
                               W_LENGTH, W_PITCH, W_SMOOTH, window_search)
 from .footstep_window import FootholdTable, search_footstep_window, WindowFeet, WindowLimits
 from .jit import direct, float_array
+from .settings import check_settings, require, setting
 from .skeleton import LegGeometry
 
 LEFT, RIGHT = 0, 1
@@ -93,26 +94,47 @@ class FootstepConfig:
     (``bench/bench_footstep_window.py``, docs/READABLE_ALGORITHMS.md).
     """
 
-    window_steps: int = 3
-    step_intervals: int = 13
-    step_length_min: float = 0.15
-    step_length_max: float = 0.80
-    max_step_up: float = 0.30
-    max_step_down: float = 0.35
-    max_swing_height: float = 0.25
-    flatness_tolerance: float = 0.015
-    min_support_fraction: float = 0.6
-    max_foot_pitch: float = 0.30
-    min_headroom: float = 1.0
-    weight_length: float = 1.0
-    weight_height: float = 0.5
-    weight_pitch: float = 0.2
-    weight_smooth: float = 0.3
-    greedy_restart: bool = True
-    lift_room: float = 0.05
-    lift_rise: float = 0.15
-    lift_step_up: float = 0.25
-    window_search: str = 'compiled'
+    window_steps: int = setting(3, 1, 8, 'Footstep window length n (paper §4.2).')
+    step_intervals: int = setting(
+        13, 1, 60, 'Step-length intervals m of the footstep planner (paper §4.2).')
+    step_length_min: float = setting(0.15, 0.05, 1.0, 'Shortest step s_min.', 'm',
+                                     rule='step_length_min < step_length_max')
+    step_length_max: float = setting(0.80, 0.05, 1.0, 'Longest step s_max.', 'm',
+                                     rule='step_length_min < step_length_max')
+    max_step_up: float = setting(0.30, 0.0, None, 'Highest step up between footholds.', 'm')
+    max_step_down: float = setting(0.35, 0.0, None, 'Deepest step down between footholds.',
+                                   'm')
+    max_swing_height: float = setting(
+        0.25, 0.0, None, 'How far above the higher foothold a swing may have to clear the '
+        'ground in between.', 'm')
+    flatness_tolerance: float = setting(
+        0.015, 0.0, None, 'How much the ground may vary under a sole.', 'm')
+    min_support_fraction: float = setting(
+        0.6, 0.0, 1.0, 'Fraction of a sole the ground must support.')
+    max_foot_pitch: float = setting(0.30, 0.0, None, 'Steepest slope a foot stands on.', 'rad')
+    min_headroom: float = setting(1.0, 0.0, None, 'Free height above a foothold.', 'm')
+    weight_length: float = setting(1.0, 0.0, None, 'Effort weight of step length.')
+    weight_height: float = setting(0.5, 0.0, None, 'Effort weight of height change.')
+    weight_pitch: float = setting(0.2, 0.0, None, 'Effort weight of foot pitch.')
+    weight_smooth: float = setting(0.3, 0.0, None, 'Effort weight of length changes.')
+    greedy_restart: bool = setting(
+        True, doc='Climb once more from a greedy configuration and keep the better result.')
+    lift_room: float = setting(
+        0.05, 0.0, None, 'Room ahead of a toe in which the ground may rise only lift_rise.',
+        'm')
+    lift_rise: float = setting(
+        0.15, 0.0, None, 'How far the ground may rise within lift_room of a toe.', 'm')
+    lift_step_up: float = setting(
+        0.25, 0.0, None, 'The most the ground within lift_room may rise at all.', 'm')
+    window_search: str = setting('compiled', doc='Which search of a window runs.',
+                                 choices=WINDOW_SEARCHES)
+
+    def __post_init__(self):
+        """Check every field against its declaration and the lengths against each other."""
+        check_settings(self)
+        require(self.step_length_min < self.step_length_max, 'step_length_min',
+                self.step_length_min, f'step_length_min {self.step_length_min} must be below '
+                f'step_length_max {self.step_length_max}')
 
     @property
     def step_increment(self) -> float:
@@ -125,29 +147,8 @@ class FootstepConfig:
 
 
 def validate_footstep_config(config: FootstepConfig) -> None:
-    """Raise ValueError naming the first bad field of ``config``."""
-    if not isinstance(config.window_steps, (int, np.integer)) or not 1 <= config.window_steps <= 8:
-        raise ValueError(f'window_steps must be an integer in [1, 8], got {config.window_steps!r}')
-    if (not isinstance(config.step_intervals, (int, np.integer))
-            or not 1 <= config.step_intervals <= 60):
-        raise ValueError(f'step_intervals must be an integer in [1, 60], got '
-                         f'{config.step_intervals!r}')
-    if config.window_search not in WINDOW_SEARCHES:
-        raise ValueError(f'window_search must be one of {WINDOW_SEARCHES}, got '
-                         f'{config.window_search!r}')
-    if not isinstance(config.greedy_restart, (bool, np.bool_)):
-        raise ValueError(f'greedy_restart must be true or false, got {config.greedy_restart!r}')
-    for name in ('step_length_min', 'step_length_max', 'max_step_up', 'max_step_down',
-                 'max_swing_height', 'flatness_tolerance', 'max_foot_pitch', 'min_headroom',
-                 'weight_length', 'weight_height', 'weight_pitch', 'weight_smooth',
-                 'lift_room', 'lift_rise', 'lift_step_up'):
-        value = getattr(config, name)
-        if not np.isfinite(value) or value < 0:
-            raise ValueError(f'{name} must be finite and >= 0, got {value!r}')
-    if not 0.05 <= config.step_length_min < config.step_length_max <= 1.0:
-        raise ValueError('need 0.05 <= step_length_min < step_length_max <= 1.0, got '
-                         f'step_length_min={config.step_length_min}, '
-                         f'step_length_max={config.step_length_max}')
+    """Raise :class:`ConfigError` naming the first bad field of ``config``."""
+    config.__post_init__()
 
 
 def _samples(array) -> np.ndarray:

@@ -41,6 +41,7 @@ from .footsteps import FootstepConfig, LEFT, RIGHT, SOLE_LINES
 from .jit import kernel
 from .key_frames import (bezier_swing, GaitError, smoothstep, step_key_frames, SwingFootprint,
                          SwingLimits)
+from .settings import check_settings, require, setting
 from .skeleton import LegGeometry, Skeleton
 
 SOLE_CLEARANCE = 0.002  # a resting sole floats this far above the surface, m
@@ -76,39 +77,51 @@ class GaitConfig:
     Why each rule and default is as it is: docs/LOWER_BODY.md.
     """
 
-    frame_rate: float = 100.0
-    reach_fraction: float = 0.975
-    pelvis_height_drop: float = 0.035
-    swing_lift: float = 0.07
-    swing_clearance: float = 0.035
-    max_swing_lift: float = 0.55
-    min_step_time: float = 0.5
-    max_step_time: float = 0.9
-    time_per_rise: float = 1.5
-    min_turn_speed: float = 0.25
-    max_heading_change: float = 0.5
-    turn_ease_heading: float = 0.5
-    swing_toe_in: float = 0.15
+    frame_rate: float = setting(100.0, 10.0, 1000.0, 'Rate of the planned frames.', 'Hz')
+    reach_fraction: float = setting(
+        0.975, 0.5, 1.0, 'Fraction of thigh + shank the hip-to-ankle distance may reach.',
+        low_open=True, high_open=True)
+    pelvis_height_drop: float = setting(
+        0.035, 0.0, None, 'How far the pelvis walks below the height of straight legs.', 'm')
+    swing_lift: float = setting(
+        0.07, 0.0, None, 'Lift of the swing curve above its footholds.', 'm')
+    swing_clearance: float = setting(
+        0.035, 0.0, None, 'Clearance the swing keeps above the ground it passes.', 'm')
+    max_swing_lift: float = setting(
+        0.55, 0.0, None, 'Highest the swing curve rises above the higher foothold.', 'm')
+    min_step_time: float = setting(0.5, 0.0, None, 'Quickest step.', 's', low_open=True)
+    max_step_time: float = setting(0.9, 0.0, None, 'Slowest step.', 's')
+    time_per_rise: float = setting(
+        1.5, 0.0, None, 'Step time added per metre of height change.', 's/m')
+    min_turn_speed: float = setting(
+        0.25, 0.0, None, 'Slowest speed a step is timed for (slower commands step no slower).',
+        'm/s')
+    max_heading_change: float = setting(
+        0.5, 0.0, None, 'Half the largest pelvis turn in one step.', 'rad')
+    turn_ease_heading: float = setting(
+        0.5, 0.0, None, 'Angle between the feet at which the pelvis slows to rest as a foot '
+        'lifts or lands (0: never).', 'rad')
+    swing_toe_in: float = setting(
+        0.15, 0.0, None, 'How far a foot in the air may turn in.', 'rad')
     # The longest step a walk prefers once its speed would ask more at nominal cadence, m:
     # faster, the steps come quicker instead (down to min_step_time), as people's do. Longer
     # steps swing the leg faster than its joints allow in that time, and the step is slowed
     # down: a 0.6 m step needs 0.67 s, a 0.8 m one 2 s, so striding out walked slower
     # (ActorConfig.max_linear_speed is the speed these steps walk at their quickest).
-    fast_step_length: float = 0.55
+    fast_step_length: float = setting(
+        0.55, 0.0, None, 'Longest step a fast walk prefers.', 'm')
+
+    def __post_init__(self):
+        """Check every field against its declaration and the step times against each other."""
+        check_settings(self)
+        require(self.min_step_time <= self.max_step_time, 'min_step_time', self.min_step_time,
+                f'need min_step_time <= max_step_time, got {self.min_step_time}, '
+                f'{self.max_step_time}')
 
 
 def validate_gait_config(config: GaitConfig) -> None:
-    """Raise ValueError naming the first bad field of ``config``."""
-    for name, value in vars(config).items():
-        if not np.isfinite(value) or value < 0:
-            raise ValueError(f'{name} must be finite and >= 0, got {value!r}')
-    if not 10.0 <= config.frame_rate <= 1000.0:
-        raise ValueError(f'frame_rate must be in [10, 1000] Hz, got {config.frame_rate}')
-    if not 0.5 < config.reach_fraction < 1.0:
-        raise ValueError(f'reach_fraction must be in (0.5, 1), got {config.reach_fraction}')
-    if not 0 < config.min_step_time <= config.max_step_time:
-        raise ValueError(f'need 0 < min_step_time <= max_step_time, got '
-                         f'{config.min_step_time}, {config.max_step_time}')
+    """Raise :class:`ConfigError` naming the first bad field of ``config``."""
+    config.__post_init__()
 
 
 @dataclass(frozen=True)

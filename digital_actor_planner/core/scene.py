@@ -266,7 +266,7 @@ def _uneven_feet(environment: Environment, start: Tuple[float, float, float],
     """
     x, y, yaw = start
     leg = skeleton.leg
-    limits = ActorConfig().footstep_config()
+    limits = ActorConfig().footsteps
     c, s = math.cos(yaw), math.sin(yaw)
     lengths = np.array([-leg.heel, 0.5 * (leg.toe - leg.heel), leg.toe])
     for name, side in (('left', 1.0), ('right', -1.0)):

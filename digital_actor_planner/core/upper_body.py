@@ -34,6 +34,7 @@ from .body_model import BodyKinematics, BodyShapes, EnvironmentIndex, TimedBody
 from .ct_roadmap import CTRoadmap, direct_return, objective_grid, ROADMAP_SEARCHES, warm_up
 from .ct_space import branch_layout, branch_model, CTSpace
 from .jit import kernel
+from .settings import check_settings, require, setting
 from .skeleton import Skeleton
 
 #: Shoulder roll that keeps a hanging arm clear of the torso and the thigh, rad.
@@ -205,71 +206,62 @@ class UpperBodyConfig:
 
     """
 
-    roadmap_radius: float = 0.3
-    node_budget: int = 300
-    check_budget: int = 15000
-    time_budget: Optional[float] = None
-    max_backtracks: int = 20
-    preview_backtracks: int = 1
-    max_roadmap_nodes: int = 64
-    hold_frames: int = 5
-    speed_fraction: float = 0.8
-    growth_attempts: int = 4
-    waist_weights: Tuple[float, float] = (1.0, 1.0)
-    arm_weights: Tuple[float, float, float, float] = (1.0, 1.0, 1.0, 0.5)
-    time_weight: float = 1.0
-    lasting_branches: Tuple[str, ...] = ('left_arm', 'right_arm')
-    roadmap_search: str = 'compiled'
-    waist_back_lean: float = 0.0
+    roadmap_radius: float = setting(0.3, 0.0, None, 'Distance r of a grown node.', 'rad',
+                                    low_open=True)
+    node_budget: int = setting(300, 1, None, 'States a branch search may expand per plan.')
+    check_budget: int = setting(
+        15000, 1, None, 'Configurations a branch search may check per plan.')
+    time_budget: Optional[float] = setting(
+        None, 0.0, None, 'CPU time a branch search may take per plan (None: no limit).', 's',
+        low_open=True, optional=True, kind=float)
+    max_backtracks: int = setting(
+        20, 0, None, 'Backtracking steps a branch search may take per plan.')
+    preview_backtracks: int = setting(
+        1, 0, None, 'Backtracking steps from a block inside the preview before giving up.')
+    max_roadmap_nodes: int = setting(
+        64, 1, None, 'Largest CT-roadmap per branch (initial patterns plus grown nodes).')
+    hold_frames: int = setting(5, 1, None, 'Frames a kept posture is held for.')
+    speed_fraction: float = setting(
+        0.8, 0.0, 1.0, 'Fraction of the joint speed limits motions between nodes use.',
+        low_open=True)
+    growth_attempts: int = setting(4, 1, None, 'Random directions tried when growing a node.')
+    waist_weights: Tuple[float, float] = setting(
+        (1.0, 1.0), doc='Joint weights (yaw, pitch) of the closeness to the objective, > 0.')
+    arm_weights: Tuple[float, float, float, float] = setting(
+        (1.0, 1.0, 1.0, 0.5), doc='Joint weights (shoulder pitch, roll, yaw, elbow) of the '
+        'closeness to the objective, > 0.')
+    time_weight: float = setting(1.0, 0.0, None, 'Weight of time in the CT-space distance.',
+                                 'rad/s')
+    lasting_branches: Tuple[str, ...] = setting(
+        ('left_arm', 'right_arm'), doc='Branches whose search prefers postures that last '
+        'through the blocked stretch ahead.')
+    roadmap_search: str = setting('compiled', doc='How the roadmaps expand a search state.',
+                                  choices=ROADMAP_SEARCHES)
+    waist_back_lean: float = setting(
+        0.0, 0.0, 1.0, 'How far back of upright the waist may pitch.', 'rad')
+
+    def __post_init__(self):
+        """Check every field against its declaration, the weights and the branches."""
+        check_settings(self)
+        for name, size in (('waist_weights', 2), ('arm_weights', 4)):
+            weights = getattr(self, name)
+            require(len(weights) == size, name, weights,
+                    f'{name} must have {size} values, got {weights!r}')
+            require(all(isinstance(w, (int, float)) and math.isfinite(w) and w > 0
+                        for w in weights), name, weights,
+                    f'{name} must all be finite numbers > 0, got {weights!r}')
+        require(all(name in BRANCH_ORDER for name in self.lasting_branches), 'lasting_branches',
+                self.lasting_branches, f'lasting_branches must name branches of {BRANCH_ORDER}, '
+                f'got {self.lasting_branches!r}')
+        initial = len(_waist_patterns()) + 1
+        require(self.max_roadmap_nodes >= initial, 'max_roadmap_nodes', self.max_roadmap_nodes,
+                f'max_roadmap_nodes must hold the {initial} initial patterns, got '
+                f'{self.max_roadmap_nodes}')
 
 
 def validate_upper_body_config(config: UpperBodyConfig) -> UpperBodyConfig:
-    """Check an :class:`UpperBodyConfig`; raise ValueError naming the first bad field."""
-    def positive(name, value, integer=False):
-        ok = (isinstance(value, (int, np.integer)) and not isinstance(value, bool) if integer
-              else isinstance(value, (int, float)) and np.isfinite(value))
-        if not ok or value <= 0:
-            kind = 'an integer' if integer else 'a finite number'
-            raise ValueError(f'{name} must be {kind} > 0, got {value!r}')
-
-    positive('roadmap_radius', config.roadmap_radius)
-    if config.time_budget is not None:
-        positive('time_budget', config.time_budget)
-    for name in ('node_budget', 'check_budget', 'max_roadmap_nodes', 'hold_frames',
-                 'growth_attempts'):
-        positive(name, getattr(config, name), integer=True)
-    for name in ('max_backtracks', 'preview_backtracks'):
-        value = getattr(config, name)
-        if not (isinstance(value, (int, np.integer)) and not isinstance(value, bool)
-                and value >= 0):
-            raise ValueError(f'{name} must be an integer >= 0, got {value!r}')
-    if not (isinstance(config.waist_back_lean, (int, float))
-            and 0.0 <= config.waist_back_lean <= 1.0):
-        raise ValueError(f'waist_back_lean must be in [0, 1] rad, got '
-                         f'{config.waist_back_lean!r}')
-    positive('speed_fraction', config.speed_fraction)
-    if config.speed_fraction > 1.0:
-        raise ValueError(f'speed_fraction must be <= 1, got {config.speed_fraction!r}')
-    for name, size in (('waist_weights', 2), ('arm_weights', 4)):
-        weights = getattr(config, name)
-        if len(weights) != size:
-            raise ValueError(f'{name} must have {size} values, got {weights!r}')
-        for value in weights:
-            positive(name, value)
-    if not (isinstance(config.time_weight, (int, float)) and np.isfinite(config.time_weight)
-            and config.time_weight >= 0):
-        raise ValueError(f'time_weight must be a finite number >= 0, got {config.time_weight!r}')
-    branches = config.lasting_branches
-    if not isinstance(branches, (tuple, list)) or any(name not in BRANCH_ORDER
-                                                      for name in branches):
-        raise ValueError(f'lasting_branches must name branches of {BRANCH_ORDER}, got '
-                         f'{config.lasting_branches!r}')
-    if config.roadmap_search not in ROADMAP_SEARCHES:
-        raise ValueError(f'roadmap_search must be one of {ROADMAP_SEARCHES}, got '
-                         f'{config.roadmap_search!r}')
-    if config.max_roadmap_nodes < len(_waist_patterns()) + 1:
-        raise ValueError(f'max_roadmap_nodes must hold the {len(_waist_patterns()) + 1} initial '
-                         f'patterns, got {config.max_roadmap_nodes}')
+    """Check an :class:`UpperBodyConfig`; raise :class:`ConfigError` naming the first bad field."""
+    config.__post_init__()
     return config
 
 

@@ -506,19 +506,15 @@ def _actor_config(fields: dict):
     Raises
     ------
     ConfigurationError
-        Naming the parameter the core's ``validate`` objects to.
+        Naming the parameter the core refuses, with its value.
 
     """
-    from digital_actor_planner.core.actor import ActorConfig, validate
-    config = ActorConfig(**fields)
+    from digital_actor_planner.core.actor import ActorConfig
+    from digital_actor_planner.core.settings import ConfigError
     try:
-        validate(config)
-    except ValueError as error:
-        text = str(error)
-        name = next((n for n in sorted(fields, key=len, reverse=True) if n in text),
-                    'window_steps')
-        raise ConfigurationError(name, text) from error
-    return config
+        return ActorConfig.from_settings(**fields)
+    except ConfigError as error:
+        raise ConfigurationError.of(error) from error
 
 
 def _planning_process(connection) -> None:

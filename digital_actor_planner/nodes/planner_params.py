@@ -15,18 +15,24 @@
 """
 Parameters of the ``actor_planner`` node: descriptors, the frozen node config, validation.
 
-The node declares every parameter listed here with its descriptor, reads them into a
-:class:`PlannerNodeConfig` and calls :func:`validate_node_config` once; a bad value makes the node
-exit non-zero with a message naming the parameter (STYLE: Parameters).
+Every parameter is declared once with :func:`core.settings.setting`: the node's own ones as
+fields of :class:`PlannerNodeConfig` here, the actor's ones in the core's configs (named in
+:data:`ACTOR_PARAMETERS`). The ROS descriptors, the checks and the README's parameter table
+(``scripts/parameter_table.py``) all come from those declarations. The node declares every
+parameter with its descriptor, reads them into a :class:`PlannerNodeConfig` and calls
+:func:`validate_node_config` once; a bad value makes the node exit non-zero with a message
+naming the parameter (STYLE: Parameters).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 import math
 import os
 import sys
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
+from digital_actor_planner.core.settings import check_settings, ConfigError, \
+    declared_settings, Setting, setting
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.parameter import Parameter
 
@@ -36,13 +42,28 @@ DEFAULT_SCENE = 'flat.yaml'
 # Parameters that may change while the node runs; every other one is read-only.
 RUNTIME_PARAMETERS = ('scene', 'cmd_timeout')
 
+#: The actor's settings the node sets from parameters of the same names, declared in the core
+#: (``FootstepConfig``, ``ActorConfig``); in the parameter list they follow ``publish_rate``.
+ACTOR_PARAMETERS = ('window_steps', 'step_intervals', 'step_length_min', 'step_length_max',
+                    'max_linear_speed', 'max_angular_speed', 'max_backward_speed',
+                    'allow_backward')
 
-class ConfigurationError(ValueError):
+
+class ConfigurationError(ConfigError):
     """A parameter value the node cannot run with; ``parameter`` names it."""
 
-    def __init__(self, parameter: str, message: str):
-        super().__init__(f'parameter {parameter!r}: {message}')
-        self.parameter = parameter
+    def __init__(self, parameter: str, message: str, value: Any = None):
+        super().__init__(parameter, value, f'parameter {parameter!r}: {message}')
+
+    @property
+    def parameter(self) -> str:
+        """Return the parameter at fault."""
+        return self.name
+
+    @classmethod
+    def of(cls, error: ConfigError) -> 'ConfigurationError':
+        """Return the node's error for a setting the core refused, naming it as a parameter."""
+        return cls(error.name, str(error), error.value)
 
 
 def default_scene_path() -> str:
@@ -84,22 +105,130 @@ def default_scene_path() -> str:
     return source
 
 
-def _float_range(low: float, high: float) -> List[FloatingPointRange]:
-    return [FloatingPointRange(from_value=float(low), to_value=float(high), step=0.0)]
+@dataclass(frozen=True)
+class PlannerNodeConfig:
+    """
+    Everything the node runs with, read once from its parameters.
+
+    The fields are the node's own parameters, each declared once here; ``actor`` holds the
+    values of :data:`ACTOR_PARAMETERS` by name, for ``ActorConfig.from_settings``.
+    """
+
+    scene: str = setting(
+        '', doc='Scene YAML (meshes + start) or one mesh file; changing it reloads the '
+        'environment (the old one is kept if the new one fails to load).',
+        rule='a scene YAML or mesh file')
+    start_pose: Optional[Tuple[float, float, float]] = setting(
+        None, doc='Start pose [x, y, yaw]; unset or empty uses the scene start.',
+        unit='m, m, rad', kind=tuple, optional=True, rule='empty or 3 finite numbers')
+    publish_rate: float = setting(
+        100.0, 1.0, 1000.0, 'Rate of joint_states; frames are interpolated from the planned '
+        'blocks.', 'Hz')
+    cmd_timeout: float = setting(
+        0.5, 0.01, 3600.0, 'No cmd_vel for this long makes the actor come to a stop.', 's')
+    frame_id: str = setting(
+        'world', doc='header.frame_id of joint_states, markers and the path.',
+        rule='non-empty')
+    cmd_vel_stamped: bool = setting(
+        True, doc='cmd_vel type: geometry_msgs/TwistStamped when true, geometry_msgs/Twist '
+        'when false.')
+    publish_robot_description: bool = setting(
+        True, doc='Publish the URDF on robot_description (std_msgs/String, transient local).')
+    planning_lead: float = setting(
+        0.3, 0.02, 5.0, 'Plan the next block when less than this much committed motion is '
+        'buffered ahead of playback; larger rides out planning hiccups, smaller reacts '
+        'sooner.', 's')
+    planning_timeout: float = setting(
+        60.0, 0.1, 3600.0, 'A planning process that gives no answer for this long is replaced '
+        'by a new one, and the actor goes on from where it stands.', 's')
+    stream_priority: int = setting(
+        10, 0, 99, 'SCHED_FIFO priority of the joint_states thread (1-99) for low jitter on a '
+        'busy machine; 0 or no permission: normal scheduling.')
+    actor: Dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self):
+        """Check every parameter against its declaration, start_pose and frame_id too."""
+        check_settings(self)
+        if self.start_pose is not None:
+            pose = tuple(self.start_pose)
+            if len(pose) != 3:
+                raise ConfigError('start_pose', pose, f'expected [x, y, yaw], got {list(pose)!r}')
+            if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in pose):
+                raise ConfigError('start_pose', pose, f'not finite: {list(pose)!r}')
+        if not self.frame_id.strip():
+            raise ConfigError('frame_id', self.frame_id, 'frame_id must not be empty')
+
+    def actor_config_fields(self) -> Dict[str, Any]:
+        """Return the settings of the core ``ActorConfig`` these parameters set, by name."""
+        return dict(self.actor)
 
 
-def _int_range(low: int, high: int) -> List[IntegerRange]:
-    return [IntegerRange(from_value=int(low), to_value=int(high), step=1)]
+def actor_parameter_settings() -> Dict[str, Setting]:
+    """Return the core's declarations of :data:`ACTOR_PARAMETERS`, by name."""
+    # Imported here: the node process loads the core only once it has chosen plain Python
+    # over the compiled kernels (actor_planner._without_kernels).
+    from digital_actor_planner.core.actor import ActorConfig
+    from digital_actor_planner.core.footsteps import FootstepConfig
+    from digital_actor_planner.core.gait import GaitConfig
+    declared = {**declared_settings(FootstepConfig), **declared_settings(GaitConfig),
+                **declared_settings(ActorConfig)}
+    return {name: declared[name] for name in ACTOR_PARAMETERS}
 
 
-def _descriptor(description: str, read_only: bool = True, floats=None,
-                integers=None, constraints: str = '') -> ParameterDescriptor:
-    descriptor = ParameterDescriptor(description=description, read_only=read_only,
-                                     additional_constraints=constraints)
-    if floats is not None:
-        descriptor.floating_point_range = _float_range(*floats)
-    if integers is not None:
-        descriptor.integer_range = _int_range(*integers)
+def parameter_settings() -> List[Tuple[str, Setting]]:
+    """
+    Return ``(name, Setting)`` of every parameter the node declares, in declaration order.
+
+    Returns
+    -------
+    list of (str, Setting)
+        The node's own parameters with the actor's ones after ``publish_rate``.
+
+    """
+    own = list(declared_settings(PlannerNodeConfig).items())
+    at = [name for name, _ in own].index('publish_rate') + 1
+    return own[:at] + list(actor_parameter_settings().items()) + own[at:]
+
+
+def _description(declaration: Setting) -> str:
+    doc = declaration.doc
+    if not declaration.unit:
+        return doc
+    return f'{doc[:-1]} ({declaration.unit}).' if doc.endswith('.') else \
+        f'{doc} ({declaration.unit})'
+
+
+def _constraints(declaration: Setting) -> str:
+    """Return what the descriptor's range cannot say: open bounds, choices, a rule."""
+    parts = []
+    if declaration.low_open:
+        parts.append(f'> {declaration.low:g}')
+    if declaration.high_open:
+        parts.append(f'< {declaration.high:g}')
+    if declaration.choices:
+        parts.append(declaration.describe_range())
+    if declaration.rule:
+        parts.append(declaration.rule)
+    return '; '.join(parts)
+
+
+def descriptor_of(name: str, declaration: Setting) -> ParameterDescriptor:
+    """
+    Return the ROS descriptor of a declared setting: description, range, read-only.
+
+    The range is the declaration's (``low`` to ``high``); an open bound, the choices or a rule
+    between parameters go to ``additional_constraints``.
+    """
+    descriptor = ParameterDescriptor(description=_description(declaration),
+                                     read_only=name not in RUNTIME_PARAMETERS,
+                                     additional_constraints=_constraints(declaration))
+    bounded = declaration.low is not None and declaration.high is not None
+    if bounded and declaration.kind is float:
+        descriptor.floating_point_range = [FloatingPointRange(
+            from_value=float(declaration.low), to_value=float(declaration.high), step=0.0)]
+    elif bounded and declaration.kind is int:
+        descriptor.integer_range = [IntegerRange(
+            from_value=int(declaration.low), to_value=int(declaration.high), step=1)]
     return descriptor
 
 
@@ -110,110 +239,27 @@ def parameter_declarations() -> List[Tuple[str, Any, ParameterDescriptor]]:
     Returns
     -------
     list of (str, value or Parameter.Type, ParameterDescriptor)
-        ``start_pose`` is declared by type only (unset means the scene's start pose).
+        ``start_pose`` is declared by type only (unset means the scene's start pose);
+        ``scene`` defaults to the package's flat scene.
 
     """
-    return [
-        ('scene', default_scene_path(), _descriptor(
-            'Scene YAML (meshes + start) or one mesh file; changing it reloads the environment '
-            '(the old one is kept if the new one fails to load).', read_only=False)),
-        ('start_pose', Parameter.Type.DOUBLE_ARRAY, _descriptor(
-            'Start pose [x, y, yaw] (m, m, rad); unset or empty uses the scene start.',
-            constraints='empty or 3 finite numbers')),
-        ('publish_rate', 100.0, _descriptor(
-            'Rate of joint_states (Hz); frames are interpolated from the planned blocks.',
-            floats=(1.0, 1000.0))),
-        ('window_steps', 3, _descriptor(
-            'Footstep window length n (paper §4.2).', integers=(1, 10))),
-        ('step_intervals', 13, _descriptor(
-            'Step-length intervals m of the footstep planner (paper §4.2).',
-            integers=(2, 100))),
-        ('step_length_min', 0.15, _descriptor(
-            'Shortest step s_min (m).', floats=(0.0, 2.0),
-            constraints='step_length_min < step_length_max')),
-        ('step_length_max', 0.8, _descriptor(
-            'Longest step s_max (m).', floats=(0.01, 2.0),
-            constraints='step_length_min < step_length_max')),
-        ('max_linear_speed', 1.0, _descriptor(
-            'Forward speed limit (m/s); commands beyond it are clamped. The default is the '
-            'fastest the gait walks: above it the steps would slow down.', floats=(0.01, 3.0))),
-        ('max_angular_speed', 1.0, _descriptor(
-            'Turning speed limit (rad/s); commands beyond it are clamped.',
-            floats=(0.01, 3.0))),
-        ('max_backward_speed', 0.5, _descriptor(
-            'Backward speed limit (m/s): a negative linear.x walks backward, clamped to '
-            '-this.', floats=(0.01, 3.0), constraints='max_backward_speed <= max_linear_speed')),
-        ('allow_backward', True, _descriptor(
-            "Walk backward on a negative linear.x; false: the paper's actor, which walks "
-            'forward only (a negative linear.x becomes 0).')),
-        ('cmd_timeout', 0.5, _descriptor(
-            'No cmd_vel for this long (s) makes the actor come to a stop.', read_only=False,
-            floats=(0.01, 3600.0))),
-        ('frame_id', 'world', _descriptor(
-            'header.frame_id of joint_states, markers and the path.',
-            constraints='non-empty')),
-        ('cmd_vel_stamped', True, _descriptor(
-            'cmd_vel type: geometry_msgs/TwistStamped when true, geometry_msgs/Twist when '
-            'false.')),
-        ('publish_robot_description', True, _descriptor(
-            'Publish the URDF on robot_description (std_msgs/String, transient local).')),
-        ('planning_lead', 0.3, _descriptor(
-            'Plan the next block when less than this much committed motion (s) is buffered '
-            'ahead of playback; larger rides out planning hiccups, smaller reacts sooner.',
-            floats=(0.02, 5.0))),
-        ('planning_timeout', 60.0, _descriptor(
-            'A planning process that gives no answer for this long (s) is replaced by a new '
-            'one, and the actor goes on from where it stands.', floats=(0.1, 3600.0))),
-        ('stream_priority', 10, _descriptor(
-            'SCHED_FIFO priority of the joint_states thread (1-99) for low jitter on a busy '
-            'machine; 0 or no permission: normal scheduling.', integers=(0, 99))),
-    ]
+    declarations = []
+    for name, declaration in parameter_settings():
+        default = declaration.default
+        if name == 'scene':
+            default = default_scene_path()
+        elif name == 'start_pose':
+            default = Parameter.Type.DOUBLE_ARRAY
+        declarations.append((name, default, descriptor_of(name, declaration)))
+    return declarations
 
 
-@dataclass(frozen=True)
-class PlannerNodeConfig:
-    """
-    Everything the node runs with, read once from its parameters.
-
-    ``start_pose`` is ``(x, y, yaw)`` in m, m, rad or None for the scene's own start;
-    ``publish_rate`` in Hz; ``cmd_timeout`` and ``planning_lead`` in s.
-    """
-
-    scene: str
-    start_pose: Optional[Tuple[float, float, float]]
-    publish_rate: float
-    window_steps: int
-    step_intervals: int
-    step_length_min: float
-    step_length_max: float
-    max_linear_speed: float
-    max_angular_speed: float
-    cmd_timeout: float
-    frame_id: str
-    cmd_vel_stamped: bool
-    publish_robot_description: bool
-    planning_lead: float = 0.3
-    stream_priority: int = 0
-    max_backward_speed: float = 0.5
-    allow_backward: bool = True
-    planning_timeout: float = 60.0
-
-    def actor_config_fields(self) -> Dict[str, Any]:
-        """Return the keyword arguments of the core ``ActorConfig`` these parameters set."""
-        return {
-            'window_steps': self.window_steps,
-            'step_intervals': self.step_intervals,
-            'step_length_min': self.step_length_min,
-            'step_length_max': self.step_length_max,
-            'max_linear_speed': self.max_linear_speed,
-            'max_angular_speed': self.max_angular_speed,
-            'max_backward_speed': self.max_backward_speed,
-            'allow_backward': self.allow_backward,
-        }
-
-
-def _value_or(value: Any, default: Any) -> Any:
-    return default if value is None else value
+def _typed(declaration: Setting, value: Any) -> Any:
+    if value is None:
+        return declaration.default
+    if declaration.kind in (bool, int, float, str):
+        return declaration.kind(value)
+    return value
 
 
 def read_node_config(get_value: Callable[[str], Any]) -> PlannerNodeConfig:
@@ -223,47 +269,32 @@ def read_node_config(get_value: Callable[[str], Any]) -> PlannerNodeConfig:
     Parameters
     ----------
     get_value
-        Returns the current value of a declared parameter (None when unset).
+        Returns the current value of a declared parameter (None when unset: its default).
 
     Returns
     -------
     PlannerNodeConfig
-        Not yet validated; call :func:`validate_node_config`.
+        Its own parameters checked; call :func:`validate_node_config` for the rest.
 
     Raises
     ------
     ConfigurationError
-        ``start_pose`` is not empty or three numbers.
+        A parameter outside its declared range, ``start_pose`` not empty or three numbers.
 
     """
-    start = get_value('start_pose')
-    if start is None or len(start) == 0:
-        start_pose = None
-    elif len(start) != 3:
-        raise ConfigurationError('start_pose', f'expected [x, y, yaw], got {list(start)!r}')
-    else:
-        start_pose = tuple(float(v) for v in start)
-    return PlannerNodeConfig(
-        scene=str(get_value('scene')),
-        start_pose=start_pose,
-        publish_rate=float(get_value('publish_rate')),
-        window_steps=int(get_value('window_steps')),
-        step_intervals=int(get_value('step_intervals')),
-        step_length_min=float(get_value('step_length_min')),
-        step_length_max=float(get_value('step_length_max')),
-        max_linear_speed=float(get_value('max_linear_speed')),
-        max_angular_speed=float(get_value('max_angular_speed')),
-        cmd_timeout=float(get_value('cmd_timeout')),
-        frame_id=str(get_value('frame_id')),
-        cmd_vel_stamped=bool(get_value('cmd_vel_stamped')),
-        publish_robot_description=bool(get_value('publish_robot_description')),
-        planning_lead=float(get_value('planning_lead')),
-        stream_priority=int(get_value('stream_priority')),
-        # Unset: the declared defaults.
-        max_backward_speed=float(_value_or(get_value('max_backward_speed'), 0.5)),
-        allow_backward=bool(_value_or(get_value('allow_backward'), True)),
-        planning_timeout=float(get_value('planning_timeout') or 60.0),
-    )
+    own = {}
+    for name, declaration in declared_settings(PlannerNodeConfig).items():
+        value = get_value(name)
+        if name == 'start_pose':
+            own[name] = None if value is None or len(value) == 0 else tuple(value)
+        else:
+            own[name] = _typed(declaration, value)
+    actor = {name: _typed(declaration, get_value(name))
+             for name, declaration in actor_parameter_settings().items()}
+    try:
+        return PlannerNodeConfig(actor=actor, **own)
+    except ConfigError as error:
+        raise ConfigurationError.of(error) from None
 
 
 def scene_file_error(path: str) -> str:
@@ -284,7 +315,7 @@ def scene_file_error(path: str) -> str:
 
 def validate_node_config(config: PlannerNodeConfig) -> None:
     """
-    Check the cross-field and file rules the descriptors cannot express.
+    Check the scene file and the actor's parameters with the core's own checks.
 
     Parameters
     ----------
@@ -297,26 +328,11 @@ def validate_node_config(config: PlannerNodeConfig) -> None:
         Naming the first bad parameter and its value.
 
     """
-    if config.start_pose is not None and not all(math.isfinite(v) for v in config.start_pose):
-        raise ConfigurationError('start_pose', f'not finite: {list(config.start_pose)!r}')
-    for name in ('publish_rate', 'cmd_timeout', 'step_length_min', 'step_length_max',
-                 'max_linear_speed', 'max_angular_speed', 'max_backward_speed',
-                 'planning_lead'):
-        value = getattr(config, name)
-        if not math.isfinite(value) or value < 0.0:
-            raise ConfigurationError(name, f'must be a finite non-negative number, got {value!r}')
-    if not config.frame_id.strip():
-        raise ConfigurationError('frame_id', 'must not be empty')
-    if not config.scene.strip():
-        raise ConfigurationError('scene', 'must name a scene YAML or mesh file')
     problem = scene_file_error(config.scene)
     if problem:
-        raise ConfigurationError('scene', problem)
-    if config.max_backward_speed > config.max_linear_speed:
-        raise ConfigurationError(
-            'max_backward_speed', f'{config.max_backward_speed} must not exceed '
-            f'max_linear_speed {config.max_linear_speed}')
-    if config.step_length_min >= config.step_length_max:
-        raise ConfigurationError(
-            'step_length_min', f'{config.step_length_min} must be below step_length_max '
-            f'{config.step_length_max}')
+        raise ConfigurationError('scene', problem, config.scene)
+    from digital_actor_planner.core.actor import ActorConfig
+    try:
+        ActorConfig.from_settings(**config.actor_config_fields())
+    except ConfigError as error:
+        raise ConfigurationError.of(error) from None
