@@ -1,3 +1,17 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
 """
 The actor pipeline: commands in, timed 22-DOF frames out, one step at a time (§3.2, Figure 2).
 
@@ -8,7 +22,7 @@ steering away) makes a step feasible again.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, replace
 import math
 import time as _time
 from typing import Optional, Tuple
@@ -32,7 +46,8 @@ LEG_LINKS = ('pelvis', 'left_hip', 'left_thigh', 'left_shank', 'left_foot', 'rig
 
 @dataclass(frozen=True)
 class ActorConfig:
-    """Settings of the whole pipeline. Speeds in m/s and rad/s, lengths in m, times in s.
+    """
+    Settings of the whole pipeline. Speeds in m/s and rad/s, lengths in m, times in s.
 
     Why each rule and default is as it is: docs/LOWER_BODY.md and docs/UPPER_BODY.md.
     """
