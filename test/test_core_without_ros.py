@@ -12,21 +12,24 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""The planning core and the evaluation beside it import no ROS (STYLE: NumPy, trimesh, FCL)."""
+"""The planning core, the evaluation beside it and the node's real time import no ROS (STYLE)."""
 import importlib
 import pkgutil
 import subprocess
 import sys
 
-# The packages that must run without a ROS install: the core, and the judge and pictures
-# that look at its plans (tests, benchmarks and `digital-actor simulate` run them bare).
-ROS_FREE = ('core', 'evaluation')
+# The packages that must run without a ROS install: the core, the judge and pictures that
+# look at its plans (tests, benchmarks and `digital-actor simulate` run them bare), and the
+# planner node's real time (frame buffer, planning processes, stream threads: nodes only adapt).
+ROS_FREE = ('core', 'evaluation', 'runtime')
 
 
 def test_ros_free_modules_import_with_rclpy_blocked():
     code = (
         'import sys, importlib, pkgutil\n'
-        "for name in ('rclpy', 'rclpy.node', 'sensor_msgs', 'geometry_msgs', 'std_msgs'):\n"
+        "for name in ('rclpy', 'rclpy.node', 'rclpy.serialization', 'rcl_interfaces',\n"
+        "             'sensor_msgs', 'geometry_msgs', 'std_msgs', 'visualization_msgs',\n"
+        "             'nav_msgs', 'diagnostic_msgs'):\n"
         '    sys.modules[name] = None\n'
         f'for package in {ROS_FREE!r}:\n'
         "    folder = importlib.import_module('digital_actor_planner.' + package)\n"

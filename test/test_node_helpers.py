@@ -244,7 +244,7 @@ class Probe:
 
 # -- tests of the node's ROS-free pieces -------------------------------------------------------
 def test_frame_buffer_interpolates_and_holds_the_last_frame():
-    from digital_actor_planner.nodes.actor_planner import FrameBuffer
+    from digital_actor_planner.runtime.frame_buffer import FrameBuffer
     q0 = np.zeros(22)
     buffer = FrameBuffer(q0)
     times = np.array([0.01, 0.02])
@@ -263,7 +263,7 @@ def test_frame_buffer_interpolates_and_holds_the_last_frame():
 
 
 def test_frame_buffer_restart_jumps_to_the_new_configuration():
-    from digital_actor_planner.nodes.actor_planner import FrameBuffer
+    from digital_actor_planner.runtime.frame_buffer import FrameBuffer
     buffer = FrameBuffer(np.zeros(22))
     frames = np.zeros((10, 22))
     frames[:, ROOT_X] = np.arange(10)
@@ -276,7 +276,7 @@ def test_frame_buffer_restart_jumps_to_the_new_configuration():
 
 
 def test_frame_buffer_restart_blends_from_the_pose_held_and_refuses_a_wrong_shape():
-    from digital_actor_planner.nodes.actor_planner import FrameBuffer
+    from digital_actor_planner.runtime.frame_buffer import FrameBuffer
     buffer = FrameBuffer(np.zeros(22))
     frames = np.zeros((10, 22))
     frames[:, ROOT_X] = np.arange(10)
@@ -294,7 +294,7 @@ def test_frame_buffer_restart_blends_from_the_pose_held_and_refuses_a_wrong_shap
 
 
 def test_frame_buffer_truncate_drops_the_motion_not_yet_begun():
-    from digital_actor_planner.nodes.actor_planner import FrameBuffer
+    from digital_actor_planner.runtime.frame_buffer import FrameBuffer
     buffer = FrameBuffer(np.zeros(22))
     frames = np.zeros((10, 22))
     frames[:, ROOT_X] = np.arange(1, 11)
@@ -341,7 +341,7 @@ def test_the_stand_in_pose_stands_on_the_scene_start(tmp_path):
 
 
 def test_command_times_out_to_zero():
-    from digital_actor_planner.nodes.actor_planner import CommandState
+    from digital_actor_planner.runtime.frame_buffer import CommandState
     command = CommandState()
     assert command.current(0.0, 0.5) == (0.0, 0.0)
     command.update(0.4, -0.2, now=10.0)
@@ -377,8 +377,8 @@ def test_planning_worker_scene_cache_shares_and_forgets_scenes():
     import gc
 
     from digital_actor_planner.core.actor import ActorConfig
-    from digital_actor_planner.nodes.actor_planner import _SceneCache
-    cache, skeleton = _SceneCache(), Skeleton()
+    from digital_actor_planner.runtime.planning import SceneCache
+    cache, skeleton = SceneCache(), Skeleton()
     a, scene_a = cache.build(skeleton, ActorConfig(), scene('flat'), None)
     b, scene_b = cache.build(skeleton, ActorConfig(), scene('flat'), None)
     assert scene_b is scene_a and b is not a
@@ -422,11 +422,11 @@ def test_environment_markers_are_built_once_per_scene_and_sent_serialized(monkey
     """
     from rclpy.serialization import deserialize_message
     from visualization_msgs.msg import Marker, MarkerArray
-    from digital_actor_planner.nodes import actor_planner
+    from digital_actor_planner.nodes import markers
     rng = np.random.default_rng(3)
     ground = (rng.normal(size=(10, 3)), rng.integers(0, 10, size=(12, 3)))
     box = (rng.normal(size=(8, 3)), rng.integers(0, 8, size=(6, 3)))
-    array = deserialize_message(actor_planner.environment_markers([ground, box], 'map'),
+    array = deserialize_message(markers.environment_markers([ground, box], 'map'),
                                 MarkerArray)
     assert array.markers[0].action == Marker.DELETEALL
     drawn = [m for m in array.markers if m.type == Marker.TRIANGLE_LIST]
@@ -436,17 +436,17 @@ def test_environment_markers_are_built_once_per_scene_and_sent_serialized(monkey
         points = np.array([[p.x, p.y, p.z] for p in marker.points])
         assert np.array_equal(points, vertices[faces].reshape(-1, 3))
     # Points written into a serialized template: the same message as rclpy's own conversion.
-    monkeypatch.setattr(actor_planner, '_spliced', lambda *args: None)
-    assert deserialize_message(actor_planner.environment_markers([ground, box], 'map'),
+    monkeypatch.setattr(markers, '_spliced', lambda *args: None)
+    assert deserialize_message(markers.environment_markers([ground, box], 'map'),
                                MarkerArray) == array
     monkeypatch.undo()
 
-    monkeypatch.setattr(actor_planner, 'MAX_MARKER_TRIANGLES', 15)
-    array = deserialize_message(actor_planner.environment_markers([ground, box], 'map'),
+    monkeypatch.setattr(markers, 'MAX_MARKER_TRIANGLES', 15)
+    array = deserialize_message(markers.environment_markers([ground, box], 'map'),
                                 MarkerArray)
     assert [len(m.points) for m in array.markers[1:]] == [36, 9]
 
-    housekeeper = actor_planner.Housekeeper()
+    housekeeper = markers.Housekeeper()
     first = housekeeper.environment([ground, box], 'world')
     again = housekeeper.environment([(ground[0].copy(), ground[1].copy()), box], 'world')
     assert again is first  # another actor on the same scene: not built again
@@ -499,7 +499,7 @@ def test_stream_backup_thread_publishes_the_ticks_a_stalled_stream_thread_misses
     """
     if len(os.sched_getaffinity(0)) < 2:
         pytest.skip('the backup thread needs a second core')
-    from digital_actor_planner.nodes.actor_planner import StreamTicker
+    from digital_actor_planner.runtime.scheduling import StreamTicker
     period, stalled = 0.02, 20
 
     class Stalling(StreamTicker):
@@ -529,7 +529,7 @@ def test_stream_catches_up_the_ticks_a_stall_of_every_thread_slept_over():
     publishes every tick it slept over at once, each showing its own instant, then the current one:
     no frame is lost. A stall longer than ``CATCH_UP`` ticks skips the oldest ones.
     """
-    from digital_actor_planner.nodes.actor_planner import StreamTicker
+    from digital_actor_planner.runtime.scheduling import StreamTicker
     period, stalled, long_stall = 0.02, 10, 30
 
     class Stalling(StreamTicker):
@@ -569,7 +569,7 @@ def test_stream_stamps_stay_on_the_tick_grid_when_a_catch_up_burst_is_interrupte
     is stamped with the instant it shows, not the moment it got out: the caught-up frames stay one
     period apart, and the stamps only increase.
     """
-    from digital_actor_planner.nodes.actor_planner import StreamTicker
+    from digital_actor_planner.runtime.scheduling import StreamTicker
     period, stalled = 0.02, 10
 
     class Stalling(StreamTicker):
@@ -603,7 +603,7 @@ def test_stream_stamps_stay_on_the_tick_grid_when_a_catch_up_burst_is_interrupte
 
 
 def test_planning_scheduler_plans_the_most_urgent_actor_first_and_skips_resting_ones():
-    from digital_actor_planner.nodes.actor_planner import IDLE_RESCAN, PlanningScheduler
+    from digital_actor_planner.runtime.scheduling import IDLE_RESCAN, PlanningScheduler
     scheduler = PlanningScheduler()
     log, due = [], {}
     actors = [_ScheduledActor(name, due, log) for name in ('late', 'later', 'resting', 'soon')]
