@@ -765,7 +765,7 @@ def test_spin_ends_quietly_when_ctrl_c_shuts_the_context_down_mid_spin(shut_down
     the shutdown asked for: the node returns (it exited 1 with a traceback). The same error with
     the context still valid is a real failure and is raised.
     """
-    from digital_actor_planner.nodes.actor_planner import spin_until_shutdown
+    from digital_actor_planner.nodes.hosting import spin_until_shutdown
     context = {'ok': True}
     executor = _Executor(context, fail_on=3, valid_after=not shut_down)
     if shut_down:

@@ -22,7 +22,6 @@ command changes (docs/planner_node_runtime.md).
 """
 from __future__ import annotations
 
-import argparse
 import array
 import collections
 import gc
@@ -39,6 +38,18 @@ from typing import Optional, Tuple
 # it does once it runs.
 try:
     from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+    from digital_actor_planner.nodes import planner_params
+    from digital_actor_planner.nodes.hosting import close_partial, command_line, \
+        CommandRouter, SharedThreads, spin_until_shutdown, terminated, without_kernels
+    from digital_actor_planner.nodes.markers import block_markers, Housekeeper
+    from digital_actor_planner.nodes.planner_params import parameter_declarations, \
+        PlannerNodeConfig, read_node_config, RUNTIME_PARAMETERS, scene_file_error, \
+        validate_node_config
+    from digital_actor_planner.runtime.frame_buffer import CommandState, FrameBuffer
+    from digital_actor_planner.runtime.planning import ConfigurationError, PlanningFailed, \
+        PlanningLost, PlanningPool, PlanningProcess, PlanningStats, REPLAN_BLOCKS
+    from digital_actor_planner.runtime.scheduling import real_time
+    from digital_actor_planner.runtime.standing import stand_in_configuration
     from geometry_msgs.msg import Twist, TwistStamped
     from nav_msgs.msg import Path
     import numpy as np
@@ -46,30 +57,15 @@ try:
     import rclpy
     from rclpy.callback_groups import ReentrantCallbackGroup
     from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
-    from rclpy.exceptions import InvalidNamespaceException, ParameterException, \
-        ParameterUninitializedException
-    from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor, \
-        SingleThreadedExecutor
+    from rclpy.exceptions import ParameterException, ParameterUninitializedException
+    from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
     from rclpy.node import Node
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
     from rclpy.signals import SignalHandlerOptions
     from rclpy.utilities import remove_ros_args
-    from rclpy.validate_namespace import validate_namespace
     from sensor_msgs.msg import JointState
     from std_msgs.msg import String
     from visualization_msgs.msg import MarkerArray
-
-    from digital_actor_planner.nodes import planner_params
-    from digital_actor_planner.nodes.markers import block_markers, Housekeeper
-    from digital_actor_planner.nodes.planner_params import parameter_declarations, \
-        PlannerNodeConfig, read_node_config, RUNTIME_PARAMETERS, scene_file_error, \
-        validate_node_config
-    from digital_actor_planner.runtime.frame_buffer import CommandState, FrameBuffer
-    from digital_actor_planner.runtime.planning import ConfigurationError, PlanningFailed, \
-        PlanningLost, PlanningPool, PlanningProcess, PlanningStats, REPLAN_BLOCKS, \
-        usable_cores
-    from digital_actor_planner.runtime.scheduling import real_time, StreamTicker
-    from digital_actor_planner.runtime.standing import stand_in_configuration
 except KeyboardInterrupt:  # pragma: no cover - depends on when the signal lands
     # Not sys.exit: after an import cut short by the signal, the interpreter's exit would end
     # the process by SIGINT whatever status it was given.
@@ -81,8 +77,6 @@ PAST_FOOTSTEPS = 40
 LEAD_SAFETY = 1.5
 RECENT_BLOCKS = 10
 MAX_LEAD = 2.0
-# The executor thread returns to Python at least this often (s), for the SIGTERM handler.
-SIGNAL_CHECK = 0.5
 # Executor threads of the node process (parameters, cmd_vel, scene reloads).
 EXECUTOR_THREADS = 4
 # After a planning failure an actor is asked again after this long (s).
@@ -111,65 +105,6 @@ HURRY_GUARD = 0.02
 # A planning process that fails this many times in a row while placing its actors is given
 # up on: the node exits non-zero (a supervisor may start it again).
 MAX_REPLACEMENTS = 3
-
-
-class SharedThreads:
-    """The threads the actors of one process share: a stream ticker per (publish period,
-    priority), and one housekeeper. Planning threads belong to the planning workers."""
-
-    def __init__(self):
-        self._tickers = {}
-        self._lock = threading.Lock()
-        self.housekeeper = Housekeeper()
-
-    def ticker(self, period: float, priority: int, warn=None) -> StreamTicker:
-        """The ticker for ``period`` s at ``priority`` (created on first use)."""
-        with self._lock:
-            key = (float(period), int(priority))
-            if key not in self._tickers:
-                self._tickers[key] = StreamTicker(period, priority, warn)
-            return self._tickers[key]
-
-
-class CommandRouter:
-    """The cmd_vel subscriptions of the actors hosted by one process, on one small hidden node
-    spun by its own executor thread.
-
-    Each subscription is made on the topic its actor resolves ``cmd_vel`` to (the actor's
-    namespace and remappings). rclpy's SingleThreadedExecutor walks every entity of every node
-    on each wake-up; 20 actors with their parameter services made that about 2.5 ms, so 20
-    teleops at 10 Hz kept half a core busy. A command now wakes a node with only the
-    subscriptions; the actors' executor wakes only for parameter and other services.
-    """
-
-    def __init__(self):
-        # No global arguments: the topics are resolved by the actors already.
-        self.node = Node(f'_actor_planner_commands_{os.getpid()}', use_global_arguments=False,
-                         start_parameter_services=False)
-        self._executor = SingleThreadedExecutor()
-        self._executor.add_node(self.node)
-        self._thread = None
-
-    def start(self, priority: int) -> None:
-        """Start delivering commands (from a thread at ``priority`` when > 0)."""
-        self._thread = threading.Thread(target=self._spin, args=(priority,),
-                                        name='actor_commands', daemon=True)
-        self._thread.start()
-
-    def _spin(self, priority: int) -> None:
-        if priority > 0:
-            real_time(priority)
-        try:
-            self._executor.spin()
-        except ExternalShutdownException:
-            pass
-
-    def stop(self) -> None:
-        """Stop the thread and destroy the node."""
-        self._executor.shutdown(timeout_sec=5.0)
-        if self._thread is not None:
-            self._thread.join(timeout=5.0)
-        self.node.destroy_node()
 
 
 class ActorPlannerNode(Node):
@@ -821,84 +756,6 @@ class ActorPlannerNode(Node):
         self.path_pub.publish(path)
 
 
-def _command_line(argv) -> Tuple[list, int]:
-    """The ``--actors NS [NS ...]`` and ``--planning-processes K`` options among the non-ROS
-    arguments: (namespaces, [''] when absent; number of planning processes).
-
-    Raises
-    ------
-    ConfigurationError
-        An unknown argument or an invalid / repeated namespace.
-    """
-    parser = argparse.ArgumentParser(
-        prog='actor_planner', description='Stream digital actors as JointState.',
-        epilog='Several actors in one process share one DDS participant and one stream thread.')
-    parser.add_argument('--actors', nargs='+', metavar='NS', default=[''],
-                        help='host one actor per namespace in this process')
-    parser.add_argument('--planning-processes', type=int, metavar='K', default=None,
-                        help='planning processes shared by the actors (default: one per actor '
-                        'up to the number of usable cores)')
-    parsed, unknown = parser.parse_known_args(argv)
-    if unknown:
-        raise ConfigurationError('arguments', f'unknown arguments {unknown}')
-    names = [ns.strip() for ns in parsed.actors]
-    for ns in names:
-        try:
-            validate_namespace(ns if ns.startswith('/') else '/' + ns)
-        except InvalidNamespaceException as error:
-            raise ConfigurationError('actors', f'invalid namespace {ns!r}: '
-                                     f'{str(error).splitlines()[0]}') from None
-    if len(set(names)) != len(names):
-        raise ConfigurationError('actors', f'repeated namespace in {names}')
-    processes = parsed.planning_processes
-    if processes is None:
-        processes = min(len(names), usable_cores())
-    return names, processes
-
-
-def _terminated(signum, frame):
-    raise KeyboardInterrupt(f'signal {signum}')
-
-
-def spin_until_shutdown(executor, ok=rclpy.ok) -> None:
-    """Spin ``executor`` until the context is shut down (``ok()`` false).
-
-    Bounded waits, so that the SIGTERM handler (Python code, run by the main thread) gets its
-    turn even when no message arrives. Ctrl-C shuts the context down from rclpy's signal
-    handler, which can land between ``ok()`` and ``spin_once`` building its wait set (RCLError,
-    a RuntimeError: "the given context is not valid"): that is the shutdown asked for, not a
-    failure (the node exited with status 1 and a traceback, one CI run in many).
-    """
-    while ok():
-        try:
-            executor.spin_once(timeout_sec=SIGNAL_CHECK)
-        except RuntimeError:
-            if ok():
-                raise
-
-
-def _close_partial(nodes, commands, planners) -> None:
-    """Shut down what :func:`main` built before it stopped starting."""
-    for node in nodes:
-        node.stop()
-        node.destroy_node()
-    if commands is not None:
-        commands.stop()
-    if planners is not None:
-        planners.close()
-    rclpy.try_shutdown()
-
-
-def _without_kernels() -> None:
-    """Load the core in this process as plain Python, not compiled.
-
-    The node process runs no kernel (its planning processes do); compiling them here too
-    took tens of seconds from an empty cache before the first frame.
-    """
-    if 'numba' not in sys.modules and 'digital_actor_planner.core.jit' not in sys.modules:
-        sys.modules['numba'] = None
-
-
 def main(args=None) -> int:
     """Run the node(s) until interrupted; exit status 2 on a bad configuration, 1 on a fault
     the planner could not recover from."""
@@ -912,19 +769,19 @@ def main(args=None) -> int:
 
 
 def _run(args) -> int:
-    _without_kernels()
+    without_kernels()
     # The executor and planning threads hold the GIL at times; a short switch interval bounds
     # how long the publishing thread waits for it after waking (the default 5 ms would be the
     # jitter).
     sys.setswitchinterval(0.0005)
     # SIGTERM (docker stop, systemd, ros2 launch after SIGINT) ends the node as Ctrl-C does.
     # rclpy's own SIGTERM handling left a node hosting 20 walking actors running for minutes.
-    signal.signal(signal.SIGTERM, _terminated)
+    signal.signal(signal.SIGTERM, terminated)
     rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.SIGINT)
     logger = rclpy.logging.get_logger('actor_planner')
     nodes, planners, commands = [], None, None
     try:
-        namespaces, processes = _command_line(remove_ros_args(
+        namespaces, processes = command_line(remove_ros_args(
             sys.argv if args is None else args)[1:])
         threads = SharedThreads()
         planners = PlanningPool(processes)
@@ -935,16 +792,16 @@ def _run(args) -> int:
     # A parameter the node reads, or one its planning processes refuse: both name it.
     except (ConfigurationError, planner_params.ConfigurationError) as error:
         logger.fatal(f'invalid configuration: {error}')
-        _close_partial(nodes, commands, planners)
+        close_partial(nodes, commands, planners)
         return 2
     except (KeyboardInterrupt, ExternalShutdownException):
-        _close_partial(nodes, commands, planners)
+        close_partial(nodes, commands, planners)
         return 0
     except RuntimeError:
         # Ctrl-C while a node was being built: rclpy's handler shut the context down under it.
         if rclpy.ok():
             raise
-        _close_partial(nodes, commands, planners)
+        close_partial(nodes, commands, planners)
         return 0
     priority = nodes[0].config.stream_priority
     if priority > 2:

@@ -26,14 +26,13 @@ import math
 import time
 from typing import Callable, Optional, Tuple
 
+from digital_actor_planner.runtime.scheduling import NodesThread
 from geometry_msgs.msg import Point, PoseStamped, Quaternion
 from nav_msgs.msg import Path
 import numpy as np
 from rclpy.serialization import serialize_message
 from std_msgs.msg import ColorRGBA
 from visualization_msgs.msg import Marker, MarkerArray
-
-from digital_actor_planner.runtime.scheduling import NodesThread
 
 # Mesh triangles drawn in RViz at most (one TRIANGLE_LIST per mesh).
 MAX_MARKER_TRIANGLES = 200_000

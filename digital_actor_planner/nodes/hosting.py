@@ -1,0 +1,178 @@
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+The process that hosts actor nodes: what they share, its command line and its spin loop.
+
+The actors of one process share their stream tickers, one housekeeping thread and, when
+there are several, one hidden node for their cmd_vel subscriptions (:class:`CommandRouter`).
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import threading
+from typing import Tuple
+
+from digital_actor_planner.nodes.markers import Housekeeper
+from digital_actor_planner.nodes.planner_params import ConfigurationError
+from digital_actor_planner.runtime.planning import usable_cores
+from digital_actor_planner.runtime.scheduling import real_time, StreamTicker
+import rclpy
+from rclpy.exceptions import InvalidNamespaceException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.validate_namespace import validate_namespace
+
+# The executor thread returns to Python at least this often (s), for the SIGTERM handler.
+SIGNAL_CHECK = 0.5
+
+
+class SharedThreads:
+    """The threads the actors of one process share: a stream ticker per (publish period,
+    priority), and one housekeeper. Planning threads belong to the planning workers."""
+
+    def __init__(self):
+        self._tickers = {}
+        self._lock = threading.Lock()
+        self.housekeeper = Housekeeper()
+
+    def ticker(self, period: float, priority: int, warn=None) -> StreamTicker:
+        """The ticker for ``period`` s at ``priority`` (created on first use)."""
+        with self._lock:
+            key = (float(period), int(priority))
+            if key not in self._tickers:
+                self._tickers[key] = StreamTicker(period, priority, warn)
+            return self._tickers[key]
+
+
+class CommandRouter:
+    """The cmd_vel subscriptions of the actors hosted by one process, on one small hidden node
+    spun by its own executor thread.
+
+    Each subscription is made on the topic its actor resolves ``cmd_vel`` to (the actor's
+    namespace and remappings). rclpy's SingleThreadedExecutor walks every entity of every node
+    on each wake-up; 20 actors with their parameter services made that about 2.5 ms, so 20
+    teleops at 10 Hz kept half a core busy. A command now wakes a node with only the
+    subscriptions; the actors' executor wakes only for parameter and other services.
+    """
+
+    def __init__(self):
+        # No global arguments: the topics are resolved by the actors already.
+        self.node = Node(f'_actor_planner_commands_{os.getpid()}', use_global_arguments=False,
+                         start_parameter_services=False)
+        self._executor = SingleThreadedExecutor()
+        self._executor.add_node(self.node)
+        self._thread = None
+
+    def start(self, priority: int) -> None:
+        """Start delivering commands (from a thread at ``priority`` when > 0)."""
+        self._thread = threading.Thread(target=self._spin, args=(priority,),
+                                        name='actor_commands', daemon=True)
+        self._thread.start()
+
+    def _spin(self, priority: int) -> None:
+        if priority > 0:
+            real_time(priority)
+        try:
+            self._executor.spin()
+        except ExternalShutdownException:
+            pass
+
+    def stop(self) -> None:
+        """Stop the thread and destroy the node."""
+        self._executor.shutdown(timeout_sec=5.0)
+        if self._thread is not None:
+            self._thread.join(timeout=5.0)
+        self.node.destroy_node()
+
+
+def command_line(argv) -> Tuple[list, int]:
+    """The ``--actors NS [NS ...]`` and ``--planning-processes K`` options among the non-ROS
+    arguments: (namespaces, [''] when absent; number of planning processes).
+
+    Raises
+    ------
+    ConfigurationError
+        An unknown argument or an invalid / repeated namespace.
+    """
+    parser = argparse.ArgumentParser(
+        prog='actor_planner', description='Stream digital actors as JointState.',
+        epilog='Several actors in one process share one DDS participant and one stream thread.')
+    parser.add_argument('--actors', nargs='+', metavar='NS', default=[''],
+                        help='host one actor per namespace in this process')
+    parser.add_argument('--planning-processes', type=int, metavar='K', default=None,
+                        help='planning processes shared by the actors (default: one per actor '
+                        'up to the number of usable cores)')
+    parsed, unknown = parser.parse_known_args(argv)
+    if unknown:
+        raise ConfigurationError('arguments', f'unknown arguments {unknown}')
+    names = [ns.strip() for ns in parsed.actors]
+    for ns in names:
+        try:
+            validate_namespace(ns if ns.startswith('/') else '/' + ns)
+        except InvalidNamespaceException as error:
+            raise ConfigurationError('actors', f'invalid namespace {ns!r}: '
+                                     f'{str(error).splitlines()[0]}') from None
+    if len(set(names)) != len(names):
+        raise ConfigurationError('actors', f'repeated namespace in {names}')
+    processes = parsed.planning_processes
+    if processes is None:
+        processes = min(len(names), usable_cores())
+    return names, processes
+
+
+def terminated(signum, frame):
+    raise KeyboardInterrupt(f'signal {signum}')
+
+
+def spin_until_shutdown(executor, ok=rclpy.ok) -> None:
+    """Spin ``executor`` until the context is shut down (``ok()`` false).
+
+    Bounded waits, so that the SIGTERM handler (Python code, run by the main thread) gets its
+    turn even when no message arrives. Ctrl-C shuts the context down from rclpy's signal
+    handler, which can land between ``ok()`` and ``spin_once`` building its wait set (RCLError,
+    a RuntimeError: "the given context is not valid"): that is the shutdown asked for, not a
+    failure (the node exited with status 1 and a traceback, one CI run in many).
+    """
+    while ok():
+        try:
+            executor.spin_once(timeout_sec=SIGNAL_CHECK)
+        except RuntimeError:
+            if ok():
+                raise
+
+
+def close_partial(nodes, commands, planners) -> None:
+    """Shut down what :func:`main` built before it stopped starting."""
+    for node in nodes:
+        node.stop()
+        node.destroy_node()
+    if commands is not None:
+        commands.stop()
+    if planners is not None:
+        planners.close()
+    rclpy.try_shutdown()
+
+
+def without_kernels() -> None:
+    """Load the core in this process as plain Python, not compiled.
+
+    The node process runs no kernel (its planning processes do); compiling them here too
+    took tens of seconds from an empty cache before the first frame.
+    """
+    if 'numba' not in sys.modules and 'digital_actor_planner.core.jit' not in sys.modules:
+        sys.modules['numba'] = None
+
