@@ -1,4 +1,19 @@
-"""ROS 2 node ``actor_planner``: cmd_vel and a mesh scene in, a 22-DOF JointState stream out.
+# Copyright 2026 digital_actor_planner developers
+#
+# Licensed under the Apache License, Version 2.0 (the "License");
+# you may not use this file except in compliance with the License.
+# You may obtain a copy of the License at
+#
+#     http://www.apache.org/licenses/LICENSE-2.0
+#
+# Unless required by applicable law or agreed to in writing, software
+# distributed under the License is distributed on an "AS IS" BASIS,
+# WITHOUT WARRANTIES OR CONDITIONS OF ANY KIND, either express or implied.
+# See the License for the specific language governing permissions and
+# limitations under the License.
+
+"""
+ROS 2 node ``actor_planner``: cmd_vel and a mesh scene in, a 22-DOF JointState stream out.
 
 A thin adapter over :class:`digital_actor_planner.core.actor.Actor` (STYLE: nodes only adapt).
 Planning never stalls the stream:
@@ -201,8 +216,12 @@ class ActorPlannerNode(Node):
 
     @property
     def default_callback_group(self):
-        """Reentrant: the parameter services answer while a scene set loads in another
-        executor thread (rclpy's default group would make them wait for it)."""
+        """
+        Reentrant callback group of the node's entities.
+
+        The parameter services answer while a scene set loads in another executor thread
+        (rclpy's default group would make them wait for it).
+        """
         group = self.__dict__.get('_reentrant_group')
         if group is None:
             group = self.__dict__['_reentrant_group'] = ReentrantCallbackGroup()
@@ -287,7 +306,8 @@ class ActorPlannerNode(Node):
         return SetParametersResult(successful=True)
 
     def _reload_scene(self, path: str) -> SetParametersResult:
-        """Load ``path`` in the planning process and hand its start to the planning thread.
+        """
+        Load ``path`` in the planning process and hand its start to the planning thread.
 
         Runs in one of the executor's threads (the others go on serving parameters and
         commands) while the stream holds the stance. The parameter takes the new value only
@@ -323,7 +343,8 @@ class ActorPlannerNode(Node):
 
     # -- planning (called by the worker's PlanningScheduler thread) -------------------------
     def planning_slack(self) -> Optional[float]:
-        """Seconds until this actor's next block is due (<= 0: due now); None: nothing to plan.
+        """
+        Seconds until this actor's next block is due (<= 0: due now); None: nothing to plan.
 
         Nothing is planned while the last block would only repeat: a hold at rest or a stuck
         hold, with the command unchanged since. A new scene's first block is due at once, as
@@ -347,9 +368,12 @@ class ActorPlannerNode(Node):
         return self.buffer.end_time - self.playback_time - lead
 
     def plan_once(self) -> None:
-        """Plan this actor's next block and commit it to the buffer (a new scene's first
-        block after the buffer restarts at the new start; the actor placed first when its
-        planning process does not hold it)."""
+        """
+        Plan this actor's next block and commit it to the buffer.
+
+        A new scene's first block is committed after the buffer restarts at the new start;
+        the actor is placed first when its planning process does not hold it.
+        """
         try:
             with self._scene_lock:
                 if not self.planner.placed and not self._place():
@@ -388,8 +412,12 @@ class ActorPlannerNode(Node):
             self.fail(1, f'planning thread failed: {error!r}\n{traceback.format_exc()}')
 
     def _replan_target(self, now: float):
-        """The first committed block not yet begun that was planned for a command unlike the
-        current one (a stop, or a change of REPLAN_LINEAR / REPLAN_ANGULAR); None if none."""
+        """
+        Return the first committed block not yet begun that the command has overtaken.
+
+        That is a block planned for a command unlike the current one (a stop, or a change of
+        REPLAN_LINEAR / REPLAN_ANGULAR); None if none.
+        """
         linear, angular = self.command.current(now, self.cmd_timeout)
         stop = abs(linear) < 1e-3 and abs(angular) < 1e-3
         guard = STOP_GUARD if stop else REPLAN_GUARD
@@ -405,8 +433,12 @@ class ActorPlannerNode(Node):
         return None
 
     def _replan_tail(self) -> None:
-        """Drop the blocks not yet begun that the command has overtaken, and take the actor in
-        its planning process back to the state before them (the next block replaces them)."""
+        """
+        Drop the blocks not yet begun that the command has overtaken.
+
+        The actor in its planning process goes back to the state before them (the next block
+        replaces them).
+        """
         target = self._replan_target(time.monotonic())
         if target is None:
             return
@@ -443,7 +475,8 @@ class ActorPlannerNode(Node):
                                                self.skeleton.velocity_limit, HURRY_MAX_RATE)
 
     def _place(self) -> bool:
-        """Place the actor in its planning process; True when placed.
+        """
+        Place the actor in its planning process; True when placed.
 
         The first time on the configured scene and start; after the process was replaced,
         where the actor stood (the root of the last committed frame), blended over to.
@@ -494,8 +527,20 @@ class ActorPlannerNode(Node):
         return True
 
     def fail(self, code: int, message: str) -> None:
-        """End the node with exit status ``code``: an ERROR on /diagnostics and the log, then
-        the context is shut down (``main`` returns ``exit_code``)."""
+        """
+        End the node with exit status ``code``.
+
+        An ERROR goes to /diagnostics and the log, then the context is shut down (``main``
+        returns ``exit_code``).
+
+        Parameters
+        ----------
+        code
+            Exit status the process is to end with.
+        message
+            What went wrong; its first line is the diagnostics' reason.
+
+        """
         if self.exit_code is not None or self._stop.is_set():
             return
         self.exit_code = code
@@ -542,7 +587,8 @@ class ActorPlannerNode(Node):
         self._latest_block = (block, profile)
 
     def _effective_lead(self) -> float:
-        """Buffered time (s) below which the next block is planned.
+        """
+        Buffered time (s) below which the next block is planned.
 
         At least ``planning_lead``, and more when recent blocks took long to plan or waited
         long for their turn in a shared planning process (a loaded
@@ -553,13 +599,22 @@ class ActorPlannerNode(Node):
 
     def publish_frame(self, now: float, late_ticks: int, instant: Optional[float],
                       stamp_ns: int) -> None:
-        """Publish the frame for monotonic time ``instant`` (None: ``now``) at ``now``
-        (called by the stream ticker).
+        """
+        Publish the frame for monotonic time ``instant`` at ``now`` (the stream ticker's call).
 
-        ``late_ticks`` ticks were skipped before this one because the tick came too late to
-        catch them up. A frame published a period or more after its tick (``instant``) shows
-        the motion at ``instant``. ``stamp_ns`` is the wall-clock time of the instant shown;
-        with ``use_sim_time`` the stamp is the ROS clock's time instead.
+        Parameters
+        ----------
+        now
+            Monotonic time (s) of publishing.
+        late_ticks
+            Ticks skipped before this one because the tick came too late to catch them up.
+        instant
+            Monotonic time (s) of the tick shown, for a frame published a period or more after
+            its tick; None: ``now``.
+        stamp_ns
+            Wall-clock time (ns) of the instant shown; with ``use_sim_time`` the stamp is the
+            ROS clock's time instead.
+
         """
         if self._stop.is_set():
             return
@@ -600,8 +655,17 @@ class ActorPlannerNode(Node):
         self.tick_times.append(now)
 
     def housekeeping(self, diagnostics: bool, housekeeper: 'Housekeeper') -> None:
-        """Publish a new environment and new markers, and diagnostics when ``diagnostics``
-        (the Housekeeper's call)."""
+        """
+        Publish a new environment and new markers, and diagnostics (the Housekeeper's call).
+
+        Parameters
+        ----------
+        diagnostics
+            Whether diagnostics are due too.
+        housekeeper
+            The calling :class:`Housekeeper`, which keeps the serialized environments.
+
+        """
         if self._stop.is_set():
             return
         try:
@@ -652,8 +716,18 @@ class ActorPlannerNode(Node):
             self._scheduler.wake.set()  # a stop is planned at once (docs/stopping.md)
 
     def stream_timing(self) -> Tuple[float, float]:
-        """Return the jitter p99 and the longest interval (ms) of the recent ticks (NaN when
-        unknown): the deviation of each interval between published frames from the period."""
+        """
+        Return the jitter p99 and the longest interval (ms) of the recent ticks.
+
+        The jitter is the deviation of each interval between published frames from the
+        period.
+
+        Returns
+        -------
+        (float, float)
+            Jitter p99 and longest interval, ms (NaN when unknown).
+
+        """
         ticks = np.array(self.tick_times)
         if len(ticks) < 3:
             return float('nan'), float('nan')
@@ -672,8 +746,11 @@ class ActorPlannerNode(Node):
         return (len(recent) - 1) / (recent[-1] - recent[0])
 
     def _check_cmd_vel_type(self) -> None:
-        """Warn (log and diagnostics) about cmd_vel publishers of the other Twist type: the
-        subscription never hears them, and nothing else would say so."""
+        """
+        Warn (log and diagnostics) about cmd_vel publishers of the other Twist type.
+
+        The subscription never hears them, and nothing else would say so.
+        """
         topic = self.resolve_topic_name('cmd_vel')
         expected = 'geometry_msgs/msg/TwistStamped' if self.config.cmd_vel_stamped else \
             'geometry_msgs/msg/Twist'
@@ -757,8 +834,21 @@ class ActorPlannerNode(Node):
 
 
 def main(args=None) -> int:
-    """Run the node(s) until interrupted; exit status 2 on a bad configuration, 1 on a fault
-    the planner could not recover from."""
+    """
+    Run the node(s) until interrupted.
+
+    Parameters
+    ----------
+    args
+        Command line (None: ``sys.argv``), ROS arguments included.
+
+    Returns
+    -------
+    int
+        Exit status: 0, 2 on a bad configuration, 1 on a fault the planner could not recover
+        from.
+
+    """
     try:
         return _run(args)
     except KeyboardInterrupt:  # Ctrl-C while starting, before rclpy took it over

@@ -41,8 +41,12 @@ SIGNAL_CHECK = 0.5
 
 
 class SharedThreads:
-    """The threads the actors of one process share: a stream ticker per (publish period,
-    priority), and one housekeeper. Planning threads belong to the planning workers."""
+    """
+    The threads the actors of one process share.
+
+    A stream ticker per (publish period, priority), and one housekeeper. Planning threads
+    belong to the planning workers.
+    """
 
     def __init__(self):
         self._tickers = {}
@@ -50,7 +54,24 @@ class SharedThreads:
         self.housekeeper = Housekeeper()
 
     def ticker(self, period: float, priority: int, warn=None) -> StreamTicker:
-        """The ticker for ``period`` s at ``priority`` (created on first use)."""
+        """
+        Return the ticker for ``period`` s at ``priority`` (created on first use).
+
+        Parameters
+        ----------
+        period
+            Publish period, s.
+        priority
+            SCHED_FIFO priority of the stream thread (0: normal scheduling).
+        warn
+            Called with a message should the ticker not get real-time scheduling.
+
+        Returns
+        -------
+        StreamTicker
+            The same ticker for every actor asking with the same period and priority.
+
+        """
         with self._lock:
             key = (float(period), int(priority))
             if key not in self._tickers:
@@ -59,8 +80,10 @@ class SharedThreads:
 
 
 class CommandRouter:
-    """The cmd_vel subscriptions of the actors hosted by one process, on one small hidden node
-    spun by its own executor thread.
+    """
+    The cmd_vel subscriptions of the actors hosted by one process.
+
+    They live on one small hidden node spun by its own executor thread.
 
     Each subscription is made on the topic its actor resolves ``cmd_vel`` to (the actor's
     namespace and remappings). rclpy's SingleThreadedExecutor walks every entity of every node
@@ -100,13 +123,24 @@ class CommandRouter:
 
 
 def command_line(argv) -> Tuple[list, int]:
-    """The ``--actors NS [NS ...]`` and ``--planning-processes K`` options among the non-ROS
-    arguments: (namespaces, [''] when absent; number of planning processes).
+    """
+    Read the ``--actors NS [NS ...]`` and ``--planning-processes K`` options.
+
+    Parameters
+    ----------
+    argv
+        The non-ROS arguments, without the program name.
+
+    Returns
+    -------
+    (list of str, int)
+        The namespaces ([''] when absent) and the number of planning processes.
 
     Raises
     ------
     ConfigurationError
         An unknown argument or an invalid / repeated namespace.
+
     """
     parser = argparse.ArgumentParser(
         prog='actor_planner', description='Stream digital actors as JointState.',
@@ -139,7 +173,8 @@ def terminated(signum, frame):
 
 
 def spin_until_shutdown(executor, ok=rclpy.ok) -> None:
-    """Spin ``executor`` until the context is shut down (``ok()`` false).
+    """
+    Spin ``executor`` until the context is shut down (``ok()`` false).
 
     Bounded waits, so that the SIGTERM handler (Python code, run by the main thread) gets its
     turn even when no message arrives. Ctrl-C shuts the context down from rclpy's signal
@@ -168,11 +203,11 @@ def close_partial(nodes, commands, planners) -> None:
 
 
 def without_kernels() -> None:
-    """Load the core in this process as plain Python, not compiled.
+    """
+    Load the core in this process as plain Python, not compiled.
 
     The node process runs no kernel (its planning processes do); compiling them here too
     took tens of seconds from an empty cache before the first frame.
     """
     if 'numba' not in sys.modules and 'digital_actor_planner.core.jit' not in sys.modules:
         sys.modules['numba'] = None
-

@@ -51,7 +51,8 @@ def _points(xyz: np.ndarray):
 
 
 def environment_markers(meshes, frame_id: str) -> bytes:
-    """The serialized MarkerArray that draws the environment in RViz.
+    """
+    Build the serialized MarkerArray that draws the environment in RViz.
 
     Parameters
     ----------
@@ -104,8 +105,10 @@ def _environment_array(drawn, frame_id: str, points_of) -> MarkerArray:
 
 
 def _spliced(drawn, frame_id: str) -> Optional[bytes]:
-    """Serialize the environment by writing each TRIANGLE_LIST's points into a serialized
-    template; None when the template's layout is not the expected one.
+    """
+    Serialize the environment by writing each TRIANGLE_LIST's points into a template.
+
+    None when the serialized template's layout is not the expected one.
 
     The RMW serializes a template with one placeholder point per marker, and again with two.
     A point sequence is a count, then 24 bytes (three float64) per point: the count is the
@@ -210,8 +213,11 @@ def block_markers(block, profile: np.ndarray, past_footsteps, frame_id: str,
 
 
 class Housekeeper(NodesThread):
-    """One thread that publishes the markers (5 Hz) and diagnostics (1 Hz) of every actor of a
-    process; plain thread, not executor timers (see ``ActorPlannerNode._make_interfaces``)."""
+    """
+    One thread that publishes the markers (5 Hz) and diagnostics (1 Hz) of a process's actors.
+
+    A plain thread, not executor timers (see ``ActorPlannerNode._make_interfaces``).
+    """
 
     name = 'actor_housekeeping'
     #: Serialized environments kept for actors on the same scene.
@@ -222,7 +228,20 @@ class Housekeeper(NodesThread):
         self._environments = collections.OrderedDict()
 
     def environment(self, meshes, frame_id: str) -> bytes:
-        """The serialized environment markers of ``meshes`` (built once per content)."""
+        """
+        Return the serialized environment markers of ``meshes`` (built once per content).
+
+        Parameters
+        ----------
+        meshes, frame_id
+            As for :func:`environment_markers`.
+
+        Returns
+        -------
+        bytes
+            The serialized MarkerArray, the same object for the same content and frame.
+
+        """
         key = (frame_id, _meshes_digest(meshes))
         if key in self._environments:
             self._environments.move_to_end(key)

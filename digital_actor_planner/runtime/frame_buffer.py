@@ -32,7 +32,8 @@ BUFFER_HISTORY = 1.0
 
 
 class FrameBuffer:
-    """Committed timed frames, sampled at any playback time; safe to share between threads.
+    """
+    Committed timed frames, sampled at any playback time; safe to share between threads.
 
     Parameters
     ----------
@@ -58,7 +59,8 @@ class FrameBuffer:
 
     def append(self, times: np.ndarray, frames: np.ndarray, velocities: np.ndarray,
                now: float) -> None:
-        """Commit frames after the current end; frames before ``now - BUFFER_HISTORY`` go.
+        """
+        Commit frames after the current end; frames before ``now - BUFFER_HISTORY`` go.
 
         Parameters
         ----------
@@ -85,7 +87,8 @@ class FrameBuffer:
 
     def restart(self, configuration: np.ndarray, start_time: float,
                 blend_from: Optional[float] = None) -> None:
-        """Drop every frame after ``start_time`` and continue from ``configuration`` there.
+        """
+        Drop every frame after ``start_time`` and continue from ``configuration`` there.
 
         Parameters
         ----------
@@ -144,7 +147,8 @@ class FrameBuffer:
         return hurried.saved
 
     def sample(self, t: float) -> Tuple[np.ndarray, np.ndarray]:
-        """Return the configuration (22,) and velocity (22,) at time ``t`` s, interpolated.
+        """
+        Return the configuration (22,) and velocity (22,) at time ``t`` s, interpolated.
 
         Beyond the last frame the last configuration is held with zero velocity.
         """

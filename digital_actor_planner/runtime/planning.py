@@ -36,10 +36,9 @@ import time
 from typing import Any, Optional, Tuple
 import weakref
 
-import numpy as np
-
 from digital_actor_planner.core.settings import ConfigError
 from digital_actor_planner.runtime.scheduling import PlanningScheduler
+import numpy as np
 
 # The ground profile marker shows surfaces up to this far above the predicted path (m).
 PROFILE_STEP_UP = 0.5
@@ -102,7 +101,8 @@ class PlanningStats:
 
 def build_actor(skeleton, actor_config, scene_path: str,
                 start_pose: Optional[Tuple[float, float, float]], scene=None):
-    """Load a scene and place a new actor at its start (or at ``start_pose``).
+    """
+    Load a scene and place a new actor at its start (or at ``start_pose``).
 
     ``scene``: the scene at ``scene_path`` already loaded (by another actor); it is not
     loaded again.
@@ -158,7 +158,8 @@ def _ground_profile(actor, block) -> np.ndarray:
 
 
 class SceneCache:
-    """Scenes a planning worker's actors use, shared among them (keyed by file and version).
+    """
+    Scenes a planning worker's actors use, shared among them (keyed by file and version).
 
     Weak: a scene no actor holds any more (replaced at run time) is forgotten.
     """
@@ -180,7 +181,8 @@ class SceneCache:
 
 
 def _actor_config(fields: dict):
-    """The core ``ActorConfig`` of the node's parameters, validated (in the planning process).
+    """
+    Return the core ``ActorConfig`` of the node's parameters, validated (in the planning process).
 
     Raises
     ------
@@ -197,7 +199,8 @@ def _actor_config(fields: dict):
 
 
 def _planning_process(connection) -> None:
-    """Child process: own the core Actors of one or more nodes and answer their requests.
+    """
+    Child process: own the core Actors of one or more nodes and answer their requests.
 
     A request is ``(number, kind, id, ...)`` with the actor's id: ``('add', id,
     actor_fields, urdf_path, scene_path, start_pose, place_at)`` (``place_at``: where to
@@ -287,12 +290,16 @@ class PlanningFailed(RuntimeError):
 
 
 class PlanningLost(PlanningFailed):
-    """The planning process died or stopped answering and has been replaced by a new one,
-    which knows none of the actors yet."""
+    """
+    The planning process died or stopped answering and has been replaced by a new one.
+
+    The new process knows none of the actors yet.
+    """
 
 
 class PlanningWorker:
-    """A child process that plans for one or more actors, one request at a time.
+    """
+    A child process that plans for one or more actors, one request at a time.
 
     The core's NumPy and FCL calls hold the GIL for milliseconds, so they run outside the
     node's process. Actors sharing a worker share its scene cache and take turns. A process
@@ -327,7 +334,8 @@ class PlanningWorker:
         return self._process.is_alive()
 
     def request(self, message: tuple, timeout: float):
-        """Send one request and wait for its reply (timeout counted from sending).
+        """
+        Send one request and wait for its reply (timeout counted from sending).
 
         Replies to earlier requests (given up on) are dropped.
 
@@ -391,7 +399,8 @@ class PlanningWorker:
 
 
 class PlanningPool:
-    """Up to ``size`` planning workers, started at once and handed out round-robin.
+    """
+    Up to ``size`` planning workers, started at once and handed out round-robin.
 
     Parameters
     ----------
@@ -408,7 +417,7 @@ class PlanningPool:
         self._next = 0
 
     def worker(self) -> PlanningWorker:
-        """The worker for the next actor."""
+        """Return the worker for the next actor."""
         worker = self._workers[self._next % len(self._workers)]
         self._next += 1
         return worker
@@ -420,7 +429,8 @@ class PlanningPool:
 
 
 class PlanningProcess:
-    """One actor's core Actor in a planning worker, driven by request/reply over its pipe.
+    """
+    One actor's core Actor in a planning worker, driven by request/reply over its pipe.
 
     Nothing is asked of the worker until :meth:`place`: the node streams meanwhile.
 
@@ -449,12 +459,12 @@ class PlanningProcess:
 
     @property
     def scheduler(self) -> 'PlanningScheduler':
-        """The planning thread of this actor's worker."""
+        """Return the planning thread of this actor's worker."""
         return self._worker.scheduler
 
     @property
     def worker(self) -> PlanningWorker:
-        """The worker this actor plans in."""
+        """Return the worker this actor plans in."""
         return self._worker
 
     @property
@@ -463,11 +473,22 @@ class PlanningProcess:
         return self._generation == self._worker.generation and self._worker.alive()
 
     def place(self, start_pose=None, timeout: float = ADD_TIMEOUT):
-        """Place the actor in the planning process on its scene; return (configuration (22,)
-        rad or m, meshes).
+        """
+        Place the actor in the planning process on its scene.
 
-        ``start_pose``: ``(x, y, yaw)`` to stand at instead of the configured start (where a
-        replaced process's actor stood).
+        Parameters
+        ----------
+        start_pose
+            ``(x, y, yaw)`` m and rad to stand at instead of the configured start (where a
+            replaced process's actor stood); None: the configured start.
+        timeout
+            s to wait for the planning process (which may first compile the core's kernels).
+
+        Returns
+        -------
+        (numpy.ndarray, list)
+            The actor's configuration (22,) rad or m, and the scene's meshes (vertices (v, 3)
+            m, faces (f, 3)).
 
         Raises
         ------
@@ -488,7 +509,8 @@ class PlanningProcess:
         return reply[1], reply[2]
 
     def plan(self, linear_x: float, angular_z: float, timeout: float = 60.0):
-        """Set the command and plan the next block.
+        """
+        Set the command and plan the next block.
 
         Returns
         -------
@@ -512,14 +534,24 @@ class PlanningProcess:
         return reply[1], reply[2], reply[3], reply[4]
 
     def replan_from(self, number: int, timeout: float = 60.0) -> bool:
-        """Take the actor back to its state before block ``number`` (that block and the ones
-        after it are to be planned again); False when that state is no longer kept."""
+        """
+        Take the actor back to its state before block ``number``.
+
+        That block and the ones after it are to be planned again.
+
+        Returns
+        -------
+        bool
+            False when that state is no longer kept.
+
+        """
         if self._generation != self._worker.generation:
             raise PlanningLost('planning process was replaced')
         return bool(self._worker.request(('rewind', self._id, int(number)), timeout)[1])
 
     def load_scene(self, scene_path: str, timeout: float = 300.0):
-        """Replace the actor by one on a new scene; return (configuration (22,), meshes).
+        """
+        Replace the actor by one on a new scene; return (configuration (22,), meshes).
 
         Raises
         ------

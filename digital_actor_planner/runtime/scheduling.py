@@ -34,9 +34,14 @@ IDLE_RESCAN = 0.25
 
 
 class NodesThread:
-    """A thread that serves the actor nodes attached to it: it starts with the first node and
-    ends when the last one is detached. Subclasses write ``_loop`` (run with ``attach``'s
-    extra arguments of the first node) and may wake it up for the end in ``_wake_up``."""
+    """
+    A thread that serves the actor nodes attached to it.
+
+    It starts with the first node and ends when the last one is detached. Subclasses write
+    ``_loop`` (run with ``attach``'s extra arguments of the first node) and may wake it up for
+    the end in ``_wake_up``. A node is the planner node, or anything with the methods the
+    subclass calls.
+    """
 
     name = 'actor_thread'
 
@@ -75,7 +80,8 @@ class NodesThread:
 
 
 class PlanningScheduler(NodesThread):
-    """One thread that plans for every actor sharing a planning worker, most urgent first.
+    """
+    One thread that plans for every actor sharing a planning worker, most urgent first.
 
     An actor is due when its buffered motion ahead of playback is down to its planning lead;
     of the due actors, the one with the least motion left goes first. The worker plans one
@@ -129,8 +135,12 @@ class PlanningScheduler(NodesThread):
 
 
 def wall_clock_offset_ns() -> int:
-    """``time.time_ns() - time.monotonic_ns()``, read as a pair: the tightest of three reads
-    (a thread losing its core between two reads would otherwise skew it)."""
+    """
+    Return ``time.time_ns() - time.monotonic_ns()``, the two clocks read as a pair.
+
+    The tightest of three reads: a thread losing its core between two reads would otherwise
+    skew it.
+    """
     best = None
     for _ in range(3):
         before = time.monotonic_ns()
@@ -142,7 +152,8 @@ def wall_clock_offset_ns() -> int:
 
 
 def real_time(priority: int) -> bool:
-    """Put the calling thread under SCHED_FIFO at ``priority``; False when not permitted.
+    """
+    Put the calling thread under SCHED_FIFO at ``priority``; False when not permitted.
 
     Children forked later start with normal scheduling (SCHED_RESET_ON_FORK).
     """
@@ -155,8 +166,10 @@ def real_time(priority: int) -> bool:
 
 
 class StreamTicker(NodesThread):
-    """One thread that publishes the joint_states of every actor attached to it, and a backup
-    thread on another core that publishes a tick the first one has not reached in time.
+    """
+    One thread that publishes the joint_states of every actor attached to it, and a backup.
+
+    The backup thread, on another core, publishes a tick the first one has not reached in time.
 
     Ticks on a monotonic schedule at ``1 / period``. A tick published late is late (jitter), not
     lost: a thread that wakes after ticks it slept over publishes each of them at once, each
