@@ -15,18 +15,21 @@
 """
 ROS 2 node ``actor_planner``: cmd_vel and a mesh scene in, a 22-DOF JointState stream out.
 
-A thin adapter over :class:`digital_actor_planner.core.actor.Actor` (STYLE: nodes only adapt).
-Planning never stalls the stream:
+A thin adapter over :class:`digital_actor_planner.core.actor.Actor` and the ROS-free real time
+of :mod:`digital_actor_planner.runtime` (STYLE: nodes only adapt). Planning never stalls the
+stream:
 
-* the core runs in a child process (:class:`PlanningProcess`): its NumPy and FCL calls hold
-  the GIL for milliseconds at a time, which would delay a publishing thread in the same process;
+* the core runs in a child process (``runtime.planning.PlanningProcess``): its NumPy and FCL
+  calls hold the GIL for milliseconds at a time, which would delay a publishing thread in the
+  same process;
 * a planning thread asks it for the next block whenever less than the planning lead of
   committed frames is buffered ahead of playback (so about one step is buffered); actors that
-  share a planning process share its planning thread (:class:`PlanningScheduler`), and an actor
-  standing at rest (or stuck) with an unchanged command is not planned for at all;
-* a publishing thread ticks on a monotonic schedule at ``publish_rate`` and publishes the frame
-  for "now", interpolated from the buffer; if planning is late it holds the last frame; ticks
-  it slept over (the machine took its core away) are published late, not dropped;
+  share a planning process share its planning thread (``runtime.scheduling.PlanningScheduler``),
+  and an actor standing at rest (or stuck) with an unchanged command is not planned for at all;
+* a publishing thread (``runtime.scheduling.StreamTicker``) ticks on a monotonic schedule at
+  ``publish_rate`` and publishes the frame for "now", interpolated from the buffer; if planning
+  is late it holds the last frame; ticks it slept over (the machine took its core away) are
+  published late, not dropped;
 * the executor's threads handle cmd_vel and parameter changes (a scene reload occupies one of
   them); a housekeeping thread publishes markers and diagnostics.
 
@@ -47,13 +50,14 @@ import sys
 import threading
 import time
 import traceback
-from typing import Optional, Tuple
+from typing import Optional
 
 # Ctrl-C while these load (a second or more on a busy machine) ends the node quietly, as
 # it does once it runs.
 try:
-    from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+    from diagnostic_msgs.msg import DiagnosticArray
     from digital_actor_planner.nodes import planner_params
+    from digital_actor_planner.nodes.diagnostics import planner_diagnostics
     from digital_actor_planner.nodes.hosting import close_partial, command_line, \
         CommandRouter, SharedThreads, spin_until_shutdown, terminated, without_kernels
     from digital_actor_planner.nodes.markers import block_markers, Housekeeper
@@ -63,7 +67,7 @@ try:
     from digital_actor_planner.runtime.frame_buffer import CommandState, FrameBuffer
     from digital_actor_planner.runtime.planning import ConfigurationError, PlanningFailed, \
         PlanningLost, PlanningPool, PlanningProcess, PlanningStats, REPLAN_BLOCKS
-    from digital_actor_planner.runtime.scheduling import real_time
+    from digital_actor_planner.runtime.scheduling import real_time_threads
     from digital_actor_planner.runtime.standing import stand_in_configuration
     from geometry_msgs.msg import Twist, TwistStamped
     from nav_msgs.msg import Path
@@ -207,9 +211,9 @@ class ActorPlannerNode(Node):
         self._scheduler.attach(self, self.config.stream_priority - 1
                                if self.config.stream_priority > 1 else 0)
         self._housekeeper.attach(self)
-        self._ticker = threads.ticker(self.period, self.config.stream_priority,
-                                      self.get_logger().info)
-        self._ticker.attach(self)
+        self.ticker = threads.ticker(self.period, self.config.stream_priority,
+                                     self.get_logger().info)
+        self.ticker.attach(self)
         self.get_logger().info(
             f'streaming {len(self.skeleton.joint_names)} joints at {self.config.publish_rate:g} '
             f'Hz, scene {self.scene_path}')
@@ -364,7 +368,7 @@ class ActorPlannerNode(Node):
             self._holding_for = None
         if self._replan_target(now) is not None or self._hurry_due(now):
             return -self._lead
-        lead = self._lead = self._effective_lead()
+        lead = self._lead = self.effective_lead()
         return self.buffer.end_time - self.playback_time - lead
 
     def plan_once(self) -> None:
@@ -586,13 +590,13 @@ class ActorPlannerNode(Node):
             self._holding_for = command
         self._latest_block = (block, profile)
 
-    def _effective_lead(self) -> float:
+    def effective_lead(self) -> float:
         """
-        Buffered time (s) below which the next block is planned.
+        Return the buffered time (s) below which the next block is planned.
 
         At least ``planning_lead``, and more when recent blocks took long to plan or waited
-        long for their turn in a shared planning process (a loaded
-        machine), so that playback does not run dry while the next block is planned.
+        long for their turn in a shared planning process (a loaded machine), so that playback
+        does not run dry while the next block is planned.
         """
         slowest = max(self._responses, default=0.0)
         return min(MAX_LEAD, max(self.planning_lead, LEAD_SAFETY * slowest))
@@ -694,7 +698,7 @@ class ActorPlannerNode(Node):
     def stop(self) -> None:
         """Stop streaming and planning, and end the planning process."""
         self.request_stop()
-        self._ticker.detach(self)
+        self.ticker.detach(self)
         self._housekeeper.detach(self)
         self._scheduler.detach(self)
         self.planner.close()
@@ -714,36 +718,6 @@ class ActorPlannerNode(Node):
         if (self._holding_for is not None and (linear_x, angular_z) != self._holding_for) or \
                 (stop and was_moving):
             self._scheduler.wake.set()  # a stop is planned at once (docs/stopping.md)
-
-    def stream_timing(self) -> Tuple[float, float]:
-        """
-        Return the jitter p99 and the longest interval (ms) of the recent ticks.
-
-        The jitter is the deviation of each interval between published frames from the
-        period.
-
-        Returns
-        -------
-        (float, float)
-            Jitter p99 and longest interval, ms (NaN when unknown).
-
-        """
-        ticks = np.array(self.tick_times)
-        if len(ticks) < 3:
-            return float('nan'), float('nan')
-        intervals = np.diff(ticks)
-        jitter = np.abs(intervals - 1.0 / self.config.publish_rate)
-        return 1e3 * float(np.percentile(jitter, 99)), 1e3 * float(intervals.max())
-
-    def publish_rate_measured(self) -> float:
-        """Return the joint_states rate (Hz) over the last second of ticks (NaN when unknown)."""
-        ticks = list(self.tick_times)
-        if len(ticks) < 2:
-            return float('nan')
-        recent = [t for t in ticks if t >= ticks[-1] - 1.0]
-        if len(recent) < 2 or recent[-1] <= recent[0]:
-            return float('nan')
-        return (len(recent) - 1) / (recent[-1] - recent[0])
 
     def _check_cmd_vel_type(self) -> None:
         """
@@ -766,58 +740,7 @@ class ActorPlannerNode(Node):
         self.cmd_vel_mismatch = mismatch
 
     def _publish_diagnostics(self) -> None:
-        stats = self.stats
-        p50, p99 = stats.percentiles()
-        rate = self.publish_rate_measured()
-        jitter_p99, longest = self.stream_timing()
-        rate_ok = math.isfinite(rate) and abs(rate - self.config.publish_rate) <= \
-            0.05 * self.config.publish_rate
-        level = DiagnosticStatus.OK
-        message = stats.state + (f': {stats.reason}' if stats.reason else '')
-        if stats.state in ('stuck', 'recovering') or self.scene_error or not rate_ok or \
-                self.cmd_vel_mismatch:
-            level = DiagnosticStatus.WARN
-        if self.exit_code is not None:
-            level = DiagnosticStatus.ERROR
-        if self.scene_error:
-            message += f'; scene error: {self.scene_error}'
-        if self.cmd_vel_mismatch:
-            message += f'; {self.cmd_vel_mismatch}'
-        if not rate_ok:
-            message += f'; joint_states at {rate:.1f} Hz'
-        values = {
-            'state': stats.state,
-            'reason': stats.reason,
-            'steps': str(stats.steps),
-            'blocks_planned': str(stats.blocks),
-            'planning_time_last_ms': f'{1e3 * stats.last_planning_time:.3f}',
-            'planning_time_p50_ms': f'{1e3 * p50:.3f}',
-            'planning_time_p99_ms': f'{1e3 * p99:.3f}',
-            'publish_rate_hz': f'{rate:.2f}',
-            'publish_rate_target_hz': f'{self.config.publish_rate:g}',
-            'stream_jitter_p99_ms': f'{jitter_p99:.3f}',
-            'stream_longest_interval_ms': f'{longest:.2f}',
-            'missed_frames': str(self.missed_frames),
-            'stream_backup_ticks': str(self._ticker.backup_publishes),
-            'stream_caught_up_ticks': str(self._ticker.caught_up),
-            'stream_late_ticks': str(self._ticker.late_ticks),
-            'stream_lateness_max_ms': f'{1e3 * self._ticker.max_lateness:.2f}',
-            'buffer_underruns': str(self.underruns),
-            'buffered_ahead_s': f'{self.buffer.end_time - self.playback_time:.3f}',
-            'planning_lead_s': f'{self._effective_lead():.3f}',
-            'scene': self.scene_path,
-            'scene_error': self.scene_error,
-            'cmd_vel_type_mismatch': self.cmd_vel_mismatch,
-            'planning_process_pid': str(self.planner.worker.pid),
-            'planning_processes_replaced': str(self.planner.worker.generation),
-            'stale_replies_dropped': str(self.planner.worker.stale_replies),
-            'blocks_planned_again': str(self.replanned_blocks),
-        }
-        status = DiagnosticStatus(
-            level=level, name=f'{self.get_fully_qualified_name()}: actor planner',
-            message=message, hardware_id=self.get_fully_qualified_name(),
-            values=[KeyValue(key=k, value=v) for k, v in values.items()])
-        array = DiagnosticArray(status=[status])
+        array = planner_diagnostics(self)
         array.header.stamp = self.get_clock().now().to_msg()
         self.diagnostics_pub.publish(array)
 
@@ -895,17 +818,8 @@ def _run(args) -> int:
         return 0
     priority = nodes[0].config.stream_priority
     if priority > 2:
-        real_time(priority - 1)  # the executor thread, as the planning threads
-        # The DDS threads too: publish() takes locks they hold, so they must not wait behind
-        # the planning processes (which stay at normal priority).
-        tasks = '/proc/self/task'
-        for thread_id in (os.listdir(tasks) if os.path.isdir(tasks) else ()):
-            try:
-                if os.sched_getscheduler(int(thread_id)) == os.SCHED_OTHER:
-                    os.sched_setscheduler(int(thread_id), os.SCHED_FIFO | getattr(
-                        os, 'SCHED_RESET_ON_FORK', 0), os.sched_param(priority - 2))
-            except OSError:
-                pass
+        # The executor thread as the planning threads, and the DDS threads below it.
+        real_time_threads(priority - 1)
     if commands is not None:
         commands.start(priority - 1 if priority > 2 else 0)
     # Several threads: a scene reload (seconds for a large scene) occupies one of them while

@@ -165,6 +165,31 @@ def real_time(priority: int) -> bool:
     return True
 
 
+def real_time_threads(priority: int) -> None:
+    """
+    Put the calling thread under SCHED_FIFO at ``priority``, the process's other threads below.
+
+    The other threads still under normal scheduling (the DDS threads) get ``priority - 1``:
+    publish() takes locks they hold, so they must not wait behind the planning processes
+    (which stay at normal priority). A thread that may not be changed is left as it is.
+
+    Parameters
+    ----------
+    priority
+        SCHED_FIFO priority of the calling thread, at least 2.
+
+    """
+    real_time(priority)
+    tasks = '/proc/self/task'
+    for thread_id in (os.listdir(tasks) if os.path.isdir(tasks) else ()):
+        try:
+            if os.sched_getscheduler(int(thread_id)) == os.SCHED_OTHER:
+                os.sched_setscheduler(int(thread_id), os.SCHED_FIFO | getattr(
+                    os, 'SCHED_RESET_ON_FORK', 0), os.sched_param(priority - 1))
+        except OSError:
+            pass
+
+
 class StreamTicker(NodesThread):
     """
     One thread that publishes the joint_states of every actor attached to it, and a backup.
