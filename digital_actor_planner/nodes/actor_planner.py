@@ -461,9 +461,12 @@ class ActorPlannerNode(Node):
         self._at_rest = False
 
     def _hurry_due(self, now: float) -> bool:
-        """True when told to stop during a walking step that can still land sooner: the step
-        has begun, is the last block committed (what is planned next starts where it ends)
-        and was not hurried yet."""
+        """
+        Tell whether the actor, told to stop, is in a walking step that can still land sooner.
+
+        The step has begun, is the last block committed (what is planned next starts where it
+        ends) and was not hurried yet.
+        """
         linear, angular = self.command.current(now, self.cmd_timeout)
         if abs(linear) >= 1e-3 or abs(angular) >= 1e-3 or not self._blocks:
             return False
@@ -472,8 +475,11 @@ class ActorPlannerNode(Node):
             start <= self.playback_time
 
     def _hurry_to_stop(self) -> None:
-        """Play the rest of the step in progress faster (``runtime.retiming``); the actor's
-        clock moves on by the time saved, so that the block planned next follows on."""
+        """
+        Play the rest of the step in progress faster (``runtime.retiming``).
+
+        The actor's clock moves on by the time saved, so that the block planned next follows on.
+        """
         self._hurried_block = self._blocks[-1][0]
         self.actor_offset -= self.buffer.hurry(self.playback_time + HURRY_GUARD,
                                                self.skeleton.velocity_limit, HURRY_MAX_RATE)

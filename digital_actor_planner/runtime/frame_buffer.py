@@ -135,9 +135,23 @@ class FrameBuffer:
             self._data = (times[:keep], frames[:keep], velocities[:keep])
 
     def hurry(self, start: float, velocity_limit: np.ndarray, max_rate: float) -> float:
-        """Play the frames after ``start`` faster along the same poses (``runtime.retiming``).
+        """
+        Play the frames after ``start`` faster along the same poses (``runtime.retiming``).
 
-        Returns the time (s) by which the buffer now ends sooner: 0 when nothing changed.
+        Parameters
+        ----------
+        start
+            s; the frames up to it keep their times.
+        velocity_limit
+            (22,) rad/s or m/s, no joint is driven faster.
+        max_rate
+            The highest playback rate (times the planned speed).
+
+        Returns
+        -------
+        float
+            The time (s) by which the buffer now ends sooner: 0 when nothing changed.
+
         """
         with self._lock:
             times, frames, velocities = self._data
