@@ -12,4 +12,4 @@
 # See the License for the specific language governing permissions and
 # limitations under the License.
 
-"""ROS-free real time for the planner node: the stand-in pose, frame buffer, planning processes."""
+"""ROS-free real time for the planner node: frame buffer, planning processes, stream threads."""
