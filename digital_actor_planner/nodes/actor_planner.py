@@ -42,10 +42,8 @@ from __future__ import annotations
 
 import array
 import collections
-import gc
 import math
 import os
-import signal
 import sys
 import threading
 import time
@@ -56,10 +54,8 @@ from typing import Optional
 # it does once it runs.
 try:
     from diagnostic_msgs.msg import DiagnosticArray
-    from digital_actor_planner.nodes import planner_params
     from digital_actor_planner.nodes.diagnostics import planner_diagnostics
-    from digital_actor_planner.nodes.hosting import close_partial, command_line, \
-        CommandRouter, SharedThreads, spin_until_shutdown, terminated, without_kernels
+    from digital_actor_planner.nodes.hosting import CommandRouter, run_nodes, SharedThreads
     from digital_actor_planner.nodes.markers import block_markers, Housekeeper
     from digital_actor_planner.nodes.planner_params import parameter_declarations, \
         PlannerNodeConfig, read_node_config, RUNTIME_PARAMETERS, scene_file_error, \
@@ -67,7 +63,6 @@ try:
     from digital_actor_planner.runtime.frame_buffer import CommandState, FrameBuffer
     from digital_actor_planner.runtime.planning import ConfigurationError, PlanningFailed, \
         PlanningLost, PlanningPool, PlanningProcess, PlanningStats, REPLAN_BLOCKS
-    from digital_actor_planner.runtime.scheduling import real_time_threads
     from digital_actor_planner.runtime.standing import stand_in_configuration
     from geometry_msgs.msg import Twist, TwistStamped
     from nav_msgs.msg import Path
@@ -77,11 +72,8 @@ try:
     from rclpy.callback_groups import ReentrantCallbackGroup
     from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
     from rclpy.exceptions import ParameterException, ParameterUninitializedException
-    from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor
     from rclpy.node import Node
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
-    from rclpy.signals import SignalHandlerOptions
-    from rclpy.utilities import remove_ros_args
     from sensor_msgs.msg import JointState
     from std_msgs.msg import String
     from visualization_msgs.msg import MarkerArray
@@ -96,8 +88,6 @@ PAST_FOOTSTEPS = 40
 LEAD_SAFETY = 1.5
 RECENT_BLOCKS = 10
 MAX_LEAD = 2.0
-# Executor threads of the node process (parameters, cmd_vel, scene reloads).
-EXECUTOR_THREADS = 4
 # After a planning failure an actor is asked again after this long (s).
 RETRY_AFTER = 0.1
 # The stream blends from the pose it holds to a newly placed actor's first frame over this
@@ -779,82 +769,12 @@ def main(args=None) -> int:
 
     """
     try:
-        return _run(args)
+        return run_nodes(args, ActorPlannerNode)
     except KeyboardInterrupt:  # Ctrl-C while starting, before rclpy took it over
         rclpy.try_shutdown()
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(0)  # see the imports: a plain exit could end by SIGINT
-
-
-def _run(args) -> int:
-    without_kernels()
-    # The executor and planning threads hold the GIL at times; a short switch interval bounds
-    # how long the publishing thread waits for it after waking (the default 5 ms would be the
-    # jitter).
-    sys.setswitchinterval(0.0005)
-    # SIGTERM (docker stop, systemd, ros2 launch after SIGINT) ends the node as Ctrl-C does.
-    # rclpy's own SIGTERM handling left a node hosting 20 walking actors running for minutes.
-    signal.signal(signal.SIGTERM, terminated)
-    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.SIGINT)
-    logger = rclpy.logging.get_logger('actor_planner')
-    nodes, planners, commands = [], None, None
-    try:
-        namespaces, processes = command_line(remove_ros_args(
-            sys.argv if args is None else args)[1:])
-        threads = SharedThreads()
-        planners = PlanningPool(processes)
-        commands = CommandRouter() if len(namespaces) > 1 else None
-        for ns in namespaces:
-            nodes.append(ActorPlannerNode(threads=threads, planners=planners, commands=commands,
-                                          **({'namespace': ns} if ns else {})))
-    # A parameter the node reads, or one its planning processes refuse: both name it.
-    except (ConfigurationError, planner_params.ConfigurationError) as error:
-        logger.fatal(f'invalid configuration: {error}')
-        close_partial(nodes, commands, planners)
-        return 2
-    except (KeyboardInterrupt, ExternalShutdownException):
-        close_partial(nodes, commands, planners)
-        return 0
-    except RuntimeError:
-        # Ctrl-C while a node was being built: rclpy's handler shut the context down under it.
-        if rclpy.ok():
-            raise
-        close_partial(nodes, commands, planners)
-        return 0
-    priority = nodes[0].config.stream_priority
-    if priority > 2:
-        # The executor thread as the planning threads, and the DDS threads below it.
-        real_time_threads(priority - 1)
-    if commands is not None:
-        commands.start(priority - 1 if priority > 2 else 0)
-    # Several threads: a scene reload (seconds for a large scene) occupies one of them while
-    # the others answer parameter requests and cmd_vel (the node's callbacks are reentrant).
-    executor = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS)
-    for node in nodes:
-        executor.add_node(node)
-    # Everything built so far (scene meshes for the markers, messages, modules) is moved out of
-    # the garbage collector's reach, so its full collections, which run in whatever thread
-    # allocates and hold the GIL, cannot delay a tick by milliseconds.
-    gc.freeze()
-    try:
-        spin_until_shutdown(executor)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
-    finally:
-        for node in nodes:
-            node.request_stop()
-        if commands is not None:
-            commands.stop()
-        for node in nodes:
-            node.stop()
-        executor.shutdown(timeout_sec=5.0)
-        for node in nodes:
-            node.destroy_node()
-        planners.close()
-        rclpy.try_shutdown()
-    codes = [node.exit_code for node in nodes if node.exit_code is not None]
-    return max(codes, default=0)
 
 
 if __name__ == '__main__':

@@ -17,27 +17,37 @@ The process that hosts actor nodes: what they share, its command line and its sp
 
 The actors of one process share their stream tickers, one housekeeping thread and, when
 there are several, one hidden node for their cmd_vel subscriptions (:class:`CommandRouter`).
+:func:`run_nodes` builds the nodes, spins them and shuts everything down.
 """
 from __future__ import annotations
 
 import argparse
+import gc
 import os
+import signal
 import sys
 import threading
 from typing import Tuple
 
+from digital_actor_planner.nodes import planner_params
 from digital_actor_planner.nodes.markers import Housekeeper
-from digital_actor_planner.nodes.planner_params import ConfigurationError
-from digital_actor_planner.runtime.planning import usable_cores
-from digital_actor_planner.runtime.scheduling import real_time, StreamTicker
+from digital_actor_planner.runtime.planning import ConfigurationError, PlanningPool, \
+    usable_cores
+from digital_actor_planner.runtime.scheduling import real_time, real_time_threads, \
+    StreamTicker
 import rclpy
 from rclpy.exceptions import InvalidNamespaceException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import ExternalShutdownException, MultiThreadedExecutor, \
+    SingleThreadedExecutor
 from rclpy.node import Node
+from rclpy.signals import SignalHandlerOptions
+from rclpy.utilities import remove_ros_args
 from rclpy.validate_namespace import validate_namespace
 
 # The executor thread returns to Python at least this often (s), for the SIGTERM handler.
 SIGNAL_CHECK = 0.5
+# Executor threads of the node process (parameters, cmd_vel, scene reloads).
+EXECUTOR_THREADS = 4
 
 
 class SharedThreads:
@@ -122,7 +132,7 @@ class CommandRouter:
         self.node.destroy_node()
 
 
-def command_line(argv) -> Tuple[list, int]:
+def _command_line(argv) -> Tuple[list, int]:
     """
     Read the ``--actors NS [NS ...]`` and ``--planning-processes K`` options.
 
@@ -168,7 +178,7 @@ def command_line(argv) -> Tuple[list, int]:
     return names, processes
 
 
-def terminated(signum, frame):
+def _terminated(signum, frame):
     raise KeyboardInterrupt(f'signal {signum}')
 
 
@@ -190,7 +200,7 @@ def spin_until_shutdown(executor, ok=rclpy.ok) -> None:
                 raise
 
 
-def close_partial(nodes, commands, planners) -> None:
+def _close_partial(nodes, commands, planners) -> None:
     """Shut down what :func:`main` built before it stopped starting."""
     for node in nodes:
         node.stop()
@@ -202,7 +212,7 @@ def close_partial(nodes, commands, planners) -> None:
     rclpy.try_shutdown()
 
 
-def without_kernels() -> None:
+def _without_kernels() -> None:
     """
     Load the core in this process as plain Python, not compiled.
 
@@ -211,3 +221,89 @@ def without_kernels() -> None:
     """
     if 'numba' not in sys.modules and 'digital_actor_planner.core.jit' not in sys.modules:
         sys.modules['numba'] = None
+
+
+def run_nodes(args, node_type) -> int:
+    """
+    Run the actor nodes the command line asks for until the context is shut down.
+
+    Parameters
+    ----------
+    args
+        Command line (None: ``sys.argv``), ROS arguments included.
+    node_type
+        The actor node class, built once per namespace of ``--actors``.
+
+    Returns
+    -------
+    int
+        Exit status: 0, 2 on a bad configuration, or the highest ``exit_code`` of the nodes.
+
+    """
+    _without_kernels()
+    # The executor and planning threads hold the GIL at times; a short switch interval bounds
+    # how long the publishing thread waits for it after waking (the default 5 ms would be the
+    # jitter).
+    sys.setswitchinterval(0.0005)
+    # SIGTERM (docker stop, systemd, ros2 launch after SIGINT) ends the node as Ctrl-C does.
+    # rclpy's own SIGTERM handling left a node hosting 20 walking actors running for minutes.
+    signal.signal(signal.SIGTERM, _terminated)
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.SIGINT)
+    logger = rclpy.logging.get_logger('actor_planner')
+    nodes, planners, commands = [], None, None
+    try:
+        namespaces, processes = _command_line(remove_ros_args(
+            sys.argv if args is None else args)[1:])
+        threads = SharedThreads()
+        planners = PlanningPool(processes)
+        commands = CommandRouter() if len(namespaces) > 1 else None
+        for ns in namespaces:
+            nodes.append(node_type(threads=threads, planners=planners, commands=commands,
+                                   **({'namespace': ns} if ns else {})))
+    # A parameter the node reads, or one its planning processes refuse: both name it.
+    except (ConfigurationError, planner_params.ConfigurationError) as error:
+        logger.fatal(f'invalid configuration: {error}')
+        _close_partial(nodes, commands, planners)
+        return 2
+    except (KeyboardInterrupt, ExternalShutdownException):
+        _close_partial(nodes, commands, planners)
+        return 0
+    except RuntimeError:
+        # Ctrl-C while a node was being built: rclpy's handler shut the context down under it.
+        if rclpy.ok():
+            raise
+        _close_partial(nodes, commands, planners)
+        return 0
+    priority = nodes[0].config.stream_priority
+    if priority > 2:
+        # The executor thread as the planning threads, and the DDS threads below it.
+        real_time_threads(priority - 1)
+    if commands is not None:
+        commands.start(priority - 1 if priority > 2 else 0)
+    # Several threads: a scene reload (seconds for a large scene) occupies one of them while
+    # the others answer parameter requests and cmd_vel (the node's callbacks are reentrant).
+    executor = MultiThreadedExecutor(num_threads=EXECUTOR_THREADS)
+    for node in nodes:
+        executor.add_node(node)
+    # Everything built so far (scene meshes for the markers, messages, modules) is moved out of
+    # the garbage collector's reach, so its full collections, which run in whatever thread
+    # allocates and hold the GIL, cannot delay a tick by milliseconds.
+    gc.freeze()
+    try:
+        spin_until_shutdown(executor)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        for node in nodes:
+            node.request_stop()
+        if commands is not None:
+            commands.stop()
+        for node in nodes:
+            node.stop()
+        executor.shutdown(timeout_sec=5.0)
+        for node in nodes:
+            node.destroy_node()
+        planners.close()
+        rclpy.try_shutdown()
+    codes = [node.exit_code for node in nodes if node.exit_code is not None]
+    return max(codes, default=0)
