@@ -117,7 +117,25 @@ MAX_REPLACEMENTS = 3
 
 
 class ActorPlannerNode(Node):
-    """Stream the digital actor's whole-body motion as JointState, directed by cmd_vel."""
+    """
+    Stream the digital actor's whole-body motion as JointState, directed by cmd_vel.
+
+    Parameters
+    ----------
+    node_name
+        Name of the node.
+    threads
+        The process's :class:`SharedThreads`; None: this node's own.
+    planners
+        The process's :class:`~digital_actor_planner.runtime.planning.PlanningPool`; None: a
+        planning process for this node alone.
+    commands
+        The process's :class:`CommandRouter` when it hosts several actors; None: the node
+        subscribes to cmd_vel itself.
+    **kwargs
+        Passed to ``rclpy.node.Node`` (namespace, context, parameter overrides).
+
+    """
 
     def __init__(self, node_name: str = 'actor_planner', threads: Optional[SharedThreads] = None,
                  planners: Optional[PlanningPool] = None,
@@ -338,12 +356,18 @@ class ActorPlannerNode(Node):
     # -- planning (called by the worker's PlanningScheduler thread) -------------------------
     def planning_slack(self) -> Optional[float]:
         """
-        Seconds until this actor's next block is due (<= 0: due now); None: nothing to plan.
+        Return the seconds until this actor's next block is due (<= 0: due now).
 
         Nothing is planned while the last block would only repeat: a hold at rest or a stuck
         hold, with the command unchanged since. A new scene's first block is due at once, as
         is placing the actor in a planning process that does not hold it (at the start, or
         after the process was replaced).
+
+        Returns
+        -------
+        float or None
+            s until due; None when there is nothing to plan.
+
         """
         if self._stop.is_set() or self.exit_code is not None:
             return None

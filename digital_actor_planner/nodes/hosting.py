@@ -111,7 +111,15 @@ class CommandRouter:
         self._thread = None
 
     def start(self, priority: int) -> None:
-        """Start delivering commands (from a thread at ``priority`` when > 0)."""
+        """
+        Start delivering commands.
+
+        Parameters
+        ----------
+        priority
+            SCHED_FIFO priority of the delivering thread when > 0.
+
+        """
         self._thread = threading.Thread(target=self._spin, args=(priority,),
                                         name='actor_commands', daemon=True)
         self._thread.start()
@@ -191,6 +199,14 @@ def spin_until_shutdown(executor, ok=rclpy.ok) -> None:
     handler, which can land between ``ok()`` and ``spin_once`` building its wait set (RCLError,
     a RuntimeError: "the given context is not valid"): that is the shutdown asked for, not a
     failure (the node exited with status 1 and a traceback, one CI run in many).
+
+    Parameters
+    ----------
+    executor
+        The executor of the actor nodes.
+    ok
+        Whether the context still runs (``rclpy.ok`` by default).
+
     """
     while ok():
         try:

@@ -128,7 +128,15 @@ class FrameBuffer:
             self._data = (np.concatenate(times), np.vstack(frames), np.vstack(velocities))
 
     def truncate(self, before: float) -> None:
-        """Drop every frame at or after ``before`` s (the first frame always stays)."""
+        """
+        Drop every frame at or after ``before`` (the first frame always stays).
+
+        Parameters
+        ----------
+        before
+            s of actor time.
+
+        """
         with self._lock:
             times, frames, velocities = self._data
             keep = max(1, int(np.searchsorted(times, before, side='left')))
@@ -162,9 +170,20 @@ class FrameBuffer:
 
     def sample(self, t: float) -> Tuple[np.ndarray, np.ndarray]:
         """
-        Return the configuration (22,) and velocity (22,) at time ``t`` s, interpolated.
+        Return the configuration and velocity at time ``t``, interpolated.
 
         Beyond the last frame the last configuration is held with zero velocity.
+
+        Parameters
+        ----------
+        t
+            Playback time, s.
+
+        Returns
+        -------
+        (numpy.ndarray, numpy.ndarray)
+            Configuration (22,) rad or m and velocity (22,) rad/s or m/s.
+
         """
         times, frames, velocities = self._data
         i = int(times.searchsorted(t, side='right'))
@@ -188,7 +207,17 @@ class CommandState:
         self.changed = 0.0
 
     def update(self, linear_x: float, angular_z: float, now: float) -> None:
-        """Store a command received at ``now``."""
+        """
+        Store a command received at ``now``.
+
+        Parameters
+        ----------
+        linear_x, angular_z
+            m/s and rad/s, finite.
+        now
+            Monotonic time of arrival, s.
+
+        """
         with self._lock:
             if (linear_x, angular_z) != self._command:
                 self.changed = now
@@ -196,7 +225,22 @@ class CommandState:
             self._received = now
 
     def current(self, now: float, timeout: float) -> Tuple[float, float]:
-        """Return the command to follow at ``now``: zero when none arrived within ``timeout``."""
+        """
+        Return the command to follow at ``now``.
+
+        Parameters
+        ----------
+        now
+            Monotonic time, s.
+        timeout
+            s; a command older than this is no longer followed.
+
+        Returns
+        -------
+        (float, float)
+            ``(linear_x m/s, angular_z rad/s)``; zero when none arrived within ``timeout``.
+
+        """
         with self._lock:
             if self._received is None or now - self._received > timeout:
                 return 0.0, 0.0

@@ -50,7 +50,19 @@ REPLAN_BLOCKS = 8
 
 
 class ConfigurationError(ConfigError):
-    """A parameter value the node cannot run with; ``parameter`` names it."""
+    """
+    A parameter value the node cannot run with; ``parameter`` names it.
+
+    Parameters
+    ----------
+    parameter
+        Name of the parameter (or option) at fault.
+    message
+        What is wrong with its value.
+    value
+        The bad value, when known.
+
+    """
 
     def __init__(self, parameter: str, message: str, value: Any = None):
         super().__init__(parameter, value, f'parameter {parameter!r}: {message}')
@@ -80,7 +92,17 @@ class PlanningStats:
         self.planning_times = collections.deque(maxlen=1000)
 
     def record(self, status: str, reason: str, planning_time: float) -> None:
-        """Record one planned block."""
+        """
+        Record one planned block.
+
+        Parameters
+        ----------
+        status, reason
+            The block's status (``walking``, ``idle``, ``stuck``, ...) and why.
+        planning_time
+            s spent planning it; NaN when nothing was planned (a failure or a state change).
+
+        """
         self.state, self.reason = status, reason
         self.last_planning_time = planning_time
         self.planning_times.append(planning_time)
@@ -104,8 +126,17 @@ def build_actor(skeleton, actor_config, scene_path: str,
     """
     Load a scene and place a new actor at its start (or at ``start_pose``).
 
-    ``scene``: the scene at ``scene_path`` already loaded (by another actor); it is not
-    loaded again.
+    Parameters
+    ----------
+    skeleton, actor_config
+        The core ``Skeleton`` and ``ActorConfig``.
+    scene_path
+        Scene file (YAML or a bare mesh).
+    start_pose
+        ``(x, y, yaw)`` m and rad, or None for the scene's start.
+    scene
+        The scene at ``scene_path`` already loaded (by another actor); it is not loaded
+        again.
 
     Returns
     -------
@@ -168,6 +199,20 @@ class SceneCache:
         self._scenes = weakref.WeakValueDictionary()
 
     def build(self, skeleton, actor_config, scene_path: str, start_pose):
+        """
+        Place a new actor on ``scene_path``, loading the scene unless an actor holds it.
+
+        Parameters
+        ----------
+        skeleton, actor_config, scene_path, start_pose
+            As for :func:`build_actor`.
+
+        Returns
+        -------
+        (Actor, Scene)
+            As :func:`build_actor` does.
+
+        """
         try:
             info = os.stat(scene_path)
             key = (os.path.abspath(scene_path), info.st_mtime_ns, info.st_size)
@@ -338,6 +383,18 @@ class PlanningWorker:
         Send one request and wait for its reply (timeout counted from sending).
 
         Replies to earlier requests (given up on) are dropped.
+
+        Parameters
+        ----------
+        message
+            ``(kind, actor id, ...)`` as :func:`_planning_process` reads it.
+        timeout
+            s to wait for the reply.
+
+        Returns
+        -------
+        tuple
+            The reply without its request number.
 
         Raises
         ------
@@ -512,6 +569,13 @@ class PlanningProcess:
         """
         Set the command and plan the next block.
 
+        Parameters
+        ----------
+        linear_x, angular_z
+            The command, m/s and rad/s.
+        timeout
+            s to wait for the planning process.
+
         Returns
         -------
         (str or None, StepBlock, numpy.ndarray, int)
@@ -539,6 +603,13 @@ class PlanningProcess:
 
         That block and the ones after it are to be planned again.
 
+        Parameters
+        ----------
+        number
+            The block's number, as :meth:`plan` returned it.
+        timeout
+            s to wait for the planning process.
+
         Returns
         -------
         bool
@@ -551,7 +622,19 @@ class PlanningProcess:
 
     def load_scene(self, scene_path: str, timeout: float = 300.0):
         """
-        Replace the actor by one on a new scene; return (configuration (22,), meshes).
+        Replace the actor by one on a new scene.
+
+        Parameters
+        ----------
+        scene_path
+            The new scene file.
+        timeout
+            s to wait for the planning process.
+
+        Returns
+        -------
+        (numpy.ndarray, list)
+            The new actor's configuration (22,) rad or m, and the scene's meshes.
 
         Raises
         ------
@@ -594,7 +677,15 @@ class PlanningProcess:
 
 
 def usable_cores() -> int:
-    """Cores this process may run on (its affinity, e.g. under taskset), at least 1."""
+    """
+    Return the number of cores this process may run on (its affinity, e.g. under taskset).
+
+    Returns
+    -------
+    int
+        At least 1.
+
+    """
     try:
         return max(1, len(os.sched_getaffinity(0)))
     except (AttributeError, OSError):

@@ -52,7 +52,17 @@ class NodesThread:
         self._thread = None
 
     def attach(self, node, *args) -> None:
-        """Serve ``node`` (the thread starts with the first node)."""
+        """
+        Serve ``node`` (the thread starts with the first node).
+
+        Parameters
+        ----------
+        node
+            The actor node to serve.
+        *args
+            Passed to ``_loop`` when this node starts the thread.
+
+        """
         with self._lock:
             self._nodes = self._nodes + [node]
             if self._thread is None:
@@ -61,7 +71,15 @@ class NodesThread:
                 self._thread.start()
 
     def detach(self, node) -> None:
-        """Stop serving ``node``; the thread ends with the last node."""
+        """
+        Stop serving ``node``; the thread ends with the last node.
+
+        Parameters
+        ----------
+        node
+            An attached actor node.
+
+        """
         with self._lock:
             self._nodes = [n for n in self._nodes if n is not node]
             last = not self._nodes
@@ -96,7 +114,17 @@ class PlanningScheduler(NodesThread):
         self.wake = threading.Event()
 
     def attach(self, node, priority: int) -> None:
-        """Plan for ``node`` (the thread starts with the first node, at ``priority`` if > 0)."""
+        """
+        Plan for ``node`` (the thread starts with the first node).
+
+        Parameters
+        ----------
+        node
+            The actor node: ``planning_slack()``, ``plan_once()`` and ``fail(code, message)``.
+        priority
+            SCHED_FIFO priority of the planning thread when this node starts it (0: normal).
+
+        """
         super().attach(node, priority)
         self.wake.set()
 
@@ -153,9 +181,20 @@ def wall_clock_offset_ns() -> int:
 
 def real_time(priority: int) -> bool:
     """
-    Put the calling thread under SCHED_FIFO at ``priority``; False when not permitted.
+    Put the calling thread under SCHED_FIFO at ``priority``.
 
     Children forked later start with normal scheduling (SCHED_RESET_ON_FORK).
+
+    Parameters
+    ----------
+    priority
+        SCHED_FIFO priority, 1-99.
+
+    Returns
+    -------
+    bool
+        False when not permitted (the thread keeps its scheduling).
+
     """
     try:
         policy = os.SCHED_FIFO | getattr(os, 'SCHED_RESET_ON_FORK', 0)
@@ -211,6 +250,16 @@ class StreamTicker(NodesThread):
     cores rarely coincide). With two or more usable cores the publishing thread is pinned to
     one and the backup, ``BACKUP_DELAY`` periods behind the schedule, to another: whichever wakes
     first for a tick publishes it, under a lock, so each tick is published once.
+
+    Parameters
+    ----------
+    period
+        Publish period, s.
+    priority
+        SCHED_FIFO priority of the stream threads (0: normal scheduling, no backup thread).
+    warn
+        Called with a message should real-time scheduling not be permitted.
+
     """
 
     name = 'joint_state_stream'
