@@ -3,6 +3,7 @@ from course_runs import judged, scene, skeleton
 from digital_actor_planner.core.actor import Actor, ActorConfig, run_commands
 from digital_actor_planner.evaluation.trajectory_check import check_trajectory
 from digital_actor_planner.nodes.actor_planner import HURRY_MAX_RATE
+from digital_actor_planner.runtime.frame_buffer import FrameBuffer
 from digital_actor_planner.runtime.retiming import hurry
 import numpy as np
 import pytest
@@ -130,3 +131,20 @@ def test_hurry_changes_nothing_when_a_joint_is_already_at_its_limit():
     h = hurry(step.times, step.velocities, 2.55, at_limit, HURRY_MAX_RATE)
     assert h.saved == 0.0 and h.peak_rate == 1.0
     assert np.array_equal(h.times, step.times)
+
+
+def test_the_stream_buffer_hurries_only_what_it_has_not_shown():
+    sc, actor, blocks = _walk_then_stop(2.55)
+    step = next(b for b in blocks if b.status == 'walking' and b.times[0] <= 2.55 < b.times[-1])
+    buffer = FrameBuffer(step.frames[0], step.times[0] - 0.01)
+    buffer.append(step.times, step.frames, step.velocities, now=step.times[0])
+    shown = [buffer.sample(t)[0] for t in np.arange(step.times[0], 2.55, 0.01)]
+    saved = buffer.hurry(2.55, skeleton().velocity_limit, HURRY_MAX_RATE)
+    assert saved > 0.05 and buffer.end_time == pytest.approx(step.times[-1] - saved)
+    # What was on show before the hurry is unchanged; the step still lands where planned.
+    again = [buffer.sample(t)[0] for t in np.arange(step.times[0], 2.55, 0.01)]
+    assert np.allclose(shown, again)
+    assert np.allclose(buffer.sample(buffer.end_time)[0], step.frames[-1])
+    # At a rate of 1 nothing is hurried.
+    end = buffer.end_time
+    assert buffer.hurry(2.6, skeleton().velocity_limit, 1.0) == 0.0 and buffer.end_time == end

@@ -29,7 +29,6 @@ import sys
 import threading
 from typing import Tuple
 
-from digital_actor_planner.nodes import planner_params
 from digital_actor_planner.nodes.markers import Housekeeper
 from digital_actor_planner.runtime.planning import ConfigurationError, PlanningPool, \
     usable_cores
@@ -277,7 +276,7 @@ def run_nodes(args, node_type) -> int:
             nodes.append(node_type(threads=threads, planners=planners, commands=commands,
                                    **({'namespace': ns} if ns else {})))
     # A parameter the node reads, or one its planning processes refuse: both name it.
-    except (ConfigurationError, planner_params.ConfigurationError) as error:
+    except ConfigurationError as error:
         logger.fatal(f'invalid configuration: {error}')
         _close_partial(nodes, commands, planners)
         return 2

@@ -33,6 +33,8 @@ from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from digital_actor_planner.core.settings import check_settings, ConfigError, \
     declared_settings, Setting, setting
+# The error naming a bad parameter is the runtime's (ROS-free), shared with the planning process.
+from digital_actor_planner.runtime.planning import ConfigurationError
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.parameter import Parameter
 
@@ -47,23 +49,6 @@ RUNTIME_PARAMETERS = ('scene', 'cmd_timeout')
 ACTOR_PARAMETERS = ('window_steps', 'step_intervals', 'step_length_min', 'step_length_max',
                     'max_linear_speed', 'max_angular_speed', 'max_backward_speed',
                     'allow_backward')
-
-
-class ConfigurationError(ConfigError):
-    """A parameter value the node cannot run with; ``parameter`` names it."""
-
-    def __init__(self, parameter: str, message: str, value: Any = None):
-        super().__init__(parameter, value, f'parameter {parameter!r}: {message}')
-
-    @property
-    def parameter(self) -> str:
-        """Return the parameter at fault."""
-        return self.name
-
-    @classmethod
-    def of(cls, error: ConfigError) -> 'ConfigurationError':
-        """Return the node's error for a setting the core refused, naming it as a parameter."""
-        return cls(error.name, str(error), error.value)
 
 
 def default_scene_path() -> str:
