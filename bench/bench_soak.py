@@ -80,6 +80,7 @@ def main(argv=None) -> int:
         stamps.clear()
         began = time.monotonic()
         next_switch, switches, refused = began + args.switch_every, 0, 0
+        switched_at = []  # wall-clock time of each scene switch, as the stamps are
         linear, angular = 0.0, 0.0
         while time.monotonic() - began < args.duration:
             if rng.random() < 0.15:
@@ -90,6 +91,7 @@ def main(argv=None) -> int:
             probe.drive(linear, angular, float(rng.uniform(0.3, 2.0)))
             if time.monotonic() >= next_switch:
                 switches += 1
+                switched_at.append(time.time())
                 result = probe.set_scene(scenes[switches % len(scenes)], timeout=120.0)
                 refused += not result.successful
                 next_switch += args.switch_every
@@ -110,6 +112,12 @@ def main(argv=None) -> int:
         print(f'rate per {WINDOW:.0f} s window: min {min(rates):.1f} Hz, '
               f'max {max(rates):.1f} Hz ({len(rates)} windows)')
     print(f'scene switches {switches} ({refused} refused)')
+    late = np.nonzero(gaps > 1.5 * PERIOD)[0]
+    if late.size:
+        since = [times[i] - max([t for t in switched_at if t <= times[i]], default=-np.inf)
+                 for i in late]
+        print('gaps (s after the last scene switch: frames lost): ' + ', '.join(
+            f'{d:.2f}: {int(round(gaps[i] / PERIOD)) - 1}' for d, i in zip(since, late)))
     print(f'resident memory (node and planning processes): {memory_start / 1024:.1f} MiB '
           f'after warm-up, {memory_end / 1024:.1f} MiB at the end '
           f'({100.0 * (memory_end - memory_start) / memory_start:+.1f} %)')
