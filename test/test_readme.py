@@ -93,3 +93,19 @@ def test_readme_keeps_the_commands_ci_and_a_new_user_run():
     assert './quickstart.sh demo' in readme
     with open(os.path.join(ROOT, '.ci', 'run'), encoding='utf-8') as f:
         assert './quickstart.sh test' in f.read()
+
+
+def test_every_version_the_documents_name_is_the_pin():
+    pins = dict(re.findall(r'^([A-Za-z0-9_.-]+)==(\S+)', _read('requirements.txt'), re.M))
+    pins = {name.lower(): version for name, version in pins.items()}
+    named, wrong = [], []
+    for document in DOCUMENTS:
+        if document == 'CHANGELOG.md':
+            continue
+        for name, version in re.findall(r'\b([A-Za-z][A-Za-z0-9_.-]*)==([0-9][^\s`)]*)',
+                                        _read(document)):
+            named.append(name)
+            if pins.get(name.lower()) != version:
+                wrong.append(f'{document}: {name}=={version}, pinned {pins.get(name.lower())}')
+    assert 'viser' in named and 'trimesh' in named
+    assert not wrong, wrong
