@@ -8,9 +8,16 @@ Prints numbers; asserts nothing. The node runs as its own process (the venv's co
 with localhost discovery in its own ROS_DOMAIN_ID. A probe steers it as a hand on the mouse
 would (the command wanders, held for 0.3-2 s at a time, now and then released) and sets the
 ``scene`` parameter to the next course every ``--switch-every`` s, while it counts every
-joint_states frame: frames received, frames lost (stamp gaps of more than 1.5 periods), frames
-with a NaN or infinite position, the rate in each 10 s window, and the resident memory of the
-node and its planning processes after the warm-up and at the end.
+joint_states frame: frames received, frames lost, frames with a NaN or infinite position, the
+rate in each 10 s window, and the resident memory of the node and its planning processes after
+the warm-up and at the end.
+
+A frame's stamp is the instant it shows, at or after its tick and before the next tick, so two
+frames in a row are between 0 and 2 periods apart: a gap of less than 2 periods is one late
+frame, not a lost one. A gap of g periods certainly lost floor(g) - 1 frames (``lost``); over the
+whole run the frames the stamps' span calls for, less those received, is the total however the
+lateness fell. The node's own count of ticks it skipped (diagnostics' ``missed_frames``) tells
+the node's losses from the subscriber's.
 """
 import argparse
 import math
@@ -63,7 +70,7 @@ def main(argv=None) -> int:
                            '-p', f'scene:={scenes[0]}')
     process = NodeProcess(command, ros_env(domain), log_path=os.devnull)
     probe = Probe(domain, rviz=False)
-    stamps, bad = [], [0]
+    stamps, bad, missed = [], [0], '?'
 
     def on_frame(message):
         stamps.append(message.header.stamp.sec + 1e-9 * message.header.stamp.nanosec)
@@ -96,28 +103,33 @@ def main(argv=None) -> int:
                 refused += not result.successful
                 next_switch += args.switch_every
         probe.command = (0.0, 0.0)
-        probe.spin(1.0)
+        probe.spin(1.5)  # a diagnostics report after the last frame counted
         memory_end = resident_kib(process.pid)
+        missed = probe.diagnostic_values().get('missed_frames', '?')
     finally:
         probe.close()
         code = process.stop()
     times = np.array(stamps)
     gaps = np.diff(times)
-    lost = int(np.sum(np.maximum(np.round(gaps / PERIOD) - 1, 0)[gaps > 1.5 * PERIOD]))
+    lost = int(np.sum(np.maximum(np.floor(gaps / PERIOD + 1e-6) - 1, 0)))
+    expected = int(round((times[-1] - times[0]) / PERIOD)) + 1
     edges = np.arange(times[0], times[-1] - WINDOW + 1e-9, WINDOW)
     rates = [np.sum((times >= e) & (times < e + WINDOW)) / WINDOW for e in edges]
     print(f'frames {times.size} over {times[-1] - times[0]:.1f} s of stamps, lost {lost}, '
-          f'not finite {bad[0]}')
+          f'not finite {bad[0]}; the span calls for {expected} ({expected - times.size} '
+          f'short); the node skipped {missed} ticks; late frames (1.5-2 periods after the '
+          f'one before) {int(np.sum((gaps > 1.5 * PERIOD) & (gaps < 2.0 * PERIOD)))}')
     if rates:
         print(f'rate per {WINDOW:.0f} s window: min {min(rates):.1f} Hz, '
               f'max {max(rates):.1f} Hz ({len(rates)} windows)')
     print(f'scene switches {switches} ({refused} refused)')
-    late = np.nonzero(gaps > 1.5 * PERIOD)[0]
+    late = np.nonzero(gaps >= 2.0 * PERIOD)[0]
     if late.size:
         since = [times[i] - max([t for t in switched_at if t <= times[i]], default=-np.inf)
                  for i in late]
         print('gaps (s after the last scene switch: frames lost): ' + ', '.join(
-            f'{d:.2f}: {int(round(gaps[i] / PERIOD)) - 1}' for d, i in zip(since, late)))
+            f'{d:.2f}: {int(np.floor(gaps[i] / PERIOD + 1e-6)) - 1}'
+            for d, i in zip(since, late)))
     print(f'resident memory (node and planning processes): {memory_start / 1024:.1f} MiB '
           f'after warm-up, {memory_end / 1024:.1f} MiB at the end '
           f'({100.0 * (memory_end - memory_start) / memory_start:+.1f} %)')
