@@ -79,7 +79,10 @@ class Probe:
                                       context=self.context)
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
+        # The latest frames (a long run keeps only the newest); ``received`` counts them all,
+        # so a count compared across a long run keeps growing.
         self.joint_states = collections.deque(maxlen=20000)
+        self.received = 0
         self.diagnostics = collections.deque(maxlen=100)
         self.descriptions = []
         self.stamped = stamped
@@ -108,6 +111,7 @@ class Probe:
 
     def _on_joint_state(self, msg) -> None:
         self.joint_states.append((time.monotonic(), msg))
+        self.received += 1
 
     def _send_command(self) -> None:
         if self.command is None:
