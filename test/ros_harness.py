@@ -66,7 +66,9 @@ class NodeProcess:
     def alive(self) -> bool:
         return self.proc.poll() is None
 
-    def stop(self, timeout: float = 10.0) -> int:
+    def stop(self, timeout: float = 60.0) -> int:
+        # A clean shutdown takes seconds per planning process, and far longer on a loaded
+        # machine: SIGKILL only a node that is stuck, not one that is slow.
         if self.proc.poll() is None:
             try:
                 os.kill(self.proc.pid, signal.SIGINT)

@@ -79,7 +79,10 @@ class Probe:
                                       context=self.context)
         self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
+        # The latest frames (a long run keeps only the newest); ``received`` counts them all,
+        # so a count compared across a long run keeps growing.
         self.joint_states = collections.deque(maxlen=20000)
+        self.received = 0
         self.diagnostics = collections.deque(maxlen=100)
         self.descriptions = []
         self.stamped = stamped
@@ -108,6 +111,7 @@ class Probe:
 
     def _on_joint_state(self, msg) -> None:
         self.joint_states.append((time.monotonic(), msg))
+        self.received += 1
 
     def _send_command(self) -> None:
         if self.command is None:
@@ -494,31 +498,37 @@ def test_stream_backup_thread_publishes_the_ticks_a_stalled_stream_thread_misses
     """
     The backup thread publishes the ticks a stalled stream thread misses, each once.
 
-    The publishing thread stalls for three periods (as on a core the hypervisor took away); the
-    backup thread on the other core publishes those ticks, each tick once.
+    The publishing thread stalls for six periods (as on a core the hypervisor took away); the
+    backup thread on the other core publishes those ticks, each tick once. A thread may wake
+    late on a loaded machine: the stall falls on the first tick the publishing thread reaches
+    from ``stalled`` on, and a backup waking late publishes several ticks in one go.
     """
     if len(os.sched_getaffinity(0)) < 2:
         pytest.skip('the backup thread needs a second core')
     from digital_actor_planner.runtime.scheduling import StreamTicker
-    period, stalled = 0.02, 20
+    period, stalled = 0.05, 20
 
     class Stalling(StreamTicker):
+        stalled_at = None
 
         def _publish(self, tick, now, backup):
-            if tick == stalled and not backup:
-                time.sleep(3.2 * period)  # woke up for its tick, then lost the core
+            if tick >= stalled and not backup and Stalling.stalled_at is None:
+                Stalling.stalled_at = tick
+                time.sleep(6.2 * period)  # woke up for its tick, then lost the core
             super()._publish(tick, now, backup)
 
     ticker = Stalling(period, priority=1)
-    frames = _TickRecorder(ticker).record(stalled + 10)
+    frames = _TickRecorder(ticker).record(stalled + 20)
+    stalled = Stalling.stalled_at
+    assert stalled is not None, 'the publishing thread never stalled'
     ticks = [tick for _, _, _, tick, _ in frames]
     assert ticks == sorted(set(ticks)), 'a tick was published twice or out of order'
     by_backup = [tick for _, _, _, tick, name in frames if name == 'joint_state_backup']
-    assert {stalled, stalled + 1, stalled + 2} <= set(by_backup), by_backup
-    assert ticker.backup_publishes == len(by_backup)
+    assert stalled in by_backup, by_backup
+    assert 1 <= ticker.backup_publishes <= len(by_backup)
     # Nothing skipped around the stall: the backup kept the stream going.
-    around = [skipped for _, skipped, _, tick, _ in frames if stalled - 2 <= tick <= stalled + 4]
-    assert around and not any(around), frames
+    around = [skipped for _, skipped, _, tick, _ in frames if stalled - 2 <= tick <= stalled + 8]
+    assert len(around) == 11 and not any(around), frames
 
 
 def test_stream_catches_up_the_ticks_a_stall_of_every_thread_slept_over():
@@ -528,26 +538,35 @@ def test_stream_catches_up_the_ticks_a_stall_of_every_thread_slept_over():
     With no thread to take over (one core, or both stalled), a thread waking 4.5 periods late
     publishes every tick it slept over at once, each showing its own instant, then the current one:
     no frame is lost. A stall longer than ``CATCH_UP`` ticks skips the oldest ones. A sleep may
-    last longer than asked on a loaded machine, so the stalls leave ``CATCH_UP`` room either way.
+    last longer than asked on a loaded machine, so the stalls leave ``CATCH_UP`` room either way;
+    and a thread may wake late for a tick, so each stall falls on the first tick it reaches from
+    ``stalled`` (``long_stall``) on.
     """
     from digital_actor_planner.runtime.scheduling import StreamTicker
     period, stalled, long_stall, catch_up = 0.05, 10, 30, 10
 
     class Stalling(StreamTicker):
         CATCH_UP = catch_up
+        stalled_at = {}  # the tick each stall fell on, by its length in periods
 
         def _publish(self, tick, now, backup):
-            if tick in (stalled, long_stall):
-                time.sleep((4.5 if tick == stalled else 15.5) * period)
-                now = time.monotonic()
+            for at, periods in ((stalled, 4.5), (long_stall, 15.5)):
+                if tick >= at and periods not in Stalling.stalled_at:
+                    Stalling.stalled_at[periods] = tick
+                    time.sleep(periods * period)
+                    now = time.monotonic()
+                    break
             super()._publish(tick, now, backup)
 
     ticker = Stalling(period, priority=0)
-    frames = _TickRecorder(ticker).record(long_stall + 20)
+    frames = _TickRecorder(ticker).record(long_stall + 30)
+    assert set(Stalling.stalled_at) == {4.5, 15.5}, Stalling.stalled_at
+    stalled, long_stall = Stalling.stalled_at[4.5], Stalling.stalled_at[15.5]
     ticks = [tick for _, _, _, tick, _ in frames]
     assert ticks == sorted(set(ticks)), 'a tick published twice or out of order'
-    # The first stall: ticks 10 .. 13 slept over, all published, each showing its instant.
-    assert ticks[:long_stall] == list(range(long_stall)), ticks
+    # The first stall: the stalled tick and the 3 after it slept over, all published, each
+    # showing its instant.
+    assert ticks[:long_stall + 1] == list(range(long_stall + 1)), ticks
     for now, _, instant, tick, _ in frames:
         if stalled <= tick < stalled + 4:
             assert instant == pytest.approx(ticker._start + tick * period)
@@ -576,15 +595,18 @@ def test_stream_stamps_stay_on_the_tick_grid_when_a_catch_up_burst_is_interrupte
     Every thread stalls for 4.5 periods; the thread catching up then loses its core again for 1.5
     periods in the middle of the burst (the hypervisor, or the planner holding the GIL). Each frame
     is stamped with the instant it shows, not the moment it got out: the caught-up frames stay one
-    period apart, and the stamps only increase.
+    period apart, and the stamps only increase. A thread may wake late for a tick on a loaded
+    machine, so the stall falls on the first tick it reaches from ``stalled`` on.
     """
     from digital_actor_planner.runtime.scheduling import StreamTicker
-    period, stalled = 0.02, 10
+    period, stalled = 0.05, 10
 
     class Stalling(StreamTicker):
+        stalled_at = None
 
         def _publish(self, tick, now, backup):
-            if tick == stalled:
+            if tick >= stalled and Stalling.stalled_at is None:
+                Stalling.stalled_at = tick
                 time.sleep(4.5 * period)
                 now = time.monotonic()
             super()._publish(tick, now, backup)
@@ -593,27 +615,39 @@ def test_stream_stamps_stay_on_the_tick_grid_when_a_catch_up_burst_is_interrupte
 
         def publish_frame(self, now, skipped, instant, stamp_ns):
             super().publish_frame(now, skipped, instant, stamp_ns)
-            if self.frames[-1][3] == stalled + 1:  # the second frame of the burst
+            if Stalling.stalled_at is not None and \
+                    self.frames[-1][3] == Stalling.stalled_at + 1:  # the burst's first frame
                 time.sleep(1.5 * period)
 
     recorder = Preempted(Stalling(period, priority=0))
-    frames = recorder.record(stalled + 12)
+    frames = recorder.record(stalled + 20)
+    stalled = Stalling.stalled_at
+    assert stalled is not None, 'the thread never stalled'
     ticks = [tick for _, _, _, tick, _ in frames]
     assert ticks == sorted(set(ticks)) and ticks[:stalled + 8] == list(range(stalled + 8)), ticks
     stamps = 1e-9 * np.array([recorder.stamps[tick] for tick in ticks])
     intervals = np.diff(stamps)
     assert np.all(intervals > 0.0), intervals
-    burst = intervals[stalled:stalled + 3]  # ticks 10 .. 13, all shown at their own instants
+    burst = intervals[stalled:stalled + 3]  # the stalled tick and 3 after, at their own instants
     assert np.allclose(burst, period, atol=2e-6), burst
-    # On the wall clock: a stamp is within a few ms of the tick's instant mapped to it.
+    # On the wall clock: a stamp is within a period of the tick's instant mapped to it.
     wall = time.time() - time.monotonic()
     instants = recorder.ticker._start + period * np.array(ticks)
     assert np.abs(stamps - (instants + wall)).max() < period, stamps - instants - wall
 
 
-def test_planning_scheduler_plans_the_most_urgent_actor_first_and_skips_resting_ones():
-    from digital_actor_planner.runtime.scheduling import IDLE_RESCAN, PlanningScheduler
-    scheduler = PlanningScheduler()
+def test_planning_scheduler_plans_the_most_urgent_actor_first_and_skips_resting_ones(
+        monkeypatch):
+    """
+    The planning thread plans the most urgent due actor first, and skips resting ones.
+
+    It sleeps until the next actor falls due, and a wake-up (a new command) plans a resting
+    actor at once. The rescan is put far off so that a plan well before it shows the thread
+    was woken, by its own timeout or by ``wake``; the bounds leave room for a loaded machine.
+    """
+    from digital_actor_planner.runtime import scheduling
+    monkeypatch.setattr(scheduling, 'IDLE_RESCAN', 30.0)
+    scheduler = scheduling.PlanningScheduler()
     log, due = [], {}
     actors = [_ScheduledActor(name, due, log) for name in ('late', 'later', 'resting', 'soon')]
     try:
@@ -624,21 +658,21 @@ def test_planning_scheduler_plans_the_most_urgent_actor_first_and_skips_resting_
         now = time.monotonic()
         due.update({'late': now - 0.1, 'later': now - 0.3, 'soon': now + 0.15})
         scheduler.wake.set()
-        deadline = time.monotonic() + 2.0
+        deadline = time.monotonic() + 20.0
         while len(log) < 3 and time.monotonic() < deadline:
             time.sleep(0.01)
         assert [name for name, _ in log] == ['later', 'late', 'soon']
         assert log[2][1] >= now + 0.14, 'planned before it was due'
-        assert log[2][1] < now + 0.15 + IDLE_RESCAN, 'not woken when it fell due'
+        assert log[2][1] < now + 15.0, 'not woken when it fell due'
         # A resting actor whose command changes is woken at once, not at the next rescan.
         time.sleep(0.05)
         due['resting'] = time.monotonic() - 0.01
         woken = time.monotonic()
         scheduler.wake.set()
-        while len(log) < 4 and time.monotonic() < woken + 2.0:
+        while len(log) < 4 and time.monotonic() < woken + 20.0:
             time.sleep(0.002)
         assert [name for name, _ in log][3:] == ['resting']
-        assert log[3][1] - woken < 0.5 * IDLE_RESCAN
+        assert log[3][1] - woken < 15.0, 'not woken by the wake-up'
     finally:
         for actor in actors:
             scheduler.detach(actor)
@@ -660,7 +694,11 @@ def test_a_scene_reload_racing_a_plan_neither_breaks_the_buffer_nor_drops_the_fi
     import rclpy
     from rclpy.parameter import Parameter
     from ros_harness import fresh_domain_id, ros_env
+    from digital_actor_planner.nodes import actor_planner
     from digital_actor_planner.nodes.actor_planner import ActorPlannerNode
+    # A retry far off: the slack after a fault shows the retry was set, however long the
+    # loaded machine takes to ask for it.
+    monkeypatch.setattr(actor_planner, 'RETRY_AFTER', 30.0)
     for key, value in ros_env(fresh_domain_id()).items():
         monkeypatch.setenv(key, value)
     context = rclpy.Context()
@@ -730,7 +768,7 @@ def test_a_scene_reload_racing_a_plan_neither_breaks_the_buffer_nor_drops_the_fi
         real_plan, end = node.planner.plan, node.buffer.end_time
         node.planner.plan = fault
         node.plan_once()
-        assert 0.0 < node.planning_slack() <= 1.0, 'not tried again soon'
+        assert 0.0 < node.planning_slack() <= 30.0, 'no retry set after the fault'
         # Diagnostics say why; the committed motion is kept.
         assert node.stats.state == 'stuck'
         assert node.stats.reason == "internal error: RuntimeError('fault')"
