@@ -599,7 +599,7 @@ def test_the_front_foot_does_not_stride_over_a_block_the_rear_foot_cannot_follow
     assert actor.stance.pelvis[0] < x + length
     feet_x = sorted(foot.xy[0] for foot in actor.stance.feet)
     assert feet_x[0] < x < x + length < feet_x[1]
-    assert 'walk generation failed' in next(b.reason for b in blocks if b.status == 'stuck')
+    assert 'the legs cannot take the step' in next(b.reason for b in blocks if b.status == 'stuck')
 
 
 def test_the_rear_foot_is_not_left_behind_a_bump_before_a_step_down_it_cannot_follow_over():

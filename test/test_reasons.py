@@ -66,3 +66,16 @@ def test_a_floors_end_and_a_drop_are_told_apart():
         ahead = float(re.search(r'([0-9.]+) m ahead', reasons[0]).group(1))
         # Measured from the pelvis, which stopped short of the edge at x = 3 m.
         assert 0.0 < ahead < 1.5 and abs(blocks[-1].frames[-1, 0] + ahead - 3.0) < 0.3
+
+
+def test_a_floors_end_behind_an_actor_walking_backward_is_told_with_its_distance():
+    # A floor ending 1 m behind the start: stepping back, the actor stops short of its edge.
+    actor = Actor(skeleton(), Environment([box([-1.0, -1.0, -0.1], [3.0, 1.0, 0.0])]),
+                  ActorConfig(plan_upper_body=False))
+    blocks = run_commands(actor, [0.0, 8.0], [-0.3, 0.0], [0.0, 0.0])
+    reasons = stuck_reasons(blocks)
+    assert reasons and all(r.startswith('no collision-free footstep window behind the actor: '
+                                        'the ground ends ') for r in reasons), reasons
+    behind = float(re.search(r'([0-9.]+) m behind', reasons[0]).group(1))
+    # Measured from the pelvis, which stopped short of the edge at x = -1 m.
+    assert 0.0 < behind < 1.5 and abs(blocks[-1].frames[-1, 0] - behind + 1.0) < 0.3

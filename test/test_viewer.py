@@ -133,8 +133,10 @@ def test_status_line_waiting_walking_stuck_and_planner_gone():
 
 @pytest.mark.parametrize('reason, words', [
     ('upper body blocked: waist blocked at t=0.19 s', 'upper body cannot get past'),
-    ('walk generation failed: the other foot could not follow (knee)', 'legs cannot reach'),
-    ('leg collides with the environment (left_shank)', 'would hit the obstacle'),
+    ('the legs cannot take the step: the other foot could not follow (knee)',
+     'legs cannot reach'),
+    ('the legs would touch the environment: the left shank would be 3 mm into an obstacle',
+     'would hit the obstacle'),
     ('something new', 'not possible here'),
 ])
 def test_every_stuck_reason_comes_with_what_to_do(reason, words):

@@ -700,9 +700,12 @@ class Actor:
         if not self.config.verify_collisions:
             return None
         index, links = self._collision.first_collision(frames, self._leg_links)
-        if index >= 0:
-            return f'leg collides with the environment ({", ".join(links)})'
-        return None
+        if index < 0:
+            return None
+        depths = self._collision.penetration(frames[index], links)
+        link, depth = max(depths.items(), key=lambda item: item[1])
+        return (f'the legs would touch the environment: the {link.replace("_", " ")} would be '
+                f'{max(1.0, 1e3 * depth):.0f} mm into an obstacle')
 
     def _walk_step(self, v: float, w: float, started: float) -> StepBlock:
         cfg = self.config
@@ -771,7 +774,7 @@ class Actor:
                 motion = self._generate(stance, path, window, v)
             except GaitError as error:
                 banned.append(window.indices[0])
-                reason = f'walk generation failed: {error}'
+                reason = f'the legs cannot take the step: {error}'
                 start = None
                 continue
             collision = self._verify(motion.frames)
@@ -817,10 +820,10 @@ class Actor:
                                      started)
         if block is not None:
             return block
-        if reason == 'no collision-free footstep window':
+        if reason.startswith('no collision-free footstep window') and ':' not in reason:
             why = describe_ground_ahead(self.environment, path, profile, stance_s + leg.toe,
                                         s_end, stance_foot.sole, fcfg, leg.hip_half_width,
-                                        leg.foot_width)
+                                        leg.foot_width, 'behind' if backward else 'ahead')
             reason += f': {why}' if why else ''
         self._failure = ((self._steps, v, w), reason)
         return self._stuck(reason, started, np.zeros((0, 4)), path_points)
@@ -1057,7 +1060,7 @@ class Actor:
         try:
             self._generate(motion.stance, path, following, v, motion.frames[-1])
         except GaitError as error:
-            return f'walk generation failed: the other foot could not follow ({error})'
+            return f'the legs cannot take the step: the other foot could not follow ({error})'
         return None
 
     def _generate(self, stance: Stance, path, window: FootstepWindow, v: float,

@@ -809,7 +809,8 @@ def sample_ground_profile(environment, path, s_start: float, s_end: float, ds: f
 
 def describe_ground_ahead(environment, path, profile: GroundProfile, s_from: float,
                           s_to: float, sole: float, config: FootstepConfig,
-                          hip_half_width: float, foot_width: float) -> str:
+                          hip_half_width: float, foot_width: float,
+                          direction: str = 'ahead') -> str:
     """
     Why no footstep can be placed ahead, in a user's words with the number, or ''.
 
@@ -819,7 +820,8 @@ def describe_ground_ahead(environment, path, profile: GroundProfile, s_from: flo
     ``max_step_down``, ends, or has less than ``min_headroom`` above it. ``path`` is the one
     the profile was sampled along (tracks ``hip_half_width`` m either side, read on
     ``SOLE_LINES`` across a sole ``foot_width`` m wide); distances are from its start (the
-    pelvis), m.
+    pelvis), m, and told ``direction`` of the actor: 'ahead', or 'behind' along a path walked
+    backward.
 
     Returns
     -------
@@ -846,7 +848,7 @@ def describe_ground_ahead(environment, path, profile: GroundProfile, s_from: flo
     offset = (hip_half_width if side == 0 else -hip_half_width) + foot_width * np.array(
         SOLE_LINES)
     xy = path.offset_poses(np.full(offset.size, distance), offset)[:, :2]
-    where = f'{distance:.2f} m ahead'
+    where = f'{distance:.2f} m {direction}'
     if drop[side, column]:
         return (f'the next drop is {sole - height[side, column]:.2f} m, {where}; the legs '
                 f'step down at most {config.max_step_down:.2f} m')

@@ -188,9 +188,9 @@ def stuck_in_plain_words(reason: str) -> str:
         return 'no room for the next steps ahead (an obstacle, an edge or a drop)'
     if reason.startswith('upper body blocked'):
         return 'the upper body cannot get past the obstacle ahead'
-    if reason.startswith('walk generation failed'):
+    if reason.startswith('the legs cannot take the step'):
         return 'the legs cannot reach the next footholds'
-    if 'collides' in reason or 'collision' in reason:
+    if reason.startswith('the legs would touch'):
         return 'the next step would hit the obstacle'
     return 'the next step is not possible here'
 
