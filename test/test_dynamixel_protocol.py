@@ -197,7 +197,7 @@ def _answered(call, *args, result_at: Optional[int] = None):
 
 def _positions(servo_bus, ids) -> dict:
     """
-    ``servo_bus.read_positions(ids)``, repeated while it comes back empty (for 20 s at most).
+    Read positions, again while the answer comes back empty (for 20 s at most).
 
     An empty answer is a read that timed out, as it can on a loaded machine; reading again
     changes nothing on the servos.
