@@ -1165,7 +1165,7 @@ class WalkGenerator:
             key_frames.weight, key_frames.start_height, key_frames.touchdown_height, r,
             float(foot_s.z), closest)
         if out_of_reach:
-            raise GaitError(f'the next foothold is beyond the swing leg\'s reach '
+            raise GaitError(f"the next foothold is beyond the swing leg's reach "
                             f'({r:.2f} m from hip to ankle at most)')
         fade = timing.fade
         ankle_low = self._leg_lower[swing_side][3] + 0.02
@@ -1370,8 +1370,8 @@ class WalkGenerator:
         low, high = self._leg_bounds[side]
         row, column = _leg_violation(joints, reach, low, high)
         if row == -2:
-            raise GaitError(f'the {"left" if side == LEFT else "right"} foot would be beyond '
-                            f'its leg\'s reach')
+            side_name = 'left' if side == LEFT else 'right'
+            raise GaitError(f"the {side_name} foot would be beyond its leg's reach")
         if row >= 0:
             name = self.skeleton.joint_names[self._leg_index[side][column]]
             raise GaitError(f'{name} would reach {joints[row, column]:.2f} rad, outside its '
