@@ -22,10 +22,9 @@ code is what runs.
 import threading
 import time
 
-import pytest
-
 from digital_actor_planner.runtime.planning import PlanningLost, PlanningWorker
 from digital_actor_planner.runtime.scheduling import PlanningScheduler
+import pytest
 
 
 def _stand_in_child(connection) -> None:
