@@ -382,7 +382,9 @@ class PlanningWorker:
         """
         Send one request and wait for its reply (timeout counted from sending).
 
-        Replies to earlier requests (given up on) are dropped.
+        Each reply carries its request's number: one left in the pipe by an earlier request
+        is dropped (counted in ``stale_replies``). A request that times out kills and replaces
+        the child, so a reply that late never arrives.
 
         Parameters
         ----------
