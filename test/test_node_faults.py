@@ -272,11 +272,22 @@ def test_while_a_large_scene_loads_the_node_answers_and_streams_and_a_bad_one_is
     assert probe.spin_until(lambda: _values(probe, 'scene') == large, 10.0)
     assert _advance(probe, 5.0) > 0.3, (loading, probe.diagnostic_values(), process.output())
 
-    # A directory, then a broken file: refused with the reason; the old scene stays, and
-    # the parameter keeps naming it.
+    # A directory, a scene naming a missing mesh, a degenerate mesh, NaN vertices, a file that
+    # is not a mesh and one too large for the memory: each refused naming the file and the
+    # reason; the old scene stays, and the parameter keeps naming it.
     broken = tmp_path / 'broken.yaml'
     broken.write_text('meshes: [{file: missing_mesh.stl}]\n')
-    for bad, words in ((str(tmp_path), 'is a directory'), (str(broken), 'missing_mesh.stl')):
+    (tmp_path / 'line.obj').write_text('v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n')
+    (tmp_path / 'nan.obj').write_text('v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n')
+    (tmp_path / 'words.stl').write_text('a mesh this is not\n' * 40)
+    with open(tmp_path / 'huge.stl', 'wb') as huge:
+        huge.truncate(1 << 40)  # sparse: a terabyte that takes no disk
+    bad_scenes = ((str(tmp_path), 'is a directory'), (str(broken), 'missing_mesh.stl'),
+                  (str(tmp_path / 'line.obj'), 'line.obj: degenerate mesh'),
+                  (str(tmp_path / 'nan.obj'), 'not finite'),
+                  (str(tmp_path / 'words.stl'), 'words.stl'),
+                  (str(tmp_path / 'huge.stl'), 'GB available'))
+    for bad, words in bad_scenes:
         result = probe.set_scene(bad)
         assert not result.successful
         assert words in result.reason, result.reason
