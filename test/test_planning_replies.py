@@ -55,14 +55,7 @@ def _stand_in_child(connection) -> None:
 class StandInWorker(PlanningWorker):
     """A :class:`PlanningWorker` whose child process is :func:`_stand_in_child`."""
 
-    def _start(self) -> None:
-        import multiprocessing
-        context = multiprocessing.get_context('spawn')
-        self._connection, child = context.Pipe()
-        self._process = context.Process(target=_stand_in_child, name='stand_in_planning',
-                                        args=(child,), daemon=True)
-        self._process.start()
-        child.close()
+    child_main = staticmethod(_stand_in_child)
 
 
 @pytest.fixture

@@ -352,6 +352,10 @@ class PlanningWorker:
     fresh one (``generation`` counts them); its actors are placed in the new one again.
     """
 
+    #: What the child process runs: it reads ``(number, kind, ...)`` requests from its end of
+    #: the pipe and answers each with ``(number, ...)``.
+    child_main = staticmethod(_planning_process)
+
     def __init__(self):
         self._lock = threading.Lock()
         self._numbers = itertools.count()
@@ -364,7 +368,7 @@ class PlanningWorker:
     def _start(self) -> None:
         context = multiprocessing.get_context('spawn')
         self._connection, child = context.Pipe()
-        self._process = context.Process(target=_planning_process, name='actor_planning',
+        self._process = context.Process(target=self.child_main, name='actor_planning',
                                         args=(child,), daemon=True)
         self._process.start()
         child.close()
