@@ -26,7 +26,6 @@ import signal
 import subprocess
 import time
 
-import numpy as np
 import pytest
 from ros_harness import fresh_domain_id, NodeProcess, ros_env
 from test_node_helpers import node_command, Probe, ROOT_X, ROOT_YAW, scene
@@ -60,24 +59,13 @@ def crowd(tmp_path_factory):
         assert process.stop() == 0, process.output()
 
 
-def _stamps_after(probe, stamp_ns: int) -> list:
-    """Distinct header stamps (ns, ascending) of the frames received stamped after ``stamp_ns``."""
-    stamps = set()
-    for _, msg in reversed(probe.joint_states):
-        stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-        if stamp <= stamp_ns:
-            break
-        stamps.add(stamp)
-    return sorted(stamps)
-
-
 def test_each_hosted_actor_streams_at_the_publish_rate(crowd):
     _, probes = crowd
-    starts = [_stamps_after(p, -1)[-1] for p in probes]
+    starts = [p.stamps_after(-1)[-1] for p in probes]
 
     def spans():
         return [1e-9 * (s[-1] - s[0]) if len(s) > 1 else 0.0
-                for s in (_stamps_after(p, t) for p, t in zip(probes, starts))]
+                for s in (p.stamps_after(t) for p, t in zip(probes, starts))]
 
     # Spinning the probes in turns until each stream spans 3 s of its own stamps: the rate is
     # the node's (frames per second of stream time), not how fast this process takes them in.
@@ -87,7 +75,7 @@ def test_each_hosted_actor_streams_at_the_publish_rate(crowd):
             probe.spin(0.05)
     assert min(spans()) >= 3.0, spans()
     rates = [(len(s) - 1) / span for s, span in
-             zip((_stamps_after(p, t) for p, t in zip(probes, starts)), spans())]
+             zip((p.stamps_after(t) for p, t in zip(probes, starts)), spans())]
     assert all(r > 80.0 for r in rates), rates
     for probe in probes:
         assert len(probe.joint_states[-1][1].name) == 22

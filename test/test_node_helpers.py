@@ -165,6 +165,16 @@ class Probe:
         state = self.diagnostic_values().get('state')
         return state is not None and state != 'warming up'
 
+    def stamps_after(self, stamp_ns: int) -> list:
+        """Distinct header stamps (ns, ascending) of the frames kept stamped after ``stamp_ns``."""
+        stamps = set()
+        for _, msg in reversed(self.joint_states):
+            stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+            if stamp <= stamp_ns:
+                break
+            stamps.add(stamp)
+        return sorted(stamps)
+
     def latest(self) -> np.ndarray:
         """Return the latest received configuration (22,)."""
         return np.array(self.joint_states[-1][1].position)

@@ -82,30 +82,19 @@ def test_each_actor_follows_only_its_own_command(two_actors):
     assert yaw1 - yaw0 > 0.4, f'stamped actor yaw {yaw0:.2f} -> {yaw1:.2f}'
 
 
-def _stamps_after(probe, stamp_ns: int) -> list:
-    """Distinct header stamps (ns, ascending) of the frames received stamped after ``stamp_ns``."""
-    stamps = set()
-    for _, msg in reversed(probe.joint_states):
-        stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
-        if stamp <= stamp_ns:
-            break
-        stamps.add(stamp)
-    return sorted(stamps)
-
-
 def test_each_actor_streams_its_own_joint_states(two_actors):
     # The rate is the node's, from the frames' own stamps over 1 s of stream time, not how
     # fast this process takes them in.
     _, probes = two_actors
     for name, probe in probes.items():
-        start = _stamps_after(probe, -1)[-1]
+        start = probe.stamps_after(-1)[-1]
 
         def span(probe=probe, start=start):
-            stamps = _stamps_after(probe, start)
+            stamps = probe.stamps_after(start)
             return 1e-9 * (stamps[-1] - stamps[0]) if len(stamps) > 1 else 0.0
 
         assert probe.spin_until(lambda: span() >= 1.0, 30.0), f'{name}: no stream'
-        stamps = _stamps_after(probe, start)
+        stamps = probe.stamps_after(start)
         rate = (len(stamps) - 1) / span()
         assert rate > 70.0, f'{name}: joint_states at {rate:.1f} Hz'
 

@@ -79,13 +79,7 @@ def _frames_after(probe, stamp_ns: int) -> int:
     Counted by header stamp, not by the probe's length: its record is bounded, and a frame
     published late is still counted once.
     """
-    stamps = set()
-    for _, msg in reversed(probe.joint_states):
-        stamp = _stamp_ns(msg)
-        if stamp <= stamp_ns:
-            break
-        stamps.add(stamp)
-    return len(stamps)
+    return len(probe.stamps_after(stamp_ns))
 
 
 def _fresh_diagnostics(probe, timeout: float = 15.0) -> dict:
