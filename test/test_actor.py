@@ -433,7 +433,7 @@ def test_beside_the_tables_corner_the_foot_that_landed_last_pivots(monkeypatch):
 
     blocks = walk()
     stop = next(b for b in blocks if b.status == 'stuck')
-    assert 3.3 < stop.times[0] < 3.65 and 'left_thigh' in stop.reason
+    assert 3.3 < stop.times[0] < 3.65 and 'the left thigh' in stop.reason
     away = [b for b in blocks if b.times[0] > 3.65 and b.category]
     assert away[0].category == 'pivot' and len(away) >= 4
     pivot = skeleton().forward_kinematics(away[0].frames[[0, -1]])
