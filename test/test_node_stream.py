@@ -174,9 +174,10 @@ def test_a_frozen_node_still_delivers_every_frame_late_not_lost(actor):
             f'{skipped} skipped by the node'
     else:
         assert gaps.max() < 0.02, gaps.max()
-    # Smooth: no step longer than the walk covers in the ticks between two frames.
+    # Smooth: no step longer than the walk covers in the ticks between two frames (at least
+    # one: two frames a tick apart may be stamped closer than a period, each within its tick).
     x = np.array([m.position[ROOT_X] for _, m in frames])
-    assert np.all(np.abs(np.diff(x)) < 0.02 * np.round(gaps / 0.01)), \
+    assert np.all(np.abs(np.diff(x)) < 0.02 * np.maximum(1.0, np.round(gaps / 0.01))), \
         'the motion jumped across the freeze'
     assert probe.spin_until(
         lambda: int(probe.diagnostic_values().get('stream_caught_up_ticks', 0)) >= 5, 15.0), \
